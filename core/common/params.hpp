@@ -1,0 +1,88 @@
+#pragma once
+// Typed planner parameters described as data, so the CLI, the REST API and the web form can list
+// every parameter with its default, unit and explanation, and reject unknown keys or bad values with
+// the field's name. A planner keeps its own typed struct; a ParamTable<T> binds keys to its fields.
+#include <cstdint>
+#include <functional>
+#include <limits>
+#include <map>
+#include <string>
+#include <variant>
+#include <vector>
+
+#include "core/common/error.hpp"
+
+namespace rover {
+
+using ParamValue = std::variant<bool, std::int64_t, double, std::string, std::vector<double>>;
+using ParamSet = std::map<std::string, ParamValue>;
+
+enum class ParamType { Bool, Int, Real, Choice, RealList };
+const char* paramTypeName(ParamType type);
+
+struct ParamInfo {
+  std::string key;
+  ParamType type = ParamType::Real;
+  ParamValue defaultValue;
+  std::string unit;  // "" when dimensionless
+  std::string doc;   // one sentence for the help text and the web form
+  double min = -std::numeric_limits<double>::infinity();  // Int/Real inclusive range
+  double max = std::numeric_limits<double>::infinity();
+  std::vector<std::string> choices;  // Choice only
+};
+
+// Value coercions used by the tables; throw InvalidParameter naming `key`.
+bool paramAsBool(const std::string& key, const ParamValue& v);
+std::int64_t paramAsInt(const ParamInfo& info, const ParamValue& v);
+double paramAsReal(const ParamInfo& info, const ParamValue& v);
+std::string paramAsChoice(const ParamInfo& info, const ParamValue& v);
+std::vector<double> paramAsRealList(const std::string& key, const ParamValue& v);
+std::string paramToString(const ParamValue& v);
+
+// Binds parameter keys to the fields of a typed struct P.
+template <class P>
+class ParamTable {
+ public:
+  using Setter = std::function<void(P&, const ParamInfo&, const ParamValue&)>;
+  using Getter = std::function<ParamValue(const P&)>;
+
+  void add(ParamInfo info, Getter get, Setter set) {
+    info.defaultValue = get(P{});
+    entries_.push_back({std::move(info), std::move(get), std::move(set)});
+  }
+  std::vector<ParamInfo> infos() const {
+    std::vector<ParamInfo> out;
+    for (const auto& e : entries_) out.push_back(e.info);
+    return out;
+  }
+  // Defaults overridden by `values`; unknown keys and bad values throw with the key as field.
+  P parse(const ParamSet& values) const {
+    P p{};
+    for (const auto& [key, value] : values) {
+      const Entry* e = find(key);
+      if (!e) throw Error(ErrorCode::UnknownParameter, key, "unknown parameter '" + key + "'");
+      e->set(p, e->info, value);
+    }
+    return p;
+  }
+  ParamSet toSet(const P& p) const {
+    ParamSet out;
+    for (const auto& e : entries_) out[e.info.key] = e.get(p);
+    return out;
+  }
+
+ private:
+  struct Entry {
+    ParamInfo info;
+    Getter get;
+    Setter set;
+  };
+  const Entry* find(const std::string& key) const {
+    for (const auto& e : entries_)
+      if (e.info.key == key) return &e;
+    return nullptr;
+  }
+  std::vector<Entry> entries_;
+};
+
+}  // namespace rover

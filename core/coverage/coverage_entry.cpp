@@ -1,0 +1,118 @@
+#include "core/coverage/coverage_entry.hpp"
+
+#include "core/common/error.hpp"
+#include "core/grid/direction.hpp"
+
+namespace rover::coverage {
+
+std::vector<StartCell> startsToCells(const GridGeometry& g, const std::vector<RoverStart>& rovers) {
+  std::vector<StartCell> out;
+  for (std::size_t k = 0; k < rovers.size(); ++k) {
+    auto cell = localToCell(g, rovers[k].position);
+    const std::string field = "rovers[" + std::to_string(k) + "]";
+    if (!cell) throw Error(ErrorCode::InvalidInput, field, field + ": start is outside the map");
+    if (!std::isfinite(rovers[k].heading))
+      throw Error(ErrorCode::InvalidInput, field, field + ": heading must be a finite angle");
+    out.push_back({g.index(*cell), radiansToDir(rovers[k].heading)});
+  }
+  return out;
+}
+
+std::vector<RoverStart> cellsToStarts(const GridGeometry& g, const std::vector<StartCell>& starts) {
+  std::vector<RoverStart> out;
+  for (const auto& s : starts) out.push_back({cellToLocal(g, g.cell(s.cell)), dirToRadians(s.heading)});
+  return out;
+}
+
+PlanResult toPlanResult(const CoverageResult& r, const GridGeometry& g) {
+  PlanResult out;
+  out.planner = "coverage";
+  out.stopReason = stopReasonName(r.stop);
+  out.cancelled = r.stop == StopReason::Cancelled;
+  const CoverageMetrics& m = r.metrics;
+  out.metrics = {
+      {"coverage", m.coverage, ""},
+      {"coverage_reachable", m.coverageReachable, ""},
+      {"moves", static_cast<double>(m.moves), "moves"},
+      {"makespan", static_cast<double>(m.makespan), "moves"},
+      {"steps", static_cast<double>(m.steps), "steps"},
+      {"path_length_ratio", m.pathLengthRatio, ""},
+      {"makespan_ratio", m.makespanRatio, ""},
+      {"distance_m", m.distanceM, "m"},
+      {"energy_j", m.energyJ, "J"},
+      {"max_pitch_deg", m.maxPitchDeg, "deg"},
+      {"revisits", static_cast<double>(m.revisits), "moves"},
+      {"cells", static_cast<double>(m.cells), "cells"},
+      {"free_cells", static_cast<double>(m.freeCells), "cells"},
+      {"visited_cells", static_cast<double>(m.visitedCells), "cells"},
+      {"unreachable_cells", static_cast<double>(m.unreachableCells), "cells"},
+  };
+  for (std::size_t k = 0; k < r.rovers.size(); ++k) {
+    const RoverTrack& t = r.rovers[k];
+    Track track;
+    track.rover = static_cast<int>(k);
+    for (int c : t.cells) track.points.push_back(cellToLocal(g, g.cell(c)));
+    track.metrics = {{"moves", static_cast<double>(t.moves), "moves"},
+                     {"waits", static_cast<double>(t.waits), "steps"},
+                     {"revisits", static_cast<double>(t.revisits), "moves"},
+                     {"distance_m", t.distanceM, "m"},
+                     {"energy_j", t.energyJ, "J"},
+                     {"max_pitch_deg", t.maxPitchDeg, "deg"}};
+    out.tracks.push_back(std::move(track));
+  }
+  Series curve{"coverage_vs_moves", "moves", "coverage", {}, {}};
+  for (const auto& p : r.curve) {
+    curve.x.push_back(static_cast<double>(p.moves));
+    curve.y.push_back(static_cast<double>(p.visited) / m.freeCells);
+  }
+  out.series.push_back(std::move(curve));
+  for (std::size_t k = 0; k < r.rovers.size(); ++k) {
+    Series pitch{"pitch_deg_rover_" + std::to_string(k), "move", "pitch_deg", {}, {}};
+    const auto& pd = r.rovers[k].pitchDeg;
+    for (std::size_t i = 0; i < pd.size(); ++i) {
+      pitch.x.push_back(static_cast<double>(i + 1));
+      pitch.y.push_back(pd[i]);
+    }
+    out.series.push_back(std::move(pitch));
+  }
+  return out;
+}
+
+namespace {
+
+class CoveragePlanner final : public Planner {
+ public:
+  std::string name() const override { return "coverage"; }
+  std::string summary() const override {
+    return "Myopic grid coverage for one rover or a team (Laîné & Yoshida 2019; Santra et al.), "
+           "spiral/boustrophedon cost tables, circumnavigation, overlap/Voronoi teams, frontier mode.";
+  }
+  std::vector<ParamInfo> params() const override { return coverageParamTable().infos(); }
+  void validate(const PlanningProblem& problem, const ParamSet& params) const override {
+    parseCoverageParams(params);
+    validateWorld(problem.world);
+    if (problem.rovers.empty() || problem.rovers.size() > 64)
+      throw Error(ErrorCode::InvalidInput, "rovers", "between 1 and 64 rovers are supported");
+    auto cells = startsToCells(problem.world.geometry(), problem.rovers);
+    for (std::size_t k = 0; k < cells.size(); ++k) {
+      const std::string field = "rovers[" + std::to_string(k) + "]";
+      if (problem.world.isObstacle(cells[k].cell))
+        throw Error(ErrorCode::InvalidInput, field, field + ": start is on an obstacle");
+      for (std::size_t j = 0; j < k; ++j)
+        if (cells[j].cell == cells[k].cell)
+          throw Error(ErrorCode::InvalidInput, field, field + ": two rovers start on one cell");
+    }
+  }
+  PlanResult run(const PlanningProblem& problem, const ParamSet& params, EventSink* sink,
+                 const CancelToken* cancel) const override {
+    CoverageParams p = parseCoverageParams(params);
+    auto cells = startsToCells(problem.world.geometry(), problem.rovers);
+    return toPlanResult(runCoverage(problem.world, cells, p, sink, cancel), problem.world.geometry());
+  }
+};
+
+}  // namespace
+
+std::unique_ptr<Planner> makeCoveragePlanner() { return std::make_unique<CoveragePlanner>(); }
+
+}  // namespace rover::coverage

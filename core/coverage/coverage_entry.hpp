@@ -1,0 +1,20 @@
+#pragma once
+// The myopic coverage family as a registered planner named "coverage".
+#include <memory>
+
+#include "core/coverage/coverage_planner.hpp"
+#include "core/planning/planner.hpp"
+
+namespace rover::coverage {
+
+std::unique_ptr<Planner> makeCoveragePlanner();
+
+// Rover starts in the local frame -> grid cells and the nearest of the 8 headings.
+// Throws InvalidInput naming rovers[k] for a start outside the grid.
+std::vector<StartCell> startsToCells(const GridGeometry& g, const std::vector<RoverStart>& rovers);
+std::vector<RoverStart> cellsToStarts(const GridGeometry& g, const std::vector<StartCell>& starts);
+
+// The planner-neutral view of a coverage result (metric keys as in the CLI's JSON).
+PlanResult toPlanResult(const CoverageResult& r, const GridGeometry& g);
+
+}  // namespace rover::coverage

@@ -1,0 +1,47 @@
+#pragma once
+// Parameters of the myopic coverage planner (SPEC §1) with their documented defaults.
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "core/common/params.hpp"
+#include "core/coverage/cost_table.hpp"
+
+namespace rover::coverage {
+
+enum class TeamMode { Overlap, Voronoi };  // paper 002 §2.3
+
+// Paper 000 eq. 5 and its defaults for the CLOVER rover on the Moon.
+struct EnergyModel {
+  double massKg = 7.0;
+  double gravity = 1.62;            // m/s², Moon
+  double rollingResistance = 0.15;  // μ
+  double efficiency = 0.7;          // η, drive train
+  double turnJoulesPerRad = 2.0;    // spot turn
+};
+
+struct CoverageParams {
+  TeamMode mode = TeamMode::Overlap;
+  std::string pattern = "spiral";  // spiral | boustrophedon | custom
+  std::vector<double> costTable;   // pattern = custom: 8 relative (+ 8 absolute) costs
+  bool circumnavigate = false;
+  bool frontier = false;
+  int senseRadius = 1;         // Chebyshev radius, 1 or 2
+  double coverage = 0.95;      // stop goal, fraction of n − O
+  double alpha = 1.0;          // weight of static + visited cost (paper 000 eq. 3)
+  double beta = 0.0;           // weight of |Δh| (paper 000 eq. 3)
+  double mcVisited = 1.1;      // penalty per previous visit (paper 000: >= 1.1)
+  std::int64_t maxSteps = 0;   // 0 = 20·n
+  EnergyModel energy;
+
+  MotionCostTable table() const;
+  std::int64_t stepBudget(int cellCount) const { return maxSteps > 0 ? maxSteps : 20LL * cellCount; }
+};
+
+const ParamTable<CoverageParams>& coverageParamTable();
+// Defaults overridden by `values`, then cross-field checks (α + β = 1, custom table).
+CoverageParams parseCoverageParams(const ParamSet& values);
+// Cross-field and range checks for a struct filled in code; throws InvalidParameter.
+void validateCoverageParams(const CoverageParams& p);
+
+}  // namespace rover::coverage

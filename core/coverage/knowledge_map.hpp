@@ -1,0 +1,45 @@
+#pragma once
+// A rover's own map in myopic coverage (papers 002/000 §2): every cell starts Unknown, sensing writes
+// Free/Obstacle, entering writes Visited and counts visits. Counts are kept incrementally; paper
+// 002's Algorithm 1 recounts the whole map every step (lines 10–12), O(n) a step, which we avoid.
+#include <cstdint>
+#include <vector>
+
+#include "core/grid/geometry.hpp"
+
+namespace rover::coverage {
+
+enum class CellState : std::uint8_t { Unknown = 0, Free = 1, Obstacle = 2, Visited = 3 };
+
+class KnowledgeMap {
+ public:
+  // `region` (empty = whole grid): cells this map may hold and its rovers may enter (Voronoi).
+  KnowledgeMap(const GridGeometry& g, std::vector<std::uint8_t> region = {});
+
+  const GridGeometry& geometry() const { return geometry_; }
+  CellState state(int i) const { return state_[i]; }
+  std::uint32_t visits(int i) const { return visits_[i]; }
+  bool inRegion(int i) const { return region_.empty() || region_[i] != 0; }
+  int regionCells() const { return regionCells_; }
+  int visitedCount() const { return visited_; }
+  int knownObstacles() const { return knownObstacles_; }
+
+  // Writes the sensed truth into an Unknown cell; returns whether the map changed.
+  bool sense(int i, bool obstacle);
+  // Enters a cell (it must not be an obstacle); returns whether it was visited before.
+  bool visit(int i);
+  // Paper 002 Algorithm 1 line 13 (with the printed `≤` read as `≥`, SPEC §1):
+  // visited >= goal · (cells − known obstacles).
+  bool goalReached(double goal) const;
+
+ private:
+  GridGeometry geometry_;
+  std::vector<std::uint8_t> region_;
+  std::vector<CellState> state_;
+  std::vector<std::uint32_t> visits_;
+  int regionCells_ = 0;
+  int visited_ = 0;
+  int knownObstacles_ = 0;
+};
+
+}  // namespace rover::coverage

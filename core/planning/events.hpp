@@ -1,0 +1,44 @@
+#pragma once
+// What a planner reports while it runs (DESIGN.md: a plain event sink; the server turns events into
+// WebSocket frames on its own strand, a planner thread never touches a socket). All positions are in
+// the local frame of SPEC §0. Default implementations ignore the event, so a sink overrides only
+// what it wants; a planner handed no sink builds no events at all.
+#include <cstdint>
+#include <span>
+
+namespace rover {
+
+// One cell of a planner's grid whose displayed state changed (state codes are the planner's own:
+// coverage uses CellState).
+struct CellUpdate {
+  std::int32_t index = 0;  // row * cols + col
+  std::uint8_t state = 0;
+  std::uint32_t visits = 0;
+};
+
+struct RoverPose {
+  int rover = 0;
+  double x = 0;        // metres east of the lower-left corner
+  double y = 0;        // metres north
+  double heading = 0;  // radians counter-clockwise from east
+};
+
+struct Progress {
+  std::int64_t step = 0;
+  double fraction = 0;  // 0..1 towards the run's goal
+  double coverage = 0;  // fraction of free cells visited so far
+  std::int64_t moves = 0;
+};
+
+class EventSink {
+ public:
+  virtual ~EventSink() = default;
+  virtual void cellsChanged(std::span<const CellUpdate> cells) { (void)cells; }
+  virtual void roverPoses(std::int64_t step, std::span<const RoverPose> poses) {
+    (void)step;
+    (void)poses;
+  }
+  virtual void progress(const Progress& p) { (void)p; }
+};
+
+}  // namespace rover

@@ -1,0 +1,35 @@
+#include "core/planning/planner.hpp"
+
+#include "core/common/error.hpp"
+#include "core/common/strings.hpp"
+#include "core/coverage/coverage_entry.hpp"
+
+namespace rover {
+
+void PlannerRegistry::add(std::unique_ptr<Planner> planner) {
+  for (const auto& p : planners_)
+    if (p->name() == planner->name())
+      throw Error(ErrorCode::InvalidInput, "planner", "planner '" + p->name() + "' registered twice");
+  planners_.push_back(std::move(planner));
+}
+
+const Planner& PlannerRegistry::get(const std::string& name) const {
+  for (const auto& p : planners_)
+    if (p->name() == name) return *p;
+  std::string known = join(names(), ", ");
+  throw Error(ErrorCode::NotFound, "planner", "unknown planner '" + name + "' (known: " + known + ")");
+}
+
+std::vector<std::string> PlannerRegistry::names() const {
+  std::vector<std::string> out;
+  for (const auto& p : planners_) out.push_back(p->name());
+  return out;
+}
+
+PlannerRegistry makeBuiltinRegistry() {
+  PlannerRegistry r;
+  r.add(coverage::makeCoveragePlanner());
+  return r;
+}
+
+}  // namespace rover

@@ -1,0 +1,56 @@
+#pragma once
+// The planner interface the server and CLI drive (DESIGN.md): planners registered by name, typed
+// parameters described as data, an event sink and a cancellation token handed in, a result out.
+// Shaped after OMPL's Planner (solve with a termination condition) and its status values.
+#include <Eigen/Core>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "core/common/cancel.hpp"
+#include "core/common/params.hpp"
+#include "core/coverage/world.hpp"
+#include "core/planning/events.hpp"
+#include "core/planning/plan_result.hpp"
+
+namespace rover {
+
+struct RoverStart {
+  Eigen::Vector2d position{0, 0};  // local frame, metres
+  double heading = 0;              // radians counter-clockwise from east
+};
+
+// Everything a planner plans on. Grows with the planner families (terrain layers, PDM).
+struct PlanningProblem {
+  coverage::World world;  // the coverage grid: obstacles and optional heights
+  std::vector<RoverStart> rovers;
+};
+
+class Planner {
+ public:
+  virtual ~Planner() = default;
+  virtual std::string name() const = 0;
+  virtual std::string summary() const = 0;
+  virtual std::vector<ParamInfo> params() const = 0;
+  // Full validation, so a server can answer 400 before it queues anything. Throws rover::Error.
+  virtual void validate(const PlanningProblem& problem, const ParamSet& params) const = 0;
+  // Runs to completion or cancellation; `sink` and `cancel` may be null.
+  virtual PlanResult run(const PlanningProblem& problem, const ParamSet& params, EventSink* sink,
+                         const CancelToken* cancel) const = 0;
+};
+
+class PlannerRegistry {
+ public:
+  void add(std::unique_ptr<Planner> planner);
+  // Throws NotFound with field "planner" for an unknown name.
+  const Planner& get(const std::string& name) const;
+  std::vector<std::string> names() const;
+
+ private:
+  std::vector<std::unique_ptr<Planner>> planners_;
+};
+
+// A registry holding every planner this build provides.
+PlannerRegistry makeBuiltinRegistry();
+
+}  // namespace rover

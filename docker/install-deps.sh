@@ -1,0 +1,42 @@
+#!/usr/bin/env bash
+# Installs every Debian package the build and the tests need. Idempotent: when all are present it
+# does nothing (no apt-get update, no network). Used by the README's commands, CI and the Dockerfile.
+#   install-deps.sh            build + test packages
+#   install-deps.sh --runtime  only what the roverplan binary needs at run time (container image)
+set -euo pipefail
+
+build_pkgs=(
+  g++ make cmake ninja-build ccache pkg-config git ca-certificates
+  libeigen3-dev libompl-dev
+  # Debian's libompl-dev needs these Boost components for its CMake config to resolve.
+  libboost-dev libboost-system-dev libboost-serialization-dev libboost-filesystem-dev
+  libboost-program-options-dev
+  nlohmann-json3-dev libgdal-dev libsqlite3-dev doctest-dev
+)
+test_pkgs=(
+  gdal-bin   # gdaldem/gdalinfo/ogrinfo: reference outputs the tests compare against
+)
+runtime_pkgs=(libompl16 libgdal32 libsqlite3-0 gdal-data)
+
+mode=${1:-all}
+case "$mode" in
+  all) want=("${build_pkgs[@]}" "${test_pkgs[@]}") ;;
+  --runtime) want=("${runtime_pkgs[@]}") ;;
+  *) echo "install-deps.sh: unknown option '$mode' (use --runtime or nothing)" >&2; exit 2 ;;
+esac
+
+missing=()
+for p in "${want[@]}"; do
+  if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q 'install ok installed'; then
+    missing+=("$p")
+  fi
+done
+if [ ${#missing[@]} -eq 0 ]; then
+  exit 0
+fi
+
+SUDO=""
+if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
+echo "install-deps: installing ${missing[*]}"
+$SUDO apt-get update -qq
+DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null

@@ -1,0 +1,86 @@
+#include "server/cli/coverage_options.hpp"
+
+#include <algorithm>
+
+#include "core/common/strings.hpp"
+#include "core/coverage/coverage_params.hpp"
+
+namespace rover::cli {
+
+std::string optionForParam(const std::string& key) {
+  if (key == "sense_radius") return "sense";
+  std::string o = key;
+  std::replace(o.begin(), o.end(), '_', '-');
+  return o;
+}
+
+void throwAsUsage(const Error& e) {
+  if (e.field().empty()) throw UsageError(e.what());
+  std::string msg = e.what();
+  const std::string prefix = e.field() + ": ";
+  if (msg.rfind(prefix, 0) == 0) msg = msg.substr(prefix.size());
+  throw UsageError("invalid value for --" + optionForParam(e.field()) + ": " + msg);
+}
+
+void addWorldOptions(ArgParser& a) {
+  a.option("rows", "N", "60", "Grid rows.");
+  a.option("cols", "N", "60", "Grid columns.");
+  a.option("cell", "M", "1.0", "Cell size in metres.");
+  a.option("obstacles", "F", "0.05", "Fraction of cells that are obstacles, placed at random.");
+  a.option("seed", "S", "1", "Seed for the obstacles and the rovers' random starts.");
+  a.option("rovers", "N", "1", "Number of rovers (random distinct starts and headings).");
+  a.flag("no-sealed", "Forbid free regions sealed off by obstacles (paper 002's single-rover "
+                      "study); by default they may occur and are reported as unreachable.");
+}
+
+coverage::WorldParams readWorldOptions(const ArgParser& a) {
+  coverage::WorldParams w;
+  w.rows = static_cast<int>(a.integer("rows", w.rows, 2, 4096));
+  w.cols = static_cast<int>(a.integer("cols", w.cols, 2, 4096));
+  w.cellSize = a.real("cell", w.cellSize, 1e-3, 1e4);
+  w.obstacleFraction = a.real("obstacles", w.obstacleFraction, 0.0, 0.9);
+  w.seed = static_cast<std::uint64_t>(a.integer("seed", 1, 0, INT64_MAX));
+  w.allowSealed = !a.isSet("no-sealed");
+  return w;
+}
+
+void addCoverageParamOptions(ArgParser& a) {
+  for (const ParamInfo& info : coverage::coverageParamTable().infos()) {
+    std::string help = info.doc;
+    if (!info.unit.empty()) help += " [" + info.unit + "]";
+    const std::string name = optionForParam(info.key);
+    switch (info.type) {
+      case ParamType::Bool: a.flag(name, help); break;
+      case ParamType::Choice: {
+        a.option(name, join(info.choices, "|"), paramToString(info.defaultValue), help);
+        break;
+      }
+      case ParamType::RealList: a.option(name, "V,V,...", "", help); break;
+      default: a.option(name, info.type == ParamType::Int ? "N" : "X", paramToString(info.defaultValue), help);
+    }
+  }
+}
+
+ParamSet readCoverageParamOptions(const ArgParser& a) {
+  ParamSet set;
+  for (const ParamInfo& info : coverage::coverageParamTable().infos()) {
+    const std::string name = optionForParam(info.key);
+    if (!a.has(name)) continue;
+    switch (info.type) {
+      case ParamType::Bool: set[info.key] = true; break;
+      case ParamType::Int: set[info.key] = static_cast<std::int64_t>(a.integer(name, 0, INT64_MIN, INT64_MAX)); break;
+      case ParamType::Real: set[info.key] = a.real(name, 0, -1e300, 1e300); break;
+      case ParamType::Choice: set[info.key] = a.str(name, ""); break;
+      case ParamType::RealList: set[info.key] = a.realList(name); break;
+    }
+  }
+  // Paper 000 eq. 3 has α + β = 1: giving one implies the other.
+  if (set.count("beta") && !set.count("alpha"))
+    set["alpha"] = 1.0 - std::get<double>(set["beta"]);
+  else if (set.count("alpha") && !set.count("beta"))
+    set["beta"] = 1.0 - std::get<double>(set["alpha"]);
+  if (set.count("cost_table") && !set.count("pattern")) set["pattern"] = std::string("custom");
+  return set;
+}
+
+}  // namespace rover::cli

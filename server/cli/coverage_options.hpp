@@ -1,0 +1,23 @@
+#pragma once
+// Options shared by `coverage`, `sweep` and `bench coverage`: the random world and every coverage
+// planner parameter, generated from the planner's own parameter table so the CLI never drifts
+// from the API.
+#include "core/common/error.hpp"
+#include "core/common/params.hpp"
+#include "core/coverage/world.hpp"
+#include "server/cli/arg_parser.hpp"
+
+namespace rover::cli {
+
+void addWorldOptions(ArgParser& args);
+coverage::WorldParams readWorldOptions(const ArgParser& args);
+
+void addCoverageParamOptions(ArgParser& args);
+ParamSet readCoverageParamOptions(const ArgParser& args);
+
+// The option name of a planner parameter key (sense_radius -> sense, max_steps -> max-steps).
+std::string optionForParam(const std::string& key);
+// A core validation error, re-said in terms of the command's options.
+[[noreturn]] void throwAsUsage(const Error& e);
+
+}  // namespace rover::cli

@@ -1,0 +1,93 @@
+#include "server/json/plan_json.hpp"
+
+#include <cmath>
+
+#include "core/common/error.hpp"
+
+namespace rover::json {
+
+using nlohmann::json;
+
+json toJson(const ParamValue& v) {
+  return std::visit([](const auto& x) { return json(x); }, v);
+}
+
+json toJson(const ParamInfo& info) {
+  json j{{"key", info.key},
+         {"type", paramTypeName(info.type)},
+         {"default", toJson(info.defaultValue)},
+         {"unit", info.unit},
+         {"doc", info.doc}};
+  if (std::isfinite(info.min)) j["min"] = info.min;
+  if (std::isfinite(info.max)) j["max"] = info.max;
+  if (!info.choices.empty()) j["choices"] = info.choices;
+  return j;
+}
+
+json toJson(const std::vector<ParamInfo>& infos) {
+  json arr = json::array();
+  for (const auto& i : infos) arr.push_back(toJson(i));
+  return arr;
+}
+
+namespace {
+json metricsObject(const std::vector<Metric>& metrics) {
+  json m = json::object();
+  for (const auto& x : metrics) m[x.key] = x.value;
+  return m;
+}
+}  // namespace
+
+json toJson(const PlanResult& r) {
+  json j{{"planner", r.planner},
+         {"stop_reason", r.stopReason},
+         {"cancelled", r.cancelled},
+         {"metrics", metricsObject(r.metrics)}};
+  json units = json::object();
+  for (const auto& m : r.metrics)
+    if (!m.unit.empty()) units[m.key] = m.unit;
+  j["metric_units"] = units;
+  json rovers = json::array();
+  for (const auto& t : r.tracks) {
+    json path = json::array();
+    for (const auto& p : t.points) path.push_back({p.x(), p.y()});
+    rovers.push_back({{"rover", t.rover}, {"metrics", metricsObject(t.metrics)}, {"path", path}});
+  }
+  j["rovers"] = rovers;
+  json series = json::object();
+  for (const auto& s : r.series)
+    series[s.key] = {{"x_label", s.xLabel}, {"y_label", s.yLabel}, {"x", s.x}, {"y", s.y}};
+  j["series"] = series;
+  return j;
+}
+
+ParamValue paramFromJson(const ParamInfo& info, const json& v) {
+  switch (info.type) {
+    case ParamType::Bool:
+      if (!v.is_boolean()) throwInvalidParameter(info.key, "expected true or false");
+      return v.get<bool>();
+    case ParamType::Int:
+      if (v.is_number_integer()) return v.get<std::int64_t>();
+      if (v.is_number_float()) return v.get<double>();  // 3.0 is accepted, 3.5 rejected later
+      throwInvalidParameter(info.key, "expected an integer");
+    case ParamType::Real:
+      if (v.is_number_integer()) return v.get<std::int64_t>();
+      if (v.is_number_float()) return v.get<double>();
+      throwInvalidParameter(info.key, "expected a number");
+    case ParamType::Choice:
+      if (!v.is_string()) throwInvalidParameter(info.key, "expected a string");
+      return v.get<std::string>();
+    case ParamType::RealList: {
+      if (!v.is_array()) throwInvalidParameter(info.key, "expected an array of numbers");
+      std::vector<double> out;
+      for (const auto& x : v) {
+        if (!x.is_number()) throwInvalidParameter(info.key, "expected an array of numbers");
+        out.push_back(x.get<double>());
+      }
+      return out;
+    }
+  }
+  throwInvalidParameter(info.key, "unsupported parameter type");
+}
+
+}  // namespace rover::json

@@ -1,0 +1,54 @@
+// roverplan: the one program (DESIGN.md) — subcommands for planning, experiments and benchmarks.
+#include <iostream>
+#include <string>
+#include <vector>
+
+#include "core/common/error.hpp"
+#include "maps/gdal_env.hpp"
+#include "server/cli/arg_parser.hpp"
+#include "server/cli/commands.hpp"
+
+namespace {
+
+const char* kUsage =
+    "usage: roverplan <command> [options]\n"
+    "\n"
+    "commands:\n"
+    "  coverage   myopic coverage path planning on a random grid world (papers 002/000)\n"
+    "  sweep      many seeded coverage runs on all cores, summarised (--preset laine-fig6|laine-fig8|frontier)\n"
+    "  bench      benchmarks that print their figures (bench coverage)\n"
+    "  version    print versions\n"
+    "\n"
+    "Run 'roverplan <command> --help' for the options of a command.\n";
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::vector<std::string> args(argv + 1, argv + argc);
+  if (args.empty() || args[0] == "--help" || args[0] == "-h" || args[0] == "help") {
+    std::cout << kUsage;
+    return args.empty() ? 2 : 0;
+  }
+  const std::string command = args[0];
+  args.erase(args.begin());
+  try {
+    if (command == "coverage") return rover::cli::coverageCommand(args, std::cout);
+    if (command == "sweep") return rover::cli::sweepCommand(args, std::cout);
+    if (command == "bench") return rover::cli::benchCommand(args, std::cout);
+    if (command == "version" || command == "--version") {
+      std::cout << "roverplan 0.1.0 (" << rover::maps::gdalVersion() << ")\n";
+      return 0;
+    }
+    std::cerr << "roverplan: unknown command '" << command << "' (see roverplan --help)\n";
+    return 2;
+  } catch (const rover::cli::UsageError& e) {
+    std::cerr << "roverplan " << command << ": " << e.what() << "\n";
+    return 2;
+  } catch (const rover::Error& e) {
+    std::cerr << "roverplan " << command << ": " << e.what() << "\n";
+    return 2;
+  } catch (const std::exception& e) {
+    std::cerr << "roverplan " << command << ": internal error: " << e.what() << "\n";
+    return 1;
+  }
+}
