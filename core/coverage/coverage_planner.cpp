@@ -62,6 +62,7 @@ struct RoverRun {
   int lineDir = 0;
   int lineOrigin = 0;
   int circleSteps = 0;
+  int abandonedOrigin = -1;
   // Frontier mode: the known path being walked to the nearest unexplored cell.
   std::vector<int> plan;
   std::size_t planPos = 0;
@@ -100,6 +101,8 @@ class Engine {
   int choose(RoverRun& r);
   int costStep(RoverRun& r);
   int contourStep(RoverRun& r, bool first);
+  bool touchesKnownObstacle(const RoverRun& r, int row, int col) const;
+  bool worthCircling(const RoverRun& r) const;
   int frontierStep(RoverRun& r);
   int bfsToFrontier(RoverRun& r, bool avoidRovers);
   void moveTo(RoverRun& r, int next);
@@ -272,7 +275,7 @@ int Engine::costStep(RoverRun& r) {
   }
   // "When an obstacle is sensed ahead" and it is what stops the rover going straight on, follow
   // its contour instead of turning away (paper 002 §2.2, obstacle circumnavigation).
-  if (p_.circumnavigate && blockedStraightCost < bestCost) {
+  if (p_.circumnavigate && blockedStraightCost < bestCost && worthCircling(r)) {
     r.circling = true;
     r.lineDir = r.heading;
     r.lineOrigin = r.cell;
@@ -284,10 +287,27 @@ int Engine::costStep(RoverRun& r) {
   return best;
 }
 
+bool Engine::worthCircling(const RoverRun& r) const {
+  // Only lanes (orthogonal headings) are followed round an obstacle, only when the line continues
+  // into cells not yet visited beyond it, and never again from a point where circling was given
+  // up: otherwise a rover circles one rock forever, or traces diagonal lanes that leave gaps.
+  if (isDiagonal(r.heading) || r.cell == r.abandonedOrigin) return false;
+  const KnowledgeMap& m = maps_[r.mapId];
+  CellIndex c = g_.cell(r.cell);
+  for (int k = 1;; ++k) {
+    int row = c.row + k * kDirRow[r.heading], col = c.col + k * kDirCol[r.heading];
+    if (!g_.contains(row, col) || !m.inRegion(g_.index(row, col))) return false;
+    CellState s = m.state(g_.index(row, col));
+    if (s != CellState::Obstacle) return s != CellState::Visited;
+  }
+}
+
 int Engine::contourStep(RoverRun& r, bool first) {
   // Right-hand contour following on the 8-grid: on the first step turn left away from the
   // obstacle ahead (straight, L45, L90, ...); afterwards try to turn right as far as possible
   // (R90, R45, straight, L45, ...), which keeps the obstacle on the right.
+  // A candidate must touch a known obstacle: without that, "turn right as far as possible" spins
+  // in open space once the rover has passed the obstacle's last cell.
   static constexpr int kFirst[8] = {0, 1, 2, 3, 4, 5, 6, 7};
   static constexpr int kFollow[8] = {6, 7, 0, 1, 2, 3, 4, 5};
   const int* order = first ? kFirst : kFollow;
@@ -295,9 +315,18 @@ int Engine::contourStep(RoverRun& r, bool first) {
   for (int k = 0; k < kDirections; ++k) {
     int dir = rotateDir(r.heading, order[k]);
     int row = c.row + kDirRow[dir], col = c.col + kDirCol[dir];
-    if (enterable(r, row, col)) return g_.index(row, col);
+    if (enterable(r, row, col) && touchesKnownObstacle(r, row, col)) return g_.index(row, col);
   }
   return -1;
+}
+
+bool Engine::touchesKnownObstacle(const RoverRun& r, int row, int col) const {
+  const KnowledgeMap& m = maps_[r.mapId];
+  for (int d = 0; d < kDirections; ++d) {
+    int rr = row + kDirRow[d], cc = col + kDirCol[d];
+    if (g_.contains(rr, cc) && m.state(g_.index(rr, cc)) == CellState::Obstacle) return true;
+  }
+  return false;
 }
 
 void Engine::afterContourMove(RoverRun& r) {
@@ -313,6 +342,7 @@ void Engine::afterContourMove(RoverRun& r) {
     r.circling = false;
   } else if (r.cell == r.lineOrigin || r.circleSteps > 4 * (g_.rows + g_.cols)) {
     r.circling = false;  // went all the way round (obstacle touches the border): give up
+    r.abandonedOrigin = r.lineOrigin;
   }
 }
 
