@@ -127,6 +127,9 @@ std::vector<double> ArgParser::realList(const std::string& name) const {
   std::vector<double> out;
   auto it = values_.find(name);
   if (it == values_.end()) return out;
+  if (!it->second.empty() && it->second.back() == ',')
+    throw UsageError("invalid value '" + it->second + "' for --" + name +
+                     ": expected comma-separated numbers");
   std::stringstream ss(it->second);
   for (std::string item; std::getline(ss, item, ',');) {
     char* end = nullptr;

@@ -75,10 +75,14 @@ ParamSet readCoverageParamOptions(const ArgParser& a) {
     }
   }
   // Paper 000 eq. 3 has α + β = 1: giving one implies the other.
-  if (set.count("beta") && !set.count("alpha"))
-    set["alpha"] = 1.0 - std::get<double>(set["beta"]);
-  else if (set.count("alpha") && !set.count("beta"))
-    set["beta"] = 1.0 - std::get<double>(set["alpha"]);
+  // Only a weight that is itself in range implies the other, so a bad one is reported by name.
+  auto implies = [&](const char* given, const char* other) {
+    if (!set.count(given) || set.count(other)) return;
+    double v = std::get<double>(set[given]);
+    if (v >= 0.0 && v <= 1.0) set[other] = 1.0 - v;
+  };
+  implies("beta", "alpha");
+  implies("alpha", "beta");
   if (set.count("cost_table") && !set.count("pattern")) set["pattern"] = std::string("custom");
   return set;
 }

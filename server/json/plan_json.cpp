@@ -1,6 +1,7 @@
 #include "server/json/plan_json.hpp"
 
 #include <cmath>
+#include <cstdint>
 
 #include "core/common/error.hpp"
 
@@ -67,10 +68,13 @@ ParamValue paramFromJson(const ParamInfo& info, const json& v) {
       if (!v.is_boolean()) throwInvalidParameter(info.key, "expected true or false");
       return v.get<bool>();
     case ParamType::Int:
+      if (v.is_number_unsigned() && v.get<std::uint64_t>() > INT64_MAX)
+        throwInvalidParameter(info.key, "is out of range");
       if (v.is_number_integer()) return v.get<std::int64_t>();
       if (v.is_number_float()) return v.get<double>();  // 3.0 is accepted, 3.5 rejected later
       throwInvalidParameter(info.key, "expected an integer");
     case ParamType::Real:
+      if (v.is_number_unsigned()) return static_cast<double>(v.get<std::uint64_t>());
       if (v.is_number_integer()) return v.get<std::int64_t>();
       if (v.is_number_float()) return v.get<double>();
       throwInvalidParameter(info.key, "expected a number");

@@ -1,0 +1,145 @@
+#!/usr/bin/env bash
+# roverplan as a user runs it: exit statuses, one-line errors on stderr, the --json shape, and the
+# files a sweep writes. Usage: cli_test.sh path/to/roverplan
+set -u
+
+if [ $# -ne 1 ] || [ ! -x "$1" ]; then
+  echo "usage: $0 path/to/roverplan (got '${1:-}')" >&2
+  exit 1
+fi
+BIN=$1
+TMP=$(mktemp -d "${TMPDIR:-/tmp}/roverplan_cli_test.XXXXXX") || { echo "FAIL: mktemp" >&2; exit 1; }
+trap 'rm -rf "$TMP"' EXIT
+
+passed=0
+OUT=$TMP/stdout
+ERR=$TMP/stderr
+STATUS=0
+
+fail() {
+  echo "FAIL: $*" >&2
+  echo "--- stdout (first 20 lines):" >&2
+  head -n 20 "$OUT" >&2 2>/dev/null
+  echo "--- stderr (first 20 lines):" >&2
+  head -n 20 "$ERR" >&2 2>/dev/null
+  echo "$passed passed, 1 failed"
+  exit 1
+}
+pass() {
+  passed=$((passed + 1))
+  echo "ok: $*"
+}
+# run ARGS...: runs roverplan, capturing stdout, stderr and the exit status.
+run() {
+  "$BIN" "$@" >"$OUT" 2>"$ERR"
+  STATUS=$?
+}
+expect_status() {  # expect_status N DESCRIPTION
+  [ "$STATUS" -eq "$1" ] || fail "$2: expected exit status $1, got $STATUS"
+}
+lines() { wc -l <"$1" | tr -d ' '; }
+
+# --- usage errors -------------------------------------------------------------------------------
+run
+expect_status 2 "roverplan with no arguments"
+grep -q "usage: roverplan" "$OUT" || fail "roverplan with no arguments: no usage text"
+pass "no arguments exits 2 with the usage"
+
+run nope
+expect_status 2 "roverplan nope"
+[ "$(lines "$ERR")" -eq 1 ] || fail "roverplan nope: expected one stderr line, got $(lines "$ERR")"
+grep -q "nope" "$ERR" || fail "roverplan nope: stderr does not name the command"
+pass "unknown command exits 2 with one stderr line"
+
+run coverage --rows abc
+expect_status 2 "roverplan coverage --rows abc"
+[ "$(lines "$ERR")" -eq 1 ] || fail "coverage --rows abc: expected one stderr line, got $(lines "$ERR")"
+grep -q -- "--rows" "$ERR" || fail "coverage --rows abc: stderr does not name --rows"
+[ -s "$OUT" ] && fail "coverage --rows abc: unexpected stdout"
+pass "bad --rows exits 2 with one stderr line naming --rows"
+
+run coverage --frobnicate
+expect_status 2 "roverplan coverage --frobnicate"
+[ "$(lines "$ERR")" -eq 1 ] || fail "coverage --frobnicate: expected one stderr line"
+grep -q -- "--frobnicate" "$ERR" || fail "coverage --frobnicate: stderr does not name --frobnicate"
+pass "unknown option exits 2 naming it"
+
+run coverage --sense 3
+expect_status 2 "roverplan coverage --sense 3"
+[ "$(lines "$ERR")" -eq 1 ] || fail "coverage --sense 3: expected one stderr line"
+grep -q -- "--sense" "$ERR" || fail "coverage --sense 3: stderr does not name --sense"
+pass "out-of-range planner parameter exits 2 naming the option"
+
+# --- help ---------------------------------------------------------------------------------------
+run coverage --help
+expect_status 0 "roverplan coverage --help"
+for opt in --rows --cols --cell --obstacles --seed --rovers --mode --pattern --circumnavigate \
+           --frontier --sense --coverage --alpha --beta --max-steps --json; do
+  grep -q -- "$opt" "$OUT" || fail "coverage --help does not list $opt"
+done
+pass "coverage --help exits 0 and lists every option"
+
+# --- coverage -----------------------------------------------------------------------------------
+run coverage --json --seed 5 --rovers 2
+expect_status 0 "roverplan coverage --json --seed 5 --rovers 2"
+[ "$(lines "$OUT")" -eq 1 ] || fail "coverage --json: expected one stdout line, got $(lines "$OUT")"
+[ -s "$ERR" ] && fail "coverage --json: unexpected stderr"
+python3 -c '
+import json, sys
+d = json.load(sys.stdin)
+m = d["metrics"]
+for k in ("coverage", "moves", "makespan", "path_length_ratio", "distance_m", "energy_j",
+          "max_pitch_deg", "revisits", "unreachable_cells"):
+    assert k in m, "metrics has no " + k
+    assert isinstance(m[k], (int, float)), k + " is not a number"
+assert 0 < m["coverage"] <= 1, "coverage out of range"
+assert len(d["rovers"]) == 2, "expected 2 rovers, got %d" % len(d["rovers"])
+for r in d["rovers"]:
+    assert len(r["path"]) > 0, "empty path"
+    assert all(len(p) == 2 for p in r["path"]), "path point is not [x, y]"
+assert "coverage_vs_moves" in d["series"], "no coverage_vs_moves series"
+assert d["world"]["seed"] == 5, "seed not echoed"
+' <"$OUT" 2>>"$ERR" || fail "coverage --json: JSON check failed"
+pass "coverage --json prints one JSON line with metrics, 2 rovers and the curve"
+
+cp "$OUT" "$TMP/first.json"
+run coverage --json --seed 5 --rovers 2
+expect_status 0 "second roverplan coverage --json --seed 5 --rovers 2"
+cmp -s "$OUT" "$TMP/first.json" || fail "coverage --json: same seed gave different output"
+pass "coverage --json is deterministic for a seed"
+
+run coverage
+expect_status 0 "roverplan coverage"
+grep -q "path length ratio" "$OUT" || fail "coverage summary does not mention 'path length ratio'"
+pass "coverage prints a readable summary"
+
+# --- sweep --------------------------------------------------------------------------------------
+run sweep --preset frontier --runs 4 --out "$TMP/sweep"
+expect_status 0 "roverplan sweep --preset frontier --runs 4"
+[ -s "$TMP/sweep/summary.json" ] || fail "sweep did not write summary.json"
+[ -s "$TMP/sweep/summary.csv" ] || fail "sweep did not write summary.csv"
+python3 -c '
+import json, sys
+d = json.load(open(sys.argv[1]))
+assert d["preset"] == "frontier"
+assert len(d["rows"]) > 0, "no rows"
+assert {r["config"] for r in d["rows"]} == {"spiral", "spiral+frontier"}, "unexpected configs"
+' "$TMP/sweep/summary.json" 2>>"$ERR" || fail "sweep: summary.json check failed"
+head -n 1 "$TMP/sweep/summary.csv" | grep -q "^config,metric" || fail "sweep: bad summary.csv header"
+pass "sweep writes summary.json and summary.csv"
+
+run sweep --preset nope --runs 1
+expect_status 2 "roverplan sweep --preset nope"
+[ "$(lines "$ERR")" -eq 1 ] || fail "sweep --preset nope: expected one stderr line"
+grep -q "nope" "$ERR" || fail "sweep --preset nope: stderr does not name the preset"
+pass "unknown sweep preset exits 2"
+
+# --- bench --------------------------------------------------------------------------------------
+run bench coverage --runs 4
+expect_status 0 "roverplan bench coverage --runs 4"
+grep -q "runs/s" "$OUT" || fail "bench coverage: no runs/s column"
+[ "$(grep -c "^spiral" "$OUT")" -eq 4 ] || fail "bench coverage: expected 4 measurement lines"
+pass "bench coverage prints its figures"
+
+echo "$passed passed, 0 failed"
+exit 0

@@ -1,0 +1,80 @@
+#include <doctest/doctest.h>
+
+#include "core/coverage/coverage_params.hpp"
+
+using namespace rover;
+using namespace rover::coverage;
+
+namespace {
+Error errorOf(const ParamSet& s) {
+  try {
+    parseCoverageParams(s);
+  } catch (const Error& e) {
+    return e;
+  }
+  FAIL("no error thrown");
+  return Error(ErrorCode::InvalidInput, "", "");
+}
+}  // namespace
+
+TEST_CASE("defaults are the documented ones (SPEC §1)") {
+  CoverageParams p = parseCoverageParams({});
+  CHECK(p.mode == TeamMode::Overlap);
+  CHECK(p.pattern == "spiral");
+  CHECK(p.senseRadius == 1);
+  CHECK(p.coverage == 0.95);
+  CHECK(p.alpha == 1.0);
+  CHECK(p.beta == 0.0);
+  CHECK(p.mcVisited == 1.1);
+  CHECK(p.stepBudget(3600) == 72000);
+  CHECK(p.energy.massKg == 7.0);
+  CHECK(p.energy.gravity == 1.62);
+  auto infos = coverageParamTable().infos();
+  for (const auto& i : infos) CHECK_MESSAGE(!i.doc.empty(), i.key);
+}
+
+TEST_CASE("values are typed, ranged and named") {
+  CoverageParams p = parseCoverageParams({{"sense_radius", std::int64_t{2}},
+                                          {"coverage", 0.99},
+                                          {"mode", std::string("voronoi")},
+                                          {"frontier", true},
+                                          {"max_steps", 3.0}});
+  CHECK(p.senseRadius == 2);
+  CHECK(p.coverage == 0.99);
+  CHECK(p.mode == TeamMode::Voronoi);
+  CHECK(p.frontier);
+  CHECK(p.maxSteps == 3);
+
+  Error e = errorOf({{"sense_radius", std::int64_t{3}}});
+  CHECK(e.code() == ErrorCode::InvalidParameter);
+  CHECK(e.field() == "sense_radius");
+  CHECK(std::string(e.what()) == "sense_radius: must be in [1, 2], got 3");
+
+  CHECK(errorOf({{"max_steps", 2.5}}).field() == "max_steps");
+  CHECK(errorOf({{"coverage", 0.0}}).field() == "coverage");
+  CHECK(errorOf({{"coverage", std::string("all")}}).field() == "coverage");
+  CHECK(errorOf({{"frontier", std::int64_t{1}}}).field() == "frontier");
+  CHECK(errorOf({{"mc_visited", 1.0}}).field() == "mc_visited");  // paper 000: >= 1.1
+  CHECK(errorOf({{"pattern", std::string("zigzag")}}).field() == "pattern");
+}
+
+TEST_CASE("unknown keys are rejected with their name") {
+  Error e = errorOf({{"sensing", std::int64_t{1}}});
+  CHECK(e.code() == ErrorCode::UnknownParameter);
+  CHECK(e.field() == "sensing");
+}
+
+TEST_CASE("alpha + beta must be 1 (paper 000 eq. 3)") {
+  CHECK_NOTHROW(parseCoverageParams({{"alpha", 0.3}, {"beta", 0.7}}));
+  Error e = errorOf({{"alpha", 0.5}, {"beta", 0.2}});
+  CHECK(e.field() == "beta");
+}
+
+TEST_CASE("a custom cost table needs pattern custom and the right shape") {
+  CHECK_NOTHROW(parseCoverageParams(
+      {{"pattern", std::string("custom")},
+       {"cost_table", std::vector<double>{0.2, 0.4, 0.1, 0.7, 0.9, 0.8, 0.6, 0.5}}}));
+  CHECK(errorOf({{"pattern", std::string("custom")}}).field() == "cost_table");
+  CHECK(errorOf({{"cost_table", std::vector<double>{0.2, 0.4, 0.1, 0.7, 0.9, 0.8, 0.6, 0.5}}})
+            .field() == "cost_table");
+}
