@@ -14,6 +14,8 @@ void ensureGdal() {
   });
 }
 
-std::string gdalVersion() { return std::string("GDAL ") + GDALVersionInfo("RELEASE_NAME"); }
+std::string gdalVersion() {
+  return std::string("GDAL ") + GDALVersionInfo("RELEASE_NAME");
+}
 
 }  // namespace rover::maps

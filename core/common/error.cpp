@@ -4,10 +4,14 @@ namespace rover {
 
 const char* errorCodeName(ErrorCode code) {
   switch (code) {
-    case ErrorCode::InvalidParameter: return "invalid_parameter";
-    case ErrorCode::UnknownParameter: return "unknown_parameter";
-    case ErrorCode::InvalidInput: return "invalid_input";
-    case ErrorCode::NotFound: return "not_found";
+    case ErrorCode::InvalidParameter:
+      return "invalid_parameter";
+    case ErrorCode::UnknownParameter:
+      return "unknown_parameter";
+    case ErrorCode::InvalidInput:
+      return "invalid_input";
+    case ErrorCode::NotFound:
+      return "not_found";
   }
   return "error";
 }

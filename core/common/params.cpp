@@ -9,11 +9,16 @@ namespace rover {
 
 const char* paramTypeName(ParamType type) {
   switch (type) {
-    case ParamType::Bool: return "bool";
-    case ParamType::Int: return "int";
-    case ParamType::Real: return "real";
-    case ParamType::Choice: return "choice";
-    case ParamType::RealList: return "real_list";
+    case ParamType::Bool:
+      return "bool";
+    case ParamType::Int:
+      return "int";
+    case ParamType::Real:
+      return "real";
+    case ParamType::Choice:
+      return "choice";
+    case ParamType::RealList:
+      return "real_list";
   }
   return "?";
 }
@@ -35,8 +40,8 @@ std::int64_t paramAsInt(const ParamInfo& info, const ParamValue& v) {
   std::int64_t i = 0;
   if (const auto* p = std::get_if<std::int64_t>(&v)) {
     i = *p;
-  } else if (const auto* d = std::get_if<double>(&v); d && std::isfinite(*d) && std::trunc(*d) == *d &&
-                                                      std::fabs(*d) < 9.0e15) {
+  } else if (const auto* d = std::get_if<double>(&v);
+             d && std::isfinite(*d) && std::trunc(*d) == *d && std::fabs(*d) < 9.0e15) {
     i = static_cast<std::int64_t>(*d);
   } else {
     throwInvalidParameter(info.key, "expected an integer");

@@ -1,7 +1,8 @@
 #pragma once
 // Typed planner parameters described as data, so the CLI, the REST API and the web form can list
-// every parameter with its default, unit and explanation, and reject unknown keys or bad values with
-// the field's name. A planner keeps its own typed struct; a ParamTable<T> binds keys to its fields.
+// every parameter with its default, unit and explanation, and reject unknown keys or bad values
+// with the field's name. A planner keeps its own typed struct; a ParamTable<T> binds keys to its
+// fields.
 #include <cstdint>
 #include <functional>
 #include <limits>

@@ -12,6 +12,6 @@ struct Summary {
 };
 
 double percentile(std::vector<double> values, double q);  // q in [0, 100]; empty -> NaN
-Summary summarize(const std::vector<double>& values);       // empty -> count 0, NaN fields
+Summary summarize(const std::vector<double>& values);     // empty -> count 0, NaN fields
 
 }  // namespace rover

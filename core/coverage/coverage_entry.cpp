@@ -20,7 +20,8 @@ std::vector<StartCell> startsToCells(const GridGeometry& g, const std::vector<Ro
 
 std::vector<RoverStart> cellsToStarts(const GridGeometry& g, const std::vector<StartCell>& starts) {
   std::vector<RoverStart> out;
-  for (const auto& s : starts) out.push_back({cellToLocal(g, g.cell(s.cell)), dirToRadians(s.heading)});
+  for (const auto& s : starts)
+    out.push_back({cellToLocal(g, g.cell(s.cell)), dirToRadians(s.heading)});
   return out;
 }
 
@@ -85,7 +86,8 @@ class CoveragePlanner final : public Planner {
   std::string name() const override { return "coverage"; }
   std::string summary() const override {
     return "Myopic grid coverage for one rover or a team (Laîné & Yoshida 2019; Santra et al.), "
-           "spiral/boustrophedon cost tables, circumnavigation, overlap/Voronoi teams, frontier mode.";
+           "spiral/boustrophedon cost tables, circumnavigation, overlap/Voronoi teams, frontier "
+           "mode.";
   }
   std::vector<ParamInfo> params() const override { return coverageParamTable().infos(); }
   void validate(const PlanningProblem& problem, const ParamSet& params) const override {
@@ -107,12 +109,15 @@ class CoveragePlanner final : public Planner {
                  const CancelToken* cancel) const override {
     CoverageParams p = parseCoverageParams(params);
     auto cells = startsToCells(problem.world.geometry(), problem.rovers);
-    return toPlanResult(runCoverage(problem.world, cells, p, sink, cancel), problem.world.geometry());
+    return toPlanResult(runCoverage(problem.world, cells, p, sink, cancel),
+                        problem.world.geometry());
   }
 };
 
 }  // namespace
 
-std::unique_ptr<Planner> makeCoveragePlanner() { return std::make_unique<CoveragePlanner>(); }
+std::unique_ptr<Planner> makeCoveragePlanner() {
+  return std::make_unique<CoveragePlanner>();
+}
 
 }  // namespace rover::coverage

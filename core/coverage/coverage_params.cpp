@@ -47,70 +47,89 @@ ParamInfo choice(std::string key, std::vector<std::string> choices, std::string 
 
 // A real-valued field bound by pointer to member.
 void addReal(ParamTable<P>& t, ParamInfo info, double P::*field) {
-  t.add(std::move(info), [field](const P& p) -> ParamValue { return p.*field; },
-        [field](P& p, const ParamInfo& i, const ParamValue& v) { p.*field = paramAsReal(i, v); });
+  t.add(
+      std::move(info), [field](const P& p) -> ParamValue { return p.*field; },
+      [field](P& p, const ParamInfo& i, const ParamValue& v) { p.*field = paramAsReal(i, v); });
 }
 void addEnergy(ParamTable<P>& t, ParamInfo info, double EnergyModel::*field) {
-  t.add(std::move(info), [field](const P& p) -> ParamValue { return p.energy.*field; },
-        [field](P& p, const ParamInfo& i, const ParamValue& v) {
-          p.energy.*field = paramAsReal(i, v);
-        });
+  t.add(
+      std::move(info), [field](const P& p) -> ParamValue { return p.energy.*field; },
+      [field](P& p, const ParamInfo& i, const ParamValue& v) {
+        p.energy.*field = paramAsReal(i, v);
+      });
 }
 void addFlag(ParamTable<P>& t, ParamInfo info, bool P::*field) {
-  t.add(std::move(info), [field](const P& p) -> ParamValue { return p.*field; },
-        [field](P& p, const ParamInfo& i, const ParamValue& v) {
-          p.*field = paramAsBool(i.key, v);
-        });
+  t.add(
+      std::move(info), [field](const P& p) -> ParamValue { return p.*field; },
+      [field](P& p, const ParamInfo& i, const ParamValue& v) { p.*field = paramAsBool(i.key, v); });
 }
 
 ParamTable<P> buildTable() {
   ParamTable<P> t;
-  t.add(choice("mode", {"overlap", "voronoi"},
-               "Team strategy (paper 002 §2.3): one shared map, or one Voronoi region per rover."),
-        [](const P& p) -> ParamValue {
-          return std::string(p.mode == TeamMode::Overlap ? "overlap" : "voronoi");
-        },
-        [](P& p, const ParamInfo& i, const ParamValue& v) {
-          p.mode = paramAsChoice(i, v) == "overlap" ? TeamMode::Overlap : TeamMode::Voronoi;
-        });
-  t.add(choice("pattern", {"spiral", "boustrophedon", "custom"},
-               "Motion pattern: the static cost table preset, or custom (then give cost_table)."),
-        [](const P& p) -> ParamValue { return p.pattern; },
-        [](P& p, const ParamInfo& i, const ParamValue& v) { p.pattern = paramAsChoice(i, v); });
+  t.add(
+      choice("mode", {"overlap", "voronoi"},
+             "Team strategy (paper 002 §2.3): one shared map, or one Voronoi region per rover."),
+      [](const P& p) -> ParamValue {
+        return std::string(p.mode == TeamMode::Overlap ? "overlap" : "voronoi");
+      },
+      [](P& p, const ParamInfo& i, const ParamValue& v) {
+        p.mode = paramAsChoice(i, v) == "overlap" ? TeamMode::Overlap : TeamMode::Voronoi;
+      });
+  t.add(
+      choice("pattern", {"spiral", "boustrophedon", "custom"},
+             "Motion pattern: the static cost table preset, or custom (then give cost_table)."),
+      [](const P& p) -> ParamValue { return p.pattern; },
+      [](P& p, const ParamInfo& i, const ParamValue& v) { p.pattern = paramAsChoice(i, v); });
   {
     ParamInfo i;
     i.key = "cost_table";
     i.type = ParamType::RealList;
-    i.doc = "Custom static costs: 8 relative to the heading (straight, L45, L90, L135, back, R135, "
-            "R90, R45), optionally followed by 8 absolute (E, NE, N, NW, W, SW, S, SE).";
-    t.add(i, [](const P& p) -> ParamValue { return p.costTable; },
-          [](P& p, const ParamInfo& i, const ParamValue& v) {
-            p.costTable = paramAsRealList(i.key, v);
-          });
-  }
-  addFlag(t, flag("circumnavigate", "Follow an obstacle's contour when it blocks the way ahead, "
-                                    "until the original line is regained (paper 002 §2.2)."),
-          &P::circumnavigate);
-  addFlag(t, flag("frontier", "When every neighbour is visited, take the shortest known path to the "
-                              "nearest unexplored cell; stop when none is reachable (ours)."),
-          &P::frontier);
-  t.add(integer("sense_radius", 1, 2, "cells", "Myopic sensing radius (Chebyshev): 1 = 8 cells, 2 = 24."),
-        [](const P& p) -> ParamValue { return std::int64_t{p.senseRadius}; },
+    i.doc =
+        "Custom static costs: 8 relative to the heading (straight, L45, L90, L135, back, R135, "
+        "R90, R45), optionally followed by 8 absolute (E, NE, N, NW, W, SW, S, SE).";
+    t.add(
+        i, [](const P& p) -> ParamValue { return p.costTable; },
         [](P& p, const ParamInfo& i, const ParamValue& v) {
-          p.senseRadius = static_cast<int>(paramAsInt(i, v));
+          p.costTable = paramAsRealList(i.key, v);
         });
-  addReal(t, real("coverage", 0.01, 1.0, "", "Coverage goal: stop when visited >= goal·(n − known obstacles)."),
+  }
+  addFlag(t,
+          flag("circumnavigate",
+               "Follow an obstacle's contour when it blocks the way ahead, "
+               "until the original line is regained (paper 002 §2.2)."),
+          &P::circumnavigate);
+  addFlag(t,
+          flag("frontier",
+               "When every neighbour is visited, take the shortest known path to the "
+               "nearest unexplored cell; stop when none is reachable (ours)."),
+          &P::frontier);
+  t.add(
+      integer("sense_radius", 1, 2, "cells",
+              "Myopic sensing radius (Chebyshev): 1 = 8 cells, 2 = 24."),
+      [](const P& p) -> ParamValue { return std::int64_t{p.senseRadius}; },
+      [](P& p, const ParamInfo& i, const ParamValue& v) {
+        p.senseRadius = static_cast<int>(paramAsInt(i, v));
+      });
+  addReal(t,
+          real("coverage", 0.01, 1.0, "",
+               "Coverage goal: stop when visited >= goal·(n − known obstacles)."),
           &P::coverage);
-  addReal(t, real("alpha", 0.0, 1.0, "", "Weight of static + visited cost (paper 000 eq. 3); alpha + beta = 1."),
+  addReal(t,
+          real("alpha", 0.0, 1.0, "",
+               "Weight of static + visited cost (paper 000 eq. 3); alpha + beta = 1."),
           &P::alpha);
   addReal(t, real("beta", 0.0, 1.0, "", "Weight of the height difference |Δh| (paper 000 eq. 3)."),
           &P::beta);
-  addReal(t, real("mc_visited", 1.1, 1000.0, "", "Cost added per previous visit of a cell (paper 000: >= 1.1)."),
+  addReal(t,
+          real("mc_visited", 1.1, 1000.0, "",
+               "Cost added per previous visit of a cell (paper 000: >= 1.1)."),
           &P::mcVisited);
-  t.add(integer("max_steps", 0, 1e9, "steps", "Step budget; 0 = 20 × number of cells."),
-        [](const P& p) -> ParamValue { return p.maxSteps; },
-        [](P& p, const ParamInfo& i, const ParamValue& v) { p.maxSteps = paramAsInt(i, v); });
-  addEnergy(t, real("rover_mass", 0.1, 1000.0, "kg", "Rover mass (CLOVER: 7 kg)."), &EnergyModel::massKg);
+  t.add(
+      integer("max_steps", 0, 1e9, "steps", "Step budget; 0 = 20 × number of cells."),
+      [](const P& p) -> ParamValue { return p.maxSteps; },
+      [](P& p, const ParamInfo& i, const ParamValue& v) { p.maxSteps = paramAsInt(i, v); });
+  addEnergy(t, real("rover_mass", 0.1, 1000.0, "kg", "Rover mass (CLOVER: 7 kg)."),
+            &EnergyModel::massKg);
   addEnergy(t, real("gravity", 0.1, 30.0, "m/s²", "Surface gravity (Moon 1.62, Mars 3.71)."),
             &EnergyModel::gravity);
   addEnergy(t, real("rolling_resistance", 0.0, 2.0, "", "Rolling resistance coefficient μ."),

@@ -26,16 +26,18 @@ struct CoverageParams {
   std::vector<double> costTable;   // pattern = custom: 8 relative (+ 8 absolute) costs
   bool circumnavigate = false;
   bool frontier = false;
-  int senseRadius = 1;         // Chebyshev radius, 1 or 2
-  double coverage = 0.95;      // stop goal, fraction of n − O
-  double alpha = 1.0;          // weight of static + visited cost (paper 000 eq. 3)
-  double beta = 0.0;           // weight of |Δh| (paper 000 eq. 3)
-  double mcVisited = 1.1;      // penalty per previous visit (paper 000: >= 1.1)
-  std::int64_t maxSteps = 0;   // 0 = 20·n
+  int senseRadius = 1;        // Chebyshev radius, 1 or 2
+  double coverage = 0.95;     // stop goal, fraction of n − O
+  double alpha = 1.0;         // weight of static + visited cost (paper 000 eq. 3)
+  double beta = 0.0;          // weight of |Δh| (paper 000 eq. 3)
+  double mcVisited = 1.1;     // penalty per previous visit (paper 000: >= 1.1)
+  std::int64_t maxSteps = 0;  // 0 = 20·n
   EnergyModel energy;
 
   MotionCostTable table() const;
-  std::int64_t stepBudget(int cellCount) const { return maxSteps > 0 ? maxSteps : 20LL * cellCount; }
+  std::int64_t stepBudget(int cellCount) const {
+    return maxSteps > 0 ? maxSteps : 20LL * cellCount;
+  }
 };
 
 const ParamTable<CoverageParams>& coverageParamTable();

@@ -15,10 +15,14 @@ namespace rover::coverage {
 
 const char* stopReasonName(StopReason r) {
   switch (r) {
-    case StopReason::GoalReached: return "goal_reached";
-    case StopReason::NothingLeft: return "nothing_left";
-    case StopReason::StepBudget: return "step_budget";
-    case StopReason::Cancelled: return "cancelled";
+    case StopReason::GoalReached:
+      return "goal_reached";
+    case StopReason::NothingLeft:
+      return "nothing_left";
+    case StopReason::StepBudget:
+      return "step_budget";
+    case StopReason::Cancelled:
+      return "cancelled";
   }
   return "?";
 }
@@ -26,7 +30,8 @@ const char* stopReasonName(StopReason r) {
 std::vector<StartCell> randomStarts(const World& world, int count, std::uint64_t seed) {
   std::vector<int> sizes;
   std::vector<int> label = freeComponents(world, sizes);
-  if (sizes.empty()) throw Error(ErrorCode::InvalidInput, "obstacles", "the world has no free cell");
+  if (sizes.empty())
+    throw Error(ErrorCode::InvalidInput, "obstacles", "the world has no free cell");
   int largest = static_cast<int>(std::max_element(sizes.begin(), sizes.end()) - sizes.begin());
   std::vector<int> pool;
   for (int i = 0; i < static_cast<int>(label.size()); ++i)
@@ -57,7 +62,8 @@ struct RoverRun {
   StopReason doneReason = StopReason::GoalReached;
   RoverTrack track;
   // Obstacle circumnavigation (paper 002 §2.2): the line being followed when an obstacle blocked
-  // it, and where; the contour is followed with the obstacle on the right until the line is regained.
+  // it, and where; the contour is followed with the obstacle on the right until the line is
+  // regained.
   bool circling = false;
   int lineDir = 0;
   int lineOrigin = 0;

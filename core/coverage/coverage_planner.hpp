@@ -82,8 +82,8 @@ CoverageResult runCoverage(const World& world, const std::vector<StartCell>& sta
                            const CoverageParams& params, EventSink* sink = nullptr,
                            const CancelToken* cancel = nullptr);
 
-// Moves (of all rovers) at which the team first reached `fraction` of the reachable free cells, read
-// from the run's own curve; -1 if never reached.
+// Moves (of all rovers) at which the team first reached `fraction` of the reachable free cells,
+// read from the run's own curve; -1 if never reached.
 std::int64_t movesToReach(const CoverageResult& result, double fraction);
 
 }  // namespace rover::coverage

@@ -1,7 +1,8 @@
 #pragma once
-// A rover's own map in myopic coverage (papers 002/000 §2): every cell starts Unknown, sensing writes
-// Free/Obstacle, entering writes Visited and counts visits. Counts are kept incrementally; paper
-// 002's Algorithm 1 recounts the whole map every step (lines 10–12), O(n) a step, which we avoid.
+// A rover's own map in myopic coverage (papers 002/000 §2): every cell starts Unknown, sensing
+// writes Free/Obstacle, entering writes Visited and counts visits. Counts are kept incrementally;
+// paper 002's Algorithm 1 recounts the whole map every step (lines 10–12), O(n) a step, which we
+// avoid.
 #include <cstdint>
 #include <vector>
 

@@ -64,8 +64,10 @@ bool ringStaysConnected(const Raster<std::uint8_t>& obs, int row, int col) {
   int root = -1;
   for (int d = 0; d < 8; ++d) {
     if (!freeRing[d]) continue;
-    if (root < 0) root = find(d);
-    else if (find(d) != root) return false;
+    if (root < 0)
+      root = find(d);
+    else if (find(d) != root)
+      return false;
   }
   return true;
 }

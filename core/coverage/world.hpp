@@ -1,6 +1,6 @@
 #pragma once
-// Ground truth for myopic coverage (SPEC §1): a grid of free/obstacle cells and, optionally, heights.
-// Rovers never read this directly except through sensing.
+// Ground truth for myopic coverage (SPEC §1): a grid of free/obstacle cells and, optionally,
+// heights. Rovers never read this directly except through sensing.
 #include <cstdint>
 #include <vector>
 
@@ -20,14 +20,14 @@ struct World {
   int freeCount() const { return geometry().cellCount() - obstacleCount(); }
 };
 
-// Checks that the grid is usable for coverage (square cells, at least 2×2, heights finite and of the
-// same size); throws InvalidInput naming the field otherwise.
+// Checks that the grid is usable for coverage (square cells, at least 2×2, heights finite and of
+// the same size); throws InvalidInput naming the field otherwise.
 void validateWorld(const World& world);
 
 struct WorldParams {
   int rows = 60;
   int cols = 60;
-  double cellSize = 1.0;          // metres
+  double cellSize = 1.0;           // metres
   double obstacleFraction = 0.05;  // of all cells, placed uniformly at random
   std::uint64_t seed = 1;
   // Paper 002 §3.2 forbids free regions sealed off by obstacles for its single-rover study; the
@@ -36,8 +36,9 @@ struct WorldParams {
 };
 
 // Random obstacle world. With allowSealed = false, obstacles are placed one at a time in random
-// order and a placement is skipped when it could split the free space (local 8-ring test, below), so
-// every free cell stays reachable; the obstacle count may then fall short of the target on dense maps.
+// order and a placement is skipped when it could split the free space (local 8-ring test, below),
+// so every free cell stays reachable; the obstacle count may then fall short of the target on dense
+// maps.
 World generateWorld(const WorldParams& params);
 
 // Free cells 8-connected to any of `starts` (flat indices). Diagonal moves between two obstacles

@@ -12,15 +12,21 @@ constexpr int kDirections = 8;
 constexpr std::array<int, 8> kDirCol{1, 1, 0, -1, -1, -1, 0, 1};
 constexpr std::array<int, 8> kDirRow{0, -1, -1, -1, 0, 1, 1, 1};
 
-constexpr bool isDiagonal(int dir) { return (dir & 1) != 0; }
+constexpr bool isDiagonal(int dir) {
+  return (dir & 1) != 0;
+}
 // Direction after turning `rel` steps of 45° counter-clockwise (left); rel may be negative.
-constexpr int rotateDir(int dir, int rel) { return ((dir + rel) % 8 + 8) % 8; }
+constexpr int rotateDir(int dir, int rel) {
+  return ((dir + rel) % 8 + 8) % 8;
+}
 // Signed turn from `from` to `to` in 45° steps, in [-3, 4] (4 = reversal).
 constexpr int turnSteps(int from, int to) {
   int d = ((to - from) % 8 + 8) % 8;
   return d > 4 ? d - 8 : d;
 }
-inline double dirToRadians(int dir) { return dir * std::numbers::pi / 4.0; }
+inline double dirToRadians(int dir) {
+  return dir * std::numbers::pi / 4.0;
+}
 // Nearest of the 8 directions to a heading in radians (counter-clockwise from east).
 inline int radiansToDir(double heading) {
   long k = std::lround(heading / (std::numbers::pi / 4.0));

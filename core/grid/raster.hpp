@@ -1,7 +1,7 @@
 #pragma once
-// A row-major grid of values on Eigen with its geometry and, when it came from a georeferenced file,
-// the GDAL geotransform and CRS carried along unchanged (SPEC §0). The value type of grid_map's
-// layers, reduced to one layer.
+// A row-major grid of values on Eigen with its geometry and, when it came from a georeferenced
+// file, the GDAL geotransform and CRS carried along unchanged (SPEC §0). The value type of
+// grid_map's layers, reduced to one layer.
 #include <Eigen/Core>
 #include <array>
 #include <string>
@@ -12,7 +12,7 @@ namespace rover {
 
 struct GeoReference {
   std::array<double, 6> geotransform{0, 1, 0, 0, 0, -1};  // GDAL order
-  std::string crsWkt;                                       // "" when unknown
+  std::string crsWkt;                                     // "" when unknown
   bool valid = false;
 };
 

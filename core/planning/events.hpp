@@ -1,7 +1,7 @@
 #pragma once
 // What a planner reports while it runs (DESIGN.md: a plain event sink; the server turns events into
-// WebSocket frames on its own strand, a planner thread never touches a socket). All positions are in
-// the local frame of SPEC §0. Default implementations ignore the event, so a sink overrides only
+// WebSocket frames on its own strand, a planner thread never touches a socket). All positions are
+// in the local frame of SPEC §0. Default implementations ignore the event, so a sink overrides only
 // what it wants; a planner handed no sink builds no events at all.
 #include <cstdint>
 #include <span>

@@ -9,7 +9,8 @@ namespace rover {
 void PlannerRegistry::add(std::unique_ptr<Planner> planner) {
   for (const auto& p : planners_)
     if (p->name() == planner->name())
-      throw Error(ErrorCode::InvalidInput, "planner", "planner '" + p->name() + "' registered twice");
+      throw Error(ErrorCode::InvalidInput, "planner",
+                  "planner '" + p->name() + "' registered twice");
   planners_.push_back(std::move(planner));
 }
 
@@ -17,7 +18,8 @@ const Planner& PlannerRegistry::get(const std::string& name) const {
   for (const auto& p : planners_)
     if (p->name() == name) return *p;
   std::string known = join(names(), ", ");
-  throw Error(ErrorCode::NotFound, "planner", "unknown planner '" + name + "' (known: " + known + ")");
+  throw Error(ErrorCode::NotFound, "planner",
+              "unknown planner '" + name + "' (known: " + known + ")");
 }
 
 std::vector<std::string> PlannerRegistry::names() const {

@@ -71,7 +71,8 @@ std::string ArgParser::help() const {
   out << " [options]\n" << summary_ << "\n";
   if (!positionalSpecs_.empty()) {
     out << "\narguments:\n";
-    for (const auto& [name, help] : positionalSpecs_) out << "  " << name << "\n      " << help << "\n";
+    for (const auto& [name, help] : positionalSpecs_)
+      out << "  " << name << "\n      " << help << "\n";
   }
   out << "\noptions:\n";
   for (const auto& s : specs_) {

@@ -32,7 +32,8 @@ class ArgParser {
   bool has(const std::string& name) const { return values_.count(name) > 0; }
   bool isSet(const std::string& flag) const { return has(flag); }
   std::string str(const std::string& name, const std::string& fallback) const;
-  long long integer(const std::string& name, long long fallback, long long min, long long max) const;
+  long long integer(const std::string& name, long long fallback, long long min,
+                    long long max) const;
   double real(const std::string& name, double fallback, double min, double max) const;
   std::vector<double> realList(const std::string& name) const;
   const std::vector<std::string>& positionals() const { return positionalValues_; }

@@ -18,7 +18,8 @@ struct BenchFigures {
   int runs = 0;
 };
 
-// `runs` spiral runs to 95 % on 60×60 with 5 % obstacles (paper 002's default world), seeds 1..runs.
+// `runs` spiral runs to 95 % on 60×60 with 5 % obstacles (paper 002's default world),
+// seeds 1..runs.
 BenchFigures benchCoverage(int runs, unsigned threads, bool frontier) {
   coverage::CoverageParams params;
   params.frontier = frontier;

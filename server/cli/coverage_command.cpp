@@ -11,9 +11,8 @@ namespace rover::cli {
 
 namespace {
 
-void printSummary(std::ostream& out, const coverage::World& world,
-                  const coverage::WorldParams& wp, const coverage::CoverageParams& p, int rovers,
-                  const PlanResult& r) {
+void printSummary(std::ostream& out, const coverage::World& world, const coverage::WorldParams& wp,
+                  const coverage::CoverageParams& p, int rovers, const PlanResult& r) {
   auto m = [&](const char* key) { return r.metric(key); };
   const GridGeometry& g = world.geometry();
   out << std::fixed;
@@ -24,17 +23,17 @@ void printSummary(std::ostream& out, const coverage::World& world,
   out << "planner    " << p.pattern << (p.circumnavigate ? " + circumnavigation" : "")
       << (p.frontier ? " + frontier" : "") << ", " << rovers << " rover(s)"
       << (rovers > 1 ? (p.mode == coverage::TeamMode::Overlap ? ", overlap" : ", voronoi") : "")
-      << ", sense radius " << p.senseRadius << ", goal " << std::setprecision(1)
-      << p.coverage * 100 << " %\n";
+      << ", sense radius " << p.senseRadius << ", goal " << std::setprecision(1) << p.coverage * 100
+      << " %\n";
   out << "stopped    " << r.stopReason << " after " << static_cast<long>(m("steps")) << " steps\n";
   out << std::setprecision(2) << "coverage   " << m("coverage") * 100 << " % of free cells, "
       << m("coverage_reachable") * 100 << " % of reachable\n";
   out << std::setprecision(3) << "moves      " << static_cast<long>(m("moves"))
       << "  path length ratio " << m("path_length_ratio") << "  makespan "
       << static_cast<long>(m("makespan")) << "\n";
-  out << std::setprecision(1) << "distance   " << m("distance_m") << " m   energy "
-      << m("energy_j") << " J   max pitch " << std::setprecision(2) << m("max_pitch_deg")
-      << " deg   revisits " << static_cast<long>(m("revisits")) << "\n";
+  out << std::setprecision(1) << "distance   " << m("distance_m") << " m   energy " << m("energy_j")
+      << " J   max pitch " << std::setprecision(2) << m("max_pitch_deg") << " deg   revisits "
+      << static_cast<long>(m("revisits")) << "\n";
 }
 
 }  // namespace
@@ -59,8 +58,8 @@ int coverageCommand(const std::vector<std::string>& argv, std::ostream& out) {
   try {
     typed = coverage::parseCoverageParams(params);
     problem.world = coverage::generateWorld(wp);
-    problem.rovers = coverage::cellsToStarts(problem.world.geometry(),
-                                             coverage::randomStarts(problem.world, rovers, wp.seed));
+    problem.rovers = coverage::cellsToStarts(
+        problem.world.geometry(), coverage::randomStarts(problem.world, rovers, wp.seed));
     planner.validate(problem, params);
   } catch (const Error& e) {
     throwAsUsage(e);
@@ -79,7 +78,8 @@ int coverageCommand(const std::vector<std::string>& argv, std::ostream& out) {
                   {"seed", wp.seed}};
     nlohmann::json starts = nlohmann::json::array();
     for (const auto& s : problem.rovers)
-      starts.push_back({{"x", s.position.x()}, {"y", s.position.y()},
+      starts.push_back({{"x", s.position.x()},
+                        {"y", s.position.y()},
                         {"heading_deg", s.heading * 180.0 / 3.14159265358979323846}});
     j["starts"] = starts;
     nlohmann::json ps = nlohmann::json::object();

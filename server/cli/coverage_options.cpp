@@ -29,8 +29,9 @@ void addWorldOptions(ArgParser& a) {
   a.option("obstacles", "F", "0.05", "Fraction of cells that are obstacles, placed at random.");
   a.option("seed", "S", "1", "Seed for the obstacles and the rovers' random starts.");
   a.option("rovers", "N", "1", "Number of rovers (random distinct starts and headings).");
-  a.flag("no-sealed", "Forbid free regions sealed off by obstacles (paper 002's single-rover "
-                      "study); by default they may occur and are reported as unreachable.");
+  a.flag("no-sealed",
+         "Forbid free regions sealed off by obstacles (paper 002's single-rover "
+         "study); by default they may occur and are reported as unreachable.");
 }
 
 coverage::WorldParams readWorldOptions(const ArgParser& a) {
@@ -50,13 +51,19 @@ void addCoverageParamOptions(ArgParser& a) {
     if (!info.unit.empty()) help += " [" + info.unit + "]";
     const std::string name = optionForParam(info.key);
     switch (info.type) {
-      case ParamType::Bool: a.flag(name, help); break;
+      case ParamType::Bool:
+        a.flag(name, help);
+        break;
       case ParamType::Choice: {
         a.option(name, join(info.choices, "|"), paramToString(info.defaultValue), help);
         break;
       }
-      case ParamType::RealList: a.option(name, "V,V,...", "", help); break;
-      default: a.option(name, info.type == ParamType::Int ? "N" : "X", paramToString(info.defaultValue), help);
+      case ParamType::RealList:
+        a.option(name, "V,V,...", "", help);
+        break;
+      default:
+        a.option(name, info.type == ParamType::Int ? "N" : "X", paramToString(info.defaultValue),
+                 help);
     }
   }
 }
@@ -67,11 +74,21 @@ ParamSet readCoverageParamOptions(const ArgParser& a) {
     const std::string name = optionForParam(info.key);
     if (!a.has(name)) continue;
     switch (info.type) {
-      case ParamType::Bool: set[info.key] = true; break;
-      case ParamType::Int: set[info.key] = static_cast<std::int64_t>(a.integer(name, 0, INT64_MIN, INT64_MAX)); break;
-      case ParamType::Real: set[info.key] = a.real(name, 0, -1e300, 1e300); break;
-      case ParamType::Choice: set[info.key] = a.str(name, ""); break;
-      case ParamType::RealList: set[info.key] = a.realList(name); break;
+      case ParamType::Bool:
+        set[info.key] = true;
+        break;
+      case ParamType::Int:
+        set[info.key] = static_cast<std::int64_t>(a.integer(name, 0, INT64_MIN, INT64_MAX));
+        break;
+      case ParamType::Real:
+        set[info.key] = a.real(name, 0, -1e300, 1e300);
+        break;
+      case ParamType::Choice:
+        set[info.key] = a.str(name, "");
+        break;
+      case ParamType::RealList:
+        set[info.key] = a.realList(name);
+        break;
     }
   }
   // Paper 000 eq. 3 has α + β = 1: giving one implies the other.

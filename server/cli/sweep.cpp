@@ -19,8 +19,8 @@ std::string percentLabel(double level) {
   return s.str();
 }
 
-SweepConfig single(std::string name, const std::string& pattern, bool circumnavigate,
-                   bool frontier, bool allowSealed, std::vector<double> levels) {
+SweepConfig single(std::string name, const std::string& pattern, bool circumnavigate, bool frontier,
+                   bool allowSealed, std::vector<double> levels) {
   SweepConfig c;
   c.name = std::move(name);
   c.world.rows = c.world.cols = 60;
@@ -36,7 +36,9 @@ SweepConfig single(std::string name, const std::string& pattern, bool circumnavi
 
 }  // namespace
 
-int presetDefaultRuns(const std::string& name) { return name == "frontier" ? 1000 : 3000; }
+int presetDefaultRuns(const std::string& name) {
+  return name == "frontier" ? 1000 : 3000;
+}
 
 std::vector<SweepConfig> sweepPreset(const std::string& name) {
   std::vector<SweepConfig> out;
@@ -95,7 +97,8 @@ SweepOutcome runSweep(const std::vector<SweepConfig>& configs, int runs, std::ui
     coverage::WorldParams wp = c.world;
     wp.seed = seed;
     coverage::World world = coverage::generateWorld(wp);
-    auto res = coverage::runCoverage(world, coverage::randomStarts(world, c.rovers, seed), c.params);
+    auto res =
+        coverage::runCoverage(world, coverage::randomStarts(world, c.rovers, seed), c.params);
     Record& r = records[i];
     const double n = res.metrics.cells;
     for (double level : c.levels) {
@@ -125,7 +128,8 @@ SweepOutcome runSweep(const std::vector<SweepConfig>& configs, int runs, std::ui
       return v;
     };
     auto row = [&](std::string metric, std::vector<double> values) {
-      out.rows.push_back({c.name, std::move(metric), static_cast<std::size_t>(runs), summarize(values)});
+      out.rows.push_back(
+          {c.name, std::move(metric), static_cast<std::size_t>(runs), summarize(values)});
     };
     for (std::size_t li = 0; li < c.levels.size(); ++li)
       row("path_length_ratio@" + percentLabel(c.levels[li]),

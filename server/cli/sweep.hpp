@@ -25,8 +25,8 @@ struct SweepConfig {
 struct SweepRow {
   std::string config;
   std::string metric;
-  std::size_t runs = 0;     // runs in the configuration
-  Summary summary;          // over the runs that have a value (count = those)
+  std::size_t runs = 0;  // runs in the configuration
+  Summary summary;       // over the runs that have a value (count = those)
 };
 
 struct SweepOutcome {

@@ -17,7 +17,8 @@ namespace {
 void printTable(std::ostream& out, const SweepOutcome& o) {
   out << std::left << std::setw(24) << "config" << std::setw(26) << "metric" << std::right
       << std::setw(6) << "n" << std::setw(10) << "mean" << std::setw(10) << "std" << std::setw(10)
-      << "p5" << std::setw(10) << "p50" << std::setw(10) << "p95" << "\n";
+      << "p5" << std::setw(10) << "p50" << std::setw(10) << "p95"
+      << "\n";
   out << std::fixed << std::setprecision(4);
   std::string last;
   for (const auto& r : o.rows) {
@@ -30,7 +31,9 @@ void printTable(std::ostream& out, const SweepOutcome& o) {
   }
 }
 
-nlohmann::json num(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(); }
+nlohmann::json num(double v) {
+  return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json();
+}
 
 void writeFiles(const std::filesystem::path& dir, const std::string& preset, int runs,
                 std::uint64_t seed, unsigned threads, const SweepOutcome& o) {
@@ -40,17 +43,29 @@ void writeFiles(const std::filesystem::path& dir, const std::string& preset, int
   csv << "config,metric,runs,n,mean,std,p5,p50,p95,min,max\n";
   for (const auto& r : o.rows) {
     const Summary& s = r.summary;
-    rows.push_back({{"config", r.config}, {"metric", r.metric}, {"runs", r.runs}, {"n", s.count},
-                    {"mean", num(s.mean)}, {"std", num(s.stddev)}, {"p5", num(s.p5)},
-                    {"p50", num(s.p50)}, {"p95", num(s.p95)}, {"min", num(s.min)},
+    rows.push_back({{"config", r.config},
+                    {"metric", r.metric},
+                    {"runs", r.runs},
+                    {"n", s.count},
+                    {"mean", num(s.mean)},
+                    {"std", num(s.stddev)},
+                    {"p5", num(s.p5)},
+                    {"p50", num(s.p50)},
+                    {"p95", num(s.p95)},
+                    {"min", num(s.min)},
                     {"max", num(s.max)}});
     csv << r.config << "," << r.metric << "," << r.runs << "," << s.count << "," << s.mean << ","
         << s.stddev << "," << s.p5 << "," << s.p50 << "," << s.p95 << "," << s.min << "," << s.max
         << "\n";
   }
-  nlohmann::json j{{"preset", preset},          {"runs_per_config", runs}, {"first_seed", seed},
-                   {"threads", threads},        {"wall_s", o.wallSeconds}, {"total_runs", o.totalRuns},
-                   {"total_moves", o.totalMoves}, {"rows", rows}};
+  nlohmann::json j{{"preset", preset},
+                   {"runs_per_config", runs},
+                   {"first_seed", seed},
+                   {"threads", threads},
+                   {"wall_s", o.wallSeconds},
+                   {"total_runs", o.totalRuns},
+                   {"total_moves", o.totalMoves},
+                   {"rows", rows}};
   std::ofstream(dir / "summary.json") << j.dump(2) << "\n";
   if (!csv) throw UsageError("cannot write to --out " + dir.string());
 }
@@ -58,8 +73,9 @@ void writeFiles(const std::filesystem::path& dir, const std::string& preset, int
 }  // namespace
 
 int sweepCommand(const std::vector<std::string>& argv, std::ostream& out) {
-  ArgParser args("sweep", "Many seeded coverage runs on all cores, summarised as mean, std, p5, "
-                          "p50, p95 per configuration (SPEC §4).");
+  ArgParser args("sweep",
+                 "Many seeded coverage runs on all cores, summarised as mean, std, p5, "
+                 "p50, p95 per configuration (SPEC §4).");
   args.option("preset", "NAME", "", "laine-fig6 | laine-fig8 | frontier (required).");
   args.option("runs", "N", "3000 (frontier: 1000)", "Seeded runs per configuration.");
   args.option("seed", "S", "1", "First seed; runs use seeds S, S+1, ...");

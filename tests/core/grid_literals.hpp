@@ -22,14 +22,18 @@ inline void setHeights(coverage::World& w, const std::vector<std::vector<double>
     for (int c = 0; c < w.geometry().cols; ++c) w.heights(r, c) = h[r][c];
 }
 
-inline int idx(const coverage::World& w, int row, int col) { return w.geometry().index(row, col); }
+inline int idx(const coverage::World& w, int row, int col) {
+  return w.geometry().index(row, col);
+}
 
 // Direction codes: 0 = E, 1 = NE, 2 = N, 3 = NW, 4 = W, 5 = SW, 6 = S, 7 = SE.
 inline coverage::StartCell at(const coverage::World& w, int row, int col, int heading) {
   return {idx(w, row, col), heading};
 }
 
-inline CellIndex cellOf(const coverage::World& w, int index) { return w.geometry().cell(index); }
+inline CellIndex cellOf(const coverage::World& w, int index) {
+  return w.geometry().cell(index);
+}
 
 // A table whose only preference is the order given (lower = preferred), for rule tests.
 inline coverage::CoverageParams withTable(std::vector<double> relative) {

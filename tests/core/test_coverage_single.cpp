@@ -211,11 +211,13 @@ TEST_CASE("same seed, same result; another seed, another result") {
 }
 
 TEST_CASE("distance counts diagonals as √2 cells; path length ratio is moves / n") {
-  World w = test::worldFrom({
-      "...",
-      "...",
-      "...",
-  }, 2.0);
+  World w = test::worldFrom(
+      {
+          "...",
+          "...",
+          "...",
+      },
+      2.0);
   CoverageParams p = onlySteps(test::withTable({0.9, 0.1, 0.5, 0.7, 0.95, 0.8, 0.6, 0.2}), 1);
   auto r = runCoverage(w, {at(w, 2, 0, 0)}, p);  // L45 from east = north-east
   CHECK(cellOf(w, r.rovers[0].cells[1]) == CellIndex{1, 1});

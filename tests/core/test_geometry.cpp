@@ -8,7 +8,7 @@
 using namespace rover;
 
 TEST_CASE("row 0 is north: cell centres in the local frame from the lower-left corner") {
-  GridGeometry g{3, 4, 2.0, 2.0};  // 8 m wide, 6 m tall
+  GridGeometry g{3, 4, 2.0, 2.0};                                 // 8 m wide, 6 m tall
   CHECK(cellToLocal(g, {2, 0}).isApprox(Eigen::Vector2d(1, 1)));  // bottom-left cell
   CHECK(cellToLocal(g, {0, 3}).isApprox(Eigen::Vector2d(7, 5)));  // top-right cell
 }

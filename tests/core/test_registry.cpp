@@ -43,8 +43,8 @@ TEST_CASE("a planner run returns the documented metrics, tracks and curve") {
   PlannerRegistry reg = makeBuiltinRegistry();
   PlanningProblem prob;
   prob.world = coverage::generateWorld({});
-  prob.rovers = coverage::cellsToStarts(prob.world.geometry(),
-                                        coverage::randomStarts(prob.world, 2, 3));
+  prob.rovers =
+      coverage::cellsToStarts(prob.world.geometry(), coverage::randomStarts(prob.world, 2, 3));
   PlanResult r = reg.get("coverage").run(prob, {{"coverage", 0.9}}, nullptr, nullptr);
   for (const char* key : {"coverage", "moves", "makespan", "path_length_ratio", "distance_m",
                           "energy_j", "max_pitch_deg", "revisits", "unreachable_cells"})

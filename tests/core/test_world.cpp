@@ -32,7 +32,7 @@ TEST_CASE("sealed regions: allowed by default and counted, forbidden on request"
     p.allowSealed = false;
     World w = generateWorld(p);
     freeComponents(w, sizes);
-    CHECK(sizes.size() == 1);  // every free cell reachable from every other
+    CHECK(sizes.size() == 1);        // every free cell reachable from every other
     CHECK(w.obstacleCount() > 200);  // the local test skips few placements
   }
   CHECK(sealedWorlds >= 3);  // 30 % obstacles often seal pockets off (7 of these 20 seeds)

@@ -187,8 +187,8 @@ TEST_CASE("coverage: the readable summary") {
   CHECK(contains(text, "path length ratio"));
   CHECK(contains(text, "coverage   "));
   CHECK(contains(text, "energy"));
-  const std::string team = runCoverage(small({"--rovers", "2", "--mode", "voronoi",
-                                              "--pattern", "boustrophedon", "--frontier"}));
+  const std::string team = runCoverage(
+      small({"--rovers", "2", "--mode", "voronoi", "--pattern", "boustrophedon", "--frontier"}));
   CHECK(contains(team, "boustrophedon + frontier, 2 rover(s), voronoi"));
 }
 
@@ -361,8 +361,8 @@ TEST_CASE("sweep --preset laine-fig6 writes summary.json and summary.csv") {
   std::vector<std::string> configs;
   bool sawRatio = false;
   for (const auto& r : j["rows"]) {
-    for (const char* key : {"config", "metric", "runs", "n", "mean", "std", "p5", "p50", "p95",
-                            "min", "max"})
+    for (const char* key :
+         {"config", "metric", "runs", "n", "mean", "std", "p5", "p50", "p95", "min", "max"})
       CHECK(r.contains(key));
     CHECK(r["runs"] == 3);
     CHECK(r["n"].get<int>() <= 3);
@@ -375,8 +375,8 @@ TEST_CASE("sweep --preset laine-fig6 writes summary.json and summary.csv") {
     }
   }
   CHECK(sawRatio);
-  CHECK(configs == std::vector<std::string>{"spiral", "spiral+circ", "boustrophedon",
-                                            "boustrophedon+circ"});
+  CHECK(configs ==
+        std::vector<std::string>{"spiral", "spiral+circ", "boustrophedon", "boustrophedon+circ"});
 
   const std::string csv = readFile(csvPath);
   CHECK(csv.rfind("config,metric", 0) == 0);
@@ -391,9 +391,11 @@ TEST_CASE("sweep results do not depend on the thread count") {
   TempDir one, two;
   std::ostringstream o1, o2;
   REQUIRE(rover::cli::sweepCommand({"--preset", "frontier", "--runs", "3", "--threads", "1",
-                                    "--seed", "7", "--out", one.path.string()}, o1) == 0);
+                                    "--seed", "7", "--out", one.path.string()},
+                                   o1) == 0);
   REQUIRE(rover::cli::sweepCommand({"--preset", "frontier", "--runs", "3", "--threads", "2",
-                                    "--seed", "7", "--out", two.path.string()}, o2) == 0);
+                                    "--seed", "7", "--out", two.path.string()},
+                                   o2) == 0);
   CHECK(readFile(one.path / "summary.csv") == readFile(two.path / "summary.csv"));
   json a = json::parse(readFile(one.path / "summary.json"));
   json b = json::parse(readFile(two.path / "summary.json"));

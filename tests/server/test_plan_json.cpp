@@ -275,7 +275,8 @@ TEST_CASE("paramFromJson: Int") {
   ranged.min = 1;
   ranged.max = 5;
   CHECK(rover::paramAsInt(ranged, f) == 3);
-  CHECK_THROWS_AS(rover::paramAsInt(ranged, rover::json::paramFromJson(i, json(3.5))), rover::Error);
+  CHECK_THROWS_AS(rover::paramAsInt(ranged, rover::json::paramFromJson(i, json(3.5))),
+                  rover::Error);
 
   checkRejected(i, json("2"));
   checkRejected(i, json(true));
