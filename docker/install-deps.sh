@@ -15,6 +15,7 @@ build_pkgs=(
 )
 test_pkgs=(
   gdal-bin   # gdaldem/gdalinfo/ogrinfo: reference outputs the tests compare against
+  time       # /usr/bin/time: peak memory in the benchmark scripts
 )
 runtime_pkgs=(libompl16 libgdal32 libsqlite3-0 gdal-data)
 

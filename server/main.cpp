@@ -18,6 +18,12 @@ const char* kUsage =
     "  sweep      many seeded coverage runs on all cores, summarised (--preset "
     "laine-fig6|laine-fig8|frontier)\n"
     "  bench      benchmarks that print their figures (bench coverage)\n"
+    "  terrain    synthetic moon/mars terrain as a GeoTIFF (the default map)\n"
+    "  traversability  traversability classes and their shares from any DEM GDAL reads\n"
+    "  slope      Horn slope (degrees) as a GeoTIFF, as gdaldem slope\n"
+    "  layer      one terrain layer as a GeoTIFF (elevation, slope, aspect, hillshade, worst-slope)\n"
+    "  pdm        a probability distribution map on a DEM's grid (Gaussians, random, raster)\n"
+    "  render     a colourised PNG of a layer with a legend\n"
     "  version    print versions\n"
     "\n"
     "Run 'roverplan <command> --help' for the options of a command.\n";
@@ -36,6 +42,12 @@ int main(int argc, char** argv) {
     if (command == "coverage") return rover::cli::coverageCommand(args, std::cout);
     if (command == "sweep") return rover::cli::sweepCommand(args, std::cout);
     if (command == "bench") return rover::cli::benchCommand(args, std::cout);
+    if (command == "terrain") return rover::cli::terrainCommand(args, std::cout);
+    if (command == "traversability") return rover::cli::traversabilityCommand(args, std::cout);
+    if (command == "slope") return rover::cli::layerCommand(args, std::cout, "slope");
+    if (command == "layer") return rover::cli::layerCommand(args, std::cout, "");
+    if (command == "pdm") return rover::cli::pdmCommand(args, std::cout);
+    if (command == "render") return rover::cli::renderCommand(args, std::cout);
     if (command == "version" || command == "--version") {
       std::cout << "roverplan 0.1.0 (" << rover::maps::gdalVersion() << ")\n";
       return 0;

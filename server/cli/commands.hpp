@@ -10,5 +10,11 @@ namespace rover::cli {
 int coverageCommand(const std::vector<std::string>& args, std::ostream& out);
 int sweepCommand(const std::vector<std::string>& args, std::ostream& out);
 int benchCommand(const std::vector<std::string>& args, std::ostream& out);
+int terrainCommand(const std::vector<std::string>& args, std::ostream& out);
+int traversabilityCommand(const std::vector<std::string>& args, std::ostream& out);
+// `layer LAYER IN --out F.tif`; with `fixed` = "slope" it is the `slope IN --out F.tif` command.
+int layerCommand(const std::vector<std::string>& args, std::ostream& out, const std::string& fixed);
+int pdmCommand(const std::vector<std::string>& args, std::ostream& out);
+int renderCommand(const std::vector<std::string>& args, std::ostream& out);
 
 }  // namespace rover::cli

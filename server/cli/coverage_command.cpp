@@ -1,25 +1,54 @@
+#include <cmath>
 #include <iomanip>
 #include <iostream>
+#include <numbers>
+#include <optional>
+#include <sstream>
 
 #include "core/coverage/coverage_entry.hpp"
 #include "core/coverage/coverage_params.hpp"
 #include "server/cli/commands.hpp"
+#include "core/coverage/terrain_world.hpp"
 #include "server/cli/coverage_options.hpp"
+#include "server/cli/dem_options.hpp"
 #include "server/json/plan_json.hpp"
 
 namespace rover::cli {
 
 namespace {
 
+// "x,y,deg;x,y,deg" -> rover starts (local frame, heading converted to radians).
+std::vector<RoverStart> readStarts(const ArgParser& args) {
+  std::vector<RoverStart> out;
+  if (!args.has("start")) return out;
+  std::stringstream all(args.str("start", ""));
+  for (std::string one; std::getline(all, one, ';');) {
+    std::vector<double> v;
+    std::stringstream ss(one);
+    for (std::string item; std::getline(ss, item, ',');) {
+      char* end = nullptr;
+      double d = std::strtod(item.c_str(), &end);
+      if (item.empty() || *end != '\0' || !std::isfinite(d))
+        throw UsageError("invalid value for --start: '" + one + "' is not X,Y,DEG");
+      v.push_back(d);
+    }
+    if (v.size() != 3) throw UsageError("invalid value for --start: '" + one + "' is not X,Y,DEG");
+    out.push_back({{v[0], v[1]}, v[2] * std::numbers::pi / 180.0});
+  }
+  if (out.empty() || out.size() > 64) throw UsageError("invalid value for --start: 1 to 64 rovers");
+  return out;
+}
+
 void printSummary(std::ostream& out, const coverage::World& world, const coverage::WorldParams& wp,
                   const coverage::CoverageParams& p, int rovers, const PlanResult& r) {
   auto m = [&](const char* key) { return r.metric(key); };
   const GridGeometry& g = world.geometry();
   out << std::fixed;
-  out << "world      " << g.rows << " x " << g.cols << " cells of " << std::setprecision(2)
+  out << (world.hasHeights() ? "dem world  " : "world      ") << g.rows << " x " << g.cols << " cells of " << std::setprecision(2)
       << g.cellWidth << " m, " << world.obstacleCount() << " obstacles, "
-      << static_cast<long>(m("unreachable_cells")) << " unreachable free cells, seed " << wp.seed
-      << "\n";
+      << static_cast<long>(m("unreachable_cells")) << " unreachable free cells";
+  if (!world.hasHeights()) out << ", seed " << wp.seed;
+  out << "\n";
   out << "planner    " << p.pattern << (p.circumnavigate ? " + circumnavigation" : "")
       << (p.frontier ? " + frontier" : "") << ", " << rovers << " rover(s)"
       << (rovers > 1 ? (p.mode == coverage::TeamMode::Overlap ? ", overlap" : ", voronoi") : "")
@@ -39,8 +68,17 @@ void printSummary(std::ostream& out, const coverage::World& world, const coverag
 }  // namespace
 
 int coverageCommand(const std::vector<std::string>& argv, std::ostream& out) {
-  ArgParser args("coverage", "Myopic coverage path planning on a random grid world (SPEC §1).");
+  ArgParser args("coverage", "Myopic coverage path planning (SPEC §1) on a random grid world, or on "
+                             "a DEM (--dem): impassable cells are obstacles, heights feed β, energy "
+                             "and pitch.");
   addWorldOptions(args);
+  args.option("dem", "FILE", "", "Plan on this DEM instead of a random world.");
+  addDemOptions(args, "coverage-cell", "1.0");
+  args.option("high-risk", "DEG", "10", "With --dem: slope from which a cell is high risk.");
+  args.option("impassable", "DEG", "15", "With --dem: slope from which a cell is an obstacle.");
+  args.option("start", "X,Y,DEG[;X,Y,DEG...]", "random",
+              "Rover starts in the local frame (metres from the lower-left corner) and headings "
+              "(degrees counter-clockwise from east); overrides --rovers.");
   addCoverageParamOptions(args);
   args.flag("json", "Print one JSON object (metrics, per-rover paths, coverage curve).");
   if (!args.parse(argv)) {
@@ -48,20 +86,38 @@ int coverageCommand(const std::vector<std::string>& argv, std::ostream& out) {
     return 0;
   }
   coverage::WorldParams wp = readWorldOptions(args);
-  const int rovers = static_cast<int>(args.integer("rovers", 1, 1, 64));
+  int rovers = static_cast<int>(args.integer("rovers", 1, 1, 64));
   ParamSet params = readCoverageParamOptions(args);
+  std::vector<RoverStart> starts = readStarts(args);
+  if (!starts.empty()) rovers = static_cast<int>(starts.size());
 
   PlannerRegistry registry = makeBuiltinRegistry();
   const Planner& planner = registry.get("coverage");
   coverage::CoverageParams typed;
   PlanningProblem problem;
+  std::optional<maps::LoadedDem> dem;
+  if (args.has("dem")) {
+    terrain::TraversabilityParams tp;
+    tp.highRiskDeg = args.real("high-risk", tp.highRiskDeg, 0.01, 89.0);
+    tp.impassableDeg = args.real("impassable", tp.impassableDeg, 0.01, 89.9);
+    dem = loadDemOrFail(args.str("dem", ""), readDemOptions(args, "coverage-cell", 1.0));
+    try {
+      problem.world = coverage::worldFromDem(dem->dem, tp);
+    } catch (const Error& e) {
+      throwAsUsage(e);
+    }
+  }
   try {
     typed = coverage::parseCoverageParams(params);
-    problem.world = coverage::generateWorld(wp);
-    problem.rovers = coverage::cellsToStarts(
-        problem.world.geometry(), coverage::randomStarts(problem.world, rovers, wp.seed));
+    if (!dem) problem.world = coverage::generateWorld(wp);
+    problem.rovers = !starts.empty()
+                         ? starts
+                         : coverage::cellsToStarts(problem.world.geometry(),
+                                                   coverage::randomStarts(problem.world, rovers, wp.seed));
     planner.validate(problem, params);
   } catch (const Error& e) {
+    if (e.field().rfind("rovers", 0) == 0 && !starts.empty())
+      throw UsageError(std::string("invalid value for --start: ") + e.what());
     throwAsUsage(e);
   }
   PlanResult result = planner.run(problem, params, nullptr, nullptr);
@@ -72,10 +128,15 @@ int coverageCommand(const std::vector<std::string>& argv, std::ostream& out) {
     j["world"] = {{"rows", g.rows},
                   {"cols", g.cols},
                   {"cell_size_m", g.cellWidth},
-                  {"obstacle_fraction", wp.obstacleFraction},
-                  {"obstacles", problem.world.obstacleCount()},
-                  {"sealed_allowed", wp.allowSealed},
-                  {"seed", wp.seed}};
+                  {"obstacles", problem.world.obstacleCount()}};
+    if (dem) {
+      j["world"]["dem"] = dem->info.path;
+      j["world"]["crs"] = dem->info.crsName;
+    } else {
+      j["world"]["obstacle_fraction"] = wp.obstacleFraction;
+      j["world"]["sealed_allowed"] = wp.allowSealed;
+      j["world"]["seed"] = wp.seed;
+    }
     nlohmann::json starts = nlohmann::json::array();
     for (const auto& s : problem.rovers)
       starts.push_back({{"x", s.position.x()},

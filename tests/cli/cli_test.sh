@@ -141,5 +141,64 @@ grep -q "runs/s" "$OUT" || fail "bench coverage: no runs/s column"
 [ "$(grep -c "^spiral" "$OUT")" -eq 4 ] || fail "bench coverage: expected 4 measurement lines"
 pass "bench coverage prints its figures"
 
+# --- terrain commands ---------------------------------------------------------------------------
+run terrain --preset mars --size 64 --cell 0.5 --seed 3 --out "$TMP/t.tif"
+expect_status 0 "terrain --preset mars"
+[ -s "$TMP/t.tif" ] || fail "terrain: no GeoTIFF written"
+pass "terrain writes a GeoTIFF"
+
+run traversability "$TMP/t.tif" --out "$TMP/classes.tif" --json
+expect_status 0 "traversability --json"
+python3 -c '
+import json, sys
+d = json.load(open(sys.argv[1]))
+for k in ("traversable_pct", "high_risk_pct", "impassable_pct", "nodata_pct", "rows", "cols", "cell_size_m"):
+    assert k in d, k
+assert d["rows"] == 64 and d["cols"] == 64 and abs(d["cell_size_m"] - 0.5) < 1e-9
+total = d["traversable_pct"] + d["high_risk_pct"] + d["impassable_pct"] + d["nodata_pct"]
+assert abs(total - 100) < 1e-6, total
+' "$OUT" || fail "traversability --json: bad JSON"
+[ -s "$TMP/classes.tif" ] || fail "traversability --out: no classes GeoTIFF"
+pass "traversability prints the class shares and writes the classes"
+
+printf 'not a raster\n' > "$TMP/notes.txt"
+for bad in "$TMP/notes.txt" "$TMP/missing.tif"; do
+  run traversability "$bad"
+  expect_status 2 "traversability $bad"
+  [ "$(lines "$ERR")" -eq 1 ] || fail "traversability $bad: expected one stderr line"
+  grep -q -- "$bad" "$ERR" || fail "traversability $bad: stderr does not name the file"
+done
+pass "bad DEM files exit 2 with one line naming the file"
+
+run slope "$TMP/t.tif" --out "$TMP/slope.tif"
+expect_status 0 "slope"
+[ -s "$TMP/slope.tif" ] || fail "slope: no GeoTIFF"
+pass "slope writes a GeoTIFF"
+
+run pdm "$TMP/t.tif" --random 4 --seed 2 --out "$TMP/pdm.tif"
+expect_status 0 "pdm --random 4"
+grep -q "total mass 1" "$OUT" || fail "pdm: mass does not sum to 1"
+pass "pdm writes a normalised PDM"
+
+run render slope "$TMP/t.tif" --out "$TMP/slope.png"
+expect_status 0 "render slope"
+head -c 8 "$TMP/slope.png" | od -An -c | grep -q "P   N   G" || fail "render: not a PNG"
+pass "render writes a PNG"
+
+run coverage --dem "$TMP/t.tif" --coverage-cell 1 --start 5,5,0 --json
+expect_status 0 "coverage --dem"
+python3 -c '
+import json, sys
+d = json.load(open(sys.argv[1]))
+assert d["world"]["rows"] == 32, d["world"]
+assert d["metrics"]["coverage"] > 0
+' "$OUT" || fail "coverage --dem: bad JSON"
+pass "coverage on a DEM"
+
+run coverage --dem "$TMP/t.tif" --start 999,5,0
+expect_status 2 "coverage --dem with a start outside the map"
+grep -q -- "--start" "$ERR" || fail "coverage --start outside: stderr does not name --start"
+pass "a start outside the DEM exits 2 naming --start"
+
 echo "$passed passed, 0 failed"
 exit 0

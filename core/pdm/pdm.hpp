@@ -1,0 +1,44 @@
+#pragma once
+// Probability distribution maps: where the science is likely to be (paper 001 eq. 5, SPEC §2).
+// p(x) = Σ_i w_i N(x; μ_i, Σ_i) / Σ_i w_i — with equal weights exactly the paper's
+// (1/G) Σ_{i=1..G} N(x; μ_i, Σ_i). Discretised as probability *mass* per cell, normalised so the
+// valid cells of the map sum to 1.
+#include <Eigen/Core>
+#include <cstdint>
+#include <vector>
+
+#include "core/grid/raster.hpp"
+
+namespace rover::pdm {
+
+struct Gaussian {
+  Eigen::Vector2d mean{0, 0};  // local frame, metres
+  double sigmaX = 1.0;         // metres, along the component's own x axis
+  double sigmaY = 1.0;         // metres, along its y axis
+  double rotation = 0.0;       // radians counter-clockwise from east, of the sigmaX axis
+  double weight = 1.0;         // relative; >= 0
+};
+
+// Throws InvalidParameter naming "components[i].field" for a bad component or an empty list.
+void validateGaussians(const std::vector<Gaussian>& components);
+
+// Mixture density at a local point (per square metre).
+double density(const std::vector<Gaussian>& components, const Eigen::Vector2d& xy);
+
+// Probability mass per cell. Each component is integrated over ±6σ around its mean by sampling
+// every cell on an s×s sub-grid (s grows when σ is small against the cell, so narrow peaks are not
+// missed between cell centres). Cells with valid[i] == 0 (nodata) get 0; `valid` empty = all.
+// Throws InvalidInput if no mass falls on valid cells of the map.
+Raster<float> discretise(const std::vector<Gaussian>& components, const GridGeometry& g,
+                         const std::vector<std::uint8_t>& valid = {});
+
+// G random components (paper 001 §4: G = 4): means uniform over the map, σ uniform in
+// [5 %, 20 %] of the shorter side, rotation uniform, equal weights. Seeded.
+std::vector<Gaussian> randomGaussians(const GridGeometry& g, int count, std::uint64_t seed);
+
+// A PDM given as a raster of non-negative weights on the map's grid: normalised to mass per
+// cell. NaN cells and invalid map cells get 0. Throws InvalidInput on negative or infinite
+// values or a zero total.
+Raster<float> normaliseWeights(const Raster<float>& weights, const std::vector<std::uint8_t>& valid = {});
+
+}  // namespace rover::pdm

@@ -1,0 +1,200 @@
+#include "core/terrain/layers.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+#include "core/common/error.hpp"
+#include "core/common/parallel.hpp"
+
+namespace rover::terrain {
+
+namespace {
+
+constexpr double kRadToDeg = 180.0 / std::numbers::pi;
+constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+
+// The 3×3 window around (r, c), named as in Horn (1981) and gdaldem:
+//   a b c
+//   d e f
+//   g h i
+// Kept in float and summed in float, as gdaldem does (its window type is the band's float): on
+// near-flat cells the aspect is sensitive to that rounding, and we want gdaldem's numbers.
+struct Window {
+  float a, b, c, d, f, g, h, i;
+  bool valid;
+};
+
+Window windowAt(const Dem& dem, int r, int c) {
+  const auto& z = dem.z;
+  Window w{z(r - 1, c - 1), z(r - 1, c), z(r - 1, c + 1), z(r, c - 1),
+           z(r, c + 1),     z(r + 1, c - 1), z(r + 1, c), z(r + 1, c + 1), true};
+  w.valid = !std::isnan(double(w.a) + w.b + w.c + w.d + w.f + w.g + w.h + w.i + z(r, c));
+  return w;
+}
+
+// Horn's gradient with gdaldem's signs: x = ((a+2d+g) − (c+2f+i)) / 8·ewres, which is −∂z/∂x, and
+// y = ((g+2h+i) − (a+2b+c)) / 8·nsres with nsres = −dy on a north-up grid, which is +∂z/∂y.
+template <class Fn>
+Raster<float> mapInterior(const Dem& dem, Fn&& fn) {
+  const GridGeometry& g = dem.geometry();
+  Raster<float> out(g, kNaN);
+  out.geo = dem.z.geo;
+  parallelFor(std::max(0, g.rows - 2), 0, [&](std::size_t k) {
+    const int r = static_cast<int>(k) + 1;
+    const double ewres = dem.dx(r), nsres = -dem.dy();
+    for (int c = 1; c < g.cols - 1; ++c) {
+      Window w = windowAt(dem, r, c);
+      if (!w.valid) continue;
+      const float sx = (w.a + w.d + w.d + w.g) - (w.c + w.f + w.f + w.i);
+      const float sy = (w.g + w.h + w.h + w.i) - (w.a + w.b + w.b + w.c);
+      double x = sx / (8.0 * ewres);
+      double y = sy / (8.0 * nsres);
+      out(r, c) = static_cast<float>(fn(x, y));
+    }
+  });
+  return out;
+}
+
+}  // namespace
+
+Raster<float> slopeHorn(const Dem& dem) {
+  return mapInterior(dem, [](double x, double y) { return std::atan(std::hypot(x, y)) * kRadToDeg; });
+}
+
+Raster<float> aspectHorn(const Dem& dem) {
+  return mapInterior(dem, [](double x, double y) -> double {
+    // Here x = −∂z/∂x and y = ∂z/∂y (north). gdaldem takes atan2 of its unscaled Horn sums,
+    // atan2(dy_rows, −dx) = atan2(−y, x) up to a positive factor per axis, then turns it into
+    // an azimuth clockwise from north. Using the scaled gradient keeps non-square pixels right
+    // and changes nothing for square ones.
+    if (x == 0 && y == 0) return std::numeric_limits<double>::quiet_NaN();  // flat
+    double aspect = std::atan2(-y, x) * kRadToDeg;
+    aspect = aspect > 90.0 ? 450.0 - aspect : 90.0 - aspect;
+    return aspect == 360.0 ? 0.0 : aspect;
+  });
+}
+
+Raster<float> hillshade(const Dem& dem, double azimuthDeg, double altitudeDeg, double zFactor) {
+  const double az = azimuthDeg / kRadToDeg, alt = altitudeDeg / kRadToDeg;
+  const double sinAlt = std::sin(alt), zCosAlt = zFactor * std::cos(alt);
+  const double cosAz = std::cos(az), sinAz = std::sin(az), z2 = zFactor * zFactor;
+  return mapInterior(dem, [=](double x, double y) {
+    // gdaldem: cang = (sin alt − z·cos alt·(y·cos az − x·sin az)) / sqrt(1 + z²(x² + y²)).
+    double cang = (sinAlt - zCosAlt * (y * cosAz - x * sinAz)) / std::sqrt(1 + z2 * (x * x + y * y));
+    return cang <= 0.0 ? 1.0 : 1.0 + 254.0 * cang;
+  });
+}
+
+const char* terrainClassName(TerrainClass c) {
+  switch (c) {
+    case TerrainClass::Traversable: return "traversable";
+    case TerrainClass::HighRisk: return "high_risk";
+    case TerrainClass::Impassable: return "impassable";
+    case TerrainClass::NoData: return "nodata";
+  }
+  return "?";
+}
+
+double ClassShares::percent(TerrainClass c) const {
+  std::int64_t total = counts[0] + counts[1] + counts[2] + counts[3];
+  return total == 0 ? 0.0 : 100.0 * counts[static_cast<int>(c)] / static_cast<double>(total);
+}
+
+Traversability traversability(const Dem& dem, const TraversabilityParams& p, bool keepSlope,
+                              unsigned threads) {
+  if (!(p.highRiskDeg > 0 && p.highRiskDeg < p.impassableDeg && p.impassableDeg < 90))
+    throwInvalidParameter("impassable_deg", "thresholds must satisfy 0 < high risk < impassable < 90");
+  const GridGeometry& g = dem.geometry();
+  Traversability t;
+  t.classes = Raster<std::uint8_t>(g, 0);
+  t.classes.geo = dem.z.geo;
+  if (keepSlope) {
+    t.worstSlopeDeg = Raster<float>(g, kNaN);
+    t.worstSlopeDeg.geo = dem.z.geo;
+  }
+  // Compare |Δh|/d against tan(threshold) instead of taking 8 arctangents per cell.
+  const double tanHigh = std::tan(p.highRiskDeg / kRadToDeg);
+  const double tanImp = std::tan(p.impassableDeg / kRadToDeg);
+  const unsigned nThreads = threads == 0 ? hardwareThreads() : threads;
+  std::vector<std::array<std::int64_t, 4>> partial(g.rows);
+  parallelFor(g.rows, nThreads, [&](std::size_t k) {
+    const int r = static_cast<int>(k);
+    const double dx = dem.dx(r), dy = dem.dy();
+    const float invDx = static_cast<float>(1.0 / dx), invDy = static_cast<float>(1.0 / dy);
+    const float invDiag = static_cast<float>(1.0 / std::hypot(dx, dy));
+    const float inv[8] = {invDx, invDiag, invDy, invDiag, invDx, invDiag, invDy, invDiag};
+    static constexpr int dr[8] = {0, -1, -1, -1, 0, 1, 1, 1};
+    static constexpr int dc[8] = {1, 1, 0, -1, -1, -1, 0, 1};
+    const float* row = &dem.z(r, 0);
+    const float* up = r > 0 ? &dem.z(r - 1, 0) : nullptr;
+    const float* down = r + 1 < g.rows ? &dem.z(r + 1, 0) : nullptr;
+    std::array<std::int64_t, 4> counts{};
+    std::uint8_t* cls = &t.classes(r, 0);
+    for (int c = 0; c < g.cols; ++c) {
+      const float h = row[c];
+      if (std::isnan(h)) {
+        cls[c] = static_cast<std::uint8_t>(TerrainClass::NoData);
+        ++counts[3];
+        continue;
+      }
+      float worst = 0.0f;  // NaN neighbours fail every comparison, so nodata is skipped
+      if (up && down && c > 0 && c + 1 < g.cols) {
+        const float s[8] = {row[c + 1], up[c + 1], up[c],   up[c - 1],
+                            row[c - 1], down[c - 1], down[c], down[c + 1]};
+        for (int n = 0; n < 8; ++n) {
+          float v = std::fabs(s[n] - h) * inv[n];
+          if (v > worst) worst = v;
+        }
+      } else {
+        for (int n = 0; n < 8; ++n) {
+          int rr = r + dr[n], cc = c + dc[n];
+          if (!g.contains(rr, cc)) continue;
+          float v = std::fabs(dem.z(rr, cc) - h) * inv[n];
+          if (v > worst) worst = v;
+        }
+      }
+      TerrainClass k2 = worst >= tanImp    ? TerrainClass::Impassable
+                        : worst >= tanHigh ? TerrainClass::HighRisk
+                                           : TerrainClass::Traversable;
+      cls[c] = static_cast<std::uint8_t>(k2);
+      ++counts[static_cast<int>(k2)];
+      if (keepSlope) t.worstSlopeDeg(r, c) = static_cast<float>(std::atan(worst) * kRadToDeg);
+    }
+    partial[r] = counts;
+  });
+  for (const auto& c : partial)
+    for (int k = 0; k < 4; ++k) t.shares.counts[k] += c[k];
+  return t;
+}
+
+std::optional<SurfacePoint> surfaceAt(const Dem& dem, double x, double y) {
+  const GridGeometry& g = dem.geometry();
+  if (g.rows < 2 || g.cols < 2 || !std::isfinite(x) || !std::isfinite(y)) return std::nullopt;
+  if (x < 0 || y < 0 || x > g.widthMetres() || y > g.heightMetres()) return std::nullopt;
+  // Pixel coordinates of the point relative to cell centres; clamped so points within half a cell
+  // of the border use the outermost square of centres.
+  double u = std::clamp(x / g.cellWidth - 0.5, 0.0, g.cols - 1.0);
+  double v = std::clamp((g.rows - y / g.cellHeight) - 0.5, 0.0, g.rows - 1.0);
+  int c0 = std::min(static_cast<int>(u), g.cols - 2), r0 = std::min(static_cast<int>(v), g.rows - 2);
+  double fu = u - c0, fv = v - r0;
+  double z00 = dem.z(r0, c0), z01 = dem.z(r0, c0 + 1), z10 = dem.z(r0 + 1, c0),
+         z11 = dem.z(r0 + 1, c0 + 1);
+  if (std::isnan(z00 + z01 + z10 + z11)) return std::nullopt;
+  SurfacePoint s;
+  s.height = (1 - fv) * ((1 - fu) * z00 + fu * z01) + fv * ((1 - fu) * z10 + fu * z11);
+  double dzdu = (1 - fv) * (z01 - z00) + fv * (z11 - z10);
+  double dzdv = (1 - fu) * (z10 - z00) + fu * (z11 - z01);
+  s.dzdx = dzdu / dem.dx(std::clamp(static_cast<int>(std::lround(v)), 0, g.rows - 1));
+  s.dzdy = -dzdv / dem.dy();  // v grows southwards
+  return s;
+}
+
+std::optional<Attitude> attitudeAt(const Dem& dem, double x, double y, double heading) {
+  auto s = surfaceAt(dem, x, y);
+  if (!s) return std::nullopt;
+  const double c = std::cos(heading), si = std::sin(heading);
+  return Attitude{std::atan(-s->dzdx * si + s->dzdy * c), std::atan(s->dzdx * c + s->dzdy * si)};
+}
+
+}  // namespace rover::terrain

@@ -1,0 +1,66 @@
+#pragma once
+// Terrain layers from a DEM (SPEC §2), pure functions on Dem values.
+//
+// Display layers use Horn's (1981) 3×3 gradient with exactly gdaldem's definitions, so the two agree
+// number for number: border cells and cells whose window holds nodata are NaN (gdaldem without
+// -compute_edges). The traversability layer is paper 001 §3.4's worst-case 8-neighbour slope.
+#include <array>
+#include <cstdint>
+#include <optional>
+
+#include "core/terrain/dem.hpp"
+
+namespace rover::terrain {
+
+// Horn slope in degrees (gdaldem slope).
+Raster<float> slopeHorn(const Dem& dem);
+// Aspect in degrees clockwise from north, the direction the slope faces (gdaldem aspect); NaN on
+// flat cells as well.
+Raster<float> aspectHorn(const Dem& dem);
+// Shaded relief 1..255 (gdaldem hillshade; azimuth clockwise from north, altitude above horizon).
+Raster<float> hillshade(const Dem& dem, double azimuthDeg = 315.0, double altitudeDeg = 45.0,
+                        double zFactor = 1.0);
+
+enum class TerrainClass : std::uint8_t { Traversable = 0, HighRisk = 1, Impassable = 2, NoData = 3 };
+const char* terrainClassName(TerrainClass c);
+
+struct TraversabilityParams {
+  double highRiskDeg = 10.0;    // paper 001 §3.4: 10° <= θ < 15° is high risk
+  double impassableDeg = 15.0;  // θ >= 15° impassable (paper 004's "10°" is a typo, SPEC §2)
+};
+
+struct ClassShares {
+  std::array<std::int64_t, 4> counts{};  // indexed by TerrainClass
+  double percent(TerrainClass c) const;  // of all cells, nodata included
+};
+
+struct Traversability {
+  Raster<std::uint8_t> classes;  // TerrainClass per cell
+  Raster<float> worstSlopeDeg;   // empty unless asked for (saves 4 bytes a cell on big rasters)
+  ClassShares shares;
+};
+
+// For every cell the slope to each of its 8 neighbours, θ = atan(|Δh| / d) with d the horizontal
+// distance (dx, dy or the diagonal); the cell takes the worst. Neighbours outside the grid or
+// without data are skipped; a cell without data is NoData. `threads` = 0 uses all cores.
+Traversability traversability(const Dem& dem, const TraversabilityParams& params = {},
+                              bool keepSlope = false, unsigned threads = 0);
+
+// Height and gradient at a local point by bilinear interpolation between cell centres
+// (SPEC §2 roll/pitch); nullopt outside the grid or next to nodata.
+struct SurfacePoint {
+  double height = 0;
+  double dzdx = 0;  // east
+  double dzdy = 0;  // north
+};
+std::optional<SurfacePoint> surfaceAt(const Dem& dem, double x, double y);
+
+// Roll and pitch (radians) of a rover at (x, y) with heading ψ (radians counter-clockwise from
+// east): pitch = atan(∇h·(cosψ, sinψ)), roll = atan(∇h·(−sinψ, cosψ)); positive pitch = nose up.
+struct Attitude {
+  double roll = 0;
+  double pitch = 0;
+};
+std::optional<Attitude> attitudeAt(const Dem& dem, double x, double y, double heading);
+
+}  // namespace rover::terrain

@@ -1,0 +1,365 @@
+#include "maps/dem_io.hpp"
+
+#include <cpl_conv.h>
+#include <cpl_error.h>
+#include <gdal.h>
+#include <gdal_utils.h>
+#include <ogr_srs_api.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <memory>
+#include <numbers>
+#include <sstream>
+#include <vector>
+
+#include "core/common/error.hpp"
+#include "core/terrain/layers.hpp"
+#include "maps/gdal_env.hpp"
+
+namespace rover::maps {
+
+namespace {
+
+[[noreturn]] void fail(const std::string& path, const std::string& reason,
+                       const std::string& field = "file") {
+  throw Error(ErrorCode::InvalidInput, field, path + ": " + reason);
+}
+
+std::string gdalMessage() {
+  std::string m = CPLGetLastErrorMsg();
+  return m.empty() ? "" : " (" + m + ")";
+}
+
+struct DatasetCloser {
+  void operator()(void* ds) const {
+    if (ds) GDALClose(ds);
+  }
+};
+using Dataset = std::unique_ptr<void, DatasetCloser>;
+
+std::string num(double v) {
+  std::ostringstream s;
+  s.precision(17);
+  s << v;
+  return s.str();
+}
+
+// Runs GDAL's warper into a lazy in-memory VRT: nothing is read until RasterIO, so the size can be
+// checked against the budget first.
+Dataset warpToVrt(GDALDatasetH src, const std::vector<std::string>& args, const std::string& path) {
+  std::vector<char*> argv;
+  for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+  argv.push_back(nullptr);
+  GDALWarpAppOptions* opts = GDALWarpAppOptionsNew(argv.data(), nullptr);
+  if (!opts) fail(path, "invalid warp options" + gdalMessage());
+  int usageError = 0;
+  CPLErrorReset();
+  GDALDatasetH out = GDALWarp("", nullptr, 1, &src, opts, &usageError);
+  GDALWarpAppOptionsFree(opts);
+  if (!out) fail(path, "cannot crop/resample" + gdalMessage());
+  return Dataset(out);
+}
+
+const char* resamplingFor(const std::string& requested, double from, double to) {
+  if (requested != "auto") return requested.c_str();
+  // Shrinking averages the cells that fall together; enlarging interpolates (issue: terrain).
+  if (to > from * 1.0001) return "average";
+  if (to < from * 0.9999) return "bilinear";
+  return "near";
+}
+
+}  // namespace
+
+LoadedDem loadDem(const std::string& path, const LoadOptions& opt) {
+  ensureGdal();
+  std::error_code ec;
+  if (!std::filesystem::exists(path, ec)) fail(path, "no such file");
+  if (std::filesystem::is_regular_file(path, ec) && std::filesystem::file_size(path, ec) == 0)
+    fail(path, "empty file");
+  if (!(opt.verticalScale != 0) || !std::isfinite(opt.verticalScale))
+    fail(path, "vertical scale must be a finite non-zero number", "vertical_scale");
+  if (opt.cellSize < 0 || !std::isfinite(opt.cellSize))
+    fail(path, "cell size must be a positive number of metres", "cell");
+  const std::vector<std::string> algs{"auto", "near", "average", "bilinear", "cubic"};
+  if (std::find(algs.begin(), algs.end(), opt.resampling) == algs.end())
+    fail(path, "resampling must be auto, near, average, bilinear or cubic", "resampling");
+
+  CPLErrorReset();
+  Dataset src(GDALOpenEx(path.c_str(), GDAL_OF_RASTER | GDAL_OF_READONLY, nullptr, nullptr, nullptr));
+  if (!src) {
+    // A PDS3 product with a detached label: users often pick the .IMG; GDAL opens the .LBL.
+    const std::string ext = std::filesystem::path(path).extension().string();
+    if (ext == ".IMG" || ext == ".img") {
+      for (const char* lbl : {".LBL", ".lbl"}) {
+        auto label = std::filesystem::path(path).replace_extension(lbl);
+        if (std::filesystem::exists(label, ec)) {
+          src.reset(GDALOpenEx(label.c_str(), GDAL_OF_RASTER | GDAL_OF_READONLY, nullptr, nullptr,
+                               nullptr));
+          if (src) break;
+        }
+      }
+    }
+  }
+  if (!src) fail(path, "not a raster GDAL can read" + gdalMessage());
+  if (GDALGetRasterCount(src.get()) < 1) fail(path, "the file holds no raster band");
+
+  LoadedDem out;
+  DemInfo& info = out.info;
+  info.path = path;
+  info.driver = GDALGetDriverShortName(GDALGetDatasetDriver(src.get()));
+  info.sourceCols = GDALGetRasterXSize(src.get());
+  info.sourceRows = GDALGetRasterYSize(src.get());
+  GDALRasterBandH band = GDALGetRasterBand(src.get(), 1);
+  int has = 0;
+  double nodata = GDALGetRasterNoDataValue(band, &has);
+  if (has) info.nodata = nodata;
+  double scale = GDALGetRasterScale(band, &has);
+  info.scale = has && scale != 0 ? scale : 1.0;
+  double offset = GDALGetRasterOffset(band, &has);
+  info.offset = has ? offset : 0.0;
+
+  double gt[6];
+  info.georeferenced = GDALGetGeoTransform(src.get(), gt) == CE_None;
+  if (!info.georeferenced) {
+    // No georeferencing: pixels taken as 1 m, north-up, origin at the lower-left corner.
+    double fallback[6] = {0, 1, 0, static_cast<double>(info.sourceRows), 0, -1};
+    std::copy(fallback, fallback + 6, gt);
+  }
+  OGRSpatialReferenceH srs = GDALGetSpatialRef(src.get());
+  if (srs) {
+    info.crsName = OSRGetName(srs) ? OSRGetName(srs) : "";
+    info.geographic = OSRIsGeographic(srs);
+  }
+
+  // Decide whether the warper has to build the grid: resampling, cropping, a rotated or south-up
+  // geotransform. Otherwise band 1 is read as is.
+  const bool rotated = gt[2] != 0 || gt[4] != 0;
+  const bool southUp = gt[5] > 0;
+  Dataset warped;
+  GDALDatasetH grid = src.get();
+  if (opt.cellSize > 0 || opt.crop || rotated || southUp) {
+    if (!info.georeferenced) fail(path, "cropping or resampling needs a georeferenced file", "crop");
+    std::vector<std::string> args{"-of", "VRT", "-ot", "Float32", "-dstnodata", "nan",
+                                  "-wo", "NUM_THREADS=ALL_CPUS"};
+    if (info.nodata) args.insert(args.end(), {"-srcnodata", num(*info.nodata)});
+    double nativeRes = std::fabs(gt[1]);
+    if (opt.crop) {
+      const auto& c = *opt.crop;
+      if (!(c[2] > 0 && c[3] > 0) || !std::isfinite(c[0] + c[1] + c[2] + c[3]))
+        fail(path, "crop width and height must be positive", "crop");
+      if (!rotated) {
+        double x0 = gt[0], x1 = gt[0] + info.sourceCols * gt[1];
+        double y0 = gt[3] + info.sourceRows * gt[5], y1 = gt[3];
+        if (southUp) std::swap(y0, y1);
+        if (c[0] >= x1 || c[0] + c[2] <= x0 || c[1] >= y1 || c[1] + c[3] <= y0)
+          fail(path, "the crop window lies outside the raster", "crop");
+      }
+      args.insert(args.end(), {"-te", num(c[0]), num(c[1]), num(c[0] + c[2]), num(c[1] + c[3])});
+    }
+    if (opt.cellSize > 0) {
+      double nativeMetres = nativeRes;
+      if (info.geographic) {
+        // Resample in metres: an equidistant cylindrical projection centred on the raster, on the
+        // file's own ellipsoid or sphere.
+        OGRErr e1 = OGRERR_NONE, e2 = OGRERR_NONE;
+        double a = OSRGetSemiMajor(srs, &e1), b = OSRGetSemiMinor(srs, &e2);
+        double unit = OSRGetAngularUnits(srs, nullptr);
+        double lon = gt[0] + gt[1] * info.sourceCols / 2.0, lat = gt[3] + gt[5] * info.sourceRows / 2.0;
+        if (opt.crop) lon = (*opt.crop)[0] + (*opt.crop)[2] / 2, lat = (*opt.crop)[1] + (*opt.crop)[3] / 2;
+        std::string proj = "+proj=eqc +lat_ts=" + num(lat * unit * 180 / std::numbers::pi) +
+                           " +lon_0=" + num(lon * unit * 180 / std::numbers::pi) + " +a=" + num(a) +
+                           " +b=" + num(b) + " +units=m +no_defs";
+        args.insert(args.end(), {"-t_srs", proj});
+        if (opt.crop) {
+          // The crop window stays in the file's own (geographic) units.
+          char* wkt = nullptr;
+          OSRExportToWkt(srs, &wkt);
+          args.insert(args.end(), {"-te_srs", wkt ? wkt : ""});
+          CPLFree(wkt);
+        }
+        nativeMetres = nativeRes * unit * a * std::cos(lat * unit);
+      } else if (srs) {
+        nativeMetres = nativeRes * OSRGetLinearUnits(srs, nullptr);
+      }
+      info.resampling = resamplingFor(opt.resampling, nativeMetres, opt.cellSize);
+      args.insert(args.end(), {"-tr", num(opt.cellSize), num(opt.cellSize), "-r", info.resampling});
+    } else if (!rotated) {
+      info.resampling = opt.resampling == "auto" ? "near" : opt.resampling;
+      args.insert(args.end(), {"-tr", num(std::fabs(gt[1])), num(std::fabs(gt[5])), "-r", info.resampling});
+    } else {
+      info.resampling = opt.resampling == "auto" ? "bilinear" : opt.resampling;
+      args.insert(args.end(), {"-r", info.resampling});
+    }
+    warped = warpToVrt(src.get(), args, path);
+    grid = warped.get();
+    GDALGetGeoTransform(grid, gt);
+    srs = GDALGetSpatialRef(grid);
+  }
+
+  const int cols = GDALGetRasterXSize(grid), rows = GDALGetRasterYSize(grid);
+  if (static_cast<std::int64_t>(cols) * rows > opt.maxCells)
+    fail(path, "raster of " + std::to_string(rows) + " x " + std::to_string(cols) +
+                   " cells exceeds the cell budget of " + std::to_string(opt.maxCells),
+         "max_cells");
+  if (rows < 2 || cols < 2) fail(path, "raster is smaller than 2 x 2 cells");
+
+  // Cell spacing in metres.
+  terrain::Dem& dem = out.dem;
+  double dx = std::fabs(gt[1]), dy = std::fabs(gt[5]);
+  if (srs && OSRIsGeographic(srs)) {
+    // Geographic CRS: metres from the CRS's own ellipsoid — the meridional radius of curvature
+    // M(φ) north-south and N(φ)·cos φ east-west, per row.
+    OGRErr e = OGRERR_NONE;
+    double a = OSRGetSemiMajor(srs, &e), b = OSRGetSemiMinor(srs, &e);
+    double e2 = 1.0 - (b * b) / (a * a), unit = OSRGetAngularUnits(srs, nullptr);
+    auto latOf = [&](double row) { return (gt[3] + row * gt[5]) * unit; };
+    auto M = [&](double phi) {
+      double s = std::sin(phi);
+      return a * (1 - e2) / std::pow(1 - e2 * s * s, 1.5);
+    };
+    auto N = [&](double phi) {
+      double s = std::sin(phi);
+      return a / std::sqrt(1 - e2 * s * s);
+    };
+    dem.rowCellWidth.resize(rows);
+    for (int r = 0; r < rows; ++r) {
+      double phi = latOf(r + 0.5);
+      dem.rowCellWidth[r] = std::max(1e-6, N(phi) * std::cos(phi) * std::fabs(gt[1]) * unit);
+    }
+    double phiC = latOf(rows / 2.0);
+    dy = M(phiC) * std::fabs(gt[5]) * unit;
+    dx = std::max(1e-6, N(phiC) * std::cos(phiC) * std::fabs(gt[1]) * unit);
+  } else if (srs) {
+    double lu = OSRGetLinearUnits(srs, nullptr);
+    dx *= lu;
+    dy *= lu;
+    const char* proj = OSRGetAttrValue(srs, "PROJECTION", 0);
+    if (proj && std::string(proj) == SRS_PT_EQUIRECTANGULAR) {
+      // Equidistant cylindrical (global PDS/ISIS products): x = R(λ−λ0)·cos φts, y = R(φ−φ0), so
+      // one pixel spans dx·cos φ / cos φts on the ground. Without this, slopes towards the poles
+      // of a global map come out far too gentle.
+      OGRErr e = OGRERR_NONE;
+      const double R = OSRGetSemiMajor(srs, &e);
+      const double deg = std::numbers::pi / 180.0;
+      const double phiTs = OSRGetProjParm(srs, SRS_PP_STANDARD_PARALLEL_1, 0.0, &e) * deg;
+      const double phi0 = OSRGetProjParm(srs, SRS_PP_LATITUDE_OF_ORIGIN, 0.0, &e) * deg;
+      const double fn = OSRGetProjParm(srs, SRS_PP_FALSE_NORTHING, 0.0, &e);
+      dem.rowCellWidth.resize(rows);
+      for (int r = 0; r < rows; ++r) {
+        double phi = ((gt[3] + (r + 0.5) * gt[5]) * lu - fn) / R + phi0;
+        dem.rowCellWidth[r] = std::max(1e-6, dx * std::cos(phi) / std::cos(phiTs));
+      }
+      double phiC = ((gt[3] + rows / 2.0 * gt[5]) * lu - fn) / R + phi0;
+      dx = std::max(1e-6, dx * std::cos(phiC) / std::cos(phiTs));
+    }
+  }
+
+  GridGeometry g{rows, cols, dx, dy};
+  dem.z = Raster<float>(g, 0.0f);
+  CPLErrorReset();
+  if (GDALRasterIO(GDALGetRasterBand(grid, 1), GF_Read, 0, 0, cols, rows, dem.z.values.data(), cols,
+                   rows, GDT_Float32, 0, 0) != CE_None)
+    fail(path, "truncated or unreadable raster data" + gdalMessage());
+
+  const bool compareNodata = info.nodata && !warped;
+  const float nodataF = info.nodata ? static_cast<float>(*info.nodata) : 0.0f;
+  const double k = info.scale * opt.verticalScale, o = info.offset * opt.verticalScale;
+  float* z = dem.z.values.data();
+  double lo = INFINITY, hi = -INFINITY;
+  for (std::int64_t i = 0; i < static_cast<std::int64_t>(rows) * cols; ++i) {
+    float v = z[i];
+    if (std::isnan(v) || (compareNodata && v == nodataF)) {
+      z[i] = NAN;
+      ++info.nodataCells;
+      continue;
+    }
+    if (std::isinf(v)) fail(path, "the raster holds infinite values");
+    double h = v * k + o;
+    z[i] = static_cast<float>(h);
+    lo = std::min(lo, h);
+    hi = std::max(hi, h);
+  }
+  if (info.nodataCells == static_cast<std::int64_t>(rows) * cols) fail(path, "every cell is nodata");
+  info.minHeight = lo;
+  info.maxHeight = hi;
+
+  dem.z.geo.valid = info.georeferenced;
+  std::copy(gt, gt + 6, dem.z.geo.geotransform.begin());
+  if (srs) {
+    char* wkt = nullptr;
+    if (OSRExportToWkt(srs, &wkt) == OGRERR_NONE && wkt) dem.z.geo.crsWkt = wkt;
+    CPLFree(wkt);
+  }
+  return out;
+}
+
+namespace {
+
+// Creates PATH.tmp, hands it to `fill`, then renames it over PATH.
+template <class Fill>
+void writeAtomically(const std::string& path, GDALDataType type, const GridGeometry& g,
+                     const GeoReference& geo, Fill&& fill) {
+  ensureGdal();
+  const std::string tmp = path + ".tmp";
+  const char* options[] = {"COMPRESS=DEFLATE", "ZLEVEL=1", "TILED=YES", "BIGTIFF=IF_SAFER", nullptr};
+  GDALDriverH drv = GDALGetDriverByName("GTiff");
+  CPLErrorReset();
+  Dataset ds(GDALCreate(drv, tmp.c_str(), g.cols, g.rows, 1, type, const_cast<char**>(options)));
+  if (!ds) fail(path, "cannot create the GeoTIFF" + gdalMessage(), "out");
+  double gt[6] = {0, g.cellWidth, 0, g.rows * g.cellHeight, 0, -g.cellHeight};
+  if (geo.valid) std::copy(geo.geotransform.begin(), geo.geotransform.end(), gt);
+  GDALSetGeoTransform(ds.get(), gt);
+  if (!geo.crsWkt.empty()) GDALSetProjection(ds.get(), geo.crsWkt.c_str());
+  bool ok = fill(GDALGetRasterBand(ds.get(), 1));
+  ds.reset();  // flushes and closes
+  std::error_code ec;
+  if (!ok || CPLGetLastErrorType() >= CE_Failure) {
+    std::filesystem::remove(tmp, ec);
+    fail(path, "cannot write the GeoTIFF" + gdalMessage(), "out");
+  }
+  // GDAL keeps what TIFF tags cannot hold (category names) in a .aux.xml sidecar: move it along,
+  // sidecar first, so the GeoTIFF never appears without it.
+  if (std::filesystem::exists(tmp + ".aux.xml", ec)) std::filesystem::rename(tmp + ".aux.xml", path + ".aux.xml", ec);
+  std::filesystem::rename(tmp, path, ec);
+  if (ec) fail(path, "cannot move the GeoTIFF into place: " + ec.message(), "out");
+}
+
+}  // namespace
+
+void writeGeoTiff(const std::string& path, const Raster<float>& layer) {
+  constexpr float kNoData = -9999.0f;
+  writeAtomically(path, GDT_Float32, layer.geometry, layer.geo, [&](GDALRasterBandH band) {
+    GDALSetRasterNoDataValue(band, kNoData);
+    const GridGeometry& g = layer.geometry;
+    std::vector<float> row(g.cols);
+    for (int r = 0; r < g.rows; ++r) {
+      for (int c = 0; c < g.cols; ++c) row[c] = std::isnan(layer(r, c)) ? kNoData : layer(r, c);
+      if (GDALRasterIO(band, GF_Write, 0, r, g.cols, 1, row.data(), g.cols, 1, GDT_Float32, 0, 0) !=
+          CE_None)
+        return false;
+    }
+    return true;
+  });
+}
+
+void writeClassesGeoTiff(const std::string& path, const Raster<std::uint8_t>& classes) {
+  writeAtomically(path, GDT_Byte, classes.geometry, classes.geo, [&](GDALRasterBandH band) {
+    GDALSetRasterNoDataValue(band, static_cast<double>(terrain::TerrainClass::NoData));
+    GDALColorTableH ct = GDALCreateColorTable(GPI_RGB);
+    const GDALColorEntry colours[4] = {
+        {46, 160, 67, 255}, {245, 166, 35, 255}, {208, 2, 27, 255}, {0, 0, 0, 0}};
+    for (int i = 0; i < 4; ++i) GDALSetColorEntry(ct, i, &colours[i]);
+    GDALSetRasterColorTable(band, ct);
+    GDALDestroyColorTable(ct);
+    const char* names[] = {"traversable", "high_risk", "impassable", "nodata", nullptr};
+    GDALSetRasterCategoryNames(band, const_cast<char**>(names));
+    const GridGeometry& g = classes.geometry;
+    return GDALRasterIO(band, GF_Write, 0, 0, g.cols, g.rows,
+                        const_cast<std::uint8_t*>(classes.values.data()), g.cols, g.rows, GDT_Byte,
+                        0, 0) == CE_None;
+  });
+}
+
+}  // namespace rover::maps

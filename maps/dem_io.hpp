@@ -1,0 +1,54 @@
+#pragma once
+// DEM files in and layers out, through GDAL (DESIGN.md: maps/). Any raster GDAL reads — GeoTIFF,
+// PDS3 .IMG+.LBL, ISIS3 .cub, PDS4, netCDF, ENVI, ASCII grid… — band 1, with the file's
+// scale/offset applied, nodata respected (NaN in the result), geotransform and CRS kept, rows
+// normalised to north-up, and cell sizes in metres even for geographic CRSs (from the CRS's own
+// ellipsoid or sphere). Optional crop and resampling run through GDAL's warper.
+#include <array>
+#include <cstdint>
+#include <optional>
+#include <string>
+
+#include "core/terrain/dem.hpp"
+
+namespace rover::maps {
+
+struct LoadOptions {
+  double cellSize = 0;  // metres; 0 = the file's own grid
+  // Window in the file's CRS units: lower-left X0, Y0, width W, height H.
+  std::optional<std::array<double, 4>> crop;
+  double verticalScale = 1.0;                // multiplies heights after the file's scale/offset
+  std::int64_t maxCells = 200'000'000;       // refused before anything is allocated
+  std::string resampling = "auto";           // auto | near | average | bilinear | cubic
+};
+
+struct DemInfo {
+  std::string path;
+  std::string driver;        // GDAL short name, e.g. GTiff, PDS, ISIS3
+  int sourceCols = 0, sourceRows = 0;
+  std::string crsName;       // "" when the file has no CRS
+  bool geographic = false;   // pixel size in degrees
+  bool georeferenced = false;
+  double scale = 1.0, offset = 0.0;
+  std::optional<double> nodata;
+  std::int64_t nodataCells = 0;  // in the loaded grid (NaN in the file counts too)
+  double minHeight = 0, maxHeight = 0;
+  std::string resampling;    // what the warper used, "" when the grid was read as is
+};
+
+struct LoadedDem {
+  terrain::Dem dem;
+  DemInfo info;
+};
+
+// Throws rover::Error (InvalidInput, field "file") with a message "PATH: reason" for a missing,
+// empty, truncated or non-raster file, an over-budget size (field "max_cells"), all-nodata,
+// infinite values, or a crop outside the raster (field "crop").
+LoadedDem loadDem(const std::string& path, const LoadOptions& options = {});
+
+// GeoTIFF writers, atomic (temporary file + rename). Float layers: NaN written as nodata -9999.
+// Classes: uint8 with a colour table and category names (terrain::TerrainClass), nodata = 3.
+void writeGeoTiff(const std::string& path, const Raster<float>& layer);
+void writeClassesGeoTiff(const std::string& path, const Raster<std::uint8_t>& classes);
+
+}  // namespace rover::maps

@@ -1,0 +1,50 @@
+#pragma once
+// Colourised PNG renderings of terrain layers with a legend (issue: terrain layers, exports):
+// hillshaded elevation, hillshade, slope, traversability classes, PDM. Encoded with GDAL's PNG
+// driver in memory, so the server can answer with the bytes and the CLI can write them.
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "core/grid/raster.hpp"
+#include "core/terrain/dem.hpp"
+
+namespace rover::maps {
+
+enum class RenderLayer { Elevation, Hillshade, Slope, Traversability, Pdm };
+// "elevation" | "hillshade" | "slope" | "traversability" | "pdm"; throws rover::Error otherwise.
+RenderLayer renderLayerFromName(const std::string& name);
+// The inverse: the layer's name as renderLayerFromName takes it.
+const char* renderLayerName(RenderLayer layer);
+
+// The rasters a rendering may need; only the ones its layer uses must be set.
+struct RenderInput {
+  const terrain::Dem* dem = nullptr;                // Elevation
+  const Raster<float>* hillshade = nullptr;         // Elevation (shading), Hillshade
+  const Raster<float>* slopeDeg = nullptr;          // Slope
+  const Raster<std::uint8_t>* classes = nullptr;    // Traversability (terrain::TerrainClass)
+  const Raster<float>* pdm = nullptr;               // Pdm (probability mass per cell)
+};
+
+struct RenderOptions {
+  int maxSize = 0;      // > 0: downsample (box average) so neither side exceeds it — an overview
+  bool legend = true;   // a legend strip with title, colour bar / class swatches and values
+};
+
+// RGBA image, row-major, 4 bytes a pixel; nodata cells are transparent. With a legend, the map
+// sits at the top-left and the legend strip (opaque) below it; when the map is narrower than the
+// legend's minimum width the area right of the map is transparent.
+struct Image {
+  int width = 0;
+  int height = 0;
+  std::vector<std::uint8_t> rgba;
+};
+
+// Throws rover::Error (InvalidInput, field "layer") when the raster the layer needs is missing or
+// empty, (InvalidInput, field "hillshade") when the shading raster does not match the DEM.
+Image renderLayer(RenderLayer layer, const RenderInput& input, const RenderOptions& options = {});
+// PNG bytes (8-bit RGBA) through GDAL's PNG driver in memory; throws rover::Error (InvalidInput,
+// field "image") for an image whose buffer does not match its size.
+std::vector<std::uint8_t> encodePng(const Image& image);
+
+}  // namespace rover::maps

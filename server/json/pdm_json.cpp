@@ -1,0 +1,66 @@
+#include "server/json/pdm_json.hpp"
+
+#include <numbers>
+
+#include "core/common/error.hpp"
+
+namespace rover::json {
+
+namespace {
+double number(const nlohmann::json& obj, const char* key, std::size_t i, bool required,
+              double fallback) {
+  const std::string field = "components[" + std::to_string(i) + "]." + key;
+  auto it = obj.find(key);
+  if (it == obj.end()) {
+    if (required) throwInvalidParameter(field, "is required");
+    return fallback;
+  }
+  if (!it->is_number()) throwInvalidParameter(field, "must be a number");
+  return it->get<double>();
+}
+}  // namespace
+
+std::vector<pdm::Gaussian> gaussiansFromJson(const nlohmann::json& j) {
+  const nlohmann::json* list = &j;
+  if (j.is_object()) {
+    auto it = j.find("components");
+    if (it == j.end()) throwInvalidParameter("components", "is required");
+    list = &*it;
+  }
+  if (!list->is_array()) throwInvalidParameter("components", "must be an array of Gaussians");
+  std::vector<pdm::Gaussian> out;
+  for (std::size_t i = 0; i < list->size(); ++i) {
+    const auto& c = (*list)[i];
+    if (!c.is_object())
+      throwInvalidParameter("components[" + std::to_string(i) + "]", "must be an object");
+    for (const auto& [key, value] : c.items()) {
+      static const char* known[] = {"x", "y", "sigma_x", "sigma_y", "rotation_deg", "weight"};
+      if (std::find(std::begin(known), std::end(known), key) == std::end(known))
+        throw Error(ErrorCode::UnknownParameter,
+                    "components[" + std::to_string(i) + "]." + key, "unknown field '" + key + "'");
+    }
+    pdm::Gaussian g;
+    g.mean = {number(c, "x", i, true, 0), number(c, "y", i, true, 0)};
+    g.sigmaX = number(c, "sigma_x", i, true, 0);
+    g.sigmaY = number(c, "sigma_y", i, false, g.sigmaX);
+    g.rotation = number(c, "rotation_deg", i, false, 0) * std::numbers::pi / 180.0;
+    g.weight = number(c, "weight", i, false, 1.0);
+    out.push_back(g);
+  }
+  pdm::validateGaussians(out);
+  return out;
+}
+
+nlohmann::json toJson(const std::vector<pdm::Gaussian>& components) {
+  nlohmann::json arr = nlohmann::json::array();
+  for (const auto& g : components)
+    arr.push_back({{"x", g.mean.x()},
+                   {"y", g.mean.y()},
+                   {"sigma_x", g.sigmaX},
+                   {"sigma_y", g.sigmaY},
+                   {"rotation_deg", g.rotation * 180.0 / std::numbers::pi},
+                   {"weight", g.weight}});
+  return {{"components", arr}};
+}
+
+}  // namespace rover::json
