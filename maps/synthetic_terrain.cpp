@@ -31,8 +31,8 @@
 // Tuning target (SPEC §2, paper 001 §3.4 classes on the worst 8-neighbour slope): on the defaults
 // (600 × 600 cells of 0.25 m) roughly 80–95 % traversable (< 10°), 3–15 % high risk and 1–8 %
 // impassable (≥ 15°); their Jezero site had 89.5 / 8.4 / 2.1 %. The impassable share sits in
-// crater walls, ridge crests and rocks rather than everywhere. tests/maps/test_synthetic_terrain.cpp
-// checks those ranges.
+// crater walls, ridge crests and rocks rather than everywhere.
+// tests/maps/test_synthetic_terrain.cpp checks those ranges.
 
 namespace rover::maps {
 namespace {
@@ -75,7 +75,9 @@ constexpr double kGradients[16][2] = {
     {0.9238795325112867, -0.3826834323650898},
 };
 
-double fade(double t) { return t * t * t * (t * (t * 6.0 - 15.0) + 10.0); }
+double fade(double t) {
+  return t * t * t * (t * (t * 6.0 - 15.0) + 10.0);
+}
 
 // One layer of noise: wavelength in metres and a random lattice offset, so that octaves of one
 // seed are unrelated.
@@ -223,16 +225,19 @@ void addRelief(Canvas& canvas, const ReliefSpec& spec, double multiplier, std::u
     octaves.push_back({NoiseLayer::make(rng.next(), lambda), amplitude});
     if (lambda < shortest) break;
   }
-  const std::size_t rough = spec.roughGain > 0 ? std::min<std::size_t>(spec.roughOctaves, octaves.size()) : 0;
+  const std::size_t rough =
+      spec.roughGain > 0 ? std::min<std::size_t>(spec.roughOctaves, octaves.size()) : 0;
   const std::size_t smooth = octaves.size() - rough;
   const NoiseLayer patches = NoiseLayer::make(
-      rng.next(), std::max(spec.patchWavelength, rough ? 6.0 * octaves[smooth].layer.wavelength : 0.0));
+      rng.next(),
+      std::max(spec.patchWavelength, rough ? 6.0 * octaves[smooth].layer.wavelength : 0.0));
   std::vector<double> row(canvas.n), roughRow(canvas.n), maskRow(canvas.n);
   for (int r = 0; r < canvas.n; ++r) {
     const double y = canvas.y(r);
     std::fill(row.begin(), row.end(), 0.0);
     for (std::size_t k = 0; k < smooth; ++k)
-      addNoiseRow(octaves[k].layer, octaves[k].amplitude, y, canvas.x(0), canvas.cell, canvas.n, row.data());
+      addNoiseRow(octaves[k].layer, octaves[k].amplitude, y, canvas.x(0), canvas.cell, canvas.n,
+                  row.data());
     if (rough > 0) {
       std::fill(roughRow.begin(), roughRow.end(), 0.0);
       std::fill(maskRow.begin(), maskRow.end(), 0.0);
@@ -260,13 +265,13 @@ void addRelief(Canvas& canvas, const ReliefSpec& spec, double multiplier, std::u
 
 struct RidgeSpec {
   bool enabled = false;
-  double minWavelength = 8.0;   // metres, drawn uniformly in [min, max] ...
-  double maxWavelength = 14.0;  // ... and never below kMinRidgeCells cells
-  double aspect = 0.04;         // crest height / wavelength
-  int sharpness = 3;            // γ (an integer: u^γ by multiplication)
-  double waviness = 0.35;       // crest displacement amplitude, in wavelengths
+  double minWavelength = 8.0;     // metres, drawn uniformly in [min, max] ...
+  double maxWavelength = 14.0;    // ... and never below kMinRidgeCells cells
+  double aspect = 0.04;           // crest height / wavelength
+  int sharpness = 3;              // γ (an integer: u^γ by multiplication)
+  double waviness = 0.35;         // crest displacement amplitude, in wavelengths
   double coverThreshold = -0.15;  // mask noise level where the field starts ...
-  double coverRamp = 0.35;      // ... and the width of its ramp to full height
+  double coverRamp = 0.35;        // ... and the width of its ramp to full height
 };
 
 constexpr double kMinRidgeCells = 12.0;
@@ -294,7 +299,8 @@ void addRidges(Canvas& canvas, const RidgeSpec& spec, double multiplier, std::ui
     std::fill(wanderRow.begin(), wanderRow.end(), 0.0);
     std::fill(swellRow.begin(), swellRow.end(), 0.0);
     addNoiseRow(mask, 1.0, y, canvas.x(0), canvas.cell, n, maskRow.data());
-    addNoiseRow(wander, spec.waviness * wavelength, y, canvas.x(0), canvas.cell, n, wanderRow.data());
+    addNoiseRow(wander, spec.waviness * wavelength, y, canvas.x(0), canvas.cell, n,
+                wanderRow.data());
     addNoiseRow(swell, 1.0, y, canvas.x(0), canvas.cell, n, swellRow.data());
     for (int c = 0; c < n; ++c) {
       const double m = smoothstep01((maskRow[c] - spec.coverThreshold) / spec.coverRamp);
@@ -321,31 +327,32 @@ void addRidges(Canvas& canvas, const RidgeSpec& spec, double multiplier, std::ui
 // Profile of a fresh simple crater (Pike 1977, lunar simple craters): rim-to-floor depth
 // d ≈ 0.196·D, rim height above the surroundings h_r ≈ 0.036·D. The bowl is a paraboloid
 // (the usual approximation of a simple crater's cross-section), h(r) = h_r − d·(1 − ρ²) for
-// ρ = r/R ≤ 1, relative to the pre-impact surface. Outside, the ejecta blanket thins as h_r·ρ^-3 (McGetchin, Settle & Head 1973),
-// tapered to zero at ρ = kEjectaRadius. Large craters become complex and shallower: depth is capped
-// by the complex-crater law (Pike 1977 for the Moon, d = 1.044·D^0.301 km; Garvin et al. 2003 for
-// Mars, d ≈ 0.36·D^0.49 km).
+// ρ = r/R ≤ 1, relative to the pre-impact surface. Outside, the ejecta blanket thins as h_r·ρ^-3
+// (McGetchin, Settle & Head 1973), tapered to zero at ρ = kEjectaRadius. Large craters become
+// complex and shallower: depth is capped by the complex-crater law (Pike 1977 for the Moon, d
+// = 1.044·D^0.301 km; Garvin et al. 2003 for Mars, d ≈ 0.36·D^0.49 km).
 //
 // Degradation: most small craters are old and shallowed by diffusion (Fassett & Thomson 2014), so
 // each crater gets a uniform age in [0, 1) and a freshness f = exp(−age/τ): diffusion shallows a
 // bowl roughly exponentially in time (Fassett & Thomson 2014), and a small τ means that only the
 // youngest few percent are still sharp, as in an equilibrium population. f scales d/D from
-// kDegradedDepthRatio (f = 0) to the fresh value (f = 1). Craters are stamped oldest first; inside its bowl a crater
-// replaces the older topography by its own bowl in proportion to its freshness (a fresh crater
-// erases what was there, a ghost crater only dents it), and outside it adds its ejecta.
+// kDegradedDepthRatio (f = 0) to the fresh value (f = 1). Craters are stamped oldest first; inside
+// its bowl a crater replaces the older topography by its own bowl in proportion to its freshness
+// (a fresh crater erases what was there, a degraded one only dents it), and outside it adds its
+// ejecta.
 
 struct CraterSpec {
-  double density = 0.0;           // K
-  double minCells = 4.0;          // smallest D in cells (a smaller bowl is not drawn by the grid)
-  double minDiameter = 0.0;       // and in metres
+  double density = 0.0;            // K
+  double minCells = 4.0;           // smallest D in cells (a smaller bowl is not drawn by the grid)
+  double minDiameter = 0.0;        // and in metres
   double maxDiameterFactor = 1.0;  // largest D = factor × site extent ...
-  double maxDiameter = 2.0e5;     // ... and never above this (metres)
+  double maxDiameter = 2.0e5;      // ... and never above this (metres)
   // Above breakDiameter the cumulative law steepens to D^-largeSlope: the production population,
   // not yet in equilibrium (lunar maria: equilibrium up to a few hundred metres, production slope
   // about −3 above; Neukum, Ivanov & Hartmann 2001). Keeps a 10 km site from being all basin.
   double breakDiameter = 1.0e30;
   double largeSlope = 3.0;
-  double freshnessTime = 0.2;     // τ, as a fraction of the oldest age: smaller = fewer fresh
+  double freshnessTime = 0.2;  // τ, as a fraction of the oldest age: smaller = fewer fresh
   // Complex-crater depth d = a·D_km^b km, caps the simple-crater depth for large D.
   double complexDepthA = 1.044;
   double complexDepthB = 0.301;
@@ -353,22 +360,23 @@ struct CraterSpec {
 
 constexpr double kFreshDepthRatio = 0.196;     // Pike 1977
 constexpr double kRimToDepth = 0.036 / 0.196;  // Pike 1977, h_r / d
-constexpr double kDegradedDepthRatio = 0.035;  // a ghost crater, nearly filled
+constexpr double kDegradedDepthRatio = 0.035;  // a heavily degraded, shallow crater
 constexpr double kEjectaRadius = 2.5;          // in crater radii, where the ejecta taper ends
 
 struct Crater {
-  double x = 0, y = 0;     // centre, local metres
-  double radius = 0;       // R = D/2
-  double depth = 0;        // d, rim crest to floor
-  double rim = 0;          // h_r
-  double freshness = 0;    // f in [0, 1]
-  double age = 0;          // sort key, oldest first
+  double x = 0, y = 0;      // centre, local metres
+  double radius = 0;        // R = D/2
+  double depth = 0;         // d, rim crest to floor
+  double rim = 0;           // h_r
+  double freshness = 0;     // f in [0, 1]
+  double age = 0;           // sort key, oldest first
   std::uint64_t order = 0;  // tie-break, keeps the sort deterministic
 };
 
 double freshCraterDepth(const CraterSpec& spec, double diameter) {
   const double simple = kFreshDepthRatio * diameter;
-  const double complex = 1000.0 * spec.complexDepthA * std::pow(diameter / 1000.0, spec.complexDepthB);
+  const double complex =
+      1000.0 * spec.complexDepthA * std::pow(diameter / 1000.0, spec.complexDepthB);
   return std::min(simple, complex);
 }
 
@@ -387,7 +395,8 @@ std::vector<Crater> sampleCraters(const Canvas& canvas, const CraterSpec& spec, 
   const double dBreak = spec.breakDiameter / dMin;
   // N(>δ·dMin) per dMin² of area: k·δ^-2 below the break.
   auto cumulative = [&](double d) {
-    return d <= dBreak ? k / (d * d) : k / (dBreak * dBreak) * std::pow(d / dBreak, -spec.largeSlope);
+    return d <= dBreak ? k / (d * d)
+                       : k / (dBreak * dBreak) * std::pow(d / dBreak, -spec.largeSlope);
   };
   // Octave bins of diameter (split at the break, so each bin follows one power law). Centres
   // fall in the site grown by the ejecta radius of the bin's largest crater, so craters just
@@ -414,12 +423,14 @@ std::vector<Crater> sampleCraters(const Canvas& canvas, const CraterSpec& spec, 
       c.age = rng.uniform();
       c.freshness = std::exp(-c.age / spec.freshnessTime);
       const double ratio =
-          kDegradedDepthRatio + c.freshness * (freshCraterDepth(spec, diameter) / diameter - kDegradedDepthRatio);
+          kDegradedDepthRatio +
+          c.freshness * (freshCraterDepth(spec, diameter) / diameter - kDegradedDepthRatio);
       c.depth = std::max(ratio, 0.0) * diameter;
       c.rim = kRimToDepth * c.depth;
       c.order = craters.size();
       const double reach = kEjectaRadius * c.radius;
-      if (c.x + reach < 0 || c.x - reach > extent || c.y + reach < 0 || c.y - reach > extent) continue;
+      if (c.x + reach < 0 || c.x - reach > extent || c.y + reach < 0 || c.y - reach > extent)
+        continue;
       craters.push_back(c);
     }
   }
@@ -503,13 +514,14 @@ void stampRock(Canvas& canvas, double x, double y, double radius, double height)
         }
       }
       if (sum > 0)
-        canvas.z(r, col) += static_cast<float>(height * sum / (kRockSupersample * kRockSupersample));
+        canvas.z(r, col) +=
+            static_cast<float>(height * sum / (kRockSupersample * kRockSupersample));
     }
   }
 }
 
-void addRocks(Canvas& canvas, const RockSpec& spec, double multiplier, const std::vector<Crater>& craters,
-              std::uint64_t seed) {
+void addRocks(Canvas& canvas, const RockSpec& spec, double multiplier,
+              const std::vector<Crater>& craters, std::uint64_t seed) {
   const double dLo = std::max(kRockMinDiameter, canvas.cell);
   if (!(spec.density * multiplier > 0) || dLo >= kRockMaxDiameter) return;
   const double extent = canvas.extent();
@@ -539,7 +551,8 @@ void addRocks(Canvas& canvas, const RockSpec& spec, double multiplier, const std
     double x = extent * rng.uniform(), y = extent * rng.uniform();
     const double pick = rng.uniform();
     if (!sources.empty() && rng.uniform() < spec.clustered) {
-      const auto at = std::upper_bound(weights.begin(), weights.end(), pick * total) - weights.begin();
+      const auto at =
+          std::upper_bound(weights.begin(), weights.end(), pick * total) - weights.begin();
       const Crater& c = *sources[std::min<std::size_t>(at, sources.size() - 1)];
       // Blocks lie mostly on the upper wall, the rim and the near ejecta.
       const double spread = rng.uniform();  // product of two uniforms: denser near the rim
@@ -633,8 +646,8 @@ terrain::Dem generateTerrain(const SyntheticTerrainParams& params) {
 
   addRelief(canvas, recipe.relief, params.relief, deriveSeed(params.seed, kReliefStream));
   addRidges(canvas, recipe.ridges, params.relief, deriveSeed(params.seed, kRidgeStream));
-  const auto craters =
-      sampleCraters(canvas, recipe.craters, params.craterDensity, deriveSeed(params.seed, kCraterStream));
+  const auto craters = sampleCraters(canvas, recipe.craters, params.craterDensity,
+                                     deriveSeed(params.seed, kCraterStream));
   for (const auto& c : craters) stampCrater(canvas, c);
   addRocks(canvas, recipe.rocks, params.rockDensity, craters, deriveSeed(params.seed, kRockStream));
 

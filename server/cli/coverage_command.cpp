@@ -8,7 +8,10 @@
 #include "core/coverage/coverage_entry.hpp"
 #include "core/coverage/coverage_params.hpp"
 #include "server/cli/commands.hpp"
+#include <fstream>
+
 #include "core/coverage/terrain_world.hpp"
+#include "maps/geojson.hpp"
 #include "server/cli/coverage_options.hpp"
 #include "server/cli/dem_options.hpp"
 #include "server/json/plan_json.hpp"
@@ -80,6 +83,7 @@ int coverageCommand(const std::vector<std::string>& argv, std::ostream& out) {
               "Rover starts in the local frame (metres from the lower-left corner) and headings "
               "(degrees counter-clockwise from east); overrides --rovers.");
   addCoverageParamOptions(args);
+  args.option("geojson", "FILE", "", "Also write the rover paths as GeoJSON in the map's CRS.");
   args.flag("json", "Print one JSON object (metrics, per-rover paths, coverage curve).");
   if (!args.parse(argv)) {
     out << args.help();
@@ -121,6 +125,19 @@ int coverageCommand(const std::vector<std::string>& argv, std::ostream& out) {
     throwAsUsage(e);
   }
   PlanResult result = planner.run(problem, params, nullptr, nullptr);
+  if (args.has("geojson")) {
+    const std::string path = args.str("geojson", "");
+    GeoReference geo = dem ? dem->dem.z.geo : GeoReference{};
+    std::string text;
+    try {
+      text = maps::tracksToGeoJson(result.tracks, problem.world.geometry(), geo);
+    } catch (const Error& e) {
+      throw UsageError(e.what());
+    }
+    std::ofstream f(path);
+    f << text;
+    if (!f) throw UsageError(path + ": cannot write");
+  }
 
   if (args.isSet("json")) {
     nlohmann::json j = json::toJson(result);

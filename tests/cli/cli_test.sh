@@ -185,8 +185,11 @@ expect_status 0 "render slope"
 head -c 8 "$TMP/slope.png" | od -An -c | grep -q "P   N   G" || fail "render: not a PNG"
 pass "render writes a PNG"
 
-run coverage --dem "$TMP/t.tif" --coverage-cell 1 --start 5,5,0 --json
+run coverage --dem "$TMP/t.tif" --coverage-cell 1 --start 5,5,0 --json --geojson "$TMP/paths.geojson"
 expect_status 0 "coverage --dem"
+if command -v ogrinfo >/dev/null; then
+  ogrinfo -ro -al -so "$TMP/paths.geojson" >/dev/null 2>&1 || fail "coverage --geojson: ogrinfo cannot read it"
+fi
 python3 -c '
 import json, sys
 d = json.load(open(sys.argv[1]))

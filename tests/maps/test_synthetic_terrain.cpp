@@ -134,8 +134,9 @@ TEST_CASE("synthetic terrain geometry, georeference and CRS") {
 
 TEST_CASE("synthetic terrain heights are all finite") {
   for (const char* preset : {"moon", "mars"}) {
-    for (const auto& [size, cell] : {std::pair{16, 0.25}, std::pair{600, 0.25}, std::pair{100, 10.0},
-                                     std::pair{64, 1000.0}, std::pair{300, 0.01}}) {
+    for (const auto& [size, cell] :
+         {std::pair{16, 0.25}, std::pair{600, 0.25}, std::pair{100, 10.0}, std::pair{64, 1000.0},
+          std::pair{300, 0.01}}) {
       CAPTURE(preset);
       CAPTURE(size);
       CAPTURE(cell);
@@ -226,8 +227,8 @@ TEST_CASE("synthetic terrain feature multipliers") {
 }
 
 TEST_CASE("synthetic terrain rejects bad parameters, naming the field") {
-  CHECK_THROWS_WITH_AS(generateTerrain(params("venus")), "preset: must be moon or mars, not \"venus\"",
-                       rover::Error);
+  CHECK_THROWS_WITH_AS(generateTerrain(params("venus")),
+                       "preset: must be moon or mars, not \"venus\"", rover::Error);
   CHECK_THROWS_WITH_AS(generateTerrain(params("mars", 15)), "size: must be in [16, 16384] cells",
                        rover::Error);
   CHECK_THROWS_WITH_AS(generateTerrain(params("mars", 600, 0.0)),
