@@ -3,6 +3,7 @@
 # does nothing (no apt-get update, no network). Used by the README's commands, CI and the Dockerfile.
 #   install-deps.sh            build + test packages
 #   install-deps.sh --runtime  only what the roverplan binary needs at run time (container image)
+#   install-deps.sh --bench    the benchmark tools (wrk, nginx)
 set -euo pipefail
 
 build_pkgs=(
@@ -18,12 +19,14 @@ test_pkgs=(
   time       # /usr/bin/time: peak memory in the benchmark scripts
 )
 runtime_pkgs=(libompl16 libgdal32 libsqlite3-0 gdal-data)
+bench_pkgs=(wrk nginx-light time curl)  # tests/bench/*: load generator and the nginx baseline
 
 mode=${1:-all}
 case "$mode" in
   all) want=("${build_pkgs[@]}" "${test_pkgs[@]}") ;;
   --runtime) want=("${runtime_pkgs[@]}") ;;
-  *) echo "install-deps.sh: unknown option '$mode' (use --runtime or nothing)" >&2; exit 2 ;;
+  --bench) want=("${bench_pkgs[@]}") ;;
+  *) echo "install-deps.sh: unknown option '$mode' (use --runtime, --bench or nothing)" >&2; exit 2 ;;
 esac
 
 missing=()

@@ -14,6 +14,7 @@ const char* kUsage =
     "usage: roverplan <command> [options]\n"
     "\n"
     "commands:\n"
+    "  serve      the planning server: REST API, live WebSocket streams, the web page\n"
     "  coverage   myopic coverage path planning on a random grid world (papers 002/000)\n"
     "  sweep      many seeded coverage runs on all cores, summarised (--preset "
     "laine-fig6|laine-fig8|frontier)\n"
@@ -39,6 +40,7 @@ int main(int argc, char** argv) {
   const std::string command = args[0];
   args.erase(args.begin());
   try {
+    if (command == "serve") return rover::cli::serveCommand(args, std::cout);
     if (command == "coverage") return rover::cli::coverageCommand(args, std::cout);
     if (command == "sweep") return rover::cli::sweepCommand(args, std::cout);
     if (command == "bench") return rover::cli::benchCommand(args, std::cout);

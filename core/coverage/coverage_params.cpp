@@ -128,6 +128,8 @@ ParamTable<P> buildTable() {
       integer("max_steps", 0, 1e9, "steps", "Step budget; 0 = 20 × number of cells."),
       [](const P& p) -> ParamValue { return p.maxSteps; },
       [](P& p, const ParamInfo& i, const ParamValue& v) { p.maxSteps = paramAsInt(i, v); });
+  addReal(t, real("coverage_cell", 0.0, 1e5, "m", "Coverage grid cell on a DEM (the map is resampled to it; 0 = the map's own cells)."),
+          &P::coverageCell);
   addEnergy(t, real("rover_mass", 0.1, 1000.0, "kg", "Rover mass (CLOVER: 7 kg)."),
             &EnergyModel::massKg);
   addEnergy(t, real("gravity", 0.1, 30.0, "m/s²", "Surface gravity (Moon 1.62, Mars 3.71)."),

@@ -32,6 +32,9 @@ struct CoverageParams {
   double beta = 0.0;          // weight of |Δh| (paper 000 eq. 3)
   double mcVisited = 1.1;     // penalty per previous visit (paper 000: >= 1.1)
   std::int64_t maxSteps = 0;  // 0 = 20·n
+  // Coverage grid cell on a DEM, metres (0 = the map's own cells). The planner itself runs on
+  // whatever grid it is given; the server and CLI resample the DEM to this before planning.
+  double coverageCell = 1.0;
   EnergyModel energy;
 
   MotionCostTable table() const;

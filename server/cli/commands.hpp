@@ -16,5 +16,6 @@ int traversabilityCommand(const std::vector<std::string>& args, std::ostream& ou
 int layerCommand(const std::vector<std::string>& args, std::ostream& out, const std::string& fixed);
 int pdmCommand(const std::vector<std::string>& args, std::ostream& out);
 int renderCommand(const std::vector<std::string>& args, std::ostream& out);
+int serveCommand(const std::vector<std::string>& args, std::ostream& out);
 
 }  // namespace rover::cli

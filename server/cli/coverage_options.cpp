@@ -47,6 +47,7 @@ coverage::WorldParams readWorldOptions(const ArgParser& a) {
 
 void addCoverageParamOptions(ArgParser& a) {
   for (const ParamInfo& info : coverage::coverageParamTable().infos()) {
+    if (info.key == "coverage_cell") continue;  // --coverage-cell comes with the DEM options
     std::string help = info.doc;
     if (!info.unit.empty()) help += " [" + info.unit + "]";
     const std::string name = optionForParam(info.key);
@@ -72,7 +73,7 @@ ParamSet readCoverageParamOptions(const ArgParser& a) {
   ParamSet set;
   for (const ParamInfo& info : coverage::coverageParamTable().infos()) {
     const std::string name = optionForParam(info.key);
-    if (!a.has(name)) continue;
+    if (!a.has(name) || info.key == "coverage_cell") continue;
     switch (info.type) {
       case ParamType::Bool:
         set[info.key] = true;

@@ -136,7 +136,7 @@ TEST_CASE("synthetic terrain heights are all finite") {
   for (const char* preset : {"moon", "mars"}) {
     for (const auto& [size, cell] :
          {std::pair{16, 0.25}, std::pair{600, 0.25}, std::pair{100, 10.0}, std::pair{64, 1000.0},
-          std::pair{300, 0.01}}) {
+          std::pair{300, 0.01}, std::pair{16, 1e-300}}) {
       CAPTURE(preset);
       CAPTURE(size);
       CAPTURE(cell);

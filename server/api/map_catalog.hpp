@@ -1,0 +1,70 @@
+#pragma once
+// Maps and PDMs of the server: imports uploaded DEMs (any GDAL format, also PDS3 pairs and zips)
+// into the data dir, keeps recently used maps loaded, and produces layers (PNG/GeoTIFF/raw float32)
+// on demand, cached as files next to the map.
+#include <list>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <vector>
+
+#include "core/pdm/pdm.hpp"
+#include "core/terrain/layers.hpp"
+#include "server/store/data_dir.hpp"
+#include "server/store/database.hpp"
+
+namespace rover::api {
+
+struct MapData {
+  store::MapRecord record;
+  terrain::Dem dem;
+  terrain::Traversability traversability;
+  std::vector<std::uint8_t> valid;  // cells with data
+};
+
+struct UploadedFile {
+  std::string path;      // where the bytes are now (moved away on import)
+  std::string filename;  // the client's name for it ("" when unknown)
+};
+
+class MapCatalog {
+ public:
+  MapCatalog(store::Database& db, store::DataDir& dir, std::int64_t maxCells = 50'000'000);
+
+  // Validates and stores a DEM; throws http::ApiError 400 (field "file"/"cell"/"name") on bad input.
+  store::MapRecord importDem(const std::vector<UploadedFile>& files, const std::string& name,
+                             double cellSize);
+  // The generated default map (synthetic Mars, 600×600 × 0.25 m, seed 1), created if no map exists.
+  void ensureDefaultMap();
+  // Throws ApiError 404 (field "id") for an unknown map.
+  std::shared_ptr<const MapData> get(const std::string& id);
+  void remove(const std::string& id);
+
+  // The map resampled to a coverage cell size (cached per cell size).
+  std::shared_ptr<const terrain::Dem> demAtCell(const std::string& id, double cellSize);
+
+  // A layer file (elevation|hillshade|slope|traversability|pdm) as png/tif/f32, created on first
+  // use; `max` > 0 for a downsampled PNG overview. Returns the file path.
+  std::string layerFile(const std::string& id, const std::string& layer, const std::string& format,
+                        int max, const std::string& pdmId);
+
+  // PDMs: from JSON ({"components":[...]} or {"random": G, "seed": S}) or a raster upload.
+  store::PdmRecord createPdm(const std::string& mapId, const std::string& name,
+                             const std::vector<pdm::Gaussian>& components, const nlohmann::json& meta);
+  store::PdmRecord createPdmFromRaster(const std::string& mapId, const std::string& name,
+                                       const std::string& rasterPath);
+  Raster<float> pdmMass(const std::string& pdmId);
+  std::string pdmFile(const std::string& pdmId) const;
+
+ private:
+  std::shared_ptr<const MapData> loadFromDisk(const store::MapRecord& r);
+
+  store::Database& db_;
+  store::DataDir& dir_;
+  std::int64_t maxCells_;
+  std::mutex mutex_;  // guards the caches and layer creation
+  std::list<std::shared_ptr<const MapData>> cache_;  // most recent first, a few maps
+  std::list<std::pair<std::string, std::shared_ptr<const terrain::Dem>>> cellCache_;
+};
+
+}  // namespace rover::api

@@ -1,0 +1,85 @@
+// roverplan serve (issue: server): the planning server on Boost.Beast.
+#include <signal.h>
+
+#include <filesystem>
+#include <iostream>
+
+#include "core/common/parallel.hpp"
+#include "server/api/map_catalog.hpp"
+#include "server/api/routes.hpp"
+#include "server/cli/arg_parser.hpp"
+#include "server/cli/commands.hpp"
+#include "server/http/http_server.hpp"
+#include "server/missions/mission_manager.hpp"
+
+namespace rover::cli {
+
+int serveCommand(const std::vector<std::string>& argv, std::ostream& out) {
+  ArgParser a("serve", "The planning server: REST API, live WebSocket streams, the web page.");
+  a.option("host", "ADDR", "127.0.0.1", "Address to bind (loopback by default; 0.0.0.0 for all).");
+  a.option("port", "N", "8080", "TCP port (0 = any free port).");
+  a.option("data", "DIR", "roverplan-data", "Data directory (SQLite database, maps, results).");
+  a.option("web", "DIR", ROVER_WEB_DIR, "Static web root served at /.");
+  a.option("token", "T", "", "Require 'Authorization: Bearer T' on every /api route except health.");
+  a.option("workers", "N", "cores", "Missions run in parallel.");
+  a.option("queue", "N", "64", "Missions that may wait; more are refused with 429.");
+  a.option("max-upload-mb", "M", "512", "Largest accepted upload.");
+  a.option("cors", "ORIGIN", "", "Allow cross-origin requests from ORIGIN (off by default).");
+  a.flag("quiet", "Do not log one line per request.");
+  if (!a.parse(argv)) {
+    out << a.help();
+    return 0;
+  }
+  http::ServerConfig config;
+  config.host = a.str("host", config.host);
+  config.port = static_cast<unsigned short>(a.integer("port", 8080, 0, 65535));
+  config.webRoot = a.str("web", ROVER_WEB_DIR);
+  if (!std::filesystem::is_directory(config.webRoot)) config.webRoot.clear();
+  config.token = a.str("token", "");
+  config.corsOrigin = a.str("cors", "");
+  config.maxUploadBytes = static_cast<std::uint64_t>(a.integer("max-upload-mb", 512, 1, 1 << 20)) << 20;
+  config.logRequests = !a.isSet("quiet");
+  const unsigned workers = static_cast<unsigned>(a.integer("workers", hardwareThreads(), 1, 256));
+  const std::size_t queue = static_cast<std::size_t>(a.integer("queue", 64, 0, 100000));
+
+  // Block the stop signals before any thread starts, so only sigwait below receives them.
+  sigset_t stopSignals;
+  sigemptyset(&stopSignals);
+  sigaddset(&stopSignals, SIGINT);
+  sigaddset(&stopSignals, SIGTERM);
+  pthread_sigmask(SIG_BLOCK, &stopSignals, nullptr);
+
+  store::DataDir dir(a.str("data", "roverplan-data"));
+  dir.cleanTmp();  // uploads in flight when the server last died: never visible
+  config.uploadDir = dir.tmpDir();
+  store::Database db(dir.databasePath());
+  int interrupted = db.markUnfinishedInterrupted();
+  api::MapCatalog maps(db, dir);
+  maps.ensureDefaultMap();
+  PlannerRegistry planners = makeBuiltinRegistry();
+  missions::MissionManager manager(db, dir, planners, workers, queue);
+  http::Router router;
+  api::ApiContext ctx{db, dir, maps, manager, planners};
+  api::addApiRoutes(router, ctx);
+  http::HttpServer server(config, router);
+  try {
+    server.start();
+  } catch (const std::exception& e) {
+    throw UsageError(std::string("cannot start the server: ") + e.what());
+  }
+  std::string shownHost = config.host == "0.0.0.0" ? "127.0.0.1" : config.host;
+  out << "roverplan serving on http://" << shownHost << ":" << server.port() << "/  (data: "
+      << std::filesystem::absolute(dir.root()).string() << ", " << workers << " workers"
+      << (config.token.empty() ? "" : ", token required") << ")" << std::endl;
+  if (interrupted > 0) out << interrupted << " mission(s) were running at the last stop: marked interrupted" << std::endl;
+
+  int sig = 0;
+  sigwait(&stopSignals, &sig);
+  out << "stopping (" << (sig == SIGINT ? "SIGINT" : "SIGTERM") << ")..." << std::endl;
+  server.stop();
+  manager.stop();
+  out << "stopped" << std::endl;
+  return 0;
+}
+
+}  // namespace rover::cli

@@ -1,0 +1,614 @@
+#include "server/http/http_session.hpp"
+
+#include <unistd.h>
+#include <algorithm>
+#include <cctype>
+#include <cstdio>
+#include <filesystem>
+#include <limits>
+#include <random>
+#include <sstream>
+#include <string_view>
+
+#include <boost/asio/dispatch.hpp>
+#include <boost/asio/post.hpp>
+#include <boost/beast/websocket/rfc6455.hpp>
+
+#include "server/http/websocket_session.hpp"
+
+namespace rover::http {
+
+namespace fs = std::filesystem;
+
+// ---------------------------------------------------------------- ServerState
+
+ServerState::ServerState(ServerConfig c, const Router& r)
+    : config(std::move(c)), router(r), statics(config.webRoot) {
+  std::random_device rd;
+  tempSalt_ = (static_cast<std::uint64_t>(rd()) << 32) ^ rd();
+}
+
+std::optional<std::uint64_t> ServerState::add(std::weak_ptr<Closable> session) {
+  std::lock_guard lock(mutex_);
+  if (stopping_) return std::nullopt;
+  const std::uint64_t id = nextId_++;
+  sessions_.emplace(id, std::move(session));
+  return id;
+}
+
+void ServerState::remove(std::uint64_t id) {
+  std::lock_guard lock(mutex_);
+  sessions_.erase(id);
+  if (sessions_.empty()) emptied_.notify_all();
+}
+
+std::vector<std::shared_ptr<Closable>> ServerState::live() const {
+  std::vector<std::shared_ptr<Closable>> out;
+  std::lock_guard lock(mutex_);
+  for (const auto& [id, weak] : sessions_)
+    if (auto s = weak.lock()) out.push_back(std::move(s));
+  return out;
+}
+
+bool ServerState::waitUntilEmpty(std::chrono::milliseconds timeout) {
+  std::unique_lock lock(mutex_);
+  return emptied_.wait_for(lock, timeout, [&] { return sessions_.empty(); });
+}
+
+void ServerState::beginStop() {
+  {
+    std::unique_lock gate(wakeGate_);
+    stopped_ = true;
+  }
+  std::lock_guard lock(mutex_);
+  stopping_ = true;
+}
+
+void ServerState::log(const std::string& line) const {
+  static std::mutex logMutex;
+  std::lock_guard lock(logMutex);
+  std::fprintf(stderr, "%s\n", line.c_str());
+}
+
+std::string ServerState::tempFilePath() {
+  std::uint64_t n;
+  {
+    std::lock_guard lock(mutex_);
+    n = ++tempCounter_;
+  }
+  fs::path dir = config.uploadDir.empty() ? fs::temp_directory_path() : fs::path(config.uploadDir);
+  std::error_code ec;
+  fs::create_directories(dir, ec);
+  std::ostringstream name;
+  name << "upload-" << ::getpid() << '-' << std::hex << tempSalt_ << '-' << std::dec << n
+       << ".part";
+  return (dir / name.str()).string();
+}
+
+// ---------------------------------------------------------------- helpers
+
+namespace {
+
+int hexValue(char c) {
+  if (c >= '0' && c <= '9') return c - '0';
+  if (c >= 'a' && c <= 'f') return c - 'a' + 10;
+  if (c >= 'A' && c <= 'F') return c - 'A' + 10;
+  return -1;
+}
+
+// %XX decoding; '+' is a space in query strings only. False on a malformed escape.
+bool percentDecode(std::string_view in, bool plusIsSpace, std::string& out) {
+  out.clear();
+  out.reserve(in.size());
+  for (std::size_t i = 0; i < in.size(); ++i) {
+    const char c = in[i];
+    if (c == '%') {
+      if (i + 2 >= in.size()) return false;
+      const int hi = hexValue(in[i + 1]);
+      const int lo = hexValue(in[i + 2]);
+      if (hi < 0 || lo < 0) return false;
+      out.push_back(static_cast<char>(hi * 16 + lo));
+      i += 2;
+    } else if (c == '+' && plusIsSpace) {
+      out.push_back(' ');
+    } else {
+      out.push_back(c);
+    }
+  }
+  return true;
+}
+
+// Splits an origin-form target into a decoded path and query. False (-> 400) on a malformed
+// target, a NUL byte, or a ".." segment.
+bool parseTarget(std::string_view target, std::string& path,
+                 std::map<std::string, std::string>& query) {
+  if (target.empty() || target.front() != '/') return false;
+  const std::size_t hash = target.find('#');
+  if (hash != std::string_view::npos) target = target.substr(0, hash);
+  const std::size_t q = target.find('?');
+  const std::string_view rawPath = target.substr(0, q);
+  if (!percentDecode(rawPath, false, path)) return false;
+  if (path.find('\0') != std::string::npos) return false;
+  std::size_t start = 0;
+  while (start <= path.size()) {
+    std::size_t slash = path.find('/', start);
+    if (slash == std::string::npos) slash = path.size();
+    if (path.compare(start, slash - start, "..") == 0) return false;
+    start = slash + 1;
+  }
+  if (q == std::string_view::npos) return true;
+  std::string_view rest = target.substr(q + 1);
+  while (!rest.empty()) {
+    std::size_t amp = rest.find('&');
+    std::string_view pair = rest.substr(0, amp);
+    rest = amp == std::string_view::npos ? std::string_view() : rest.substr(amp + 1);
+    if (pair.empty()) continue;
+    const std::size_t eq = pair.find('=');
+    std::string key, value;
+    if (!percentDecode(pair.substr(0, eq), true, key)) return false;
+    if (eq != std::string_view::npos && !percentDecode(pair.substr(eq + 1), true, value))
+      return false;
+    if (key.find('\0') != std::string::npos || value.find('\0') != std::string::npos) return false;
+    query[key] = value;
+  }
+  return true;
+}
+
+// Beast 1.74 speaks boost::string_view.
+std::string_view sv(beast::string_view s) {
+  return {s.data(), s.size()};
+}
+
+std::string lower(std::string_view s) {
+  std::string out(s);
+  std::transform(out.begin(), out.end(), out.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return out;
+}
+
+// Time depends on the secret's length only, not on where the strings differ.
+bool constantTimeEquals(const std::string& presented, const std::string& secret) {
+  unsigned char diff = presented.size() == secret.size() ? 0 : 1;
+  for (std::size_t i = 0; i < secret.size(); ++i) {
+    const unsigned char p = i < presented.size() ? static_cast<unsigned char>(presented[i]) : 0;
+    diff |= static_cast<unsigned char>(p ^ static_cast<unsigned char>(secret[i]));
+  }
+  volatile unsigned char result = diff;
+  return result == 0;
+}
+
+bool authorized(const Request& req, const std::string& token, bool allowQueryToken) {
+  std::string presented;
+  bool found = false;
+  const std::string h = req.header("authorization");
+  if (h.size() > 7 && lower(h.substr(0, 7)) == "bearer ") {
+    presented = h.substr(7);
+    while (!presented.empty() && (presented.back() == ' ' || presented.back() == '\t'))
+      presented.pop_back();
+    while (!presented.empty() && presented.front() == ' ') presented.erase(presented.begin());
+    found = true;
+  }
+  if (!found && allowQueryToken) {
+    auto it = req.query.find("token");
+    if (it != req.query.end()) {
+      presented = it->second;
+      found = true;
+    }
+  }
+  return found && constantTimeEquals(presented, token);
+}
+
+bool isApiPath(const std::string& path) {
+  return path == "/api" || path.rfind("/api/", 0) == 0;
+}
+
+Response invokeHandler(const Route& route, const Request& req) noexcept {
+  try {
+    try {
+      return route.handler(req);
+    } catch (const ApiError& e) {
+      return Response::error(e.status(), e.code(), e.what(), e.field());
+    } catch (const std::exception& e) {
+      return Response::error(500, "internal", e.what());
+    } catch (...) {
+      return Response::error(500, "internal", "unknown error");
+    }
+  } catch (...) {  // building the error itself failed (out of memory)
+    Response r;
+    r.status = 500;
+    r.body = R"({"error":{"code":"internal","message":"internal error"}})";
+    return r;
+  }
+}
+
+bool bodyless(int status) {
+  return status < 200 || status == 204 || status == 304;
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------- HttpSession
+
+HttpSession::HttpSession(tcp::socket&& socket, std::shared_ptr<ServerState> state)
+    : stream_(std::move(socket)), executor_(stream_.get_executor()), state_(std::move(state)) {}
+
+HttpSession::~HttpSession() {
+  removeTempFile();
+  unregister();
+}
+
+void HttpSession::unregister() {
+  if (id_) state_->remove(*id_);
+  id_.reset();
+}
+
+void HttpSession::run() {
+  beast::error_code ec;
+  auto ep = stream_.socket().remote_endpoint(ec);
+  if (!ec) remote_ = ep.address().to_string() + ":" + std::to_string(ep.port());
+  id_ = state_->add(weak_from_this());
+  if (!id_) {  // the server is stopping
+    stream_.close();
+    return;
+  }
+  // Start on the strand (the socket's executor) so every handler of this session is serialized.
+  net::dispatch(executor_, beast::bind_front_handler(&HttpSession::readHeader, shared_from_this()));
+}
+
+void HttpSession::close() {
+  net::post(executor_, [self = shared_from_this()] {
+    if (self->handedOff_) return;
+    beast::error_code ec;
+    self->stream_.socket().shutdown(tcp::socket::shutdown_both, ec);
+    self->stream_.close();
+  });
+}
+
+void HttpSession::readHeader() {
+  headerParser_.emplace();
+  stringParser_.reset();
+  fileParser_.reset();
+  route_ = nullptr;
+  request_ = Request{};
+  headerParser_->header_limit(state_->config.maxHeaderBytes);
+  // Unlimited here (max, not none: Beast 1.74 compares Content-Length against an empty optional
+  // as "over the limit"); the route's limit is checked once the header is known.
+  headerParser_->body_limit(std::numeric_limits<std::uint64_t>::max());
+  stream_.expires_after(state_->config.readTimeout);
+  bhttp::async_read_header(stream_, buffer_, *headerParser_,
+                           beast::bind_front_handler(&HttpSession::onHeader, shared_from_this()));
+}
+
+void HttpSession::onHeader(beast::error_code ec, std::size_t) {
+  started_ = std::chrono::steady_clock::now();
+  if (ec) {
+    if (ec == bhttp::error::header_limit) {
+      request_.method = "-";
+      request_.path = "-";
+      return sendError(431, "header_too_large", "request header too large", true);
+    }
+    if (ec.category() == bhttp::make_error_code(bhttp::error::bad_target).category() &&
+        ec != bhttp::error::end_of_stream && ec != bhttp::error::partial_message) {
+      request_.method = "-";
+      request_.path = "-";
+      return sendError(400, "bad_request", "malformed request: " + ec.message(), true);
+    }
+    // end of stream, timeout, reset, or stop(): close quietly.
+    beast::error_code ignored;
+    stream_.socket().shutdown(tcp::socket::shutdown_send, ignored);
+    stream_.close();
+    return;
+  }
+  const auto& h = headerParser_->get();
+  request_.method = std::string(h.method_string());
+  request_.remote = remote_;
+  keepAlive_ = h.keep_alive();
+  version_ = h.version();
+  head_ = h.method() == bhttp::verb::head;
+  for (const auto& field : h) {
+    std::string name = lower(sv(field.name_string()));
+    auto [it, inserted] = request_.headers.emplace(name, std::string(field.value()));
+    if (!inserted) it->second += ", " + std::string(field.value());
+  }
+  if (!parseTarget(sv(h.target()), request_.path, request_.query)) {
+    request_.path = std::string(sv(h.target()).substr(0, 200));
+    return sendError(400, "bad_request", "invalid request target", !headerParser_->is_done());
+  }
+  routeRequest();
+}
+
+void HttpSession::routeRequest() {
+  const ServerConfig& cfg = state_->config;
+  const auto& h = headerParser_->get();
+  const bool bodyPending = !headerParser_->is_done();
+  const bool isUpgrade = beast::websocket::is_upgrade(h);
+  const std::string& path = request_.path;
+  const bool api = isApiPath(path);
+
+  if (!cfg.corsOrigin.empty() && h.method() == bhttp::verb::options) {
+    Response r;
+    r.status = 204;
+    r.contentType.clear();
+    r.headers = {{"Access-Control-Allow-Methods", "GET, POST, DELETE, OPTIONS"},
+                 {"Access-Control-Allow-Headers", "Authorization, Content-Type"},
+                 {"Access-Control-Max-Age", "600"}};
+    return send(std::move(r), bodyPending);
+  }
+
+  Router::Match m = state_->router.match(request_.method, path, isUpgrade);
+  const bool wsRoute = m.route && m.route->method == "WS";
+  const bool needAuth = !cfg.token.empty() && (m.route ? m.route->options.requireAuth : api);
+  if (needAuth && !authorized(request_, cfg.token, wsRoute)) {
+    Response r = Response::error(401, "unauthorized", "missing or invalid bearer token");
+    r.headers.emplace_back("WWW-Authenticate", "Bearer");
+    return send(std::move(r), bodyPending);
+  }
+
+  if (!m.route) {
+    if (h.method() == bhttp::verb::get && !isUpgrade) {
+      Router::Match ws = state_->router.match("GET", path, true);
+      if (ws.route && ws.route->method == "WS")
+        return sendError(426, "upgrade_required", "this path is a WebSocket endpoint", bodyPending);
+    }
+    if (!api && state_->statics.enabled() &&
+        (h.method() == bhttp::verb::get || h.method() == bhttp::verb::head))
+      return send(state_->statics.serve(path), bodyPending);
+    if (m.pathKnown) {
+      std::string allow;
+      for (const auto& method : state_->router.allowedMethods(path))
+        allow += (allow.empty() ? "" : ", ") + method;
+      Response r = Response::error(405, "method_not_allowed",
+                                   request_.method + " is not allowed on " + path);
+      r.headers.emplace_back("Allow", allow);
+      return send(std::move(r), bodyPending);
+    }
+    return sendError(404, "not_found", "no route for " + request_.method + " " + path, bodyPending);
+  }
+
+  route_ = m.route;
+  request_.params = std::move(m.params);
+  if (wsRoute) return upgrade();
+  readBody();
+}
+
+void HttpSession::readBody() {
+  const ServerConfig& cfg = state_->config;
+  const bool stream = route_->options.streamBody;
+  const std::uint64_t limit = stream ? cfg.maxUploadBytes : cfg.maxBodyBytes;
+  const auto& h = headerParser_->get();
+  if (auto len = headerParser_->content_length(); len && *len > limit)
+    return sendError(
+        413, "payload_too_large",
+        "body of " + std::to_string(*len) + " bytes exceeds the limit of " + std::to_string(limit),
+        true);
+  const bool expectContinue =
+      !headerParser_->is_done() && lower(sv(h[bhttp::field::expect])) == "100-continue";
+
+  if (stream) {
+    tempFile_ = state_->tempFilePath();
+    fileParser_.emplace(std::move(*headerParser_));
+    headerParser_.reset();
+    fileParser_->body_limit(limit);
+    beast::error_code ec;
+    fileParser_->get().body().open(tempFile_.c_str(), beast::file_mode::write_new, ec);
+    if (ec) {
+      tempFile_.clear();
+      return sendError(500, "internal", "cannot create upload file: " + ec.message(), true);
+    }
+  } else {
+    stringParser_.emplace(std::move(*headerParser_));
+    headerParser_.reset();
+    stringParser_->body_limit(limit);
+  }
+  if (expectContinue) {
+    continue_ =
+        std::make_shared<bhttp::response<bhttp::empty_body>>(bhttp::status::continue_, version_);
+    stream_.expires_after(cfg.readTimeout);
+    return bhttp::async_write(
+        stream_, *continue_,
+        beast::bind_front_handler(&HttpSession::onContinueWritten, shared_from_this()));
+  }
+  startBodyRead();
+}
+
+void HttpSession::onContinueWritten(beast::error_code ec, std::size_t) {
+  continue_.reset();
+  if (ec) {
+    removeTempFile();
+    stream_.close();
+    return;
+  }
+  startBodyRead();
+}
+
+void HttpSession::startBodyRead() {
+  const bool done = fileParser_ ? fileParser_->is_done() : stringParser_->is_done();
+  if (done) return onBody({}, 0);
+  stream_.expires_after(state_->config.readTimeout);
+  auto handler = beast::bind_front_handler(&HttpSession::onBody, shared_from_this());
+  if (fileParser_)
+    bhttp::async_read(stream_, buffer_, *fileParser_, std::move(handler));
+  else
+    bhttp::async_read(stream_, buffer_, *stringParser_, std::move(handler));
+}
+
+void HttpSession::onBody(beast::error_code ec, std::size_t) {
+  if (ec) {
+    removeTempFile();
+    if (ec == bhttp::error::body_limit)
+      return sendError(413, "payload_too_large", "request body exceeds the limit", true);
+    if (ec.category() == bhttp::make_error_code(bhttp::error::bad_target).category() &&
+        ec != bhttp::error::end_of_stream && ec != bhttp::error::partial_message)
+      return sendError(400, "bad_request", "malformed request body: " + ec.message(), true);
+    stream_.close();  // timeout, reset, or stop()
+    return;
+  }
+  if (fileParser_) {
+    beast::error_code ignored;
+    fileParser_->get().body().file().close(ignored);
+    keepAlive_ = fileParser_->get().keep_alive();
+    request_.bodyFile = tempFile_;
+    std::error_code fec;
+    const auto size = fs::file_size(tempFile_, fec);
+    request_.bodySize = fec ? 0 : static_cast<std::uint64_t>(size);
+  } else {
+    keepAlive_ = stringParser_->get().keep_alive();
+    request_.body = stringParser_->release().body();
+    request_.bodySize = request_.body.size();
+  }
+  Response res = invokeHandler(*route_, request_);
+  removeTempFile();  // the handler moved it away if it keeps it
+  send(std::move(res));
+}
+
+void HttpSession::upgrade() {
+  if (!headerParser_->is_done())
+    return sendError(400, "bad_request", "a WebSocket upgrade cannot carry a body", true);
+  auto connection = std::make_shared<WsConnectionImpl>(state_);
+  std::shared_ptr<WsSource> source;
+  try {
+    try {
+      source = route_->wsHandler(request_, connection);
+    } catch (const ApiError& e) {
+      return send(Response::error(e.status(), e.code(), e.what(), e.field()));
+    } catch (const std::exception& e) {
+      return sendError(500, "internal", e.what());
+    }
+  } catch (...) {
+    return sendError(500, "internal", "unknown error");
+  }
+  if (!source) return sendError(500, "internal", "the WebSocket handler returned no source");
+
+  auto ws = std::make_shared<WebsocketSession>(std::move(stream_), state_, std::move(connection),
+                                               std::move(source), request_.path);
+  handedOff_ = true;
+  unregister();
+  ws->run(headerParser_->release());
+}
+
+void HttpSession::sendError(int status, const std::string& code, const std::string& message,
+                            bool close) {
+  send(Response::error(status, code, message), close);
+}
+
+void HttpSession::send(Response res, bool close) {
+  const ServerConfig& cfg = state_->config;
+  if (bodyless(res.status)) {
+    res.body.clear();
+    res.file.clear();
+  }
+  auto decorate = [&](auto& msg) {
+    msg.result(static_cast<unsigned>(res.status));
+    msg.version(version_);
+    msg.set(bhttp::field::server, "roverplan");
+    if (!res.contentType.empty() && !bodyless(res.status))
+      msg.set(bhttp::field::content_type, res.contentType);
+    for (const auto& [name, value] : res.headers) msg.insert(name, value);
+    if (!cfg.corsOrigin.empty()) {
+      msg.set(bhttp::field::access_control_allow_origin, cfg.corsOrigin);
+      msg.set(bhttp::field::vary, "Origin");
+    }
+    msg.keep_alive(keepAlive_ && !close);
+  };
+
+  if (!res.file.empty()) {
+    bhttp::file_body::value_type body;
+    beast::error_code ec;
+    body.open(res.file.c_str(), beast::file_mode::scan, ec);
+    if (ec) {
+      res = Response::error(404, "not_found", "file not found");
+    } else {
+      const std::uint64_t size = body.size();
+      if (head_) {
+        auto msg = std::make_shared<bhttp::response<bhttp::empty_body>>();
+        decorate(*msg);
+        msg->content_length(size);
+        return write(std::move(msg), res.status, 0, close);
+      }
+      auto msg = std::make_shared<bhttp::response<bhttp::file_body>>();
+      decorate(*msg);
+      msg->body() = std::move(body);
+      msg->prepare_payload();
+      return write(std::move(msg), res.status, size, close);
+    }
+  }
+  auto msg = std::make_shared<bhttp::response<bhttp::string_body>>();
+  decorate(*msg);
+  const std::uint64_t size = res.body.size();
+  if (head_) {
+    if (!bodyless(res.status)) msg->content_length(size);
+    return write(std::move(msg), res.status, 0, close);
+  }
+  msg->body() = std::move(res.body);
+  if (!bodyless(res.status)) msg->prepare_payload();
+  write(std::move(msg), res.status, size, close);
+}
+
+template <class Message>
+void HttpSession::write(std::shared_ptr<Message> msg, int status, std::uint64_t bytes, bool close) {
+  logStatus_ = status;
+  logBytes_ = bytes;
+  close = close || !msg->keep_alive();
+  Message& ref = *msg;
+  response_ = std::move(msg);
+  // A stuck reader must not hold the connection forever; big files get time at 256 KiB/s.
+  stream_.expires_after(std::max<std::chrono::steady_clock::duration>(state_->config.readTimeout,
+                                                                      std::chrono::seconds(30)) +
+                        std::chrono::seconds(bytes / (256 * 1024)));
+  bhttp::async_write(stream_, ref,
+                     beast::bind_front_handler(&HttpSession::onWrite, shared_from_this(), close));
+}
+
+void HttpSession::onWrite(bool close, beast::error_code ec, std::size_t) {
+  response_.reset();
+  if (state_->config.logRequests) {
+    const auto ms = std::chrono::duration_cast<std::chrono::milliseconds>(
+                        std::chrono::steady_clock::now() - started_)
+                        .count();
+    state_->log(request_.method + " " + request_.path + " " + std::to_string(logStatus_) + " " +
+                std::to_string(logBytes_) + " " + std::to_string(ms) +
+                (ec ? " (write failed)" : ""));
+  }
+  if (ec) {
+    stream_.close();
+    return;
+  }
+  if (close) return lingeringClose();
+  readHeader();
+}
+
+void HttpSession::lingeringClose() {
+  beast::error_code ec;
+  stream_.socket().shutdown(tcp::socket::shutdown_send, ec);
+  if (ec) {
+    stream_.close();
+    return;
+  }
+  stream_.expires_after(std::min<std::chrono::steady_clock::duration>(state_->config.readTimeout,
+                                                                      std::chrono::seconds(5)));
+  stream_.async_read_some(net::buffer(drain_),
+                          beast::bind_front_handler(&HttpSession::onDrain, shared_from_this()));
+}
+
+void HttpSession::onDrain(beast::error_code ec, std::size_t) {
+  if (ec) {  // EOF, the deadline, or stop()
+    stream_.close();
+    return;
+  }
+  // Same deadline as before: the whole drain is bounded.
+  stream_.async_read_some(net::buffer(drain_),
+                          beast::bind_front_handler(&HttpSession::onDrain, shared_from_this()));
+}
+
+void HttpSession::removeTempFile() {
+  if (tempFile_.empty()) return;
+  if (fileParser_) {
+    beast::error_code ignored;
+    fileParser_->get().body().file().close(ignored);
+  }
+  std::error_code ec;
+  fs::remove(tempFile_, ec);
+  tempFile_.clear();
+}
+
+}  // namespace rover::http

@@ -1,0 +1,138 @@
+#pragma once
+// One HTTP/1.1 connection (keep-alive, one request at a time). Reads the header first, then picks
+// the body type by route: a file on disk for streamed uploads, a string otherwise. Runs the
+// handler on the connection's strand, writes the response, and hands WebSocket upgrades over to
+// a WebsocketSession. Also holds ServerState, what every session of one server shares.
+#include <chrono>
+#include <condition_variable>
+#include <cstdint>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <shared_mutex>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+#include <boost/asio/ip/tcp.hpp>
+#include <boost/beast/core.hpp>
+#include <boost/beast/http.hpp>
+
+#include "server/http/http_server.hpp"
+#include "server/http/router.hpp"
+#include "server/http/static_files.hpp"
+
+namespace rover::http {
+
+namespace beast = boost::beast;
+namespace bhttp = boost::beast::http;
+namespace net = boost::asio;
+using tcp = boost::asio::ip::tcp;
+
+// A live connection that stop() can close. close() is thread-safe (it posts to the strand).
+class Closable {
+ public:
+  virtual ~Closable() = default;
+  virtual void close() = 0;
+};
+
+// Shared by the listener and all sessions of one server. Sessions hold it by shared_ptr; it holds
+// sessions only by weak_ptr, so a slow or dead client never pins memory.
+class ServerState {
+ public:
+  ServerState(ServerConfig config, const Router& router);
+
+  const ServerConfig config;
+  const Router& router;
+  const StaticFiles statics;
+
+  // Registry of live sessions. add() refuses (nullopt) once stopping.
+  std::optional<std::uint64_t> add(std::weak_ptr<Closable> session);
+  void remove(std::uint64_t id);
+  std::vector<std::shared_ptr<Closable>> live() const;
+  // Waits until every session has unregistered or `timeout` passed; true when none is left.
+  bool waitUntilEmpty(std::chrono::milliseconds timeout);
+
+  // Marks the server as stopping: no new sessions, and WsConnection::wake() becomes a no-op.
+  void beginStop();
+  // Held shared by wake() while it posts to a strand, so the io_context outlives the post.
+  std::shared_mutex& wakeGate() { return wakeGate_; }
+  bool stoppedLocked() const { return stopped_; }  // caller holds wakeGate()
+
+  // One line on stderr (whole lines, never interleaved).
+  void log(const std::string& line) const;
+  // A fresh, unique path in config.uploadDir (or the system temp dir) for a streamed body.
+  std::string tempFilePath();
+
+ private:
+  mutable std::mutex mutex_;
+  std::condition_variable emptied_;
+  std::unordered_map<std::uint64_t, std::weak_ptr<Closable>> sessions_;
+  std::uint64_t nextId_ = 1;
+  bool stopping_ = false;
+  std::shared_mutex wakeGate_;
+  bool stopped_ = false;  // guarded by wakeGate_
+  std::uint64_t tempCounter_ = 0;
+  std::uint64_t tempSalt_ = 0;
+};
+
+class HttpSession : public Closable, public std::enable_shared_from_this<HttpSession> {
+ public:
+  HttpSession(tcp::socket&& socket, std::shared_ptr<ServerState> state);
+  ~HttpSession() override;
+  void run();
+  void close() override;
+
+ private:
+  void readHeader();
+  void onHeader(beast::error_code ec, std::size_t bytes);
+  void routeRequest();
+  void readBody();
+  void onContinueWritten(beast::error_code ec, std::size_t bytes);
+  void startBodyRead();
+  void onBody(beast::error_code ec, std::size_t bytes);
+  void upgrade();
+
+  // Writes `res` (JSON, string or file); `close` ends the connection afterwards.
+  void send(Response res, bool close = false);
+  void sendError(int status, const std::string& code, const std::string& message,
+                 bool close = false);
+  template <class Message>
+  void write(std::shared_ptr<Message> msg, int status, std::uint64_t bytes, bool close);
+  void onWrite(bool close, beast::error_code ec, std::size_t bytes);
+  // Shuts down our side and drains what the peer still sends (bounded), so the peer reads the
+  // response instead of a reset when we close on an unread body.
+  void lingeringClose();
+  void onDrain(beast::error_code ec, std::size_t bytes);
+  void removeTempFile();
+  void unregister();
+
+  beast::tcp_stream stream_;
+  const net::any_io_executor executor_;
+  std::shared_ptr<ServerState> state_;
+  std::optional<std::uint64_t> id_;
+  bool handedOff_ = false;  // stream_ moved into a WebsocketSession
+  beast::flat_buffer buffer_;
+
+  // The current request.
+  std::optional<bhttp::request_parser<bhttp::empty_body>> headerParser_;
+  std::optional<bhttp::request_parser<bhttp::string_body>> stringParser_;
+  std::optional<bhttp::request_parser<bhttp::file_body>> fileParser_;
+  Request request_;
+  const Route* route_ = nullptr;
+  std::string tempFile_;
+  bool keepAlive_ = false;
+  bool head_ = false;
+  unsigned version_ = 11;
+  std::chrono::steady_clock::time_point started_;
+  std::string remote_;
+
+  // The response being written (one write in flight) and what the log line reports.
+  std::shared_ptr<void> response_;
+  int logStatus_ = 0;
+  std::uint64_t logBytes_ = 0;
+  std::shared_ptr<bhttp::response<bhttp::empty_body>> continue_;
+  char drain_[4096];
+};
+
+}  // namespace rover::http

@@ -1,0 +1,92 @@
+#pragma once
+// What route handlers see and return: a transport-neutral request/response, so handlers are plain
+// functions testable without sockets. The Beast sessions (http_session, websocket_session) convert.
+#include <chrono>
+#include <cstdint>
+#include <functional>
+#include <map>
+#include <memory>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+namespace rover::http {
+
+struct Request {
+  std::string method;                          // "GET", "POST", ...
+  std::string path;                            // percent-decoded, without the query
+  std::map<std::string, std::string> query;    // percent-decoded
+  std::map<std::string, std::string> headers;  // names lower-case
+  std::map<std::string, std::string> params;   // captures of the route pattern, e.g. {id}
+  std::string body;                            // in-memory body (JSON routes)
+  std::string bodyFile;  // streamed routes: the body on disk (deleted after the handler returns)
+  std::uint64_t bodySize = 0;
+  std::string remote;  // peer address
+  std::string header(const std::string& lowerName) const;
+};
+
+struct Response {
+  int status = 200;
+  std::string contentType = "application/json";
+  std::string body;
+  std::string file;  // when set, the response body is this file (sent from disk)
+  std::vector<std::pair<std::string, std::string>> headers;
+
+  static Response json(int status, const nlohmann::json& j);
+  // {"error": {"code", "message", "field"}} (DESIGN.md conventions).
+  static Response error(int status, const std::string& code, const std::string& message,
+                        const std::string& field = "");
+};
+
+// Thrown by handlers for an expected failure; the server answers Response::error(...).
+class ApiError : public std::runtime_error {
+ public:
+  ApiError(int status, std::string code, const std::string& message, std::string field = "")
+      : std::runtime_error(message),
+        status_(status),
+        code_(std::move(code)),
+        field_(std::move(field)) {}
+  int status() const { return status_; }
+  const std::string& code() const { return code_; }
+  const std::string& field() const { return field_; }
+
+ private:
+  int status_;
+  std::string code_;
+  std::string field_;
+};
+
+using Handler = std::function<Response(const Request&)>;
+
+// --- WebSocket: a pull model. The session asks its source for the next frame whenever it may
+// write (one write in flight); the source says "nothing now" and later calls wake() on the
+// connection. So a slow client costs a cursor, never a queue, and intermediate state coalesces.
+struct WsFrame {
+  bool binary = false;
+  std::string data;
+  bool last = false;  // close the socket (normal closure) after this frame
+};
+
+class WsConnection {
+ public:
+  virtual ~WsConnection() = default;
+  // Thread-safe; cheap when called often (coalesced into one wake-up).
+  virtual void wake() = 0;
+};
+
+class WsSource {
+ public:
+  virtual ~WsSource() = default;
+  virtual std::optional<WsFrame> next() = 0;
+  // Minimum spacing of frames that are not `last`, so a fast planner does not flood a browser.
+  virtual std::chrono::milliseconds minInterval() const { return std::chrono::milliseconds(30); }
+};
+
+// Builds the source for an upgrade request (may throw ApiError: answered as HTTP, no upgrade).
+using WsHandler =
+    std::function<std::shared_ptr<WsSource>(const Request&, std::shared_ptr<WsConnection>)>;
+
+}  // namespace rover::http

@@ -1,0 +1,196 @@
+#include "server/http/websocket_session.hpp"
+
+#include <algorithm>
+
+#include <boost/asio/post.hpp>
+
+namespace rover::http {
+
+namespace websocket = boost::beast::websocket;
+
+// ---------------------------------------------------------------- WsConnectionImpl
+
+void WsConnectionImpl::attach(std::weak_ptr<WebsocketSession> session) {
+  std::lock_guard lock(mutex_);
+  session_ = std::move(session);
+}
+
+void WsConnectionImpl::wake() {
+  if (pending_.exchange(true)) return;  // a wake-up is already on its way: coalesce
+  // The gate keeps stop() from tearing the io_context down while we post to it.
+  std::shared_lock gate(state_->wakeGate());
+  if (state_->stoppedLocked()) return;
+  std::shared_ptr<WebsocketSession> session;
+  {
+    std::lock_guard lock(mutex_);
+    session = session_.lock();
+  }
+  // Not attached yet: the session's first next() will see whatever prompted this call.
+  if (!session) return;
+  const net::any_io_executor ex = session->executor();
+  try {
+    // The strong reference moves into the handler, so the last one is dropped on the io thread.
+    net::post(ex, [s = std::move(session)] { s->onWake(); });
+  } catch (...) {
+    // Out of memory while posting: nothing sensible to do from the planner's thread.
+  }
+}
+
+// ---------------------------------------------------------------- WebsocketSession
+
+WebsocketSession::WebsocketSession(beast::tcp_stream&& stream, std::shared_ptr<ServerState> state,
+                                   std::shared_ptr<WsConnectionImpl> connection,
+                                   std::shared_ptr<WsSource> source, std::string path)
+    : ws_(std::move(stream)),
+      executor_(ws_.get_executor()),
+      state_(std::move(state)),
+      connection_(std::move(connection)),
+      source_(std::move(source)),
+      path_(std::move(path)),
+      pace_(executor_) {}
+
+WebsocketSession::~WebsocketSession() {
+  if (id_) state_->remove(*id_);
+}
+
+void WebsocketSession::run(bhttp::request<bhttp::empty_body> request) {
+  request_ = std::move(request);
+  id_ = state_->add(weak_from_this());
+  if (!id_) {
+    beast::error_code ec;
+    beast::get_lowest_layer(ws_).socket().close(ec);
+    return;
+  }
+  connection_->attach(weak_from_this());
+
+  beast::get_lowest_layer(ws_).expires_never();  // the websocket stream has its own timeouts
+  auto timeouts = websocket::stream_base::timeout::suggested(beast::role_type::server);
+  timeouts.handshake_timeout = state_->config.readTimeout;
+  // Idle pings: a peer that stops answering (or reading) is dropped after this long.
+  timeouts.idle_timeout = std::max<std::chrono::steady_clock::duration>(
+      state_->config.readTimeout * 2, std::chrono::seconds(20));
+  timeouts.keep_alive_pings = true;
+  ws_.set_option(timeouts);
+  ws_.set_option(websocket::stream_base::decorator(
+      [](websocket::response_type& res) { res.set(bhttp::field::server, "roverplan"); }));
+  ws_.read_message_max(64 * 1024);  // client messages are discarded anyway
+  ws_.async_accept(request_,
+                   beast::bind_front_handler(&WebsocketSession::onAccept, shared_from_this()));
+}
+
+void WebsocketSession::close() {
+  net::post(executor_, [self = shared_from_this()] {
+    self->pace_.cancel();
+    beast::error_code ec;
+    beast::get_lowest_layer(self->ws_).socket().shutdown(tcp::socket::shutdown_both, ec);
+    beast::get_lowest_layer(self->ws_).socket().close(ec);
+  });
+}
+
+void WebsocketSession::onAccept(beast::error_code ec) {
+  if (ec) return finish("handshake failed: " + ec.message());
+  open_ = true;
+  opened_ = std::chrono::steady_clock::now();
+  if (state_->config.logRequests) state_->log("WS " + path_ + " 101 open");
+  readLoop();
+  pull();
+}
+
+void WebsocketSession::readLoop() {
+  ws_.async_read(readBuffer_,
+                 beast::bind_front_handler(&WebsocketSession::onRead, shared_from_this()));
+}
+
+void WebsocketSession::onRead(beast::error_code ec, std::size_t) {
+  if (ec) {
+    // The client closed, the socket failed, or stop(): this ends the session (writes, the pace
+    // timer and the parked state all stop holding it once their handlers return).
+    return finish(ec == websocket::error::closed ? "closed" : ec.message());
+  }
+  readBuffer_.consume(readBuffer_.size());
+  readLoop();
+}
+
+void WebsocketSession::onWake() {
+  if (waiting_) pull();  // otherwise a write or the pace timer will pull anyway
+}
+
+void WebsocketSession::pull() {
+  if (!open_ || writing_ || pacing_ || closing_) return;
+  waiting_ = false;
+  connection_->clearPending();
+  std::optional<WsFrame> frame;
+  try {
+    frame = source_->next();
+  } catch (const std::exception& e) {
+    if (state_->config.logRequests) state_->log("WS " + path_ + " source failed: " + e.what());
+    return closeWith(websocket::close_code::internal_error);
+  } catch (...) {
+    return closeWith(websocket::close_code::internal_error);
+  }
+  if (!frame) {
+    waiting_ = true;
+    return;
+  }
+  frame_ = std::move(*frame);
+  writing_ = true;
+  ws_.binary(frame_.binary);
+  ws_.async_write(net::buffer(frame_.data),
+                  beast::bind_front_handler(&WebsocketSession::onWrite, shared_from_this()));
+}
+
+void WebsocketSession::onWrite(beast::error_code ec, std::size_t bytes) {
+  writing_ = false;
+  if (ec) return finish("write failed: " + ec.message());
+  ++frames_;
+  bytes_ += bytes;
+  frame_.data = std::string();  // release the frame's memory while parked
+  if (frame_.last) return closeWith(websocket::close_code::normal);
+  std::chrono::milliseconds interval{0};
+  try {
+    interval = source_->minInterval();
+  } catch (...) {
+  }
+  if (interval.count() <= 0) return pull();
+  pacing_ = true;
+  pace_.expires_after(interval);
+  pace_.async_wait(beast::bind_front_handler(&WebsocketSession::onPaced, shared_from_this()));
+}
+
+void WebsocketSession::onPaced(beast::error_code ec) {
+  pacing_ = false;
+  if (ec) return;  // cancelled by close()
+  pull();
+}
+
+void WebsocketSession::closeWith(websocket::close_code code) {
+  if (closing_ || !open_) return;
+  closing_ = true;
+  ws_.async_close(code, beast::bind_front_handler(&WebsocketSession::onClose, shared_from_this()));
+}
+
+void WebsocketSession::onClose(beast::error_code ec) {
+  // The read loop sees the peer's close reply (or the failure) and finishes the session.
+  if (ec) {
+    beast::error_code ignored;
+    beast::get_lowest_layer(ws_).socket().close(ignored);
+  }
+}
+
+void WebsocketSession::finish(const std::string& why) {
+  if (finished_) return;
+  finished_ = true;
+  open_ = false;
+  pace_.cancel();
+  if (state_->config.logRequests) {
+    const auto ms = opened_.time_since_epoch().count() == 0
+                        ? 0
+                        : std::chrono::duration_cast<std::chrono::milliseconds>(
+                              std::chrono::steady_clock::now() - opened_)
+                              .count();
+    state_->log("WS " + path_ + " close " + std::to_string(frames_) + " frames " +
+                std::to_string(bytes_) + " bytes " + std::to_string(ms) + " ms (" + why + ")");
+  }
+}
+
+}  // namespace rover::http

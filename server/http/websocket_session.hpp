@@ -1,0 +1,89 @@
+#pragma once
+// One WebSocket connection, fed by a WsSource in a pull loop: one write in flight; after each
+// write (and initially) the session asks the source for the next frame; "nothing now" parks it
+// until WsConnection::wake(). Frames that are not `last` are spaced by source->minInterval() (the
+// wait happens before next(), so the frame written is the freshest state). A read loop discards
+// client messages and notices closes. Only wake() runs on other threads.
+#include <atomic>
+#include <chrono>
+#include <cstdint>
+#include <memory>
+#include <mutex>
+#include <string>
+
+#include <boost/asio/steady_timer.hpp>
+#include <boost/beast/websocket.hpp>
+
+#include "server/http/http_session.hpp"
+
+namespace rover::http {
+
+class WebsocketSession;
+
+// The handle given to the WsHandler. Holds the session only weakly: it stays safe to call after
+// the session or the whole server is gone (wake() is then a no-op), and wake() never keeps a
+// session alive on the caller's thread (the strong reference travels inside the posted handler).
+class WsConnectionImpl : public WsConnection {
+ public:
+  explicit WsConnectionImpl(std::shared_ptr<ServerState> state) : state_(std::move(state)) {}
+  void wake() override;
+
+  void attach(std::weak_ptr<WebsocketSession> session);
+  // Called on the strand right before source->next(): a wake() after this posts again.
+  void clearPending() { pending_.store(false); }
+
+ private:
+  std::shared_ptr<ServerState> state_;
+  std::atomic<bool> pending_{false};
+  std::mutex mutex_;
+  std::weak_ptr<WebsocketSession> session_;
+};
+
+class WebsocketSession : public Closable, public std::enable_shared_from_this<WebsocketSession> {
+ public:
+  WebsocketSession(beast::tcp_stream&& stream, std::shared_ptr<ServerState> state,
+                   std::shared_ptr<WsConnectionImpl> connection, std::shared_ptr<WsSource> source,
+                   std::string path);
+  ~WebsocketSession() override;
+
+  // Accepts the upgrade `request` (already routed and authorised), then starts both loops.
+  void run(bhttp::request<bhttp::empty_body> request);
+  void close() override;
+  const net::any_io_executor& executor() const { return executor_; }
+  void onWake();  // on the strand
+
+ private:
+  void onAccept(beast::error_code ec);
+  void readLoop();
+  void onRead(beast::error_code ec, std::size_t bytes);
+  void pull();
+  void onWrite(beast::error_code ec, std::size_t bytes);
+  void onPaced(beast::error_code ec);
+  void closeWith(beast::websocket::close_code code);
+  void onClose(beast::error_code ec);
+  void finish(const std::string& why);
+
+  beast::websocket::stream<beast::tcp_stream> ws_;
+  const net::any_io_executor executor_;
+  std::shared_ptr<ServerState> state_;
+  std::shared_ptr<WsConnectionImpl> connection_;
+  std::shared_ptr<WsSource> source_;
+  const std::string path_;
+  std::optional<std::uint64_t> id_;
+  net::steady_timer pace_;
+  beast::flat_buffer readBuffer_;
+  bhttp::request<bhttp::empty_body> request_;
+
+  WsFrame frame_;      // the frame being written
+  bool open_ = false;  // accepted and not yet closed/failed
+  bool writing_ = false;
+  bool pacing_ = false;
+  bool waiting_ = false;  // next() said "nothing now": parked until wake()
+  bool closing_ = false;
+  bool finished_ = false;
+  std::uint64_t frames_ = 0;
+  std::uint64_t bytes_ = 0;
+  std::chrono::steady_clock::time_point opened_;
+};
+
+}  // namespace rover::http

@@ -1,0 +1,211 @@
+#include "server/missions/mission_manager.hpp"
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "core/coverage/coverage_entry.hpp"
+#include "maps/geojson.hpp"
+#include "server/http/http_types.hpp"
+#include "server/json/plan_json.hpp"
+
+namespace rover::missions {
+
+namespace fs = std::filesystem;
+
+namespace {
+std::string readFile(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+}  // namespace
+
+MissionManager::MissionManager(store::Database& db, store::DataDir& dir,
+                               const PlannerRegistry& registry, unsigned workers,
+                               std::size_t queueCapacity)
+    : db_(db), dir_(dir), registry_(registry), capacity_(queueCapacity) {
+  for (unsigned i = 0; i < std::max(1u, workers); ++i) workers_.emplace_back([this] { work(); });
+}
+
+MissionManager::~MissionManager() { stop(); }
+
+void MissionManager::submit(MissionJob job) {
+  std::unique_lock lock(mutex_);
+  if (stopping_) throw http::ApiError(503, "unavailable", "the server is shutting down");
+  if (queue_.size() >= capacity_)
+    throw http::ApiError(429, "queue_full",
+                         "the mission queue is full (" + std::to_string(capacity_) + " waiting); try again later");
+  job.record.status = "queued";
+  db_.insertMission(job.record);
+  const GridGeometry& g = job.problem.world.geometry();
+  Active a;
+  a.stream = std::make_shared<MissionStream>(job.record.id, g, static_cast<int>(job.problem.rovers.size()), job.pace);
+  a.cancel = std::make_shared<CancelToken>();
+  active_[job.record.id] = a;
+  queue_.push_back(std::move(job));
+  lock.unlock();
+  cv_.notify_one();
+}
+
+bool MissionManager::cancel(const std::string& id) {
+  std::unique_lock lock(mutex_);
+  auto it = active_.find(id);
+  if (it == active_.end()) return false;
+  it->second.cancel->cancel();
+  it->second.stream->setCancelled();
+  if (!it->second.running) {
+    // Still queued: take it out and finish it here.
+    for (auto q = queue_.begin(); q != queue_.end(); ++q)
+      if (q->record.id == id) {
+        queue_.erase(q);
+        break;
+      }
+    auto stream = it->second.stream;
+    active_.erase(it);
+    lock.unlock();
+    db_.updateMission(id, "cancelled", "cancelled before it started");
+    stream->finish("cancelled", "cancelled before it started", nullptr);
+    std::lock_guard relock(mutex_);
+    finished_[id] = stream;
+    finishedOrder_.push_back(id);
+  }
+  return true;
+}
+
+std::shared_ptr<MissionStream> MissionManager::stream(const std::string& id) {
+  {
+    std::lock_guard lock(mutex_);
+    if (auto it = active_.find(id); it != active_.end()) return it->second.stream;
+    if (auto it = finished_.find(id); it != finished_.end()) return it->second;
+  }
+  auto rec = db_.getMission(id);
+  if (!rec) return nullptr;
+  // A finished mission from an earlier run of the server: replay its stored final state.
+  const fs::path dir = dir_.missionDir(id);
+  nlohmann::json trails = nlohmann::json::array();
+  if (fs::exists(dir / "trails.json")) trails = nlohmann::json::parse(readFile(dir / "trails.json"), nullptr, false);
+  if (trails.is_discarded()) trails = nlohmann::json::array();
+  std::string grid = fs::exists(dir / "grid.bin") ? readFile(dir / "grid.bin") : std::string();
+  auto s = MissionStream::fromStored(id, grid, trails, rec->status, rec->message, rec->metrics);
+  std::lock_guard lock(mutex_);
+  finished_[id] = s;
+  finishedOrder_.push_back(id);
+  while (finishedOrder_.size() > 32) {
+    finished_.erase(finishedOrder_.front());
+    finishedOrder_.pop_front();
+  }
+  return s;
+}
+
+std::size_t MissionManager::running() const {
+  std::lock_guard lock(mutex_);
+  std::size_t n = 0;
+  for (const auto& [id, a] : active_) n += a.running;
+  return n;
+}
+
+std::size_t MissionManager::queued() const {
+  std::lock_guard lock(mutex_);
+  return queue_.size();
+}
+
+void MissionManager::work() {
+  while (true) {
+    std::unique_lock lock(mutex_);
+    cv_.wait(lock, [&] { return stopping_ || !queue_.empty(); });
+    if (stopping_) return;
+    MissionJob job = std::move(queue_.front());
+    queue_.pop_front();
+    Active& a = active_[job.record.id];
+    a.running = true;
+    Active copy = a;
+    lock.unlock();
+    runJob(job, copy);
+  }
+}
+
+void MissionManager::runJob(MissionJob& job, Active a) {
+  const std::string& id = job.record.id;
+  db_.updateMission(id, "running", "");
+  a.stream->setStatus("running");
+  std::string status = "succeeded", message;
+  nlohmann::json metrics = nullptr;
+  try {
+    const Planner& planner = registry_.get(job.record.planner);
+    PlanResult result = planner.run(job.problem, job.params, a.stream.get(), a.cancel.get());
+    metrics = json::toJson(result)["metrics"];
+    if (result.cancelled || a.cancel->cancelled()) {
+      bool shuttingDown;
+      {
+        std::lock_guard lock(mutex_);
+        shuttingDown = stopping_;
+      }
+      status = shuttingDown ? "interrupted" : "cancelled";
+      message = shuttingDown ? "the server stopped while the mission was running" : "cancelled by request";
+    }
+    saveResult(job, result, *a.stream);
+  } catch (const std::exception& e) {
+    status = "failed";
+    message = e.what();
+  }
+  db_.updateMission(id, status, message, metrics);
+  a.stream->finish(status, message, metrics);
+  std::lock_guard lock(mutex_);
+  active_.erase(id);
+  finished_[id] = a.stream;
+  finishedOrder_.push_back(id);
+  while (finishedOrder_.size() > 32) {
+    finished_.erase(finishedOrder_.front());
+    finishedOrder_.pop_front();
+  }
+}
+
+void MissionManager::saveResult(const MissionJob& job, const PlanResult& result,
+                                const MissionStream& stream) {
+  const std::string staging = dir_.stagingDir();
+  const fs::path s(staging);
+  nlohmann::json j = json::toJson(result);
+  j["mission"] = job.record.id;
+  j["map"] = job.record.mapId;
+  j["spec"] = job.record.spec;
+  store::DataDir::writeFileAtomic((s / "result.json").string(), j.dump());
+  store::DataDir::writeFileAtomic(
+      (s / "result.geojson").string(),
+      maps::tracksToGeoJson(result.tracks, job.problem.world.geometry(), job.geo));
+  std::ostringstream csv;
+  csv << "rover,index,x_m,y_m\n";
+  for (const auto& t : result.tracks)
+    for (std::size_t i = 0; i < t.points.size(); ++i)
+      csv << t.rover << "," << i << "," << t.points[i].x() << "," << t.points[i].y() << "\n";
+  store::DataDir::writeFileAtomic((s / "result.csv").string(), csv.str());
+  store::DataDir::writeFileAtomic((s / "grid.bin").string(), stream.fullGridFrame());
+  store::DataDir::writeFileAtomic((s / "trails.json").string(), stream.trailsJson().dump());
+  dir_.commitDir(staging, dir_.missionDir(job.record.id));
+}
+
+void MissionManager::stop() {
+  std::vector<std::pair<std::string, std::shared_ptr<MissionStream>>> queuedStreams;
+  {
+    std::lock_guard lock(mutex_);
+    if (stopping_ && workers_.empty()) return;
+    stopping_ = true;
+    for (auto& [id, a] : active_) {
+      a.cancel->cancel();
+      a.stream->setCancelled();
+      if (!a.running) queuedStreams.emplace_back(id, a.stream);
+    }
+    queue_.clear();
+  }
+  cv_.notify_all();
+  for (auto& t : workers_)
+    if (t.joinable()) t.join();
+  workers_.clear();
+  for (auto& [id, s] : queuedStreams) {
+    db_.updateMission(id, "interrupted", "the server stopped before the mission started");
+    s->finish("interrupted", "the server stopped before the mission started", nullptr);
+  }
+}
+
+}  // namespace rover::missions

@@ -1,0 +1,318 @@
+#include "server/missions/mission_stream.hpp"
+
+#include <cmath>
+#include <cstring>
+#include <numbers>
+#include <thread>
+
+namespace rover::missions {
+
+namespace {
+
+constexpr std::uint32_t kCellUpdates = 1, kFullGrid = 2;
+
+void putU32(std::string& out, std::uint32_t v) {
+  char b[4] = {static_cast<char>(v & 0xff), static_cast<char>((v >> 8) & 0xff),
+               static_cast<char>((v >> 16) & 0xff), static_cast<char>((v >> 24) & 0xff)};
+  out.append(b, 4);
+}
+std::uint32_t getU32(const std::string& in, std::size_t at) {
+  std::uint32_t v = 0;
+  for (int k = 3; k >= 0; --k) v = (v << 8) | static_cast<unsigned char>(in[at + k]);
+  return v;
+}
+
+nlohmann::json poseJson(float x, float y, float headingDeg) {
+  return {{"x", x}, {"y", y}, {"heading_deg", headingDeg}};
+}
+
+}  // namespace
+
+// One WebSocket client's cursors over the stream.
+class MissionStream::Subscription : public http::WsSource {
+ public:
+  explicit Subscription(std::shared_ptr<MissionStream> s) : stream_(std::move(s)) {}
+
+  std::optional<http::WsFrame> next() override {
+    MissionStream& s = *stream_;
+    std::lock_guard lock(s.mutex_);
+    const std::uint64_t gridVersion = s.logBase_ + s.changeLog_.size();
+    if (!snapshotSent_) {
+      snapshotSent_ = true;
+      nlohmann::json rovers = nlohmann::json::array();
+      trailSent_.assign(s.trails_.size(), 0);
+      for (std::size_t k = 0; k < s.trails_.size(); ++k) {
+        nlohmann::json trail = nlohmann::json::array();
+        for (const auto& p : s.trails_[k]) trail.push_back({p.x, p.y});
+        nlohmann::json r{{"rover", k}, {"trail", trail}, {"pose", nullptr}};
+        if (!s.trails_[k].empty()) {
+          const Pose& p = s.trails_[k].back();
+          r["pose"] = poseJson(p.x, p.y, p.headingDeg);
+        }
+        rovers.push_back(r);
+        trailSent_[k] = s.trails_[k].size();
+      }
+      nlohmann::json grid = nullptr;
+      if (s.grid_.cellCount() > 0)
+        grid = {{"rows", s.grid_.rows}, {"cols", s.grid_.cols}, {"cell_size_m", s.grid_.cellWidth}};
+      nlohmann::json j{{"type", "snapshot"}, {"mission", s.id_},   {"status", s.status_},
+                       {"grid", grid},       {"rovers", rovers},   {"step", s.step_},
+                       {"progress", s.progress_}, {"metrics", s.metrics_}};
+      progressSeen_ = s.progressVersion_;
+      statusSeen_ = s.statusVersion_;
+      return http::WsFrame{false, j.dump(), false};
+    }
+    if (s.grid_.cellCount() > 0 && (!gridSent_ || gridSeen_ != gridVersion)) {
+      std::string frame;
+      // A full grid for a new client, or when it fell behind the compacted log, or when the diff
+      // would be bigger than the grid.
+      if (!gridSent_ || gridSeen_ < s.logBase_ ||
+          gridVersion - gridSeen_ > static_cast<std::uint64_t>(s.grid_.cellCount()) / 2)
+        frame = s.fullGridFrameLocked();
+      else
+        frame = s.gridDiffFrame(gridSeen_);
+      gridSent_ = true;
+      gridSeen_ = gridVersion;
+      return http::WsFrame{true, std::move(frame), false};
+    }
+    nlohmann::json rovers = nlohmann::json::array();
+    for (std::size_t k = 0; k < s.trails_.size(); ++k) {
+      if (trailSent_[k] == s.trails_[k].size()) continue;
+      nlohmann::json append = nlohmann::json::array();
+      for (std::size_t i = trailSent_[k]; i < s.trails_[k].size(); ++i)
+        append.push_back({s.trails_[k][i].x, s.trails_[k][i].y});
+      const Pose& p = s.trails_[k].back();
+      rovers.push_back({{"rover", k}, {"append", append}, {"pose", poseJson(p.x, p.y, p.headingDeg)}});
+      trailSent_[k] = s.trails_[k].size();
+    }
+    if (!rovers.empty())
+      return http::WsFrame{false, nlohmann::json{{"type", "poses"}, {"step", s.step_}, {"rovers", rovers}}.dump(), false};
+    if (progressSeen_ != s.progressVersion_) {
+      progressSeen_ = s.progressVersion_;
+      nlohmann::json j = s.progress_;
+      j["type"] = "progress";
+      return http::WsFrame{false, j.dump(), false};
+    }
+    if (statusSeen_ != s.statusVersion_ && !s.finished_) {
+      statusSeen_ = s.statusVersion_;
+      return http::WsFrame{false, nlohmann::json{{"type", "status"}, {"status", s.status_}}.dump(), false};
+    }
+    if (s.finished_ && !doneSent_) {
+      doneSent_ = true;
+      nlohmann::json j{{"type", "done"}, {"mission", s.id_}, {"status", s.status_},
+                       {"message", s.message_}, {"metrics", s.metrics_}, {"step", s.step_}};
+      return http::WsFrame{false, j.dump(), true};
+    }
+    return std::nullopt;
+  }
+
+ private:
+  std::shared_ptr<MissionStream> stream_;
+  bool snapshotSent_ = false, gridSent_ = false, doneSent_ = false;
+  std::uint64_t gridSeen_ = 0, progressSeen_ = 0, statusSeen_ = 0;
+  std::vector<std::size_t> trailSent_;
+};
+
+MissionStream::MissionStream(std::string missionId, const GridGeometry& grid, int rovers,
+                             double paceStepsPerSecond)
+    : id_(std::move(missionId)),
+      grid_(grid),
+      pace_(paceStepsPerSecond),
+      state_(grid.cellCount(), 0),
+      visits_(grid.cellCount(), 0),
+      trails_(std::max(0, rovers)) {}
+
+void MissionStream::cellsChanged(std::span<const CellUpdate> cells) {
+  {
+    std::lock_guard lock(mutex_);
+    for (const CellUpdate& c : cells) {
+      if (c.index < 0 || c.index >= grid_.cellCount()) continue;
+      state_[c.index] = c.state;
+      if (c.visits > 0 || c.state != 3) visits_[c.index] = std::max(visits_[c.index], c.visits);
+      changeLog_.push_back(c.index);
+    }
+    // Bound the log: clients behind a compaction get a full grid instead of a diff.
+    if (changeLog_.size() > 2 * static_cast<std::size_t>(std::max(1, grid_.cellCount())) + 1024) {
+      logBase_ += changeLog_.size();
+      changeLog_.clear();
+    }
+  }
+  wakeAll(false);
+}
+
+void MissionStream::roverPoses(std::int64_t step, std::span<const RoverPose> poses) {
+  {
+    std::lock_guard lock(mutex_);
+    step_ = step;
+    for (const RoverPose& p : poses) {
+      if (p.rover < 0) continue;
+      if (static_cast<std::size_t>(p.rover) >= trails_.size()) trails_.resize(p.rover + 1);
+      auto& t = trails_[p.rover];
+      Pose q{static_cast<float>(p.x), static_cast<float>(p.y),
+             static_cast<float>(p.heading * 180.0 / std::numbers::pi)};
+      if (t.empty() || t.back().x != q.x || t.back().y != q.y) t.push_back(q);
+      else t.back().headingDeg = q.headingDeg;
+    }
+  }
+  wakeAll(false);
+  if (pace_ > 0 && !cancelRequested_) {
+    // Hold the planner to `pace_` steps a second so a person can watch; short sleeps keep
+    // cancellation prompt (the planner checks its token every step).
+    auto now = std::chrono::steady_clock::now();
+    if (paceFirstStep_ < 0) paceFirstStep_ = step, paceStart_ = now;
+    auto due = paceStart_ + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                                std::chrono::duration<double>((step - paceFirstStep_) / pace_));
+    if (due > now) std::this_thread::sleep_for(std::min<std::chrono::steady_clock::duration>(due - now, std::chrono::milliseconds(50)));
+  }
+}
+
+void MissionStream::progress(const Progress& p) {
+  {
+    std::lock_guard lock(mutex_);
+    progress_ = {{"step", p.step}, {"fraction", p.fraction}, {"coverage", p.coverage}, {"moves", p.moves}};
+    ++progressVersion_;
+  }
+  wakeAll(false);
+}
+
+void MissionStream::setStatus(const std::string& status) {
+  {
+    std::lock_guard lock(mutex_);
+    status_ = status;
+    ++statusVersion_;
+  }
+  wakeAll(true);
+}
+
+void MissionStream::finish(const std::string& status, const std::string& message,
+                           const nlohmann::json& metrics) {
+  {
+    std::lock_guard lock(mutex_);
+    status_ = status;
+    message_ = message;
+    metrics_ = metrics;
+    finished_ = true;
+    ++statusVersion_;
+  }
+  wakeAll(true);
+}
+
+bool MissionStream::finished() const {
+  std::lock_guard lock(mutex_);
+  return finished_;
+}
+
+nlohmann::json MissionStream::summary() const {
+  std::lock_guard lock(mutex_);
+  return {{"status", status_}, {"step", step_}, {"progress", progress_}, {"metrics", metrics_},
+          {"message", message_}, {"subscribers", subscribers_.size()}};
+}
+
+std::string MissionStream::fullGridFrame() const {
+  std::lock_guard lock(mutex_);
+  return fullGridFrameLocked();
+}
+
+std::string MissionStream::fullGridFrameLocked() const {
+  std::string out;
+  const auto n = static_cast<std::uint32_t>(grid_.cellCount());
+  out.reserve(16 + 5 * n);
+  putU32(out, kFullGrid);
+  putU32(out, grid_.rows);
+  putU32(out, grid_.cols);
+  putU32(out, n);
+  out.append(reinterpret_cast<const char*>(state_.data()), n);
+  for (std::uint32_t v : visits_) putU32(out, v);
+  return out;
+}
+
+std::string MissionStream::gridDiffFrame(std::uint64_t since) const {
+  // Latest state of every cell changed since `since`, each cell once.
+  std::vector<std::int32_t> cells;
+  std::vector<std::uint8_t> seen(grid_.cellCount(), 0);
+  for (std::size_t i = since - logBase_; i < changeLog_.size(); ++i) {
+    std::int32_t c = changeLog_[i];
+    if (!seen[c]) seen[c] = 1, cells.push_back(c);
+  }
+  std::string out;
+  out.reserve(16 + 12 * cells.size());
+  putU32(out, kCellUpdates);
+  putU32(out, grid_.rows);
+  putU32(out, grid_.cols);
+  putU32(out, static_cast<std::uint32_t>(cells.size()));
+  for (std::int32_t c : cells) {
+    putU32(out, static_cast<std::uint32_t>(c));
+    out.push_back(static_cast<char>(state_[c]));
+    out.append(3, '\0');
+    putU32(out, visits_[c]);
+  }
+  return out;
+}
+
+nlohmann::json MissionStream::trailsJson() const {
+  std::lock_guard lock(mutex_);
+  nlohmann::json all = nlohmann::json::array();
+  for (const auto& t : trails_) {
+    nlohmann::json pts = nlohmann::json::array();
+    for (const auto& p : t) pts.push_back({p.x, p.y, p.headingDeg});
+    all.push_back(pts);
+  }
+  return all;
+}
+
+std::shared_ptr<MissionStream> MissionStream::fromStored(const std::string& missionId,
+                                                         const std::string& gridFrame,
+                                                         const nlohmann::json& trails,
+                                                         const std::string& status,
+                                                         const std::string& message,
+                                                         const nlohmann::json& metrics) {
+  GridGeometry g{};
+  if (gridFrame.size() >= 16 && getU32(gridFrame, 0) == kFullGrid) {
+    g.rows = static_cast<int>(getU32(gridFrame, 4));
+    g.cols = static_cast<int>(getU32(gridFrame, 8));
+    if (gridFrame.size() != 16 + 5ull * g.rows * g.cols) g = GridGeometry{};
+  }
+  auto s = std::make_shared<MissionStream>(missionId, g, static_cast<int>(trails.size()));
+  for (int i = 0; i < g.cellCount(); ++i) {
+    s->state_[i] = static_cast<std::uint8_t>(gridFrame[16 + i]);
+    s->visits_[i] = getU32(gridFrame, 16 + g.cellCount() + 4ull * i);
+  }
+  for (std::size_t k = 0; k < trails.size(); ++k)
+    for (const auto& p : trails[k])
+      s->trails_[k].push_back({p.at(0).get<float>(), p.at(1).get<float>(), p.size() > 2 ? p.at(2).get<float>() : 0.0f});
+  s->finish(status, message, metrics);
+  return s;
+}
+
+std::shared_ptr<http::WsSource> MissionStream::subscribe(std::shared_ptr<http::WsConnection> connection) {
+  {
+    std::lock_guard lock(mutex_);
+    std::erase_if(subscribers_, [](const auto& w) { return w.expired(); });
+    subscribers_.push_back(connection);
+  }
+  return std::make_shared<Subscription>(shared_from_this());
+}
+
+std::size_t MissionStream::subscriberCount() const {
+  std::lock_guard lock(mutex_);
+  std::size_t n = 0;
+  for (const auto& w : subscribers_) n += !w.expired();
+  return n;
+}
+
+void MissionStream::wakeAll(bool force) {
+  std::vector<std::shared_ptr<http::WsConnection>> live;
+  {
+    std::lock_guard lock(mutex_);
+    // The planner may emit thousands of events a second; waking clients every few ms is plenty
+    // (they pull whatever accumulated). Lifecycle changes always wake.
+    auto now = std::chrono::steady_clock::now();
+    if (!force && now - lastWake_ < std::chrono::milliseconds(5)) return;
+    lastWake_ = now;
+    for (const auto& w : subscribers_)
+      if (auto c = w.lock()) live.push_back(std::move(c));
+  }
+  for (auto& c : live) c->wake();
+}
+
+}  // namespace rover::missions

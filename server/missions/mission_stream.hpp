@@ -1,0 +1,102 @@
+#pragma once
+// The live state of one mission and its WebSocket subscribers (issue: server, "Live streams").
+//
+// The planner writes events into it (it is the planner's EventSink); each subscriber pulls frames
+// with its own cursors — grid version, trail lengths, progress version — so a slow client costs a
+// few integers, intermediate grid states coalesce into one diff, and the final state is never
+// dropped: "done" is only handed out once the client has everything before it.
+//
+// Protocol (documented in README.md):
+//   1. text   {"type":"snapshot", mission, status, grid{rows,cols,cell_size_m}|null, rovers[{trail,pose}], progress, metrics}
+//   2. binary full grid (type 2), then diffs (type 1) as cells change
+//   3. text   {"type":"poses", step, rovers[{rover, append[[x,y]...], pose{x,y,heading_deg}}]}
+//   4. text   {"type":"progress", ...} and {"type":"status", status}
+//   5. text   {"type":"done", status, message, metrics} — the last frame, then a normal close
+// Binary frames, little-endian: u32 type, u32 rows, u32 cols, u32 count, then
+//   type 1: count × (u32 cell index, u8 state, u8×3 zero, u32 visits)
+//   type 2: rows·cols × u8 state, then rows·cols × u32 visits
+#include <chrono>
+#include <cstdint>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "core/grid/geometry.hpp"
+#include "core/planning/events.hpp"
+#include "server/http/http_types.hpp"
+
+namespace rover::missions {
+
+class MissionStream : public EventSink, public std::enable_shared_from_this<MissionStream> {
+ public:
+  // `grid` is the planner's cell grid (0×0 when the planner has none); `paceStepsPerSecond` > 0
+  // slows the planner down to that many steps a second so people can watch (0 = full speed).
+  MissionStream(std::string missionId, const GridGeometry& grid, int rovers,
+                double paceStepsPerSecond = 0);
+
+  // EventSink — called on the planner's thread.
+  void cellsChanged(std::span<const CellUpdate> cells) override;
+  void roverPoses(std::int64_t step, std::span<const RoverPose> poses) override;
+  void progress(const Progress& p) override;
+
+  void setStatus(const std::string& status);
+  // The final frame's content; wakes every subscriber.
+  void finish(const std::string& status, const std::string& message, const nlohmann::json& metrics);
+  bool finished() const;
+  void setCancelled() { cancelRequested_ = true; }
+
+  // Status, progress and (when finished) metrics, for GET /api/missions/{id}.
+  nlohmann::json summary() const;
+  // Final grid (type 2 frame bytes) and trails, for storing and replaying a finished mission.
+  std::string fullGridFrame() const;
+  nlohmann::json trailsJson() const;
+  // Rebuilds a finished mission's stream from its stored grid frame and result.
+  static std::shared_ptr<MissionStream> fromStored(const std::string& missionId,
+                                                   const std::string& gridFrame,
+                                                   const nlohmann::json& trails,
+                                                   const std::string& status,
+                                                   const std::string& message,
+                                                   const nlohmann::json& metrics);
+
+  std::shared_ptr<http::WsSource> subscribe(std::shared_ptr<http::WsConnection> connection);
+  std::size_t subscriberCount() const;
+
+ private:
+  class Subscription;
+  struct Pose {
+    float x, y, headingDeg;
+  };
+  void wakeAll(bool force);
+  std::string gridDiffFrame(std::uint64_t since) const;  // caller holds mutex_
+  std::string fullGridFrameLocked() const;                 // caller holds mutex_
+
+  const std::string id_;
+  const GridGeometry grid_;
+  const double pace_;
+  bool cancelRequested_ = false;
+  std::chrono::steady_clock::time_point paceStart_{};
+  std::int64_t paceFirstStep_ = -1;
+
+  mutable std::mutex mutex_;
+  std::vector<std::uint8_t> state_;
+  std::vector<std::uint32_t> visits_;
+  std::vector<std::int32_t> changeLog_;  // cell indices in change order
+  std::uint64_t logBase_ = 0;            // version of changeLog_[0]
+  std::vector<std::vector<Pose>> trails_;
+  std::int64_t step_ = 0;
+  nlohmann::json progress_ = nullptr;
+  std::uint64_t progressVersion_ = 0;
+  std::string status_ = "queued";
+  std::uint64_t statusVersion_ = 0;
+  bool finished_ = false;
+  std::string message_;
+  nlohmann::json metrics_ = nullptr;
+  std::vector<std::weak_ptr<http::WsConnection>> subscribers_;
+  std::chrono::steady_clock::time_point lastWake_{};
+};
+
+}  // namespace rover::missions

@@ -1,0 +1,215 @@
+#include "server/store/data_dir.hpp"
+
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstdint>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <random>
+#include <stdexcept>
+#include <system_error>
+#include <utility>
+#include <vector>
+
+namespace fs = std::filesystem;
+
+namespace rover::store {
+
+namespace {
+
+std::string errnoText(int err) { return std::error_code(err, std::generic_category()).message(); }
+
+// Opens `path` read-only and fsyncs it. Returns 0 or the errno of the failure.
+int fsyncPath(const fs::path& path, bool directory) {
+  int flags = O_RDONLY | O_CLOEXEC;
+  if (directory) flags |= O_DIRECTORY;
+  const int fd = ::open(path.c_str(), flags);
+  if (fd < 0) return errno;
+  int err = 0;
+  if (::fsync(fd) != 0) err = errno;
+  ::close(fd);
+  return err;
+}
+
+// Best effort: some filesystems refuse fsync on a directory (EINVAL); the data is still renamed.
+void fsyncDirBestEffort(const fs::path& dir) {
+  (void)fsyncPath(dir.empty() ? fs::path(".") : dir, true);
+}
+
+// Flushes every regular file under `dir` (throws on failure) and every folder (best effort),
+// deepest first, so that after the rename the whole tree is on disk.
+void fsyncTree(const fs::path& dir) {
+  std::error_code ec;
+  for (fs::recursive_directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
+    const auto& entry = *it;
+    std::error_code sec;
+    if (entry.is_regular_file(sec)) {
+      if (const int err = fsyncPath(entry.path(), false); err != 0)
+        throw std::runtime_error("cannot flush '" + entry.path().string() + "': " + errnoText(err));
+    } else if (entry.is_directory(sec)) {
+      fsyncDirBestEffort(entry.path());
+    }
+  }
+  if (ec) throw std::runtime_error("cannot list '" + dir.string() + "': " + ec.message());
+  fsyncDirBestEffort(dir);
+}
+
+}  // namespace
+
+DataDir::DataDir(std::string root) : root_(std::move(root)) {
+  if (root_.empty()) throw std::runtime_error("data directory: empty path");
+  const fs::path r(root_);
+  for (const fs::path& dir : {r, r / "maps", r / "pdms", r / "missions", r / "tmp"}) {
+    std::error_code ec;
+    fs::create_directories(dir, ec);
+    if (ec)
+      throw std::runtime_error("data directory '" + root_ + "': cannot create '" + dir.string() +
+                               "': " + ec.message());
+    if (!fs::is_directory(dir, ec))
+      throw std::runtime_error("data directory '" + root_ + "': '" + dir.string() +
+                               "' exists but is not a folder");
+  }
+  // Writability probe: create and remove a file in the root (and in tmp/, where uploads go).
+  for (const fs::path& dir : {r, r / "tmp"}) {
+    const fs::path probe = dir / (".write-probe-" + newId());
+    const int fd = ::open(probe.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0600);
+    if (fd < 0) {
+      throw std::runtime_error("data directory '" + root_ + "' is not writable: cannot create '" +
+                               probe.string() + "': " + errnoText(errno));
+    }
+    const bool wrote = ::write(fd, "x", 1) == 1;
+    const int writeErr = errno;
+    ::close(fd);
+    ::unlink(probe.c_str());
+    if (!wrote)
+      throw std::runtime_error("data directory '" + root_ + "' is not writable: cannot write '" +
+                               probe.string() + "': " + errnoText(writeErr));
+  }
+}
+
+std::string DataDir::databasePath() const { return (fs::path(root_) / "roverplan.db").string(); }
+std::string DataDir::mapDir(const std::string& id) const {
+  return (fs::path(root_) / "maps" / id).string();
+}
+std::string DataDir::pdmDir(const std::string& id) const {
+  return (fs::path(root_) / "pdms" / id).string();
+}
+std::string DataDir::missionDir(const std::string& id) const {
+  return (fs::path(root_) / "missions" / id).string();
+}
+std::string DataDir::tmpDir() const { return (fs::path(root_) / "tmp").string(); }
+
+std::string DataDir::newId() {
+  // One device per thread: std::random_device is not safe to share between threads.
+  thread_local std::random_device rd;
+  const std::uint64_t v = (static_cast<std::uint64_t>(rd()) << 32) ^ static_cast<std::uint64_t>(rd());
+  char buf[24];
+  std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(v));
+  return buf;
+}
+
+std::string DataDir::stagingDir() const {
+  const fs::path tmp(tmpDir());
+  std::error_code ec;
+  fs::create_directories(tmp, ec);  // in case someone removed it while the server runs
+  for (int attempt = 0; attempt < 16; ++attempt) {
+    const fs::path dir = tmp / newId();
+    if (fs::create_directory(dir, ec)) return dir.string();
+    if (ec)
+      throw std::runtime_error("cannot create staging folder '" + dir.string() +
+                               "': " + ec.message());
+    // Exists already (an id collision): try another name.
+  }
+  throw std::runtime_error("cannot create a unique staging folder in '" + tmp.string() + "'");
+}
+
+void DataDir::commitDir(const std::string& staged, const std::string& finalDir) const {
+  std::error_code ec;
+  if (!fs::is_directory(staged, ec))
+    throw std::runtime_error("commit: staged folder '" + staged + "' does not exist");
+  // rename(2) would silently replace an empty target folder, so refuse any existing target first.
+  // (Callers commit fresh random ids, so there is no race on the same target in practice.)
+  if (fs::exists(fs::symlink_status(finalDir, ec)))
+    throw std::runtime_error("commit: target '" + finalDir + "' already exists");
+  const fs::path target(finalDir);
+  if (target.has_parent_path()) {
+    fs::create_directories(target.parent_path(), ec);
+    if (ec)
+      throw std::runtime_error("commit: cannot create '" + target.parent_path().string() +
+                               "': " + ec.message());
+  }
+  fsyncTree(staged);
+  fs::rename(staged, target, ec);
+  if (ec)
+    throw std::runtime_error("commit: cannot move '" + staged + "' to '" + finalDir +
+                             "': " + ec.message());
+  // Make the rename itself durable: flush both parent folders.
+  fsyncDirBestEffort(target.parent_path());
+  fsyncDirBestEffort(fs::path(staged).parent_path());
+}
+
+void DataDir::writeFileAtomic(const std::string& path, const std::string& bytes) {
+  const fs::path target(path);
+  const fs::path dir = target.has_parent_path() ? target.parent_path() : fs::path(".");
+  std::string tmpName = ".";  // hidden, and unique per call
+  tmpName += target.filename().string();
+  tmpName += ".tmp-";
+  tmpName += newId();
+  const fs::path tmp = dir / tmpName;
+
+  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
+  if (fd < 0)
+    throw std::runtime_error("cannot write '" + path + "': cannot create temporary file '" +
+                             tmp.string() + "': " + errnoText(errno));
+  auto failWith = [&](const char* what, int err) {
+    ::unlink(tmp.c_str());
+    throw std::runtime_error("cannot write '" + path + "': " + what + ": " + errnoText(err));
+  };
+
+  const char* p = bytes.data();
+  std::size_t left = bytes.size();
+  while (left > 0) {
+    const ssize_t n = ::write(fd, p, left);
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      const int err = errno;
+      ::close(fd);
+      failWith("write", err);
+    }
+    p += n;
+    left -= static_cast<std::size_t>(n);
+  }
+  if (::fsync(fd) != 0) {
+    const int err = errno;
+    ::close(fd);
+    failWith("fsync", err);
+  }
+  if (::close(fd) != 0) failWith("close", errno);
+  if (::rename(tmp.c_str(), target.c_str()) != 0) failWith("rename", errno);
+  fsyncDirBestEffort(dir);
+}
+
+void DataDir::removeTree(const std::string& path) {
+  std::error_code ec;
+  fs::remove_all(path, ec);
+  if (ec && ec != std::errc::no_such_file_or_directory)
+    throw std::runtime_error("cannot remove '" + path + "': " + ec.message());
+}
+
+void DataDir::cleanTmp() const {
+  const fs::path tmp(tmpDir());
+  std::error_code ec;
+  fs::create_directories(tmp, ec);
+  if (ec) throw std::runtime_error("cannot create '" + tmp.string() + "': " + ec.message());
+  std::vector<fs::path> entries;
+  for (fs::directory_iterator it(tmp, ec), end; !ec && it != end; it.increment(ec))
+    entries.push_back(it->path());
+  if (ec) throw std::runtime_error("cannot list '" + tmp.string() + "': " + ec.message());
+  for (const auto& e : entries) removeTree(e.string());
+}
+
+}  // namespace rover::store

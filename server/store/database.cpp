@@ -1,0 +1,389 @@
+#include "server/store/database.hpp"
+
+#include <sqlite3.h>
+
+#include <chrono>
+#include <cstdio>
+#include <ctime>
+#include <stdexcept>
+#include <utility>
+
+// Durability choice: journal_mode=WAL with synchronous=NORMAL. Every write below is a single
+// statement, i.e. one implicit transaction. In WAL mode a transaction is committed once its frames
+// are appended to the -wal file with write(); with synchronous=NORMAL SQLite does not fsync at
+// every commit, only at checkpoints. The data written by write() lives in the kernel's page cache,
+// which survives the death of the process (crash, abort, kill -9): the next open replays the WAL.
+// So a committed row is never lost to a process crash. Only a power loss / kernel panic can roll
+// back the last few transactions (never corrupt the database) — an acceptable trade for a planning
+// server whose missions are marked "interrupted" at restart anyway. Use synchronous=FULL if
+// power-loss durability of the very last commit ever matters.
+
+namespace rover::store {
+
+namespace {
+
+constexpr int kSchemaVersion = 1;
+
+[[noreturn]] void fail(sqlite3* db, const std::string& what) {
+  throw std::runtime_error("database: " + what + ": " +
+                           (db != nullptr ? sqlite3_errmsg(db) : "out of memory"));
+}
+
+// A prepared statement, finalized on scope exit. Values are only ever bound as parameters.
+class Stmt {
+ public:
+  Stmt(sqlite3* db, const char* sql) : db_(db) {
+    if (sqlite3_prepare_v2(db, sql, -1, &stmt_, nullptr) != SQLITE_OK) fail(db, "prepare");
+  }
+  ~Stmt() { sqlite3_finalize(stmt_); }
+  Stmt(const Stmt&) = delete;
+  Stmt& operator=(const Stmt&) = delete;
+
+  Stmt& bind(int i, const std::string& s) {
+    check(sqlite3_bind_text(stmt_, i, s.data(), static_cast<int>(s.size()), SQLITE_TRANSIENT));
+    return *this;
+  }
+  // Binds NULL for an empty string (unset timestamps).
+  Stmt& bindOrNull(int i, const std::string& s) {
+    if (s.empty()) {
+      check(sqlite3_bind_null(stmt_, i));
+      return *this;
+    }
+    return bind(i, s);
+  }
+  Stmt& bindInt(int i, long long v) {
+    check(sqlite3_bind_int64(stmt_, i, v));
+    return *this;
+  }
+
+  // Steps once: true if a row is available, false when done; throws on error.
+  bool step() {
+    const int rc = sqlite3_step(stmt_);
+    if (rc == SQLITE_ROW) return true;
+    if (rc == SQLITE_DONE) return false;
+    fail(db_, "step");
+  }
+  void run() {
+    while (step()) {
+    }
+  }
+
+  std::string text(int col) const {
+    const auto* p = sqlite3_column_text(stmt_, col);
+    if (p == nullptr) return {};
+    return {reinterpret_cast<const char*>(p), static_cast<std::size_t>(sqlite3_column_bytes(stmt_, col))};
+  }
+  bool isNull(int col) const { return sqlite3_column_type(stmt_, col) == SQLITE_NULL; }
+  long long integer(int col) const { return sqlite3_column_int64(stmt_, col); }
+
+ private:
+  void check(int rc) {
+    if (rc != SQLITE_OK) fail(db_, "bind");
+  }
+  sqlite3* db_;
+  sqlite3_stmt* stmt_ = nullptr;
+};
+
+void exec(sqlite3* db, const char* sql) {
+  char* err = nullptr;
+  if (sqlite3_exec(db, sql, nullptr, nullptr, &err) != SQLITE_OK) {
+    std::string msg = err != nullptr ? err : sqlite3_errmsg(db);
+    sqlite3_free(err);
+    throw std::runtime_error("database: " + std::string(sql).substr(0, 60) + ": " + msg);
+  }
+}
+
+std::string dumpJson(const nlohmann::json& j, const char* what) {
+  try {
+    return j.dump();
+  } catch (const nlohmann::json::exception& e) {
+    throw std::runtime_error(std::string("database: cannot store ") + what + ": " + e.what());
+  }
+}
+
+nlohmann::json parseJson(const Stmt& s, int col, const char* what) {
+  if (s.isNull(col)) return nullptr;
+  try {
+    return nlohmann::json::parse(s.text(col));
+  } catch (const nlohmann::json::exception& e) {
+    throw std::runtime_error(std::string("database: corrupt ") + what + " JSON: " + e.what());
+  }
+}
+
+bool isFinal(const std::string& status) {
+  return status == "succeeded" || status == "failed" || status == "cancelled" ||
+         status == "interrupted";
+}
+
+// Version 1 of the schema. Later versions add a migrate step from N-1 in Database::Database.
+constexpr const char* kSchemaV1 = R"sql(
+CREATE TABLE IF NOT EXISTS maps(
+  id         TEXT PRIMARY KEY,
+  name       TEXT NOT NULL,
+  created_at TEXT NOT NULL,
+  meta       TEXT NOT NULL DEFAULT 'null'
+);
+CREATE TABLE IF NOT EXISTS pdms(
+  id         TEXT PRIMARY KEY,
+  map_id     TEXT NOT NULL REFERENCES maps(id) ON DELETE CASCADE,
+  name       TEXT NOT NULL,
+  created_at TEXT NOT NULL,
+  meta       TEXT NOT NULL DEFAULT 'null'
+);
+CREATE INDEX IF NOT EXISTS pdms_by_map ON pdms(map_id);
+-- map_id / pdm_id are plain text on purpose (no foreign key): a mission's record outlives its map.
+CREATE TABLE IF NOT EXISTS missions(
+  id          TEXT PRIMARY KEY,
+  map_id      TEXT NOT NULL,
+  pdm_id      TEXT NOT NULL DEFAULT '',
+  planner     TEXT NOT NULL,
+  spec        TEXT NOT NULL DEFAULT 'null',
+  status      TEXT NOT NULL,
+  message     TEXT NOT NULL DEFAULT '',
+  created_at  TEXT NOT NULL,
+  started_at  TEXT,
+  finished_at TEXT,
+  metrics     TEXT
+);
+CREATE INDEX IF NOT EXISTS missions_by_created ON missions(created_at DESC, id);
+CREATE INDEX IF NOT EXISTS missions_by_status ON missions(status);
+)sql";
+
+MapRecord readMap(const Stmt& s) {
+  return MapRecord{s.text(0), s.text(1), s.text(2), parseJson(s, 3, "map meta")};
+}
+
+PdmRecord readPdm(const Stmt& s) {
+  return PdmRecord{s.text(0), s.text(1), s.text(2), s.text(3), parseJson(s, 4, "PDM meta")};
+}
+
+constexpr const char* kMissionColumns =
+    "id, map_id, pdm_id, planner, spec, status, message, created_at, started_at, finished_at, "
+    "metrics";
+
+MissionRecord readMission(const Stmt& s) {
+  MissionRecord m;
+  m.id = s.text(0);
+  m.mapId = s.text(1);
+  m.pdmId = s.text(2);
+  m.planner = s.text(3);
+  m.spec = parseJson(s, 4, "mission spec");
+  m.status = s.text(5);
+  m.message = s.text(6);
+  m.createdAt = s.text(7);
+  m.startedAt = s.text(8);
+  m.finishedAt = s.text(9);
+  m.metrics = parseJson(s, 10, "mission metrics");
+  return m;
+}
+
+}  // namespace
+
+Database::Database(const std::string& path) {
+  const int flags = SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE | SQLITE_OPEN_FULLMUTEX;
+  if (sqlite3_open_v2(path.c_str(), &db_, flags, nullptr) != SQLITE_OK) {
+    std::string msg = db_ != nullptr ? sqlite3_errmsg(db_) : "out of memory";
+    sqlite3_close_v2(db_);
+    db_ = nullptr;
+    throw std::runtime_error("database: cannot open '" + path + "': " + msg);
+  }
+  try {
+    sqlite3_extended_result_codes(db_, 1);
+    exec(db_, "PRAGMA busy_timeout=5000");
+    {
+      Stmt s(db_, "PRAGMA journal_mode=WAL");
+      const std::string mode = s.step() ? s.text(0) : std::string();
+      // An in-memory database (":memory:") reports "memory"; a file must really be in WAL mode.
+      if (mode != "wal" && mode != "memory")
+        throw std::runtime_error("database: cannot enable WAL on '" + path + "' (journal mode " +
+                                 mode + ")");
+    }
+    exec(db_, "PRAGMA synchronous=NORMAL");
+    exec(db_, "PRAGMA foreign_keys=ON");
+
+    // Schema creation / migration in one write transaction, so two processes opening a fresh file
+    // at once cannot both initialise it.
+    exec(db_, "BEGIN IMMEDIATE");
+    try {
+      exec(db_, "CREATE TABLE IF NOT EXISTS schema_version(version INTEGER NOT NULL)");
+      long long version = 0;
+      {
+        Stmt s(db_, "SELECT MAX(version) FROM schema_version");
+        if (s.step() && !s.isNull(0)) version = s.integer(0);
+      }
+      if (version > kSchemaVersion)
+        throw std::runtime_error("database: '" + path + "' has schema version " +
+                                 std::to_string(version) + ", newer than this server supports (" +
+                                 std::to_string(kSchemaVersion) + ")");
+      // Migrations go here: if (version == 1) { ...ALTER...; version = 2; } and so on.
+      exec(db_, kSchemaV1);
+      if (version == 0) {
+        Stmt s(db_, "INSERT INTO schema_version(version) VALUES (1)");
+        s.run();
+      }
+      exec(db_, "COMMIT");
+    } catch (...) {
+      sqlite3_exec(db_, "ROLLBACK", nullptr, nullptr, nullptr);
+      throw;
+    }
+  } catch (...) {
+    sqlite3_close_v2(db_);
+    db_ = nullptr;
+    throw;
+  }
+}
+
+Database::~Database() {
+  if (db_ != nullptr) sqlite3_close_v2(db_);
+}
+
+// ---- maps -------------------------------------------------------------------------------------
+
+void Database::insertMap(const MapRecord& m) {
+  const std::string meta = dumpJson(m.meta, "map meta");
+  std::lock_guard lock(mutex_);
+  Stmt s(db_, "INSERT INTO maps(id, name, created_at, meta) VALUES (?1, ?2, ?3, ?4)");
+  s.bind(1, m.id).bind(2, m.name).bind(3, m.createdAt).bind(4, meta).run();
+}
+
+std::optional<MapRecord> Database::getMap(const std::string& id) {
+  std::lock_guard lock(mutex_);
+  Stmt s(db_, "SELECT id, name, created_at, meta FROM maps WHERE id = ?1");
+  s.bind(1, id);
+  if (!s.step()) return std::nullopt;
+  return readMap(s);
+}
+
+std::vector<MapRecord> Database::listMaps() {
+  std::lock_guard lock(mutex_);
+  Stmt s(db_, "SELECT id, name, created_at, meta FROM maps ORDER BY created_at ASC, id ASC");
+  std::vector<MapRecord> out;
+  while (s.step()) out.push_back(readMap(s));
+  return out;
+}
+
+bool Database::deleteMap(const std::string& id) {
+  std::lock_guard lock(mutex_);
+  // The PDMs go with it through ON DELETE CASCADE, in the same statement (one transaction).
+  Stmt s(db_, "DELETE FROM maps WHERE id = ?1");
+  s.bind(1, id).run();
+  return sqlite3_changes(db_) > 0;
+}
+
+// ---- PDMs -------------------------------------------------------------------------------------
+
+void Database::insertPdm(const PdmRecord& p) {
+  const std::string meta = dumpJson(p.meta, "PDM meta");
+  std::lock_guard lock(mutex_);
+  Stmt s(db_, "INSERT INTO pdms(id, map_id, name, created_at, meta) VALUES (?1, ?2, ?3, ?4, ?5)");
+  s.bind(1, p.id).bind(2, p.mapId).bind(3, p.name).bind(4, p.createdAt).bind(5, meta).run();
+}
+
+std::optional<PdmRecord> Database::getPdm(const std::string& id) {
+  std::lock_guard lock(mutex_);
+  Stmt s(db_, "SELECT id, map_id, name, created_at, meta FROM pdms WHERE id = ?1");
+  s.bind(1, id);
+  if (!s.step()) return std::nullopt;
+  return readPdm(s);
+}
+
+std::vector<PdmRecord> Database::listPdms(const std::string& mapId) {
+  std::lock_guard lock(mutex_);
+  Stmt s(db_,
+         "SELECT id, map_id, name, created_at, meta FROM pdms WHERE map_id = ?1 "
+         "ORDER BY created_at ASC, id ASC");
+  s.bind(1, mapId);
+  std::vector<PdmRecord> out;
+  while (s.step()) out.push_back(readPdm(s));
+  return out;
+}
+
+bool Database::deletePdm(const std::string& id) {
+  std::lock_guard lock(mutex_);
+  Stmt s(db_, "DELETE FROM pdms WHERE id = ?1");
+  s.bind(1, id).run();
+  return sqlite3_changes(db_) > 0;
+}
+
+// ---- missions ---------------------------------------------------------------------------------
+
+void Database::insertMission(const MissionRecord& m) {
+  const std::string spec = dumpJson(m.spec, "mission spec");
+  const std::string metrics = m.metrics.is_null() ? std::string() : dumpJson(m.metrics, "metrics");
+  std::lock_guard lock(mutex_);
+  Stmt s(db_,
+         "INSERT INTO missions(id, map_id, pdm_id, planner, spec, status, message, created_at, "
+         "started_at, finished_at, metrics) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11)");
+  s.bind(1, m.id).bind(2, m.mapId).bind(3, m.pdmId).bind(4, m.planner).bind(5, spec);
+  s.bind(6, m.status).bind(7, m.message).bind(8, m.createdAt);
+  s.bindOrNull(9, m.startedAt).bindOrNull(10, m.finishedAt).bindOrNull(11, metrics);
+  s.run();
+}
+
+std::optional<MissionRecord> Database::getMission(const std::string& id) {
+  std::lock_guard lock(mutex_);
+  Stmt s(db_, (std::string("SELECT ") + kMissionColumns + " FROM missions WHERE id = ?1").c_str());
+  s.bind(1, id);
+  if (!s.step()) return std::nullopt;
+  return readMission(s);
+}
+
+std::vector<MissionRecord> Database::listMissions() {
+  std::lock_guard lock(mutex_);
+  Stmt s(db_, (std::string("SELECT ") + kMissionColumns +
+               " FROM missions ORDER BY created_at DESC, id ASC")
+                  .c_str());
+  std::vector<MissionRecord> out;
+  while (s.step()) out.push_back(readMission(s));
+  return out;
+}
+
+void Database::updateMission(const std::string& id, const std::string& status,
+                             const std::string& message, const nlohmann::json& metrics) {
+  const std::string metricsText = metrics.is_null() ? std::string() : dumpJson(metrics, "metrics");
+  const std::string now = nowIso();
+  std::lock_guard lock(mutex_);
+  // In SET expressions `status` is the value before the update, so the timestamps are set only on
+  // the transition into running / into a final status (a repeated update keeps the first time).
+  Stmt s(db_,
+         "UPDATE missions SET "
+         "  started_at = CASE WHEN ?2 = 'running' AND status <> 'running' THEN ?4 "
+         "                    ELSE started_at END, "
+         "  finished_at = CASE WHEN ?5 = 1 AND status NOT IN "
+         "                       ('succeeded', 'failed', 'cancelled', 'interrupted') THEN ?4 "
+         "                     ELSE finished_at END, "
+         "  metrics = COALESCE(?6, metrics), "
+         "  status = ?2, message = ?3 "
+         "WHERE id = ?1");
+  s.bind(1, id).bind(2, status).bind(3, message).bind(4, now);
+  s.bindInt(5, isFinal(status) ? 1 : 0);
+  s.bindOrNull(6, metricsText);
+  s.run();
+  if (sqlite3_changes(db_) == 0) throw std::runtime_error("database: no mission '" + id + "'");
+}
+
+int Database::markUnfinishedInterrupted() {
+  const std::string now = nowIso();
+  std::lock_guard lock(mutex_);
+  Stmt s(db_,
+         "UPDATE missions SET status = 'interrupted', "
+         "  message = ?1 || status, finished_at = ?2 "
+         "WHERE status IN ('queued', 'running')");
+  s.bind(1, std::string("server restarted while the mission was ")).bind(2, now).run();
+  return sqlite3_changes(db_);
+}
+
+std::string nowIso() {
+  using namespace std::chrono;
+  const auto now = system_clock::now();
+  const auto ms = duration_cast<milliseconds>(now.time_since_epoch()).count() % 1000;
+  const std::time_t t = system_clock::to_time_t(now);
+  std::tm tm{};
+  gmtime_r(&t, &tm);
+  char buf[96];
+  std::snprintf(buf, sizeof buf, "%04d-%02d-%02dT%02d:%02d:%02d.%03dZ", tm.tm_year + 1900,
+                tm.tm_mon + 1, tm.tm_mday, tm.tm_hour, tm.tm_min, tm.tm_sec, static_cast<int>(ms));
+  return buf;
+}
+
+}  // namespace rover::store

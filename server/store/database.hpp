@@ -1,0 +1,80 @@
+#pragma once
+// Metadata of maps, PDMs and missions in SQLite (WAL), rasters and results as files beside it
+// (issue: server, "Mission manager and storage"). Thread-safe: one connection behind a mutex; every
+// write is one transaction, so a crash (even kill -9) leaves either the old or the new row.
+#include <cstdint>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+struct sqlite3;
+
+namespace rover::store {
+
+struct MapRecord {
+  std::string id;
+  std::string name;
+  std::string createdAt;  // ISO 8601 UTC
+  nlohmann::json meta;    // size, cell size, CRS, elevation range, class percentages, files
+};
+
+struct PdmRecord {
+  std::string id;
+  std::string mapId;
+  std::string name;
+  std::string createdAt;
+  nlohmann::json meta;  // kind (gaussians | random | raster), components, files
+};
+
+struct MissionRecord {
+  std::string id;
+  std::string mapId;
+  std::string pdmId;    // "" when none
+  std::string planner;
+  nlohmann::json spec;  // the request as accepted (rovers, params)
+  std::string status;   // queued | running | succeeded | failed | cancelled | interrupted
+  std::string message;  // failure / interruption reason
+  std::string createdAt, startedAt, finishedAt;
+  nlohmann::json metrics;  // final metrics (object), null until finished
+};
+
+class Database {
+ public:
+  // Opens or creates the database file and its schema; throws std::runtime_error on failure.
+  explicit Database(const std::string& path);
+  ~Database();
+  Database(const Database&) = delete;
+  Database& operator=(const Database&) = delete;
+
+  void insertMap(const MapRecord& m);
+  std::optional<MapRecord> getMap(const std::string& id);
+  std::vector<MapRecord> listMaps();  // oldest first
+  bool deleteMap(const std::string& id);  // also deletes its PDMs' rows; returns false if absent
+
+  void insertPdm(const PdmRecord& p);
+  std::optional<PdmRecord> getPdm(const std::string& id);
+  std::vector<PdmRecord> listPdms(const std::string& mapId);
+  bool deletePdm(const std::string& id);
+
+  void insertMission(const MissionRecord& m);
+  std::optional<MissionRecord> getMission(const std::string& id);
+  std::vector<MissionRecord> listMissions();  // newest first
+  // Updates status and message; sets startedAt when status becomes running and finishedAt for
+  // a final status; stores metrics when given.
+  void updateMission(const std::string& id, const std::string& status, const std::string& message,
+                     const nlohmann::json& metrics = nullptr);
+  // After a restart: every queued or running mission becomes interrupted. Returns how many.
+  int markUnfinishedInterrupted();
+
+ private:
+  sqlite3* db_ = nullptr;
+  std::mutex mutex_;
+};
+
+// Current time as ISO 8601 UTC with milliseconds, e.g. 2026-11-23T08:00:00.123Z.
+std::string nowIso();
+
+}  // namespace rover::store

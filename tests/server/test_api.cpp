@@ -1,0 +1,395 @@
+// The REST + WebSocket API over loopback, with an in-process server on an ephemeral port.
+#include <doctest/doctest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <thread>
+
+#include "core/planning/planner.hpp"
+#include "maps/dem_io.hpp"
+#include "server/api/map_catalog.hpp"
+#include "server/api/routes.hpp"
+#include "server/http/http_server.hpp"
+#include "server/missions/mission_manager.hpp"
+#include "test_client.hpp"
+
+using namespace rover;
+using rover::test::request;
+using nlohmann::json;
+namespace fs = std::filesystem;
+
+namespace {
+
+struct Options {
+  std::string token;
+  unsigned workers = 2;
+  std::size_t queue = 16;
+  std::uint64_t maxUpload = 64ull << 20;
+};
+
+// A whole server on a data dir: what `roverplan serve` builds, minus the signal handling.
+struct TestServer {
+  std::string dataDir;
+  store::DataDir dir;
+  store::Database db;
+  api::MapCatalog maps;
+  PlannerRegistry planners = makeBuiltinRegistry();
+  missions::MissionManager manager;
+  http::Router router;
+  api::ApiContext ctx;
+  std::unique_ptr<http::HttpServer> server;
+  int interrupted = 0;
+
+  explicit TestServer(const std::string& data, Options o = {})
+      : dataDir(data),
+        dir(data),
+        db((dir.cleanTmp(), dir.databasePath())),
+        maps(db, dir),
+        manager(db, dir, planners, o.workers, o.queue),
+        ctx{db, dir, maps, manager, planners} {
+    interrupted = db.markUnfinishedInterrupted();
+    maps.ensureDefaultMap();
+    api::addApiRoutes(router, ctx);
+    http::ServerConfig c;
+    c.port = 0;
+    c.token = o.token;
+    c.uploadDir = dir.tmpDir();
+    c.maxUploadBytes = o.maxUpload;
+    c.logRequests = false;
+    server = std::make_unique<http::HttpServer>(c, router);
+    server->start();
+  }
+  ~TestServer() {
+    server->stop();
+    manager.stop();
+  }
+  unsigned short port() const { return server->port(); }
+  test::HttpResult get(const std::string& t) { return request(port(), "GET", t); }
+  test::HttpResult postJson(const std::string& t, const json& j) {
+    return request(port(), "POST", t, j.dump(), "application/json");
+  }
+  std::string defaultMap() { return get("/api/maps").json()[0]["id"]; }
+  // Waits until the mission has a final status (bounded).
+  json waitFinished(const std::string& id, double seconds = 30) {
+    auto until = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
+    json m;
+    while (std::chrono::steady_clock::now() < until) {
+      m = get("/api/missions/" + id).json();
+      std::string s = m["status"];
+      if (s != "queued" && s != "running") return m;
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+    return m;
+  }
+};
+
+struct TempDir {
+  fs::path path = fs::temp_directory_path() / ("roverplan-api-" + std::to_string(::getpid()) + "-" + std::to_string(std::rand()));
+  TempDir() { fs::create_directories(path); }
+  ~TempDir() {
+    std::error_code ec;
+    fs::remove_all(path, ec);
+  }
+  std::string str(const std::string& sub) const { return (path / sub).string(); }
+};
+
+std::string readBytes(const std::string& p) {
+  std::ifstream in(p, std::ios::binary);
+  return std::string((std::istreambuf_iterator<char>(in)), {});
+}
+
+// A small georeferenced DEM file (40 × 50 cells of 1 m, gentle slope) as GeoTIFF bytes.
+std::string smallDemBytes(const TempDir& tmp) {
+  Raster<float> z(GridGeometry{40, 50, 1.0, 1.0}, 0.0f);
+  for (int r = 0; r < 40; ++r)
+    for (int c = 0; c < 50; ++c) z(r, c) = 0.05f * c + 0.02f * r;
+  z.geo.valid = true;
+  z.geo.geotransform = {500000, 1, 0, 4100040, 0, -1};
+  const std::string path = tmp.str("small.tif");
+  maps::writeGeoTiff(path, z);
+  return readBytes(path);
+}
+
+json coverageMission(const std::string& map, double x = 10.5, double y = 10.5) {
+  return {{"map", map}, {"planner", "coverage"}, {"rovers", {{{"x", x}, {"y", y}, {"heading", 0}}}},
+          {"params", {{"coverage", 0.5}}}};
+}
+
+void checkError(const test::HttpResult& r, int status, const std::string& field) {
+  CHECK(r.status == status);
+  json j = r.json();
+  REQUIRE(j.contains("error"));
+  CHECK(j["error"].contains("code"));
+  CHECK(j["error"].contains("message"));
+  // "field" names the offending input; it is left out when the error is not about one field.
+  CHECK(j["error"].value("field", std::string()) == field);
+}
+
+}  // namespace
+
+TEST_CASE("api: health, planners, and an OpenAPI document naming every route") {
+  TempDir tmp;
+  TestServer s(tmp.str("data"));
+  auto h = s.get("/api/health");
+  CHECK(h.status == 200);
+  CHECK(h.json()["status"] == "ok");
+  auto planners = s.get("/api/planners").json();
+  REQUIRE(planners.size() >= 1);
+  CHECK(planners[0]["name"] == "coverage");
+  CHECK(planners[0]["params"].size() > 10);
+  json doc = s.get("/api/openapi.json").json();
+  CHECK(doc["openapi"] == "3.0.3");
+  for (const auto& r : s.router.routes()) CHECK_MESSAGE(doc["paths"].contains(r.pattern), r.pattern);
+  checkError(s.get("/api/nope"), 404, "");
+}
+
+TEST_CASE("api: the default map is there, with metadata and layers in three formats") {
+  TempDir tmp;
+  TestServer s(tmp.str("data"));
+  auto list = s.get("/api/maps").json();
+  REQUIRE(list.size() == 1);
+  json m = list[0];
+  CHECK(m["rows"] == 600);
+  CHECK(m["cell_size_m"].get<double>() == doctest::Approx(0.25));
+  CHECK(m["classes"]["traversable_pct"].get<double>() > 70);
+  const std::string id = m["id"];
+  auto png = s.get("/api/maps/" + id + "/layers/traversability.png?max=128");
+  CHECK(png.status == 200);
+  CHECK(png.headers["Content-Type"] == "image/png");
+  CHECK(png.body.substr(1, 3) == "PNG");
+  auto f32 = s.get("/api/maps/" + id + "/layers/elevation.f32");
+  CHECK(f32.status == 200);
+  CHECK(f32.body.size() == 600u * 600u * 4u);
+  CHECK(f32.headers["X-Rows"] == "600");
+  auto tif = s.get("/api/maps/" + id + "/layers/slope.tif");
+  CHECK(tif.status == 200);
+  CHECK(tif.body.substr(0, 2) == "II");
+  checkError(s.get("/api/maps/" + id + "/layers/nope.png"), 404, "layer");
+  checkError(s.get("/api/maps/" + id + "/layers/slope.jpg"), 404, "format");
+  checkError(s.get("/api/maps/" + id + "/layers/pdm.png"), 404, "pdm");  // no PDM yet
+  checkError(s.get("/api/maps/doesnotexist"), 404, "id");
+}
+
+TEST_CASE("api: DEM upload as a raw body, as multipart, bad files and deletion") {
+  TempDir tmp;
+  TestServer s(tmp.str("data"));
+  const std::string bytes = smallDemBytes(tmp);
+  auto r = request(s.port(), "POST", "/api/maps?name=small&filename=small.tif", bytes, "image/tiff");
+  REQUIRE(r.status == 201);
+  json m = r.json();
+  CHECK(m["name"] == "small");
+  CHECK(m["rows"] == 40);
+  CHECK(m["cols"] == 50);
+
+  // multipart/form-data with a name field and a file part, resampled to 2 m cells.
+  const std::string boundary = "XyZBoundary42";
+  std::string body = "--" + boundary + "\r\nContent-Disposition: form-data; name=\"name\"\r\n\r\nhalf\r\n--" +
+                     boundary + "\r\nContent-Disposition: form-data; name=\"file\"; filename=\"dem.tif\"\r\n"
+                     "Content-Type: image/tiff\r\n\r\n" + bytes + "\r\n--" + boundary + "--\r\n";
+  r = request(s.port(), "POST", "/api/maps?cell=2", body, "multipart/form-data; boundary=" + boundary);
+  REQUIRE(r.status == 201);
+  CHECK(r.json()["name"] == "half");
+  CHECK(r.json()["cols"] == 25);
+
+  checkError(request(s.port(), "POST", "/api/maps?filename=x.tif", "definitely not a raster", "image/tiff"), 400, "file");
+  checkError(request(s.port(), "POST", "/api/maps", "", "image/tiff"), 400, "file");
+  checkError(request(s.port(), "POST", "/api/maps?cell=-1&filename=a.tif", bytes, "image/tiff"), 400, "cell");
+  CHECK(s.get("/api/maps").json().size() == 3);
+  // Nothing of the failed uploads is left behind.
+  CHECK(fs::is_empty(s.dir.tmpDir()));
+
+  const std::string id = m["id"];
+  CHECK(request(s.port(), "DELETE", "/api/maps/" + id).status == 200);
+  CHECK(s.get("/api/maps/" + id).status == 404);
+  CHECK(request(s.port(), "DELETE", "/api/maps/" + id).status == 404);
+}
+
+TEST_CASE("api: a PDS3 product uploaded as an .IMG + .LBL multipart pair") {
+  const fs::path dir = fs::path(ROVER_SOURCE_DIR) / ".." / "shared" / "dems" / "moon_lola_ldem4_global";
+  if (!fs::exists(dir)) {
+    MESSAGE("SKIPPED: ../shared/dems absent");
+    return;
+  }
+  TempDir tmp;
+  TestServer s(tmp.str("data"));
+  const std::string b = "PairBoundary";
+  std::string body;
+  for (const char* f : {"LDEM_4.LBL", "LDEM_4.IMG"})
+    body += "--" + b + "\r\nContent-Disposition: form-data; name=\"file\"; filename=\"" + f + "\"\r\n\r\n" +
+            readBytes((dir / f).string()) + "\r\n";
+  body += "--" + b + "--\r\n";
+  auto r = request(s.port(), "POST", "/api/maps?name=lola", body, "multipart/form-data; boundary=" + b);
+  REQUIRE(r.status == 201);
+  CHECK(r.json()["driver"] == "PDS");
+  CHECK(r.json()["rows"] == 720);
+}
+
+TEST_CASE("api: PDMs from Gaussians, random and raster; errors name the field") {
+  TempDir tmp;
+  TestServer s(tmp.str("data"));
+  const std::string map = s.defaultMap();
+  auto r = s.postJson("/api/maps/" + map + "/pdms",
+                      {{"name", "two"}, {"components", {{{"x", 40}, {"y", 50}, {"sigma_x", 10}},
+                                                        {{"x", 110}, {"y", 100}, {"sigma_x", 8}, {"sigma_y", 20}, {"rotation_deg", 30}, {"weight", 2}}}}});
+  REQUIRE(r.status == 201);
+  const std::string pdm = r.json()["id"];
+  CHECK(r.json()["components"].size() == 2);
+  CHECK(s.postJson("/api/maps/" + map + "/pdms", {{"random", 4}, {"seed", 7}}).status == 201);
+  checkError(s.postJson("/api/maps/" + map + "/pdms", {{"components", {{{"x", 1}, {"y", 1}, {"sigma_x", -3}}}}}), 400,
+             "components[0].sigma_x");
+  checkError(s.postJson("/api/maps/" + map + "/pdms", {{"components", {{{"x", 1}, {"y", 1}, {"sigma_x", 3}, {"colour", 1}}}}}), 400,
+             "components[0].colour");
+  CHECK(s.get("/api/maps/" + map + "/pdms").json().size() == 2);
+  auto png = s.get("/api/maps/" + map + "/layers/pdm.png?max=100&pdm=" + pdm);
+  CHECK(png.status == 200);
+  // A raster PDM: the map's own elevation as weights (shifted positive) would do; use the PDM tif.
+  auto tif = s.get("/api/maps/" + map + "/layers/pdm.tif?pdm=" + pdm);
+  REQUIRE(tif.status == 200);
+  r = request(s.port(), "POST", "/api/maps/" + map + "/pdms?name=fromraster&filename=p.tif", tif.body, "image/tiff");
+  CHECK(r.status == 201);
+  CHECK(request(s.port(), "DELETE", "/api/maps/" + map + "/pdms/" + pdm).status == 200);
+  CHECK(s.get("/api/maps/" + map + "/pdms/" + pdm).status == 404);
+}
+
+TEST_CASE("api: missions are validated fully before they are queued") {
+  TempDir tmp;
+  TestServer s(tmp.str("data"));
+  const std::string map = s.defaultMap();
+  json m = coverageMission(map);
+  m["planner"] = "teleport";
+  checkError(s.postJson("/api/missions", m), 400, "planner");
+  m = coverageMission("nope");
+  checkError(s.postJson("/api/missions", m), 400, "map");
+  checkError(s.postJson("/api/missions", coverageMission(map, 500, 10)), 400, "rovers[0]");
+  m = coverageMission(map);
+  m["params"]["sense_radius"] = 7;
+  checkError(s.postJson("/api/missions", m), 400, "params.sense_radius");
+  m = coverageMission(map);
+  m["params"]["warp_drive"] = true;
+  checkError(s.postJson("/api/missions", m), 400, "params.warp_drive");
+  m = coverageMission(map);
+  m["rovers"] = json::array();
+  checkError(s.postJson("/api/missions", m), 400, "rovers");
+  m = coverageMission(map);
+  m["extra"] = 1;
+  checkError(s.postJson("/api/missions", m), 400, "extra");
+  checkError(request(s.port(), "POST", "/api/missions", "{not json", "application/json"), 400, "body");
+  CHECK(s.get("/api/missions").json().empty());
+}
+
+TEST_CASE("api: a coverage mission runs, reports metrics and exports its results") {
+  TempDir tmp;
+  TestServer s(tmp.str("data"));
+  const std::string map = s.defaultMap();
+  json body = coverageMission(map);
+  body["params"] = json::object();  // every default
+  auto r = s.postJson("/api/missions", body);
+  REQUIRE(r.status == 202);
+  const std::string id = r.json()["id"];
+  json m = s.waitFinished(id);
+  REQUIRE(m["status"] == "succeeded");
+  CHECK(m["metrics"]["coverage"].get<double>() >= 0.94);
+  CHECK(m["metrics"]["path_length_ratio"].get<double>() > 0.5);
+  auto res = s.get("/api/missions/" + id + "/result.json").json();
+  CHECK(res["rovers"].size() == 1);
+  auto geo = s.get("/api/missions/" + id + "/result.geojson");
+  CHECK(geo.status == 200);
+  CHECK(geo.json()["features"].size() == 1);
+  auto csv = s.get("/api/missions/" + id + "/result.csv");
+  CHECK(csv.body.rfind("rover,index,x_m,y_m\n", 0) == 0);
+  checkError(s.get("/api/missions/" + id + "/result.xml"), 404, "file");
+  CHECK(request(s.port(), "DELETE", "/api/missions/" + id).status == 409);  // finished: nothing to cancel
+}
+
+TEST_CASE("api: two WebSocket clients see the same final state; a late joiner replays it") {
+  TempDir tmp;
+  TestServer s(tmp.str("data"));
+  const std::string map = s.defaultMap();
+  json body = coverageMission(map);
+  body["pace"] = 400;  // steps per second: a few seconds of live mission
+  body["params"] = {{"coverage", 0.3}};
+  const std::string id = s.postJson("/api/missions", body).json()["id"];
+  std::vector<test::WsFrameSeen> a, b;
+  std::thread ta([&] { a = test::readAllFrames(s.port(), "/api/missions/" + id + "/stream"); });
+  std::thread tb([&] { b = test::readAllFrames(s.port(), "/api/missions/" + id + "/stream"); });
+  ta.join();
+  tb.join();
+  for (auto* frames : {&a, &b}) {
+    REQUIRE(frames->size() >= 3);
+    json first = json::parse(frames->front().data);
+    CHECK(first["type"] == "snapshot");
+    json last = json::parse(frames->back().data);
+    CHECK(last["type"] == "done");
+    CHECK(last["status"] == "succeeded");
+    bool sawGrid = false;
+    for (const auto& f : *frames) sawGrid |= f.binary;
+    CHECK(sawGrid);
+  }
+  CHECK(json::parse(a.back().data)["metrics"] == json::parse(b.back().data)["metrics"]);
+  // After the end: snapshot, the full final grid, done.
+  auto late = test::readAllFrames(s.port(), "/api/missions/" + id + "/stream");
+  REQUIRE(late.size() == 3);
+  CHECK(json::parse(late[0].data)["status"] == "succeeded");
+  CHECK(late[1].binary);
+  CHECK(json::parse(late[2].data)["metrics"] == json::parse(a.back().data)["metrics"]);
+  CHECK(request(s.port(), "GET", "/api/missions/nope/stream").status == 404);
+}
+
+TEST_CASE("api: DELETE cancels a running mission promptly; a full queue answers 429") {
+  TempDir tmp;
+  Options o;
+  o.workers = 1;
+  o.queue = 1;
+  TestServer s(tmp.str("data"), o);
+  const std::string map = s.defaultMap();
+  json slow = coverageMission(map);
+  slow["pace"] = 20;
+  slow["params"] = {{"coverage", 1.0}};
+  const std::string running = s.postJson("/api/missions", slow).json()["id"];
+  while (s.get("/api/missions/" + running).json()["status"] == "queued") std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  const std::string waiting = s.postJson("/api/missions", slow).json()["id"];
+  checkError(s.postJson("/api/missions", slow), 429, "");
+  auto t0 = std::chrono::steady_clock::now();
+  CHECK(request(s.port(), "DELETE", "/api/missions/" + running).status == 202);
+  json m = s.waitFinished(running, 5);
+  double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  MESSAGE("cancel -> final status in " << ms << " ms");
+  CHECK(m["status"] == "cancelled");
+  CHECK(request(s.port(), "DELETE", "/api/missions/" + waiting).status == 202);
+  CHECK(s.waitFinished(waiting, 5)["status"] == "cancelled");
+}
+
+TEST_CASE("api: with a token every /api route but health needs it") {
+  TempDir tmp;
+  Options o;
+  o.token = "s3cret";
+  TestServer s(tmp.str("data"), o);
+  CHECK(s.get("/api/health").status == 200);
+  checkError(s.get("/api/maps"), 401, "");
+  auto ok = request(s.port(), "GET", "/api/maps", "", "", {{"Authorization", "Bearer s3cret"}});
+  CHECK(ok.status == 200);
+  CHECK(request(s.port(), "GET", "/api/maps", "", "", {{"Authorization", "Bearer wrong"}}).status == 401);
+}
+
+TEST_CASE("api: maps, PDMs and finished missions survive a restart; running ones are interrupted") {
+  TempDir tmp;
+  std::string map, pdm, done;
+  {
+    TestServer s(tmp.str("data"));
+    map = s.defaultMap();
+    pdm = s.postJson("/api/maps/" + map + "/pdms", {{"random", 4}}).json()["id"];
+    done = s.postJson("/api/missions", coverageMission(map)).json()["id"];
+    REQUIRE(s.waitFinished(done)["status"] == "succeeded");
+  }
+  {
+    TestServer s(tmp.str("data"));
+    CHECK(s.get("/api/maps").json().size() == 1);  // the default map is not made twice
+    CHECK(s.get("/api/maps/" + map + "/pdms/" + pdm).status == 200);
+    json m = s.get("/api/missions/" + done).json();
+    CHECK(m["status"] == "succeeded");
+    CHECK(s.get("/api/missions/" + done + "/result.geojson").status == 200);
+    auto replay = test::readAllFrames(s.port(), "/api/missions/" + done + "/stream");
+    REQUIRE(replay.size() == 3);
+    CHECK(json::parse(replay[2].data)["metrics"] == m["metrics"]);
+  }
+}
