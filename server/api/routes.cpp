@@ -284,15 +284,28 @@ void addApiRoutes(http::Router& router, ApiContext& ctx) {
   }, upload);
 
   router.add("GET", "/api/maps/{id}", [&ctx](const Request& req) {
-    auto m = ctx.db.getMap(req.params.at("id"));
-    if (!m) throw ApiError(404, "not_found", "no map '" + req.params.at("id") + "'", "id");
+    const std::string& id = req.params.at("id");
+    Response r;
+    {
+      std::lock_guard lock(ctx.mapCacheMutex);
+      if (auto it = ctx.mapBodyCache.find(id); it != ctx.mapBodyCache.end()) {
+        r.body = it->second;
+        return r;
+      }
+    }
+    auto m = ctx.db.getMap(id);
+    if (!m) throw ApiError(404, "not_found", "no map '" + id + "'", "id");
     json j = mapJson(*m);
     j["pdms"] = json::array();
     for (const auto& p : ctx.db.listPdms(m->id)) j["pdms"].push_back(pdmJson(p));
-    return Response::json(200, j);
+    r.body = j.dump();
+    std::lock_guard lock(ctx.mapCacheMutex);
+    ctx.mapBodyCache[id] = r.body;
+    return r;
   }, doc("One map: size, cell size, CRS, elevation range, class percentages, PDMs."));
 
   router.add("DELETE", "/api/maps/{id}", [&ctx](const Request& req) {
+    ctx.invalidateMap(req.params.at("id"));
     ctx.maps.remove(req.params.at("id"));
     return Response::json(200, {{"deleted", req.params.at("id")}});
   }, doc("Delete a map and its PDMs (missions keep their records and results)."));
@@ -332,6 +345,7 @@ void addApiRoutes(http::Router& router, ApiContext& ctx) {
   router.add("POST", "/api/maps/{id}/pdms", [&ctx](const Request& req) {
     const std::string mapId = req.params.at("id");
     ctx.maps.get(mapId);  // 404 for an unknown map
+    ctx.invalidateMap(mapId);
     if (req.bodyFile.empty() || req.bodySize == 0) throw ApiError(400, "invalid_input", "the request has no body", "body");
     std::string type = req.header("content-type");
     if (type.rfind("application/json", 0) == 0) {
@@ -382,6 +396,7 @@ void addApiRoutes(http::Router& router, ApiContext& ctx) {
   router.add("DELETE", "/api/maps/{id}/pdms/{pdm}", [&ctx](const Request& req) {
     auto p = ctx.db.getPdm(req.params.at("pdm"));
     if (!p || p->mapId != req.params.at("id")) throw ApiError(404, "not_found", "no PDM '" + req.params.at("pdm") + "' on this map", "pdm");
+    ctx.invalidateMap(p->mapId);
     ctx.db.deletePdm(p->id);
     store::DataDir::removeTree(ctx.dir.pdmDir(p->id));
     return Response::json(200, {{"deleted", p->id}});

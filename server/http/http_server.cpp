@@ -62,16 +62,16 @@ void HttpServer::start() {
   const unsigned n = std::max(1u, cfg.threads);
   impl_->threads.reserve(n);
   for (unsigned i = 0; i < n; ++i) {
-    impl_->threads.emplace_back([this] {
+    impl_->threads.emplace_back([impl = impl_.get()] {
       // Handlers never throw on purpose; if one does, log and keep the thread serving.
       for (;;) {
         try {
-          impl_->ioc.run();
+          impl->ioc.run();
           return;
         } catch (const std::exception& e) {
-          impl_->state->log(std::string("http: unhandled exception: ") + e.what());
+          impl->state->log(std::string("http: unhandled exception: ") + e.what());
         } catch (...) {
-          impl_->state->log("http: unhandled exception");
+          impl->state->log("http: unhandled exception");
         }
       }
     });

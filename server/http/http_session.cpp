@@ -270,6 +270,9 @@ void HttpSession::readHeader() {
   fileParser_.reset();
   route_ = nullptr;
   request_ = Request{};
+  keepAlive_ = false;
+  head_ = false;
+  version_ = 11;
   headerParser_->header_limit(state_->config.maxHeaderBytes);
   // Unlimited here (max, not none: Beast 1.74 compares Content-Length against an empty optional
   // as "over the limit"); the route's limit is checked once the header is known.
@@ -311,7 +314,8 @@ void HttpSession::onHeader(beast::error_code ec, std::size_t) {
     if (!inserted) it->second += ", " + std::string(field.value());
   }
   if (!parseTarget(sv(h.target()), request_.path, request_.query)) {
-    request_.path = std::string(sv(h.target()).substr(0, 200));
+    const std::string_view raw = sv(h.target());
+    request_.path = std::string(raw.substr(0, std::min<std::size_t>(raw.find('?'), 200)));
     return sendError(400, "bad_request", "invalid request target", !headerParser_->is_done());
   }
   routeRequest();

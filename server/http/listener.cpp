@@ -8,7 +8,11 @@
 namespace rover::http {
 
 Listener::Listener(net::io_context& ioc, std::shared_ptr<ServerState> state)
-    : ioc_(ioc), strand_(net::make_strand(ioc)), acceptor_(strand_), state_(std::move(state)) {}
+    : ioc_(ioc),
+      strand_(net::make_strand(ioc)),
+      acceptor_(strand_),
+      backoff_(strand_),
+      state_(std::move(state)) {}
 
 void Listener::listen(const tcp::endpoint& endpoint) {
   beast::error_code ec;
@@ -35,6 +39,7 @@ void Listener::stop() {
   net::post(strand_, [self = shared_from_this()] {
     beast::error_code ec;
     self->acceptor_.close(ec);
+    self->backoff_.cancel();
   });
 }
 
@@ -48,14 +53,16 @@ void Listener::accept() {
 void Listener::onAccept(beast::error_code ec, tcp::socket socket) {
   if (ec == net::error::operation_aborted || !acceptor_.is_open()) return;
   if (ec) {
-    // E.g. out of file descriptors: log and keep accepting.
+    // E.g. out of file descriptors: log, wait a little, and keep accepting.
     if (state_->config.logRequests) state_->log("accept failed: " + ec.message());
-  } else {
-    try {
-      std::make_shared<HttpSession>(std::move(socket), state_)->run();
-    } catch (const std::exception& e) {
-      if (state_->config.logRequests) state_->log(std::string("session failed: ") + e.what());
-    }
+    backoff_.expires_after(std::chrono::milliseconds(50));
+    backoff_.async_wait([self = shared_from_this()](beast::error_code) { self->accept(); });
+    return;
+  }
+  try {
+    std::make_shared<HttpSession>(std::move(socket), state_)->run();
+  } catch (const std::exception& e) {
+    if (state_->config.logRequests) state_->log(std::string("session failed: ") + e.what());
   }
   accept();
 }

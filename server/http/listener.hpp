@@ -4,6 +4,7 @@
 
 #include <boost/asio/io_context.hpp>
 #include <boost/asio/ip/tcp.hpp>
+#include <boost/asio/steady_timer.hpp>
 #include <boost/asio/strand.hpp>
 
 #include "server/http/http_session.hpp"
@@ -26,6 +27,7 @@ class Listener : public std::enable_shared_from_this<Listener> {
   net::io_context& ioc_;
   net::strand<net::io_context::executor_type> strand_;
   tcp::acceptor acceptor_;
+  net::steady_timer backoff_;  // after an accept error (e.g. out of descriptors): no busy loop
   std::shared_ptr<ServerState> state_;
   unsigned short port_ = 0;
 };

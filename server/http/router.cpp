@@ -28,9 +28,8 @@ bool isCapture(const std::string& seg) {
 
 // Matches whole segments. On success fills `params` and `literalMask` ('1' literal, '0' capture)
 // whose lexicographic order ranks specificity.
-bool matchPattern(const std::string& pattern, const std::vector<std::string>& path,
+bool matchPattern(const std::vector<std::string>& pat, const std::vector<std::string>& path,
                   std::map<std::string, std::string>& params, std::string& literalMask) {
-  const std::vector<std::string> pat = splitSegments(pattern);
   if (pat.size() != path.size()) return false;
   params.clear();
   literalMask.clear();
@@ -56,6 +55,7 @@ void Router::add(const std::string& method, const std::string& pattern, Handler 
   r.handler = std::move(h);
   r.options = std::move(o);
   routes_.push_back(std::move(r));
+  segments_.push_back(splitSegments(pattern));
 }
 
 void Router::addWebSocket(const std::string& pattern, WsHandler h, RouteOptions o) {
@@ -65,6 +65,7 @@ void Router::addWebSocket(const std::string& pattern, WsHandler h, RouteOptions 
   r.wsHandler = std::move(h);
   r.options = std::move(o);
   routes_.push_back(std::move(r));
+  segments_.push_back(splitSegments(pattern));
 }
 
 Router::Match Router::match(const std::string& method, const std::string& path,
@@ -75,8 +76,9 @@ Router::Match Router::match(const std::string& method, const std::string& path,
   int bestRank = -1;  // 1: a WS route for an upgrade, 0: a plain route
   std::map<std::string, std::string> params;
   std::string mask;
-  for (const Route& r : routes_) {
-    if (!matchPattern(r.pattern, segs, params, mask)) continue;
+  for (std::size_t i = 0; i < routes_.size(); ++i) {
+    const Route& r = routes_[i];
+    if (!matchPattern(segments_[i], segs, params, mask)) continue;
     int rank = -1;
     if (r.method == "WS") {
       if (websocket && method == "GET") rank = 1;
@@ -103,8 +105,9 @@ std::vector<std::string> Router::allowedMethods(const std::string& path) const {
   std::vector<std::string> out;
   std::map<std::string, std::string> params;
   std::string mask;
-  for (const Route& r : routes_) {
-    if (!matchPattern(r.pattern, segs, params, mask)) continue;
+  for (std::size_t i = 0; i < routes_.size(); ++i) {
+    const Route& r = routes_[i];
+    if (!matchPattern(segments_[i], segs, params, mask)) continue;
     out.push_back(r.method == "WS" ? "GET" : r.method);
   }
   std::sort(out.begin(), out.end());

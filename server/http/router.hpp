@@ -45,6 +45,7 @@ class Router {
 
  private:
   std::vector<Route> routes_;
+  std::vector<std::vector<std::string>> segments_;  // each pattern split once, at add()
 };
 
 }  // namespace rover::http

@@ -28,6 +28,7 @@ size=$(stat -c %s "$work/body.json")
 
 mkdir -p "$work/www" "$work/nginx/logs"
 cp "$work/body.json" "$work/www/map.json"
+chmod -R a+rX "$work"  # nginx workers run as an unprivileged user
 cat > "$work/nginx/nginx.conf" <<CONF
 worker_processes 2;
 pid $work/nginx/nginx.pid;
