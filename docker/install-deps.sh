@@ -18,7 +18,7 @@ test_pkgs=(
   gdal-bin   # gdaldem/gdalinfo/ogrinfo: reference outputs the tests compare against
   time       # /usr/bin/time: peak memory in the benchmark scripts
 )
-runtime_pkgs=(libompl16 libgdal32 libsqlite3-0 gdal-data)
+runtime_pkgs=(libompl16 libgdal32 libsqlite3-0 gdal-data curl ca-certificates)  # curl: HEALTHCHECK
 bench_pkgs=(wrk nginx-light time curl)  # tests/bench/*: load generator and the nginx baseline
 
 mode=${1:-all}

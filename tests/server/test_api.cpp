@@ -306,8 +306,8 @@ TEST_CASE("api: two WebSocket clients see the same final state; a late joiner re
   TestServer s(tmp.str("data"));
   const std::string map = s.defaultMap();
   json body = coverageMission(map);
-  body["pace"] = 400;  // steps per second: a few seconds of live mission
-  body["params"] = {{"coverage", 0.3}};
+  body["pace"] = 1500;  // steps per second: about two seconds of live mission
+  body["params"] = {{"coverage", 0.1}};
   const std::string id = s.postJson("/api/missions", body).json()["id"];
   std::vector<test::WsFrameSeen> a, b;
   std::thread ta([&] { a = test::readAllFrames(s.port(), "/api/missions/" + id + "/stream"); });
