@@ -2,6 +2,7 @@
 # Installs every Debian package the build and the tests need. Idempotent: when all are present it
 # does nothing (no apt-get update, no network). Used by the README's commands, CI and the Dockerfile.
 #   install-deps.sh            build + test packages
+#   install-deps.sh --build    only what building roverplan needs (the container's build stage)
 #   install-deps.sh --runtime  only what the roverplan binary needs at run time (container image)
 #   install-deps.sh --bench    the benchmark tools (wrk, nginx)
 set -euo pipefail
@@ -17,6 +18,8 @@ build_pkgs=(
 test_pkgs=(
   gdal-bin   # gdaldem/gdalinfo/ogrinfo: reference outputs the tests compare against
   time       # /usr/bin/time: peak memory in the benchmark scripts
+  chromium   # the browser tests drive Debian's Chromium through playwright-core
+  curl python3
 )
 runtime_pkgs=(libompl16 libgdal32 libsqlite3-0 gdal-data curl ca-certificates)  # curl: HEALTHCHECK
 bench_pkgs=(wrk nginx-light time curl)  # tests/bench/*: load generator and the nginx baseline
@@ -24,9 +27,10 @@ bench_pkgs=(wrk nginx-light time curl)  # tests/bench/*: load generator and the 
 mode=${1:-all}
 case "$mode" in
   all) want=("${build_pkgs[@]}" "${test_pkgs[@]}") ;;
+  --build) want=("${build_pkgs[@]}") ;;
   --runtime) want=("${runtime_pkgs[@]}") ;;
   --bench) want=("${bench_pkgs[@]}") ;;
-  *) echo "install-deps.sh: unknown option '$mode' (use --runtime, --bench or nothing)" >&2; exit 2 ;;
+  *) echo "install-deps.sh: unknown option '$mode' (use --build, --runtime, --bench or nothing)" >&2; exit 2 ;;
 esac
 
 missing=()

@@ -1,12 +1,15 @@
 #!/usr/bin/env bash
 # The README's test command: installs what is missing, builds, and runs every test —
-# the Release build's full CTest suite, then the unit tests again under
-# AddressSanitizer + UndefinedBehaviorSanitizer (a second build directory), failing on any report.
+# the Release build's full CTest suite, the unit tests again under AddressSanitizer +
+# UndefinedBehaviorSanitizer (a second build directory, failing on any report), the browser tests in
+# Debian's Chromium, and the container smoke test (podman). ROVERPLAN_SKIP_CONTAINER=1 skips the
+# last one for quick local runs; CI runs everything.
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 cd "$root"
 
 bash docker/install-deps.sh
+bash docker/setup-web.sh web tests/browser
 jobs=$(nproc)
 
 echo "== Release build (build/)"
@@ -18,8 +21,16 @@ ctest --test-dir build --output-on-failure -j "$jobs"
 echo "== Sanitizer build (build-asan/: ASan + UBSan)"
 cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=Debug -DROVER_SANITIZE=ON \
   -DCMAKE_CXX_FLAGS_DEBUG="-O1 -g" >/dev/null
-ninja -C build-asan test_core test_server
+ninja -C build-asan test_core test_maps test_server
 echo "== Unit tests under sanitizers"
 export ASAN_OPTIONS=abort_on_error=1:detect_leaks=1:strict_string_checks=1
 export UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
-ctest --test-dir build-asan --output-on-failure -j "$jobs" -R '^(core|server)/'
+ctest --test-dir build-asan --output-on-failure -j "$jobs" -R '^(core|maps|server)/' -E 'serve-restart'
+
+echo "== Browser tests (Chromium via playwright-core)"
+ROVERPLAN_BIN="$root/build/bin/roverplan" node --test tests/browser/
+
+if [ "${ROVERPLAN_SKIP_CONTAINER:-0}" != 1 ]; then
+  echo "== Container smoke test (podman)"
+  bash tests/container/smoke_test.sh
+fi

@@ -62,36 +62,48 @@ class MissionStream::Subscription : public http::WsSource {
       statusSeen_ = s.statusVersion_;
       return http::WsFrame{false, j.dump(), false};
     }
-    if (s.grid_.cellCount() > 0 && (!gridSent_ || gridSeen_ != gridVersion)) {
-      std::string frame;
-      // A full grid for a new client, or when it fell behind the compacted log, or when the diff
-      // would be bigger than the grid.
-      if (!gridSent_ || gridSeen_ < s.logBase_ ||
-          gridVersion - gridSeen_ > static_cast<std::uint64_t>(s.grid_.cellCount()) / 2)
-        frame = s.fullGridFrameLocked();
-      else
-        frame = s.gridDiffFrame(gridSeen_);
-      gridSent_ = true;
-      gridSeen_ = gridVersion;
-      return http::WsFrame{true, std::move(frame), false};
-    }
-    nlohmann::json rovers = nlohmann::json::array();
-    for (std::size_t k = 0; k < s.trails_.size(); ++k) {
-      if (trailSent_[k] == s.trails_[k].size()) continue;
-      nlohmann::json append = nlohmann::json::array();
-      for (std::size_t i = trailSent_[k]; i < s.trails_[k].size(); ++i)
-        append.push_back({s.trails_[k][i].x, s.trails_[k][i].y});
-      const Pose& p = s.trails_[k].back();
-      rovers.push_back({{"rover", k}, {"append", append}, {"pose", poseJson(p.x, p.y, p.headingDeg)}});
-      trailSent_[k] = s.trails_[k].size();
-    }
-    if (!rovers.empty())
-      return http::WsFrame{false, nlohmann::json{{"type", "poses"}, {"step", s.step_}, {"rovers", rovers}}.dump(), false};
-    if (progressSeen_ != s.progressVersion_) {
-      progressSeen_ = s.progressVersion_;
-      nlohmann::json j = s.progress_;
-      j["type"] = "progress";
-      return http::WsFrame{false, j.dump(), false};
+    // Grid diffs, poses and progress take turns, so a planner that changes cells every step
+    // cannot starve the trails and the progress bar.
+    for (int tries = 0; tries < 3; ++tries) {
+      const int kind = (lastKind_ + 1 + tries) % 3;
+      if (kind == 0 && s.grid_.cellCount() > 0 && (!gridSent_ || gridSeen_ != gridVersion)) {
+        std::string frame;
+        // A full grid for a new client, or when it fell behind the compacted log, or when the
+        // diff would be bigger than the grid.
+        if (!gridSent_ || gridSeen_ < s.logBase_ ||
+            gridVersion - gridSeen_ > static_cast<std::uint64_t>(s.grid_.cellCount()) / 2)
+          frame = s.fullGridFrameLocked();
+        else
+          frame = s.gridDiffFrame(gridSeen_);
+        gridSent_ = true;
+        gridSeen_ = gridVersion;
+        lastKind_ = 0;
+        return http::WsFrame{true, std::move(frame), false};
+      }
+      if (kind == 1) {
+        if (trailSent_.size() < s.trails_.size()) trailSent_.resize(s.trails_.size(), 0);
+        nlohmann::json rovers = nlohmann::json::array();
+        for (std::size_t k = 0; k < s.trails_.size(); ++k) {
+          if (trailSent_[k] == s.trails_[k].size()) continue;
+          nlohmann::json append = nlohmann::json::array();
+          for (std::size_t i = trailSent_[k]; i < s.trails_[k].size(); ++i)
+            append.push_back({s.trails_[k][i].x, s.trails_[k][i].y});
+          const Pose& p = s.trails_[k].back();
+          rovers.push_back({{"rover", k}, {"append", append}, {"pose", poseJson(p.x, p.y, p.headingDeg)}});
+          trailSent_[k] = s.trails_[k].size();
+        }
+        if (!rovers.empty()) {
+          lastKind_ = 1;
+          return http::WsFrame{false, nlohmann::json{{"type", "poses"}, {"step", s.step_}, {"rovers", rovers}}.dump(), false};
+        }
+      }
+      if (kind == 2 && progressSeen_ != s.progressVersion_) {
+        progressSeen_ = s.progressVersion_;
+        nlohmann::json j = s.progress_;
+        j["type"] = "progress";
+        lastKind_ = 2;
+        return http::WsFrame{false, j.dump(), false};
+      }
     }
     if (statusSeen_ != s.statusVersion_ && !s.finished_) {
       statusSeen_ = s.statusVersion_;
@@ -111,6 +123,7 @@ class MissionStream::Subscription : public http::WsSource {
   bool snapshotSent_ = false, gridSent_ = false, doneSent_ = false;
   std::uint64_t gridSeen_ = 0, progressSeen_ = 0, statusSeen_ = 0;
   std::vector<std::size_t> trailSent_;
+  int lastKind_ = 2;  // 0 grid, 1 poses, 2 progress: the kind sent last, for taking turns
 };
 
 MissionStream::MissionStream(std::string missionId, const GridGeometry& grid, int rovers,

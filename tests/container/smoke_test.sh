@@ -45,7 +45,12 @@ if ! pm image exists docker.io/library/debian:bookworm-slim; then
 fi
 pass "base image debian:bookworm-slim"
 
-pm build --network host --pull=never -t "$image" -f "$root/docker/Dockerfile" "$root" > "$state/build.log" 2>&1 \
+# npm inside the build must trust the same CAs as this host (the sandbox inspects HTTPS).
+ca_args=()
+if [ -f /etc/ssl/certs/ca-certificates.crt ]; then
+  ca_args=(-v /etc/ssl/certs/ca-certificates.crt:/tmp/host-ca.crt:ro --build-arg NODE_EXTRA_CA_CERTS=/tmp/host-ca.crt)
+fi
+pm build --network host --pull=never "${ca_args[@]}" -t "$image" -f "$root/docker/Dockerfile" "$root" > "$state/build.log" 2>&1 \
   || { tail -30 "$state/build.log" >&2; fail "podman build"; }
 pass "image builds from docker/Dockerfile"
 

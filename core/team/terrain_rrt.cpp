@@ -1,0 +1,467 @@
+#include "core/team/terrain_rrt.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <memory>
+#include <mutex>
+#include <ompl/base/MotionValidator.h>
+#include <ompl/base/OptimizationObjective.h>
+#include <ompl/base/PlannerData.h>
+#include <ompl/base/PlannerTerminationCondition.h>
+#include <ompl/base/ProblemDefinition.h>
+#include <ompl/base/ScopedState.h>
+#include <ompl/base/SpaceInformation.h>
+#include <ompl/base/StateValidityChecker.h>
+#include <ompl/base/spaces/RealVectorStateSpace.h>
+#include <ompl/geometric/PathGeometric.h>
+#include <ompl/geometric/planners/rrt/RRTstar.h>
+#include <ompl/util/Console.h>
+#include <ompl/util/RandomNumbers.h>
+#include <string>
+
+#include "core/common/error.hpp"
+#include "core/common/random.hpp"
+#include "core/terrain/layers.hpp"
+
+namespace rover::team {
+
+namespace ob = ompl::base;
+namespace og = ompl::geometric;
+
+// ---------------------------------------------------------------------------------------------
+// Parameters
+
+namespace {
+
+void requireFinite(const char* key, double v) {
+  if (!std::isfinite(v)) throwInvalidParameter(key, "must be a finite number");
+}
+void requireNonNegative(const char* key, double v) {
+  if (!std::isfinite(v) || !(v >= 0)) throwInvalidParameter(key, "must be a finite number >= 0");
+}
+void requirePositive(const char* key, double v) {
+  if (!std::isfinite(v) || !(v > 0)) throwInvalidParameter(key, "must be a finite number > 0");
+}
+
+}  // namespace
+
+void TerrainCostWeights::validate() const {
+  requireNonNegative("w_r", wR);
+  requireNonNegative("w_phi", wPhi);
+  requireNonNegative("w_theta", wTheta);
+  requireNonNegative("w_psi", wPsi);
+  requirePositive("n_r", nR);
+  requirePositive("n_phi", nPhi);
+  requirePositive("n_theta", nTheta);
+  requirePositive("n_psi", nPsi);
+}
+
+void RrtParams::validate() const {
+  requirePositive("range", range);
+  if (maxVertices < 2) throwInvalidParameter("max_vertices", "must be an integer >= 2");
+  // A zero clearance would give a degenerate (zero-area) box when start and goal share an axis.
+  requirePositive("clearance", clearance);
+  requirePositive("attitude_limit", attitudeLimit);
+  if (attitudeLimit > std::numbers::pi / 2) throwInvalidParameter("attitude_limit", "must be <= 90°");
+  requireNonNegative("edge_resolution", edgeResolution);
+  requireFinite("goal_bias", goalBias);
+  if (goalBias < 0 || goalBias > 1) throwInvalidParameter("goal_bias", "must be in [0, 1]");
+  if (maxIterations < 1) throwInvalidParameter("max_iterations", "must be an integer >= 1");
+}
+
+// ---------------------------------------------------------------------------------------------
+// Geometry and the eq. 9 terms (no OMPL)
+
+SearchBounds searchBounds(const GridGeometry& map, const Eigen::Vector2d& start,
+                          const Eigen::Vector2d& goal, double clearance) {
+  const Eigen::Vector2d extent(map.widthMetres(), map.heightMetres());
+  SearchBounds b;
+  b.min = (start.cwiseMin(goal).array() - clearance).max(0.0).matrix();
+  b.max = (start.cwiseMax(goal).array() + clearance).min(extent.array()).matrix();
+  return b;
+}
+
+double headingChange(double from, double to) {
+  double d = std::remainder(to - from, 2 * std::numbers::pi);  // in [−π, π]
+  return std::abs(d);
+}
+
+TerrainEdgeModel::TerrainEdgeModel(const terrain::Dem& dem, const Raster<std::uint8_t>& classes,
+                                   SearchBounds bounds, double attitudeLimit, double edgeResolution)
+    : dem_(dem), classes_(classes), bounds_(bounds), limit_(attitudeLimit),
+      resolution_(edgeResolution) {
+  const GridGeometry &d = dem.geometry(), &c = classes.geometry;
+  if (d.rows != c.rows || d.cols != c.cols)
+    throw Error(ErrorCode::InvalidInput, "classes",
+                "traversability classes (" + std::to_string(c.rows) + "×" + std::to_string(c.cols) +
+                    ") do not match the DEM (" + std::to_string(d.rows) + "×" +
+                    std::to_string(d.cols) + ")");
+  if (!(edgeResolution > 0) || !std::isfinite(edgeResolution))
+    throwInvalidParameter("edge_resolution", "must be a finite number > 0");
+}
+
+namespace {
+
+// Cell checks shared by pointValid and edgeValid: inside the bounds and the map, data present, not
+// impassable. High-risk cells are allowed; the attitude limit decides along edges.
+bool cellAllowed(const terrain::Dem& dem, const Raster<std::uint8_t>& classes,
+                 const SearchBounds& bounds, const Eigen::Vector2d& p) {
+  if (!std::isfinite(p.x()) || !std::isfinite(p.y()) || !bounds.contains(p)) return false;
+  auto cell = localToCell(classes.geometry, p);
+  if (!cell) return false;
+  auto cls = static_cast<terrain::TerrainClass>(classes(cell->row, cell->col));
+  if (cls == terrain::TerrainClass::Impassable || cls == terrain::TerrainClass::NoData) return false;
+  return dem.valid(cell->row, cell->col);
+}
+
+// Number of segments an edge of length `len` is cut into for sampling.
+int segmentsFor(double len, double resolution) {
+  return std::max(1, static_cast<int>(std::ceil(len / resolution)));
+}
+
+Eigen::Vector2d sampleAt(const Eigen::Vector2d& a, const Eigen::Vector2d& b, int i, int n) {
+  return i == n ? b : Eigen::Vector2d(a + (b - a) * (static_cast<double>(i) / n));
+}
+
+}  // namespace
+
+bool TerrainEdgeModel::pointValid(const Eigen::Vector2d& p) const {
+  return cellAllowed(dem_, classes_, bounds_, p) && terrain::surfaceAt(dem_, p.x(), p.y());
+}
+
+// Roll and pitch follow SPEC §2 exactly as terrain::attitudeAt does — pitch = atan(∇h·(cosψ, sinψ)),
+// roll = atan(∇h·(−sinψ, cosψ)) on the bilinear surface — but with the edge's cos ψ, sin ψ computed
+// once and atan applied once to the largest tangent (atan is monotonic, so max|atan x| =
+// atan max|x|, and |atan x| >= limit <=> |x| >= tan limit). Calling attitudeAt per sample costs
+// two atan and a sincos each and made up most of a planning call; a test checks the two agree.
+
+bool TerrainEdgeModel::edgeValid(const Eigen::Vector2d& a, const Eigen::Vector2d& b) const {
+  const Eigen::Vector2d d = b - a;
+  const double len = d.norm();
+  if (!(len > 0)) return pointValid(a);  // no heading: only the point itself
+  const double c = d.x() / len, s = d.y() / len, tanLimit = std::tan(limit_);
+  const int n = segmentsFor(len, resolution_);
+  for (int i = 0; i <= n; ++i) {
+    const Eigen::Vector2d p = sampleAt(a, b, i, n);
+    if (!cellAllowed(dem_, classes_, bounds_, p)) return false;
+    auto sp = terrain::surfaceAt(dem_, p.x(), p.y());
+    if (!sp) return false;
+    if (std::abs(sp->dzdx * c + sp->dzdy * s) >= tanLimit ||
+        std::abs(-sp->dzdx * s + sp->dzdy * c) >= tanLimit)
+      return false;
+  }
+  return true;
+}
+
+// φ and θ are the *largest* |roll| and |pitch| over the edge's samples, not their mean: eq. 9's N_φ
+// and N_θ are "the maximum valid value" (paper 001 §3.6), i.e. the same 15° limit that edgeValid
+// applies sample by sample, so with the maximum every valid edge has φ/N_φ, θ/N_θ in [0, 1), and an
+// edge that grazes a steep spot pays for it even if the rest is flat. Like the paper's per-node
+// cost, the attitude terms are per edge, not per metre.
+EdgeTerms TerrainEdgeModel::edgeTerms(const Eigen::Vector2d& a, const Eigen::Vector2d& b) const {
+  EdgeTerms t;
+  const Eigen::Vector2d d = b - a;
+  t.length = d.norm();
+  if (!(t.length > 0)) return t;
+  const double c = d.x() / t.length, s = d.y() / t.length;
+  const int n = segmentsFor(t.length, resolution_);
+  double tanPitch = 0, tanRoll = 0;  // largest |∇h·(cosψ, sinψ)|, |∇h·(−sinψ, cosψ)|
+  for (int i = 0; i <= n; ++i) {
+    const Eigen::Vector2d p = sampleAt(a, b, i, n);
+    if (auto sp = terrain::surfaceAt(dem_, p.x(), p.y())) {
+      tanPitch = std::max(tanPitch, std::abs(sp->dzdx * c + sp->dzdy * s));
+      tanRoll = std::max(tanRoll, std::abs(-sp->dzdx * s + sp->dzdy * c));
+    }
+  }
+  t.pitch = std::atan(tanPitch);
+  t.roll = std::atan(tanRoll);
+  return t;
+}
+
+EdgeTerms TerrainEdgeModel::edgeTerms(const Eigen::Vector2d& a, const Eigen::Vector2d& b,
+                                      double previousHeading) const {
+  EdgeTerms t = edgeTerms(a, b);
+  if (t.length > 0)
+    t.headingChange = headingChange(previousHeading, std::atan2(b.y() - a.y(), b.x() - a.x()));
+  return t;
+}
+
+double pathCost(const TerrainEdgeModel& model, const std::vector<Eigen::Vector2d>& path,
+                double startHeading, const TerrainCostWeights& weights, bool turnsAtEveryVertex) {
+  double sum = 0, heading = startHeading;
+  for (std::size_t i = 0; i + 1 < path.size(); ++i) {
+    const Eigen::Vector2d &a = path[i], &b = path[i + 1];
+    EdgeTerms t = (i == 0 || turnsAtEveryVertex) ? model.edgeTerms(a, b, heading)
+                                                 : model.edgeTerms(a, b);
+    sum += t.cost(weights);
+    if (t.length > 0) heading = std::atan2(b.y() - a.y(), b.x() - a.x());
+  }
+  return sum;
+}
+
+const char* pathStatusName(PathStatus s) {
+  switch (s) {
+    case PathStatus::Exact: return "exact";
+    case PathStatus::Approximate: return "approximate";
+    case PathStatus::NoSolution: return "no_solution";
+    case PathStatus::InvalidStart: return "invalid_start";
+    case PathStatus::InvalidGoal: return "invalid_goal";
+    case PathStatus::Cancelled: return "cancelled";
+  }
+  return "unknown";
+}
+
+// ---------------------------------------------------------------------------------------------
+// OMPL glue
+
+namespace {
+
+Eigen::Vector2d xyOf(const ob::State* s) {
+  const auto* v = s->as<ob::RealVectorStateSpace::StateType>();
+  return {v->values[0], v->values[1]};
+}
+
+// core/ does no I/O: OMPL's console output is switched off once per process (a global setting in
+// OMPL; done under std::call_once so concurrent first calls do not race on it).
+void silenceOmpl() {
+  static std::once_flag once;
+  std::call_once(once, [] {
+    ompl::msg::noOutputHandler();
+    ompl::msg::setLogLevel(ompl::msg::LOG_NONE);
+  });
+}
+
+class TerrainValidityChecker : public ob::StateValidityChecker {
+ public:
+  TerrainValidityChecker(const ob::SpaceInformationPtr& si, const TerrainEdgeModel& model)
+      : ob::StateValidityChecker(si), model_(model) {}
+  bool isValid(const ob::State* s) const override { return model_.pointValid(xyOf(s)); }
+
+ private:
+  const TerrainEdgeModel& model_;
+};
+
+class TerrainMotionValidator : public ob::MotionValidator {
+ public:
+  TerrainMotionValidator(const ob::SpaceInformationPtr& si, const TerrainEdgeModel& model)
+      : ob::MotionValidator(si), model_(model) {}
+
+  bool checkMotion(const ob::State* s1, const ob::State* s2) const override {
+    bool ok = model_.edgeValid(xyOf(s1), xyOf(s2));
+    ++(ok ? valid_ : invalid_);
+    return ok;
+  }
+
+  // Walks the same samples as edgeValid and reports the last valid one (RRTstar does not use this
+  // overload; other OMPL tools may).
+  bool checkMotion(const ob::State* s1, const ob::State* s2,
+                   std::pair<ob::State*, double>& lastValid) const override {
+    const Eigen::Vector2d a = xyOf(s1), b = xyOf(s2);
+    if (model_.edgeValid(a, b)) {
+      ++valid_;
+      return true;
+    }
+    const int n = segmentsFor((b - a).norm(), model_.edgeResolution());
+    int last = 0;  // index of the last sample i such that the sub-edge a→sample(i) is valid
+    for (int i = 1; i <= n; ++i) {
+      if (!model_.edgeValid(a, sampleAt(a, b, i, n))) break;
+      last = i;
+    }
+    const double t = static_cast<double>(last) / n;
+    if (lastValid.first) si_->getStateSpace()->interpolate(s1, s2, t, lastValid.first);
+    lastValid.second = t;
+    ++invalid_;
+    return false;
+  }
+
+ private:
+  const TerrainEdgeModel& model_;
+};
+
+// Paper 001 eq. 9 as an OMPL optimisation objective, apart from the search (STYLE.md).
+//
+// Δψ in a geometric R² space: the turn from the previous edge is not available in motionCost(s1,
+// s2) — a state (x, y) does not know which edge reached it — and making the cost depend on the
+// parent's incoming edge would break RRT*'s rewiring (a rewired vertex changes its children's edge
+// costs, which RRT* assumes fixed). An SE(2) space does not help either: OMPL's straight-line
+// interpolation of (x, y, ψ) turns the body while it drives, so ψ no longer is the direction of
+// travel. We therefore keep R² and charge Δψ where it is known exactly: on edges leaving the start
+// state, as the turn from the rover's start heading (its heading on arrival from the previous
+// segment). Interior turns are free in the search; the R term and RRT*'s rewiring already keep paths
+// close to straight, and PathResult::costWithTurns reports eq. 9 with every turn charged.
+// The cost is then Markov in (s1, s2), and symmetric except on edges into the start, which RRT*
+// never rewires (nothing beats the start's identity cost), so isSymmetric() stays true.
+class Eq9Objective : public ob::OptimizationObjective {
+ public:
+  Eq9Objective(const ob::SpaceInformationPtr& si, const TerrainEdgeModel& model,
+               const TerrainCostWeights& weights, const Eigen::Vector2d& start, double startHeading)
+      : ob::OptimizationObjective(si), model_(model), weights_(weights), start_(start),
+        startHeading_(startHeading) {
+    description_ = "terrain cost, paper 001 eq. 9";
+  }
+
+  // Never satisfied: the tree always grows to the vertex budget (paper 001 §3.6).
+  bool isSatisfied(ob::Cost) const override { return false; }
+  ob::Cost stateCost(const ob::State*) const override { return identityCost(); }
+  ob::Cost motionCost(const ob::State* s1, const ob::State* s2) const override {
+    const Eigen::Vector2d a = xyOf(s1), b = xyOf(s2);
+    // RRTstar copies the start state bit for bit, so exact comparison identifies it.
+    EdgeTerms t = a == start_ ? model_.edgeTerms(a, b, startHeading_) : model_.edgeTerms(a, b);
+    return ob::Cost(t.cost(weights_));
+  }
+  // Admissible: the R term alone (the other terms are >= 0).
+  ob::Cost motionCostHeuristic(const ob::State* s1, const ob::State* s2) const override {
+    return ob::Cost(weights_.wR * (xyOf(s2) - xyOf(s1)).norm() / weights_.nR);
+  }
+
+ private:
+  const TerrainEdgeModel& model_;
+  TerrainCostWeights weights_;
+  Eigen::Vector2d start_;
+  double startHeading_;
+};
+
+// Per-problem determinism. ompl::RNG::setSeed() fixes the seed of the *process-wide* generator of
+// seeds and only works before the first RNG is created, so it cannot give each of several concurrent
+// problems its own seed. Instead, every random stream RRT* draws from is re-seeded locally with
+// RNG::setLocalSeed(): the planner's own rng_ (goal biasing; a protected member, reached from this
+// subclass) and the uniform state sampler's rng_ (through a StateSamplerAllocator on the problem's
+// state space, below). The only other RNG involved, inside the GNAT nearest-neighbour structure,
+// picks pivots; GNAT's queries are exact, so it changes speed, not results.
+class SeededRrtStar : public og::RRTstar {
+ public:
+  SeededRrtStar(const ob::SpaceInformationPtr& si, std::uint32_t seed) : og::RRTstar(si) {
+    rng_.setLocalSeed(seed);
+  }
+  // Vertices currently in the tree (the termination condition polls this every iteration).
+  std::size_t treeSize() const { return nn_ ? nn_->size() : 0; }
+};
+
+class SeededSampler : public ob::RealVectorStateSampler {
+ public:
+  SeededSampler(const ob::StateSpace* space, std::uint32_t seed) : ob::RealVectorStateSampler(space) {
+    rng_.setLocalSeed(seed);
+  }
+};
+
+}  // namespace
+
+PathResult planPath(const terrain::Dem& dem, const Raster<std::uint8_t>& classes,
+                    const Eigen::Vector2d& start, double startHeading, const Eigen::Vector2d& goal,
+                    const RrtParams& params, const TerrainCostWeights& weights,
+                    const CancelToken* cancel) {
+  params.validate();
+  weights.validate();
+  requireFinite("start_heading", startHeading);
+  if (!start.allFinite()) throwInvalidParameter("start", "must be a finite position");
+  if (!goal.allFinite()) throwInvalidParameter("goal", "must be a finite position");
+  silenceOmpl();
+
+  const GridGeometry& g = dem.geometry();
+  const double resolution = params.edgeResolution > 0
+                                ? params.edgeResolution
+                                : 0.25 * std::min(g.cellWidth, g.cellHeight);
+  const SearchBounds box = searchBounds(g, start, goal, params.clearance);
+  const TerrainEdgeModel model(dem, classes, box, params.attitudeLimit, resolution);
+
+  PathResult r;
+  if (!model.pointValid(start)) {
+    r.status = PathStatus::InvalidStart;
+    return r;
+  }
+  if (!model.pointValid(goal)) {
+    r.status = PathStatus::InvalidGoal;
+    return r;
+  }
+  if (cancel && cancel->cancelled()) {
+    r.status = PathStatus::Cancelled;
+    return r;
+  }
+  if (start == goal) {  // nothing to plan; OMPL would return a duplicated point
+    r.status = PathStatus::Exact;
+    r.waypoints = {start};
+    r.vertices = 1;
+    return r;
+  }
+
+  // Problem: R² inside the search box.
+  auto space = std::make_shared<ob::RealVectorStateSpace>(2);
+  ob::RealVectorBounds bounds(2);
+  for (int i = 0; i < 2; ++i) {
+    bounds.setLow(i, box.min[i]);
+    bounds.setHigh(i, box.max[i]);
+  }
+  space->setBounds(bounds);
+  const auto samplerSeed = static_cast<std::uint32_t>(deriveSeed(params.seed, 1));
+  const auto plannerSeed = static_cast<std::uint32_t>(deriveSeed(params.seed, 2));
+  space->setStateSamplerAllocator([samplerSeed](const ob::StateSpace* s) -> ob::StateSamplerPtr {
+    return std::make_shared<SeededSampler>(s, samplerSeed);
+  });
+
+  auto si = std::make_shared<ob::SpaceInformation>(space);
+  si->setStateValidityChecker(std::make_shared<TerrainValidityChecker>(si, model));
+  si->setMotionValidator(std::make_shared<TerrainMotionValidator>(si, model));
+  si->setup();
+
+  auto pdef = std::make_shared<ob::ProblemDefinition>(si);
+  ob::ScopedState<> s(space), q(space);
+  s[0] = start.x();
+  s[1] = start.y();
+  q[0] = goal.x();
+  q[1] = goal.y();
+  pdef->setStartAndGoalStates(s, q);
+  pdef->setOptimizationObjective(
+      std::make_shared<Eq9Objective>(si, model, weights, start, startHeading));
+
+  auto planner = std::make_shared<SeededRrtStar>(si, plannerSeed);
+  planner->setRange(params.range);
+  planner->setGoalBias(params.goalBias);
+  // r-disc rewiring: OMPL caps the rewiring radius at the range, so no edge of the tree (new or
+  // rewired) is longer than `range` — paper 001's N_R = 1 m assumes exactly that. k-nearest
+  // rewiring has no such cap.
+  planner->setKNearest(false);
+  planner->setProblemDefinition(pdef);
+  planner->setup();
+
+  // Vertex-count termination (paper 001 §3.6), not wall-clock, so the result depends on the seed
+  // only; the iteration cap and the cancel token are the other ways out.
+  const auto maxVertices = static_cast<std::size_t>(params.maxVertices);
+  const auto maxIterations = static_cast<unsigned>(params.maxIterations);
+  ob::PlannerTerminationCondition ptc([&] {
+    return planner->treeSize() >= maxVertices || planner->numIterations() >= maxIterations ||
+           (cancel && cancel->cancelled());
+  });
+  const ob::PlannerStatus status = planner->solve(ptc);
+
+  ob::PlannerData data(si);
+  planner->getPlannerData(data);
+  r.vertices = static_cast<int>(data.numVertices());
+  r.iterations = static_cast<int>(planner->numIterations());
+
+  if (cancel && cancel->cancelled()) {
+    r.status = PathStatus::Cancelled;
+    return r;
+  }
+  switch (ob::PlannerStatus::StatusType(status)) {
+    case ob::PlannerStatus::EXACT_SOLUTION: r.status = PathStatus::Exact; break;
+    case ob::PlannerStatus::APPROXIMATE_SOLUTION: r.status = PathStatus::Approximate; break;
+    case ob::PlannerStatus::INVALID_START: r.status = PathStatus::InvalidStart; return r;
+    case ob::PlannerStatus::INVALID_GOAL: r.status = PathStatus::InvalidGoal; return r;
+    default: r.status = PathStatus::NoSolution; return r;
+  }
+  ob::PathPtr solution = pdef->getSolutionPath();
+  if (!solution) {
+    r.status = PathStatus::NoSolution;
+    return r;
+  }
+  // RRT*'s own vertices, neither simplified nor interpolated: every edge is already <= range.
+  const auto& path = *solution->as<og::PathGeometric>();
+  r.waypoints.reserve(path.getStateCount());
+  for (std::size_t i = 0; i < path.getStateCount(); ++i) r.waypoints.push_back(xyOf(path.getState(i)));
+  r.goalDistance = r.status == PathStatus::Exact ? 0.0 : (r.waypoints.back() - goal).norm();
+  r.cost = pathCost(model, r.waypoints, startHeading, weights, false);
+  r.costWithTurns = pathCost(model, r.waypoints, startHeading, weights, true);
+  return r;
+}
+
+}  // namespace rover::team

@@ -1,0 +1,159 @@
+#pragma once
+// Individual rover paths: RRT* (Karaman & Frazzoli 2011, OMPL's RRTstar) on terrain with the cost of
+// paper 001 §3.6 eq. 9 (after Takemura & Ishigami 2017), SPEC §3.2:
+//   cost(q_i) = W_R·R_i/N_R + W_φ·φ_i/N_φ + W_θ·θ_i/N_θ + W_ψ·Δψ_i/N_ψ
+// One planning problem per rover per route segment; the tree grows to a fixed number of vertices so
+// that the result depends on the seed alone, never on the clock.
+//
+// Everything OMPL stays in terrain_rrt.cpp: the eq. 9 objective and the validity checks there are
+// thin wrappers around TerrainEdgeModel below, which tests and the team planner can use directly.
+// Positions are in the local frame (x east, y north, metres from the raster's south-west corner),
+// headings in radians counter-clockwise from east (SPEC §0).
+#include <Eigen/Core>
+#include <cstdint>
+#include <numbers>
+#include <vector>
+
+#include "core/common/cancel.hpp"
+#include "core/grid/raster.hpp"
+#include "core/terrain/dem.hpp"
+
+namespace rover::team {
+
+// Weights W and normalisers N of eq. 9. Defaults are paper 001's: W = (0.1, 0.4, 0.4, 0.1),
+// N = (1 m, 15°, 15°, 60°). Angles in radians here; user-facing layers show degrees.
+struct TerrainCostWeights {
+  double wR = 0.1;                                  //                        key: w_r
+  double wPhi = 0.4;                                // roll                   key: w_phi
+  double wTheta = 0.4;                              // pitch                  key: w_theta
+  double wPsi = 0.1;                                // heading change         key: w_psi
+  double nR = 1.0;                                  // m (the RRT* range)     key: n_r
+  double nPhi = 15.0 * std::numbers::pi / 180.0;    // rad (15°)              key: n_phi
+  double nTheta = 15.0 * std::numbers::pi / 180.0;  // rad (15°)              key: n_theta
+  double nPsi = 60.0 * std::numbers::pi / 180.0;    // rad (60°)              key: n_psi
+
+  // Throws rover::Error(InvalidParameter) with the key as field: weights must be finite and >= 0,
+  // normalisers finite and > 0.
+  void validate() const;
+};
+
+struct RrtParams {
+  double range = 1.0;      // m, the longest edge of the tree (paper 001: 1 m)      key: range
+  int maxVertices = 1250;  // the tree is grown to this many vertices (paper 001) key: max_vertices
+  double clearance = 2.0;  // m around the box of start and goal, clipped to the map key: clearance
+  // rad (15°); |roll| or |pitch| >= it anywhere on an edge makes it invalid   key: attitude_limit
+  double attitudeLimit = 15.0 * std::numbers::pi / 180.0;
+  std::uint64_t seed = 1;  //                                                       key: seed
+  // m between the attitude/validity samples of an edge; 0 = a quarter of the DEM cell
+  double edgeResolution = 0.0;  //                                             key: edge_resolution
+  double goalBias = 0.05;  // probability of sampling the goal (OMPL's default)  key: goal_bias
+  // Safety cap on RRT* iterations (deterministic, like the vertex count): a start boxed in by
+  // impassable cells could never grow the tree to maxVertices.           key: max_iterations
+  int maxIterations = 100000;
+
+  // Throws rover::Error(InvalidParameter) with the key as field.
+  void validate() const;
+};
+
+// The search region: bounding box of start and goal grown by the clearance, clipped to the map.
+struct SearchBounds {
+  Eigen::Vector2d min{0, 0};
+  Eigen::Vector2d max{0, 0};
+  bool contains(const Eigen::Vector2d& p) const {
+    return p.x() >= min.x() && p.y() >= min.y() && p.x() <= max.x() && p.y() <= max.y();
+  }
+};
+SearchBounds searchBounds(const GridGeometry& map, const Eigen::Vector2d& start,
+                          const Eigen::Vector2d& goal, double clearance);
+
+// |a − b| wrapped to [0, π]: the turn from heading a to heading b.
+double headingChange(double from, double to);
+
+// The four quantities of eq. 9 for one edge.
+struct EdgeTerms {
+  double length = 0;         // R, m
+  double roll = 0;           // φ, the largest |roll| sampled along the edge, rad
+  double pitch = 0;          // θ, the largest |pitch| sampled along the edge, rad
+  double headingChange = 0;  // Δψ, rad in [0, π]
+  double cost(const TerrainCostWeights& w) const {
+    return w.wR * length / w.nR + w.wPhi * roll / w.nPhi + w.wTheta * pitch / w.nTheta +
+           w.wPsi * headingChange / w.nPsi;
+  }
+};
+
+// Validity and eq. 9 terms of straight edges on one DEM and its traversability classes
+// (terrain::TerrainClass values). Holds references: the rasters must outlive it. Const and
+// thread-safe.
+class TerrainEdgeModel {
+ public:
+  // `classes` must have the DEM's grid (rows, cols); throws InvalidInput otherwise.
+  // `edgeResolution` > 0 is the spacing of the samples along an edge.
+  TerrainEdgeModel(const terrain::Dem& dem, const Raster<std::uint8_t>& classes, SearchBounds bounds,
+                   double attitudeLimit, double edgeResolution);
+  // Temporaries would dangle.
+  TerrainEdgeModel(terrain::Dem&&, const Raster<std::uint8_t>&, SearchBounds, double, double) = delete;
+  TerrainEdgeModel(const terrain::Dem&, Raster<std::uint8_t>&&, SearchBounds, double, double) = delete;
+
+  // Inside the bounds and the map, on a cell with data that is not Impassable, with a defined
+  // surface (bilinear interpolation needs the four surrounding cell centres to have data).
+  bool pointValid(const Eigen::Vector2d& p) const;
+  // Every sample of the edge (both ends included, at most edgeResolution apart) is pointValid and
+  // has |roll| and |pitch| strictly below the attitude limit for the edge's heading.
+  bool edgeValid(const Eigen::Vector2d& a, const Eigen::Vector2d& b) const;
+  // R, φ, θ of the edge a→b (φ, θ over the same samples as edgeValid, samples without a surface
+  // skipped); Δψ is the turn from `previousHeading` to the edge's heading (0 for a zero-length edge).
+  EdgeTerms edgeTerms(const Eigen::Vector2d& a, const Eigen::Vector2d& b,
+                      double previousHeading) const;
+  // Same without a turn (Δψ = 0).
+  EdgeTerms edgeTerms(const Eigen::Vector2d& a, const Eigen::Vector2d& b) const;
+
+  const SearchBounds& bounds() const { return bounds_; }
+  double edgeResolution() const { return resolution_; }
+
+ private:
+  const terrain::Dem& dem_;
+  const Raster<std::uint8_t>& classes_;
+  SearchBounds bounds_;
+  double limit_;
+  double resolution_;
+};
+
+// eq. 9 summed over a polyline (first point = start). With `turnsAtEveryVertex` false this is what
+// the planner minimises (Δψ only on the first edge, from `startHeading`, see terrain_rrt.cpp); with
+// true, Δψ is charged at every vertex as the turn from the previous edge — the turns the rover
+// really makes.
+double pathCost(const TerrainEdgeModel& model, const std::vector<Eigen::Vector2d>& path,
+                double startHeading, const TerrainCostWeights& weights, bool turnsAtEveryVertex);
+
+enum class PathStatus {
+  Exact,        // the path ends at the goal
+  Approximate,  // no valid path found; the path ends at the tree vertex closest to the goal
+  NoSolution,   // the tree never left the start
+  InvalidStart, // start outside the map or not pointValid
+  InvalidGoal,  // goal outside the map or not pointValid
+  Cancelled,    // the cancel token was set; no path returned
+};
+const char* pathStatusName(PathStatus s);
+
+struct PathResult {
+  PathStatus status = PathStatus::NoSolution;
+  std::vector<Eigen::Vector2d> waypoints;  // local frame, start first; RRT*'s own vertices
+  double cost = 0;             // eq. 9 as minimised by RRT* (pathCost(..., false)); 0 without path
+  double costWithTurns = 0;    // eq. 9 with Δψ at every vertex (pathCost(..., true))
+  double goalDistance = 0;     // m from the last waypoint to the goal (0 when Exact)
+  int vertices = 0;            // vertices of the RRT* tree (OMPL PlannerData) when it stopped
+  int iterations = 0;          // RRT* iterations (samples drawn)
+  bool hasPath() const { return status == PathStatus::Exact || status == PathStatus::Approximate; }
+};
+
+// Plans one rover's path from `start` (heading `startHeading`) to `goal` with RRT* (paper 001 §3.6):
+// bounds from searchBounds(), range `params.range`, eq. 9 cost, the tree grown until it has
+// `params.maxVertices` vertices (or `params.maxIterations` iterations, or cancellation).
+// Deterministic for a given seed; safe to call concurrently from several threads (each call builds
+// its own OMPL objects and seeded random generators). Bad parameters throw rover::Error.
+PathResult planPath(const terrain::Dem& dem, const Raster<std::uint8_t>& classes,
+                    const Eigen::Vector2d& start, double startHeading, const Eigen::Vector2d& goal,
+                    const RrtParams& params = {}, const TerrainCostWeights& weights = {},
+                    const CancelToken* cancel = nullptr);
+
+}  // namespace rover::team

@@ -1,0 +1,171 @@
+// REST and WebSocket access to the roverplan server (server/api/routes.cpp): bearer token,
+// JSON errors as ApiError {status, code, message, field}, raw float32 layers, XHR uploads.
+
+const TOKEN_KEY = 'roverplan.token';
+
+export class ApiError extends Error {
+  constructor(status, code, message, field) {
+    super(message || `HTTP ${status}`);
+    this.status = status;
+    this.code = code || '';
+    this.field = field || '';
+  }
+  // "message (field: x)" for people.
+  describe() {
+    return this.field ? `${this.message} (field: ${this.field})` : this.message;
+  }
+}
+
+export function getToken() {
+  try { return localStorage.getItem(TOKEN_KEY) || ''; } catch { return ''; }
+}
+
+export function setToken(token) {
+  try {
+    if (token) localStorage.setItem(TOKEN_KEY, token);
+    else localStorage.removeItem(TOKEN_KEY);
+  } catch { /* storage disabled: the token lives for this page only */ }
+  sessionToken = token;
+}
+
+let sessionToken = getToken();
+
+function authHeaders(extra = {}) {
+  const h = { ...extra };
+  if (sessionToken) h.Authorization = `Bearer ${sessionToken}`;
+  return h;
+}
+
+async function errorFrom(response) {
+  let body = null;
+  try { body = await response.json(); } catch { /* not JSON */ }
+  const e = body && body.error ? body.error : {};
+  return new ApiError(response.status, e.code, e.message || `${response.status} ${response.statusText}`, e.field);
+}
+
+// fetch() with the token; throws ApiError on a non-2xx answer or a network failure.
+export async function request(path, options = {}) {
+  let response;
+  try {
+    response = await fetch(path, { ...options, headers: authHeaders(options.headers) });
+  } catch (err) {
+    if (err.name === 'AbortError') throw new ApiError(0, 'aborted', 'request cancelled', '');
+    throw new ApiError(0, 'network', `cannot reach the server: ${err.message}`, '');
+  }
+  if (!response.ok) throw await errorFrom(response);
+  return response;
+}
+
+export async function getJson(path) {
+  return (await request(path)).json();
+}
+
+export async function sendJson(method, path, body) {
+  const response = await request(path, {
+    method,
+    headers: { 'Content-Type': 'application/json' },
+    body: body === undefined ? undefined : JSON.stringify(body),
+  });
+  return response.json();
+}
+
+export const api = {
+  health: () => getJson('/api/health'),
+  planners: () => getJson('/api/planners'),
+  maps: () => getJson('/api/maps'),
+  map: (id) => getJson(`/api/maps/${id}`),
+  deleteMap: (id) => sendJson('DELETE', `/api/maps/${id}`),
+  pdms: (mapId) => getJson(`/api/maps/${mapId}/pdms`),
+  createPdm: (mapId, body) => sendJson('POST', `/api/maps/${mapId}/pdms`, body),
+  deletePdm: (mapId, pdmId) => sendJson('DELETE', `/api/maps/${mapId}/pdms/${pdmId}`),
+  missions: () => getJson('/api/missions'),
+  mission: (id) => getJson(`/api/missions/${id}`),
+  launch: (body) => sendJson('POST', '/api/missions', body),
+  cancel: (id) => sendJson('DELETE', `/api/missions/${id}`),
+  result: (id) => getJson(`/api/missions/${id}/result.json`),
+};
+
+export function layerUrl(mapId, name, format, { max = 0, pdm = '' } = {}) {
+  const q = new URLSearchParams();
+  if (max > 0) q.set('max', String(max));
+  if (pdm) q.set('pdm', pdm);
+  const qs = q.toString();
+  return `/api/maps/${mapId}/layers/${name}.${format}${qs ? `?${qs}` : ''}`;
+}
+
+// A PNG as an ImageBitmap (fetched with the token, so it works behind --token).
+export async function fetchImage(url, signal) {
+  const blob = await (await request(url, { signal })).blob();
+  return createImageBitmap(blob);
+}
+
+// Raw little-endian float32 raster: {rows, cols, cellW, cellH, data: Float32Array}; NaN = nodata.
+export async function fetchF32(url, signal) {
+  const response = await request(url, { signal });
+  const rows = Number(response.headers.get('X-Rows'));
+  const cols = Number(response.headers.get('X-Cols'));
+  const buffer = await response.arrayBuffer();
+  if (!(rows > 0 && cols > 0) || buffer.byteLength !== rows * cols * 4)
+    throw new ApiError(0, 'bad_layer', `layer ${url}: size ${rows}×${cols} does not match ${buffer.byteLength} bytes`, '');
+  // DataView keeps this right on a big-endian client too.
+  let data;
+  if (new Uint8Array(new Uint16Array([1]).buffer)[0] === 1) {
+    data = new Float32Array(buffer);
+  } else {
+    const view = new DataView(buffer);
+    data = new Float32Array(rows * cols);
+    for (let i = 0; i < data.length; i++) data[i] = view.getFloat32(4 * i, true);
+  }
+  return {
+    rows, cols, data,
+    cellW: Number(response.headers.get('X-Cell-Width-M')) || 1,
+    cellH: Number(response.headers.get('X-Cell-Height-M')) || 1,
+  };
+}
+
+// Downloads a server file with the token (for export buttons behind --token).
+export async function downloadWithToken(url, filename) {
+  const blob = await (await request(url)).blob();
+  const href = URL.createObjectURL(blob);
+  const a = document.createElement('a');
+  a.href = href;
+  a.download = filename;
+  document.body.append(a);
+  a.click();
+  a.remove();
+  setTimeout(() => URL.revokeObjectURL(href), 10000);
+}
+
+export function hasToken() {
+  return Boolean(sessionToken);
+}
+
+// Multipart DEM upload with progress: each file is a part named "file". Resolves to the new map.
+export function uploadDem(files, { name = '', cell = '' } = {}, onProgress = () => {}) {
+  return new Promise((resolve, reject) => {
+    const form = new FormData();
+    for (const f of files) form.append('file', f, f.name);
+    if (name) form.append('name', name);
+    if (cell !== '' && cell !== null && cell !== undefined) form.append('cell', String(cell));
+    const xhr = new XMLHttpRequest();
+    xhr.open('POST', '/api/maps');
+    if (sessionToken) xhr.setRequestHeader('Authorization', `Bearer ${sessionToken}`);
+    xhr.upload.onprogress = (e) => onProgress(e.lengthComputable ? e.loaded / e.total : NaN, e.loaded, 'upload');
+    xhr.upload.onload = () => onProgress(1, 0, 'processing');
+    xhr.onload = () => {
+      let body = null;
+      try { body = JSON.parse(xhr.responseText); } catch { /* not JSON */ }
+      if (xhr.status >= 200 && xhr.status < 300 && body) return resolve(body);
+      const e = body && body.error ? body.error : {};
+      reject(new ApiError(xhr.status, e.code, e.message || `upload failed: HTTP ${xhr.status}`, e.field));
+    };
+    xhr.onerror = () => reject(new ApiError(0, 'network', 'the upload failed: the server closed the connection', 'file'));
+    xhr.send(form);
+  });
+}
+
+export function streamUrl(missionId) {
+  const proto = location.protocol === 'https:' ? 'wss:' : 'ws:';
+  const q = sessionToken ? `?token=${encodeURIComponent(sessionToken)}` : '';
+  return `${proto}//${location.host}/api/missions/${missionId}/stream${q}`;
+}

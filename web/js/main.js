@@ -1,0 +1,190 @@
+// The operator's page: wires the map view, layers, panels, the live mission view and the 3D view.
+
+import { api, setToken, getToken } from './api.js';
+import { LayerStack } from './layer_stack.js';
+import { MapView } from './map_view.js';
+import { MapsPanel } from './maps_panel.js';
+import { MissionForm } from './mission_form.js';
+import { MissionView } from './mission_view.js';
+import { PdmEditor } from './pdm_editor.js';
+import { RunsPanel } from './runs.js';
+import { counters, state } from './state.js';
+import { $, report, setErrorReporter } from './util.js';
+import { View3D } from './view3d.js';
+
+// --- status line: a message part and a live-mission part ---
+const statusParts = { msg: '', live: '' };
+function statusLine(text, part = 'msg') {
+  statusParts[part] = text;
+  $('status-line').textContent = [statusParts.live, statusParts.msg].filter(Boolean).join('  ·  ');
+}
+let msgTimer = null;
+setErrorReporter((msg) => {
+  statusLine(`⚠ ${msg}`);
+  clearTimeout(msgTimer);
+  msgTimer = setTimeout(() => statusLine(''), 12000);
+});
+window.addEventListener('error', (e) => counters.errors.push(String(e.message)));
+window.addEventListener('unhandledrejection', (e) => {
+  counters.errors.push(String(e.reason && e.reason.message ? e.reason.message : e.reason));
+  report(e.reason && e.reason.message ? e.reason.message : String(e.reason));
+  e.preventDefault();
+});
+
+// --- the modules ---
+const view = new MapView($('map-canvas'));
+view.padLeft = 256;  // the floating layers/legend panels
+const layers = new LayerStack(view);
+const missionView = new MissionView({ view, layers, statusLine, selectMap, onFinished: () => runs.reload() });
+const pdmEditor = new PdmEditor({ view, layers });
+const missionForm = new MissionForm({ view, onLaunched: (m) => launched(m) });
+const mapsPanel = new MapsPanel({ selectMap });
+const runs = new RunsPanel({ missionView });
+const view3d = new View3D({ container: $('view3d'), message: $('view3d-message'), layers, missionView });
+window.__roverplanApp = { view, layers, missionView, pdmEditor, missionForm, mapsPanel, runs, view3d, state };
+
+async function selectMap(id) {
+  if (!id) {
+    state.map = null;
+    state.pdms = [];
+    state.pdmId = '';
+    $('map-title').textContent = 'no map';
+    await layers.setMap(null);
+    state.emit('map', null);
+    view.invalidate(true);
+    return;
+  }
+  const map = await api.map(id);
+  state.map = map;
+  state.pdms = map.pdms || [];
+  state.pdmId = '';
+  $('map-title').textContent = `${map.name} — ${map.cols}×${map.rows} × ${Number(map.cell_size_m.toPrecision(4))} m`;
+  $('map-title').title = `map ${map.id}`;
+  mapsPanel.remember(id);
+  view.setExtent(map.width_m, map.height_m, true);
+  const loading = layers.setMap(map);
+  state.emit('map', map);
+  state.emit('pdms', state.pdms);
+  await loading;
+}
+
+async function launched(mission) {
+  await missionView.show(mission);
+  runs.reload();
+}
+
+// First map drawn (the tests print it): the first frame with the elevation layer in it.
+view.onRender(() => {
+  counters.mapDraws++;
+  if (!counters.mapDrawn && layers.get('elevation').image) {
+    counters.mapDrawn = true;
+    counters.firstMapDrawMs = Math.round(performance.now());
+    statusLine(`map drawn ${counters.firstMapDrawMs} ms after page start`);
+  }
+});
+
+// --- cursor readout ---
+view.onHover((p) => {
+  if (!p) return;
+  const cell = missionView.cellReadout(p.x, p.y);
+  $('readout').textContent = layers.readout(p.x, p.y) + (cell ? `   ${cell}` : '');
+});
+
+// --- tools follow the tabs ---
+const TOOL_HELP = {
+  pan: 'drag to pan · wheel or +/− to zoom',
+  pdm: 'PDM: click to add a Gaussian · drag handles to shape it · drag elsewhere to pan',
+  rovers: 'Mission: click to place the next rover, drag from it to set its heading',
+};
+state.on('tool', (tool) => {
+  view.setTool(tool);
+  $('tool-label').textContent = TOOL_HELP[tool] || '';
+  view.invalidate();
+});
+state.on('pdm-selected', (id) => layers.setPdm(id));
+
+const TABS = ['maps', 'pdm', 'mission', 'runs'];
+function showTab(name) {
+  for (const t of TABS) {
+    const active = t === name;
+    $(`tab-${t}`).classList.toggle('active', active);
+    $(`tab-${t}`).setAttribute('aria-selected', String(active));
+    $(`tab-${t}`).tabIndex = active ? 0 : -1;
+    $(`panel-${t}`).hidden = !active;
+  }
+  missionForm.showStarts = name === 'mission';
+  if (name === 'pdm') state.setTool('pdm');
+  else if (name === 'mission') missionForm.activate();
+  else state.setTool('pan');
+  if (name === 'mission' && !missionForm.placing) state.setTool('pan');
+  if (name === 'runs') runs.reload();
+  view.invalidate();
+}
+for (const t of TABS) {
+  $(`tab-${t}`).addEventListener('click', () => showTab(t));
+  $(`tab-${t}`).addEventListener('keydown', (e) => {
+    const i = TABS.indexOf(t);
+    const j = e.key === 'ArrowRight' ? (i + 1) % TABS.length : e.key === 'ArrowLeft' ? (i + TABS.length - 1) % TABS.length : -1;
+    if (j >= 0) {
+      e.preventDefault();
+      showTab(TABS[j]);
+      $(`tab-${TABS[j]}`).focus();
+    }
+  });
+}
+
+// --- map / 3D switch, zoom buttons, PNG export ---
+function showView(which) {
+  const is3d = which === '3d';
+  $('view-map').classList.toggle('active', !is3d);
+  $('view-3d').classList.toggle('active', is3d);
+  $('view-map').setAttribute('aria-selected', String(!is3d));
+  $('view-3d').setAttribute('aria-selected', String(is3d));
+  $('map-view').hidden = is3d;
+  $('view3d').hidden = !is3d;
+  if (is3d) view3d.show();
+  else {
+    view3d.hide();
+    view.resize();
+    view.invalidate(true);
+  }
+}
+$('view-map').addEventListener('click', () => showView('map'));
+$('view-3d').addEventListener('click', () => showView('3d'));
+$('zoom-in').addEventListener('click', () => view.zoomAt(1.25));
+$('zoom-out').addEventListener('click', () => view.zoomAt(0.8));
+$('zoom-fit').addEventListener('click', () => view.fit());
+$('export-png').addEventListener('click', () => {
+  const url = $('view3d').hidden ? (view.render(), view.canvas.toDataURL('image/png')) : view3d.toDataURL();
+  if (!url) return;
+  const a = document.createElement('a');
+  a.href = url;
+  a.download = `roverplan-${state.map ? state.map.id : 'map'}${$('view3d').hidden ? '' : '-3d'}.png`;
+  document.body.append(a);
+  a.click();
+  a.remove();
+});
+
+// --- token ---
+const tokenInput = $('token');
+tokenInput.value = getToken();
+tokenInput.addEventListener('change', () => {
+  setToken(tokenInput.value.trim());
+  start();
+});
+
+// --- start ---
+async function start() {
+  try {
+    state.planners = await api.planners();
+    missionForm.setPlanners(state.planners);
+    await mapsPanel.reload();
+    await selectMap(mapsPanel.initialMapId());
+    runs.reload();
+  } catch (err) {
+    if (err.status === 401) report('the server wants a token: enter it at the top right');
+    else report(err);
+  }
+}
+showTab('maps');
+start();

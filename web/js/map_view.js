@@ -1,0 +1,297 @@
+// The 2D map view: a <canvas> in the local frame (x east, y north, metres from the map's
+// lower-left corner), pan by dragging, zoom with the wheel or +/- keys. Drawing is split in two:
+// "base" layers (the PNG rasters) are composed into a cached canvas only when the view or a layer
+// changes; "overlay" layers (coverage grid, trails, rovers, PDM editing) are drawn every frame on
+// top. Frames are drawn on requestAnimationFrame only when something asked for it.
+
+import { clamp } from './util.js';
+
+export class MapView {
+  constructor(canvas) {
+    this.canvas = canvas;
+    this.ctx = canvas.getContext('2d');
+    this.base = document.createElement('canvas');
+    this.baseCtx = this.base.getContext('2d');
+    this.widthM = 100;
+    this.heightM = 100;
+    this.cx = 50;
+    this.cy = 50;
+    this.scale = 1;          // CSS pixels per metre
+    this.padLeft = 0;        // CSS pixels covered by floating panels on the left
+    this.dpr = 1;
+    this.cssW = 1;
+    this.cssH = 1;
+    this.layers = [];        // {id, order, base, draw(ctx, view)}
+    this.viewVersion = 0;    // bumps on every pan/zoom/resize (screen-space caches key on it)
+    this.baseDirty = true;
+    this.pending = false;
+    this.renderListeners = [];
+    this.tools = {};         // name → {down, move, up, cursor}
+    this.tool = 'pan';
+    this.drag = null;
+    this.hoverListeners = [];
+
+    new ResizeObserver(() => this.resize()).observe(canvas);
+    this.resize();
+    this.bindPointer();
+    this.bindKeys();
+  }
+
+  // --- geometry ---
+  setExtent(widthM, heightM, fit = true) {
+    this.widthM = widthM;
+    this.heightM = heightM;
+    if (fit) this.fit();
+    else this.invalidate(true);
+  }
+
+  fit() {
+    // Leave the floating layer/legend panels (left) free when there is room for it.
+    const pad = 16, left = this.cssW - this.padLeft > 400 ? this.padLeft : 0;
+    const w = this.cssW - 2 * pad - left, h = this.cssH - 2 * pad;
+    this.scale = Math.max(1e-6, Math.min(w / this.widthM, h / this.heightM));
+    this.cx = this.widthM / 2 - left / 2 / this.scale;
+    this.cy = this.heightM / 2;
+    this.viewChanged();
+  }
+
+  worldToScreen(x, y) {
+    return [(x - this.cx) * this.scale + this.cssW / 2, (this.cy - y) * this.scale + this.cssH / 2];
+  }
+
+  screenToWorld(sx, sy) {
+    return [(sx - this.cssW / 2) / this.scale + this.cx, this.cy - (sy - this.cssH / 2) / this.scale];
+  }
+
+  // Screen rectangle of a world rectangle [x0, x0+w] × [y0, y0+h].
+  rectToScreen(x0, y0, w, h) {
+    const [sx, sy] = this.worldToScreen(x0, y0 + h);
+    return [sx, sy, w * this.scale, h * this.scale];
+  }
+
+  zoomAt(factor, sx = this.cssW / 2, sy = this.cssH / 2) {
+    const [wx, wy] = this.screenToWorld(sx, sy);
+    const fitScale = Math.min(this.cssW / this.widthM, this.cssH / this.heightM);
+    this.scale = clamp(this.scale * factor, fitScale / 8, fitScale * 400);
+    // Keep the world point under the cursor where it was.
+    this.cx = wx - (sx - this.cssW / 2) / this.scale;
+    this.cy = wy + (sy - this.cssH / 2) / this.scale;
+    this.viewChanged();
+  }
+
+  panBy(dx, dy) {
+    this.cx -= dx / this.scale;
+    this.cy += dy / this.scale;
+    this.viewChanged();
+  }
+
+  viewChanged() {
+    this.viewVersion++;
+    this.invalidate(true);
+  }
+
+  resize() {
+    const r = this.canvas.getBoundingClientRect();
+    const dpr = window.devicePixelRatio || 1;
+    const w = Math.max(1, Math.round(r.width)), h = Math.max(1, Math.round(r.height));
+    if (w === this.cssW && h === this.cssH && dpr === this.dpr) return;
+    const first = this.cssW <= 1;
+    this.cssW = w;
+    this.cssH = h;
+    this.dpr = dpr;
+    for (const c of [this.canvas, this.base]) {
+      c.width = Math.round(w * dpr);
+      c.height = Math.round(h * dpr);
+    }
+    if (first) this.fit();
+    else this.viewChanged();
+  }
+
+  // --- layers and drawing ---
+  addLayer(layer) {
+    this.layers.push(layer);
+    this.layers.sort((a, b) => a.order - b.order);
+    this.invalidate(Boolean(layer.base));
+  }
+
+  invalidate(base = false) {
+    if (base) this.baseDirty = true;
+    if (this.pending) return;
+    this.pending = true;
+    requestAnimationFrame((t) => {
+      this.pending = false;
+      this.render(t);
+    });
+  }
+
+  onRender(fn) {
+    this.renderListeners.push(fn);
+  }
+
+  render(t = performance.now()) {
+    const { ctx, dpr } = this;
+    if (this.baseDirty) {
+      this.baseDirty = false;
+      const b = this.baseCtx;
+      b.setTransform(1, 0, 0, 1, 0, 0);
+      b.fillStyle = '#0b0d10';
+      b.fillRect(0, 0, this.base.width, this.base.height);
+      b.setTransform(dpr, 0, 0, dpr, 0, 0);
+      // The map's footprint, so an area without data still shows where the map is.
+      const [fx, fy, fw, fh] = this.rectToScreen(0, 0, this.widthM, this.heightM);
+      b.fillStyle = '#1a1f26';
+      b.fillRect(fx, fy, fw, fh);
+      for (const l of this.layers) if (l.base) this.drawLayer(b, l);
+      b.strokeStyle = '#56657a';
+      b.lineWidth = 1;
+      b.strokeRect(Math.round(fx) + 0.5, Math.round(fy) + 0.5, Math.round(fw), Math.round(fh));
+    }
+    ctx.setTransform(1, 0, 0, 1, 0, 0);
+    ctx.drawImage(this.base, 0, 0);
+    ctx.setTransform(dpr, 0, 0, dpr, 0, 0);
+    for (const l of this.layers) if (!l.base) this.drawLayer(ctx, l);
+    this.drawScaleBar(ctx);
+    for (const fn of this.renderListeners) fn(t);
+  }
+
+  drawLayer(ctx, layer) {
+    ctx.save();
+    try {
+      layer.draw(ctx, this);
+    } catch (err) {
+      console.warn(`layer ${layer.id}:`, err);
+    }
+    ctx.restore();
+  }
+
+  drawScaleBar(ctx) {
+    // A scale bar of a round length, bottom-right.
+    const target = 120 / this.scale;
+    const pow = 10 ** Math.floor(Math.log10(target));
+    const len = [1, 2, 5, 10].map((m) => m * pow).filter((v) => v <= target).pop() || pow;
+    const px = len * this.scale;
+    const x = this.cssW - px - 16, y = this.cssH - 14;
+    ctx.save();
+    ctx.fillStyle = 'rgba(11,13,16,0.7)';
+    ctx.fillRect(x - 6, y - 16, px + 12, 22);
+    ctx.strokeStyle = '#e3e8ee';
+    ctx.lineWidth = 2;
+    ctx.beginPath();
+    ctx.moveTo(x, y - 4);
+    ctx.lineTo(x, y);
+    ctx.lineTo(x + px, y);
+    ctx.lineTo(x + px, y - 4);
+    ctx.stroke();
+    ctx.fillStyle = '#e3e8ee';
+    ctx.font = '11px system-ui, sans-serif';
+    ctx.textAlign = 'center';
+    ctx.fillText(len >= 1000 ? `${len / 1000} km` : `${len} m`, x + px / 2, y - 5);
+    ctx.restore();
+  }
+
+  // --- interaction ---
+  registerTool(name, handler) {
+    this.tools[name] = handler;
+  }
+
+  setTool(name) {
+    this.tool = name;
+    this.canvas.classList.toggle('tool-pdm', name === 'pdm');
+    this.canvas.classList.toggle('tool-rovers', name === 'rovers');
+  }
+
+  onHover(fn) {
+    this.hoverListeners.push(fn);
+  }
+
+  eventPoint(e) {
+    const r = this.canvas.getBoundingClientRect();
+    const sx = e.clientX - r.left, sy = e.clientY - r.top;
+    const [x, y] = this.screenToWorld(sx, sy);
+    return { sx, sy, x, y };
+  }
+
+  bindPointer() {
+    const c = this.canvas;
+    c.addEventListener('pointerdown', (e) => {
+      if (e.button !== 0) return;
+      c.focus({ preventScroll: true });
+      const p = this.eventPoint(e);
+      const tool = this.tools[this.tool];
+      let consumed = false;
+      if (tool && tool.down) consumed = tool.down(p, e) === true;
+      this.drag = { consumed, tool, lastX: p.sx, lastY: p.sy, startX: p.sx, startY: p.sy, moved: false };
+      c.setPointerCapture(e.pointerId);
+      if (!consumed) c.classList.add('dragging');
+    });
+    c.addEventListener('pointermove', (e) => {
+      const p = this.eventPoint(e);
+      for (const fn of this.hoverListeners) fn(p);
+      const d = this.drag;
+      if (!d) {
+        const tool = this.tools[this.tool];
+        if (tool && tool.hover) tool.hover(p);
+        return;
+      }
+      if (Math.hypot(p.sx - d.startX, p.sy - d.startY) > 3) d.moved = true;
+      if (d.consumed) {
+        if (d.tool.move) d.tool.move(p, e);
+      } else if (d.moved) {
+        this.panBy(p.sx - d.lastX, p.sy - d.lastY);
+      }
+      d.lastX = p.sx;
+      d.lastY = p.sy;
+    });
+    const end = (e) => {
+      const d = this.drag;
+      if (!d) return;
+      this.drag = null;
+      c.classList.remove('dragging');
+      const p = this.eventPoint(e);
+      if (d.consumed) {
+        if (d.tool.up) d.tool.up(p, e, d.moved);
+      } else if (!d.moved && d.tool && d.tool.click && e.type === 'pointerup') {
+        d.tool.click(p, e);
+      }
+    };
+    c.addEventListener('pointerup', end);
+    c.addEventListener('pointercancel', end);
+    c.addEventListener('pointerleave', () => {
+      if (!this.drag) for (const fn of this.hoverListeners) fn(null);
+    });
+    c.addEventListener('wheel', (e) => {
+      e.preventDefault();
+      const p = this.eventPoint(e);
+      const delta = e.deltaMode === 1 ? e.deltaY * 16 : e.deltaY;
+      this.zoomAt(Math.exp(-delta * 0.0015), p.sx, p.sy);
+    }, { passive: false });
+  }
+
+  bindKeys() {
+    const handle = (e) => {
+      if (e.ctrlKey || e.metaKey || e.altKey) return false;
+      const step = 60;
+      switch (e.key) {
+        case '+': case '=': this.zoomAt(1.25); return true;
+        case '-': case '_': this.zoomAt(0.8); return true;
+        case '0': this.fit(); return true;
+        case 'ArrowLeft': this.panBy(step, 0); return true;
+        case 'ArrowRight': this.panBy(-step, 0); return true;
+        case 'ArrowUp': this.panBy(0, step); return true;
+        case 'ArrowDown': this.panBy(0, -step); return true;
+        default: return false;
+      }
+    };
+    this.canvas.addEventListener('keydown', (e) => {
+      if (handle(e)) e.preventDefault();
+    });
+    // +/- also work anywhere on the page that is not a text field.
+    window.addEventListener('keydown', (e) => {
+      if (e.target === this.canvas || e.defaultPrevented) return;
+      const t = e.target;
+      if (t && (t.tagName === 'INPUT' || t.tagName === 'SELECT' || t.tagName === 'TEXTAREA' || t.isContentEditable)) return;
+      if (this.canvas.offsetParent === null) return;  // the 3D view is showing
+      if (['+', '=', '-', '_'].includes(e.key) && handle(e)) e.preventDefault();
+    });
+  }
+}

@@ -1,0 +1,153 @@
+// The Maps tab: DEM upload (file picker or drag-and-drop, several files as multipart parts named
+// "file", e.g. .IMG + .LBL), name and cell size, an upload progress bar, the server's error in
+// words; the list of maps to select or delete, and the selected map's facts.
+
+import { api, uploadDem } from './api.js';
+import { state } from './state.js';
+import { $, el, fmt, report, showError } from './util.js';
+
+const LAST_MAP_KEY = 'roverplan.map';
+
+export class MapsPanel {
+  constructor({ selectMap }) {
+    this.selectMap = selectMap;
+    this.files = [];
+    const input = $('dem-files');
+    const zone = $('drop-zone');
+    input.addEventListener('change', () => this.choose([...input.files]));
+    zone.addEventListener('keydown', (e) => {
+      if (e.key === 'Enter' || e.key === ' ') {
+        e.preventDefault();
+        input.click();
+      }
+    });
+    zone.addEventListener('dragover', (e) => {
+      e.preventDefault();
+      zone.classList.add('over');
+    });
+    zone.addEventListener('dragleave', () => zone.classList.remove('over'));
+    zone.addEventListener('drop', (e) => {
+      e.preventDefault();
+      zone.classList.remove('over');
+      this.choose([...e.dataTransfer.files]);
+    });
+    // A file dropped anywhere else must not navigate the page away.
+    window.addEventListener('dragover', (e) => e.preventDefault());
+    window.addEventListener('drop', (e) => e.preventDefault());
+    $('dem-upload').addEventListener('click', () => this.upload());
+    state.on('map', () => this.renderList());
+  }
+
+  choose(files) {
+    this.files = files;
+    $('dem-chosen').textContent = files.map((f) => `${f.name} (${fmt(f.size / 1024, 3)} KiB)`).join(', ');
+    $('dem-upload').disabled = files.length === 0;
+    showError($('dem-error'), null);
+  }
+
+  async upload() {
+    if (this.files.length === 0) return;
+    const bar = $('dem-progress'), text = $('dem-progress-text'), button = $('dem-upload');
+    const cellInput = $('dem-cell');
+    const cell = cellInput.value.trim();
+    if (cell !== '' && !(Number(cell) >= 0)) {
+      showError($('dem-error'), 'cell size must be a positive number of metres (field: cell)');
+      cellInput.classList.add('invalid');
+      return;
+    }
+    cellInput.classList.remove('invalid');
+    $('dem-name').classList.remove('invalid');
+    showError($('dem-error'), null);
+    button.disabled = true;
+    bar.hidden = false;
+    bar.value = 0;
+    text.textContent = 'uploading…';
+    try {
+      const map = await uploadDem(this.files, { name: $('dem-name').value.trim(), cell }, (f, loaded, phase) => {
+        if (phase === 'processing') {
+          bar.removeAttribute('value');  // indeterminate while the server imports
+          text.textContent = 'importing…';
+        } else if (Number.isFinite(f)) {
+          bar.value = f;
+          text.textContent = `${Math.round(f * 100)} %`;
+        }
+      });
+      text.textContent = `added “${map.name}”`;
+      this.choose([]);
+      $('dem-files').value = '';
+      $('dem-name').value = '';
+      await this.reload();
+      await this.selectMap(map.id);
+    } catch (err) {
+      text.textContent = '';
+      showError($('dem-error'), `upload refused: ${err.message}${err.field ? ` (field: ${err.field})` : ''}${err.status ? ` — HTTP ${err.status}` : ''}`);
+      const field = { cell: cellInput, name: $('dem-name') }[err.field];
+      if (field) field.classList.add('invalid');
+      button.disabled = this.files.length === 0;
+    } finally {
+      bar.hidden = true;
+      bar.value = 0;
+    }
+  }
+
+  async reload() {
+    state.maps = await api.maps();
+    this.renderList();
+    state.emit('maps', state.maps);
+    return state.maps;
+  }
+
+  // The map to show first: the last one used in this browser, else the first.
+  initialMapId() {
+    let last = '';
+    try { last = localStorage.getItem(LAST_MAP_KEY) || ''; } catch { /* no storage */ }
+    if (state.maps.some((m) => m.id === last)) return last;
+    return state.maps.length ? state.maps[0].id : null;
+  }
+
+  remember(id) {
+    try { localStorage.setItem(LAST_MAP_KEY, id); } catch { /* no storage */ }
+  }
+
+  renderList() {
+    const list = $('map-list');
+    list.replaceChildren(...state.maps.map((m) => el('li', { class: state.map?.id === m.id ? 'selected' : '', dataset: { map: m.id } },
+      el('button', { class: 'name', title: `${m.name} — ${m.id}`, onclick: () => this.selectMap(m.id) }, m.name),
+      el('span', { class: 'meta' }, `${m.cols}×${m.rows} · ${fmt(m.cell_size_m)} m`),
+      el('button', { class: 'small', title: `delete ${m.name}`, 'aria-label': `delete map ${m.name}`, onclick: () => this.remove(m) }, '✕'))));
+    this.renderInfo();
+  }
+
+  renderInfo() {
+    const m = state.map;
+    const node = $('map-info');
+    if (!m) {
+      node.replaceChildren('No map selected.');
+      return;
+    }
+    const c = m.classes || {};
+    const line = (k, v) => el('div', {}, `${k}: `, el('b', {}, v));
+    node.replaceChildren(
+      line('size', `${m.cols} × ${m.rows} cells · ${fmt(m.width_m)} × ${fmt(m.height_m)} m`),
+      line('cell', `${fmt(m.cell_size_m)} × ${fmt(m.cell_height_m ?? m.cell_size_m)} m`),
+      line('elevation', `${fmt(m.elevation?.min)} … ${fmt(m.elevation?.max)} m`),
+      line('classes', `traversable ${fmt(c.traversable_pct, 2)} %, high risk ${fmt(c.high_risk_pct, 2)} %, impassable ${fmt(c.impassable_pct, 2)} %, nodata ${fmt(c.nodata_pct, 2)} %`),
+      line('CRS', m.crs || 'none'),
+      line('source', `${(m.source_files || []).join(', ')} (${m.driver || '?'})`));
+  }
+
+  async remove(m) {
+    if (!window.confirm(`Delete the map “${m.name}” and its PDMs? Missions keep their results.`)) return;
+    try {
+      // Show another map first, so nothing still loads from the one being deleted.
+      if (state.map?.id === m.id) {
+        const other = state.maps.find((x) => x.id !== m.id);
+        await this.selectMap(other ? other.id : null);
+      }
+      await api.deleteMap(m.id);
+      await this.reload();
+    } catch (err) {
+      report(err);
+    }
+  }
+}

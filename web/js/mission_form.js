@@ -1,0 +1,346 @@
+// The Mission tab: planner (from GET /api/planners), PDM, rovers placed by clicking on the map
+// (heading by dragging from the click point), pace, and every planner parameter with its
+// default, unit and doc, checked against min/max/choices before sending. A 400 from the server
+// is shown next to the input its field names.
+
+import { api } from './api.js';
+import { state } from './state.js';
+import { $, el, fmt, roverColour, showError } from './util.js';
+
+const FIELD_PREFIX = 'm-param-';
+
+export class MissionForm {
+  constructor({ view, onLaunched }) {
+    this.view = view;
+    this.onLaunched = onLaunched;
+    this.rovers = [];      // {x, y, heading} or null (not placed yet)
+    this.next = 0;         // the rover the next click places
+    this.placing = false;
+    this.drag = null;
+    view.addLayer({ id: 'rover-starts', order: 50, draw: (ctx, v) => this.draw(ctx, v) });
+    view.registerTool('rovers', {
+      down: (p) => this.placeDown(p),
+      move: (p) => this.placeMove(p),
+      up: (p, e, moved) => this.placeUp(moved),
+    });
+    $('m-planner').addEventListener('change', () => this.renderParams());
+    $('m-rover-count').addEventListener('input', () => this.setCount(Number($('m-rover-count').value)));
+    $('m-place').addEventListener('click', () => this.setPlacing(!this.placing));
+    $('mission-form').addEventListener('submit', (e) => {
+      e.preventDefault();
+      this.launch();
+    });
+    $('m-pdm').addEventListener('change', () => {
+      state.pdmId = $('m-pdm').value;
+      state.emit('pdm-selected', state.pdmId);
+    });
+    state.on('map', () => {
+      this.rovers = this.rovers.map(() => null);
+      this.next = 0;
+      this.renderRovers();
+      this.renderPdms();
+    });
+    state.on('pdms', () => this.renderPdms());
+    state.on('pdm-selected', () => this.renderPdms());
+    this.setCount(Number($('m-rover-count').value) || 1);
+  }
+
+  setPlanners(planners) {
+    const sel = $('m-planner');
+    const current = sel.value;
+    sel.replaceChildren(...planners.map((p) => el('option', { value: p.name, title: p.summary }, p.name)));
+    if (planners.some((p) => p.name === current)) sel.value = current;
+    this.renderParams();
+  }
+
+  get planner() {
+    return state.planners.find((p) => p.name === $('m-planner').value) || null;
+  }
+
+  // --- parameters ---
+  renderParams() {
+    const p = this.planner;
+    $('m-planner-summary').textContent = p ? p.summary : 'The server lists no planner.';
+    const box = $('m-params');
+    if (!p) return box.replaceChildren();
+    box.replaceChildren(...p.params.map((info) => this.paramRow(info)));
+    this.updateDependent();
+  }
+
+  paramRow(info) {
+    const id = FIELD_PREFIX + info.key;
+    const range = [info.min !== undefined ? `min ${fmt(info.min)}` : '', info.max !== undefined ? `max ${fmt(info.max)}` : ''].filter(Boolean).join(', ');
+    const help = `${info.doc}${info.unit ? ` [${info.unit}]` : ''} — default ${JSON.stringify(info.default)}${range ? `; ${range}` : ''}`;
+    let input;
+    switch (info.type) {
+      case 'choice':
+        input = el('select', { id }, info.choices.map((c) => el('option', { value: c }, c)));
+        input.value = info.default;
+        break;
+      case 'bool':
+        input = el('input', { id, type: 'checkbox', checked: Boolean(info.default) });
+        break;
+      case 'int':
+      case 'real':
+        input = el('input', {
+          id, type: 'number', value: String(info.default), step: info.type === 'int' ? '1' : 'any',
+          min: info.min !== undefined ? String(info.min) : undefined, max: info.max !== undefined ? String(info.max) : undefined,
+        });
+        break;
+      default:  // real_list
+        input = el('input', { id, type: 'text', value: (info.default || []).join(', '), placeholder: 'comma-separated numbers' });
+    }
+    input.title = help;
+    input.dataset.key = info.key;
+    input.setAttribute('aria-describedby', `${id}-doc`);
+    input.addEventListener('change', () => {
+      this.clearFieldError(`params.${info.key}`);
+      this.updateDependent();
+    });
+    return el('div', { class: 'param', dataset: { param: info.key } },
+      el('div', { class: 'form-row' }, el('label', { for: id, title: help }, info.key), input, info.unit ? el('span', { class: 'unit' }, info.unit) : null),
+      el('div', { class: 'doc', id: `${id}-doc` }, `${info.doc} (default ${Array.isArray(info.default) ? `[${info.default.join(', ')}]` : info.default}${range ? `; ${range}` : ''})`),
+      el('div', { class: 'field-error', dataset: { field: `params.${info.key}` } }));
+  }
+
+  // cost_table only means something with pattern = custom.
+  updateDependent() {
+    const pattern = $(`${FIELD_PREFIX}pattern`);
+    const row = document.querySelector('[data-param="cost_table"]');
+    if (pattern && row) row.classList.toggle('hidden-param', pattern.value !== 'custom');
+  }
+
+  // The parameters that differ from their defaults, validated. Returns {params, errors}.
+  readParams() {
+    const p = this.planner;
+    const params = {}, errors = [];
+    if (!p) return { params, errors: [['planner', 'choose a planner']] };
+    const pattern = $(`${FIELD_PREFIX}pattern`);
+    for (const info of p.params) {
+      const input = $(FIELD_PREFIX + info.key);
+      if (!input) continue;
+      const field = `params.${info.key}`;
+      let value;
+      if (info.type === 'bool') value = input.checked;
+      else if (info.type === 'choice') {
+        value = input.value;
+        if (!info.choices.includes(value)) errors.push([field, `must be one of ${info.choices.join(', ')}`]);
+      } else if (info.type === 'real_list') {
+        if (info.key === 'cost_table' && pattern && pattern.value !== 'custom') continue;
+        const text = input.value.trim();
+        value = text === '' ? [] : text.split(/[\s,;]+/).filter(Boolean).map(Number);
+        if (value.some((v) => !Number.isFinite(v))) errors.push([field, 'must be numbers separated by commas']);
+      } else {
+        const text = input.value.trim();
+        value = Number(text);
+        if (text === '' || !Number.isFinite(value)) errors.push([field, 'must be a number']);
+        else if (info.type === 'int' && !Number.isInteger(value)) errors.push([field, 'must be a whole number']);
+        else if (info.min !== undefined && value < info.min) errors.push([field, `must be at least ${fmt(info.min)}`]);
+        else if (info.max !== undefined && value > info.max) errors.push([field, `must be at most ${fmt(info.max)}`]);
+      }
+      if (JSON.stringify(value) !== JSON.stringify(info.default)) params[info.key] = value;
+    }
+    return { params, errors };
+  }
+
+  // --- rovers ---
+  setCount(n) {
+    if (!Number.isInteger(n) || n < 1 || n > 64) {
+      $('m-rover-count').classList.add('invalid');
+      return;
+    }
+    $('m-rover-count').classList.remove('invalid');
+    while (this.rovers.length < n) this.rovers.push(null);
+    this.rovers.length = n;
+    this.next = Math.min(this.next, n - 1);
+    const free = this.rovers.findIndex((r) => r === null);
+    if (free >= 0) this.next = free;
+    this.renderRovers();
+    this.view.invalidate();
+  }
+
+  setPlacing(on) {
+    this.placing = on;
+    $('m-place').setAttribute('aria-pressed', String(on));
+    $('m-place').textContent = on ? 'placing… (click map)' : 'place on map';
+    state.setTool(on ? 'rovers' : 'pan');
+    this.renderRovers();
+  }
+
+  // Entering the Mission tab: place rovers straight away when some are not placed yet.
+  activate() {
+    if (this.rovers.some((r) => r === null)) this.setPlacing(true);
+    else if (this.placing) state.setTool('rovers');
+  }
+
+  placeDown(p) {
+    const m = state.map;
+    if (!m || p.x < 0 || p.y < 0 || p.x > m.width_m || p.y > m.height_m) return false;
+    const k = this.next;
+    const heading = this.rovers[k]?.heading ?? 0;
+    this.rovers[k] = { x: p.x, y: p.y, heading };
+    this.drag = { k, sx: p.sx, sy: p.sy, x: p.x, y: p.y };
+    this.clearFieldError('rovers');
+    this.renderRovers();
+    this.view.invalidate();
+    return true;
+  }
+
+  placeMove(p) {
+    const d = this.drag;
+    if (!d || Math.hypot(p.sx - d.sx, p.sy - d.sy) < 6) return;
+    let deg = (Math.atan2(p.y - d.y, p.x - d.x) * 180) / Math.PI;
+    if (deg < 0) deg += 360;
+    this.rovers[d.k].heading = Math.round(deg);
+    this.renderRovers();
+    this.view.invalidate();
+  }
+
+  placeUp() {
+    if (!this.drag) return;
+    this.drag = null;
+    const free = this.rovers.findIndex((r) => r === null);
+    if (free >= 0) {
+      this.next = free;
+    } else {
+      this.next = 0;
+      this.setPlacing(false);  // all placed: back to panning
+    }
+    this.renderRovers();
+  }
+
+  renderRovers() {
+    const box = $('m-rovers');
+    const head = el('div', { class: 'rover-row rover-head' }, el('span', {}, '#'), el('span', {}, 'x (m, east)'), el('span', {}, 'y (m, north)'), el('span', {}, 'heading (°)'));
+    box.replaceChildren(head, ...this.rovers.map((r, k) => {
+      const num = (key, label) => el('input', {
+        type: 'number', step: 'any', value: r ? String(Math.round(r[key] * 100) / 100) : '', placeholder: key === 'heading' ? '0°' : 'click map',
+        'aria-label': `rover ${k + 1} ${label}`, dataset: { rover: String(k), key },
+        onchange: (e) => {
+          const v = Number(e.target.value);
+          if (e.target.value.trim() === '' || !Number.isFinite(v)) return e.target.classList.add('invalid');
+          e.target.classList.remove('invalid');
+          this.rovers[k] = { x: 0, y: 0, heading: 0, ...(this.rovers[k] || {}), [key]: v };
+          this.view.invalidate();
+        },
+      });
+      return el('div', { class: `rover-row${this.placing && k === this.next ? ' next' : ''}`, title: `rover ${k + 1}: x, y (m), heading (° ccw from east)` },
+        el('span', { class: 'rover-dot', style: `background:${roverColour(k)}` }),
+        num('x', 'x (m)'), num('y', 'y (m)'), num('heading', 'heading (deg)'));
+    }));
+  }
+
+  draw(ctx, view) {
+    if (state.tool !== 'rovers' && !this.showStarts) return;
+    this.rovers.forEach((r, k) => {
+      if (!r) return;
+      const [sx, sy] = view.worldToScreen(r.x, r.y);
+      const a = (-r.heading * Math.PI) / 180;
+      ctx.strokeStyle = '#000';
+      ctx.lineWidth = 3;
+      ctx.beginPath();
+      ctx.moveTo(sx, sy);
+      ctx.lineTo(sx + 22 * Math.cos(a), sy + 22 * Math.sin(a));
+      ctx.stroke();
+      ctx.strokeStyle = roverColour(k);
+      ctx.lineWidth = 2;
+      ctx.stroke();
+      ctx.beginPath();
+      ctx.arc(sx, sy, 8, 0, 2 * Math.PI);
+      ctx.fillStyle = roverColour(k);
+      ctx.fill();
+      ctx.strokeStyle = '#000';
+      ctx.lineWidth = 1.5;
+      ctx.stroke();
+      ctx.fillStyle = '#000';
+      ctx.font = 'bold 10px system-ui, sans-serif';
+      ctx.textAlign = 'center';
+      ctx.textBaseline = 'middle';
+      ctx.fillText(String(k + 1), sx, sy + 0.5);
+    });
+  }
+
+  renderPdms() {
+    const sel = $('m-pdm');
+    sel.replaceChildren(el('option', { value: '' }, 'none'), ...state.pdms.map((p) => el('option', { value: p.id }, p.name)));
+    sel.value = state.pdms.some((p) => p.id === state.pdmId) ? state.pdmId : '';
+  }
+
+  // --- errors ---
+  clearErrors() {
+    for (const n of document.querySelectorAll('#mission-form .field-error')) n.textContent = '';
+    for (const n of document.querySelectorAll('#mission-form .invalid')) n.classList.remove('invalid');
+    showError($('m-error'), null);
+  }
+
+  clearFieldError(field) {
+    const n = document.querySelector(`#mission-form .field-error[data-field="${field}"]`);
+    if (n) n.textContent = '';
+  }
+
+  // Puts an error next to its input; returns whether a place was found.
+  fieldError(field, message) {
+    let key = field, input = null;
+    const rover = /^rovers(\[(\d+)\])?(\.(\w+))?/.exec(field);
+    if (rover) {
+      key = 'rovers';
+      if (rover[2] !== undefined) input = document.querySelector(`#m-rovers input[data-rover="${rover[2]}"][data-key="${rover[4] || 'x'}"]`);
+    } else if (field.startsWith('params.')) {
+      input = $(FIELD_PREFIX + field.slice(7));
+    } else if (field === 'pace') {
+      input = $('m-pace');
+    } else if (field === 'pdm') {
+      input = $('m-pdm');
+    } else if (field === 'planner') {
+      input = $('m-planner');
+    }
+    if (input) input.classList.add('invalid');
+    const node = document.querySelector(`#mission-form .field-error[data-field="${key}"]`);
+    if (node) {
+      node.textContent = message;
+      node.closest('.param')?.scrollIntoView({ block: 'center' });
+    }
+    return Boolean(node || input);
+  }
+
+  // --- launch ---
+  async launch() {
+    this.clearErrors();
+    const map = state.map;
+    if (!map) return showError($('m-error'), 'select a map first');
+    const { params, errors } = this.readParams();
+    const missing = this.rovers.findIndex((r) => r === null);
+    if (missing >= 0) errors.push([`rovers[${missing}]`, `place rover ${missing + 1} on the map (click it)`]);
+    const paceText = $('m-pace').value.trim();
+    const pace = Number(paceText);
+    if (paceText === '' || !Number.isFinite(pace) || pace < 0 || pace > 1e6) errors.push(['pace', 'pace must be a number of steps per second in [0, 1e6]']);
+    if (errors.length) {
+      for (const [f, msg] of errors) this.fieldError(f, msg);
+      showError($('m-error'), `not sent: ${errors.map(([f, m]) => `${f}: ${m}`).join('; ')}`);
+      return;
+    }
+    const body = {
+      map: map.id,
+      planner: this.planner.name,
+      rovers: this.rovers.map((r) => ({ x: r.x, y: r.y, heading: r.heading })),
+      params,
+      pace,
+    };
+    if ($('m-pdm').value) body.pdm = $('m-pdm').value;
+    const button = $('m-launch');
+    button.disabled = true;
+    $('m-launch-status').textContent = 'sending…';
+    try {
+      const mission = await api.launch(body);
+      $('m-launch-status').textContent = `launched ${mission.id}`;
+      this.setPlacing(false);
+      await this.onLaunched(mission);
+    } catch (err) {
+      $('m-launch-status').textContent = '';
+      const placed = err.field ? this.fieldError(err.field, err.message) : false;
+      showError($('m-error'), `the server refused the mission: ${err.message}${err.field ? ` (field: ${err.field})` : ''}${placed ? '' : ''}`);
+    } finally {
+      button.disabled = false;
+    }
+  }
+}

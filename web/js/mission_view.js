@@ -1,0 +1,357 @@
+// One mission on the page — live or finished: its coverage grid and trails on the map, the dock's
+// progress bar, metrics, charts and cancel button, the replay slider and the export links. The
+// live view counts the frames it renders per second (window.__roverplan.fps, status line).
+
+import { api, downloadWithToken, hasToken } from './api.js';
+import { barChart, lineChart } from './charts.js';
+import { CELL_STATE_NAMES, CoverageLayer } from './coverage_layer.js';
+import { LiveStream } from './live_stream.js';
+import { counters, state } from './state.js';
+import { TrailLayer, TrailSet } from './trails.js';
+import { $, el, fmt, report, roverColour } from './util.js';
+import { Replay } from './replay.js';
+
+const SHOWN_METRICS = [
+  ['coverage', 'coverage', (v) => `${(v * 100).toFixed(1)} %`],
+  ['coverage_reachable', 'of reachable', (v) => `${(v * 100).toFixed(1)} %`],
+  ['moves', 'moves'],
+  ['makespan', 'makespan'],
+  ['path_length_ratio', 'path ratio'],
+  ['makespan_ratio', 'span ratio'],
+  ['distance_m', 'distance', (v) => (v >= 10000 ? `${(v / 1000).toFixed(2)} km` : `${fmt(v)} m`)],
+  ['energy_j', 'energy', (v) => (v >= 10000 ? `${(v / 1000).toFixed(1)} kJ` : `${fmt(v)} J`)],
+  ['max_pitch_deg', 'max pitch', (v) => `${v.toFixed(1)}°`],
+  ['revisits', 'revisits'],
+  ['unreachable_cells', 'unreachable'],
+  ['steps', 'steps'],
+];
+
+export class MissionView {
+  constructor({ view, layers, statusLine, selectMap, onFinished }) {
+    this.view = view;
+    this.layers = layers;
+    this.statusLine = statusLine;
+    this.selectMap = selectMap;
+    this.onFinished = onFinished || (() => {});
+    this.coverage = new CoverageLayer();
+    this.trailLayer = new TrailLayer(view);
+    this.trails = this.trailLayer.add(new TrailSet({ width: 2 }));
+    this.compareSets = [];
+    this.mission = null;
+    this.result = null;
+    this.progressCurve = { x: [], y: [] };
+    this.renderTimes = [];
+    this.stream = new LiveStream(this.handlers());
+
+    const covLayer = layers.addOverlay({ id: 'coverage', label: 'coverage', legendTitle: 'coverage grid (cell state, visits)', visible: true, opacity: 0.75, legend: () => CoverageLayer.legend() });
+    const trailLayer = layers.addOverlay({ id: 'trails', label: 'trails', legendTitle: 'rover trails', visible: true, opacity: 0.95, legend: () => this.trailLegend() });
+    view.addLayer({ id: 'coverage', order: 30, draw: (ctx, v) => covLayer.visible && this.coverage.draw(ctx, v, covLayer.opacity) });
+    view.addLayer({ id: 'trails', order: 40, draw: (ctx, v) => this.trailLayer.draw(ctx, v, trailLayer.opacity, trailLayer.visible) });
+    view.onRender((t) => this.countFrame(t));
+
+    this.replay = new Replay({
+      slider: $('replay-slider'), play: $('replay-play'), label: $('replay-label'),
+      seek: (step, end) => this.seek(step, end),
+    });
+    $('live-cancel').addEventListener('click', () => this.cancel());
+    for (const id of ['export-geojson', 'export-csv']) {
+      $(id).addEventListener('click', (e) => {
+        const a = e.currentTarget;
+        if (a.classList.contains('disabled')) return e.preventDefault();
+        if (hasToken()) {  // a plain link cannot carry the bearer token
+          e.preventDefault();
+          downloadWithToken(a.getAttribute('href'), a.getAttribute('download')).catch((err) => report(err));
+        }
+      });
+    }
+    window.addEventListener('resize', () => this.drawCharts());
+    this.drawCharts();
+  }
+
+  // --- showing a mission ---
+  async show(mission) {
+    if (typeof mission === 'string') mission = await api.mission(mission);
+    if (state.map?.id !== mission.map) {
+      try {
+        await this.selectMap(mission.map);
+      } catch {
+        report(`mission ${mission.id}: its map ${mission.map} is gone; showing it on the current map`);
+      }
+    }
+    this.reset(mission);
+    this.stream.open(mission.id);
+  }
+
+  reset(mission) {
+    this.stream.close();
+    this.replay.stop();
+    this.mission = mission;
+    this.result = null;
+    this.progressCurve = { x: [], y: [] };
+    this.coverage.reset();
+    this.trails.clear((mission.spec?.rovers || []).length);
+    this.layers.renderLegends();
+    this.lastProgress = mission.progress || null;
+    this.progressText = '';
+    counters.missionId = mission.id;
+    counters.missionStatus = mission.status;
+    counters.finalMetrics = null;
+    counters.fps = 0;
+    counters.fpsPeak = 0;
+    this.renderTimes = [];
+    this.liveSince = performance.now();
+    $('live-title').textContent = `${mission.planner} · ${mission.id}`;
+    $('live-title').title = JSON.stringify(mission.spec || {});
+    this.setStatus(mission.status);
+    this.setProgress(mission.progress?.fraction ?? (mission.status === 'succeeded' ? 1 : 0));
+    this.renderMetrics(mission.metrics);
+    this.setExports(null);
+    this.replay.disable();
+    this.renderCounters();
+    this.drawCharts();
+    this.view.invalidate();
+  }
+
+  handlers() {
+    return {
+      snapshot: (m) => {
+        if (m.grid) this.coverage.reset(m.grid.rows, m.grid.cols, m.grid.cell_size_m);
+        this.trails.clear(m.rovers.length);
+        for (const r of m.rovers) this.trails.append(r.rover, r.trail, r.pose);
+        this.layers.renderLegends();
+        this.setStatus(m.status);
+        if (m.progress) this.onProgress(m.progress);
+        if (m.metrics) this.renderMetrics(m.metrics);
+        this.view.invalidate();
+      },
+      grid: (buffer) => {
+        const type = this.coverage.applyFrame(buffer);
+        this.view.invalidate();
+        return type;
+      },
+      poses: (m) => {
+        for (const r of m.rovers) this.trails.append(r.rover, r.append, r.pose);
+        this.step = m.step;
+        this.view.invalidate();
+      },
+      progress: (m) => this.onProgress(m),
+      status: (m) => this.setStatus(m.status),
+      done: (m) => this.onDone(m),
+      closed: (info) => {
+        if (!info.done) {
+          this.setStatus(`${counters.missionStatus || ''} (stream closed${info.code !== 1000 ? ` ${info.code}` : ''})`);
+          report(`mission stream closed before the end (code ${info.code}${info.reason ? `: ${info.reason}` : ''})`);
+        }
+        this.updateStatusLine(true);
+      },
+    };
+  }
+
+  onProgress(p) {
+    this.lastProgress = p;
+    this.setProgress(p.fraction ?? 0);
+    if (Number.isFinite(p.moves) && Number.isFinite(p.coverage)) {
+      const c = this.progressCurve;
+      if (c.x.length === 0 || p.moves >= c.x[c.x.length - 1]) {
+        c.x.push(p.moves);
+        c.y.push(p.coverage);
+      }
+      if (!this.chartPending) {
+        this.chartPending = true;
+        setTimeout(() => {
+          this.chartPending = false;
+          if (!this.result) this.drawCharts();
+        }, 200);
+      }
+    }
+    this.progressText = `step ${fmt(p.step)} · moves ${fmt(p.moves)} · coverage ${(100 * (p.coverage || 0)).toFixed(1)} %`;
+    this.renderCounters();
+  }
+
+  // The server's last progress, and what the grid frames say (they arrive even when the server
+  // sends few progress frames).
+  renderCounters() {
+    let grid = '';
+    if (this.coverage.ready) {
+      const [, , obstacles, visited] = this.coverage.counts();
+      grid = `grid: ${fmt(visited)} visited · ${fmt(obstacles)} obstacles of ${fmt(this.coverage.rows * this.coverage.cols)} cells`;
+    }
+    $('live-counters').replaceChildren(this.progressText || '', this.progressText && grid ? document.createElement('br') : '', grid);
+  }
+
+  async onDone(m) {
+    counters.missionStatus = m.status;
+    counters.finalMetrics = m.metrics;
+    this.setStatus(m.status + (m.message ? `: ${m.message}` : ''));
+    if (m.status === 'succeeded') this.setProgress(1);
+    this.renderMetrics(m.metrics);
+    this.coverage.keepFinal();
+    this.updateStatusLine(true);
+    if (m.status === 'succeeded' || m.status === 'cancelled') {
+      try {
+        this.result = await api.result(m.mission);
+        if (this.mission?.id !== m.mission) return;
+        this.trails.setPaths(this.result.rovers.map((r) => r.path));
+        this.setExports(m.mission);
+        this.replay.enable(this.trails.longest - 1);
+      } catch (err) {
+        if (err.status !== 409) report(err);
+      }
+    }
+    this.drawCharts();
+    this.view.invalidate();
+    this.onFinished(m);
+  }
+
+  async cancel() {
+    if (!this.mission) return;
+    try {
+      const id = this.mission.id;
+      await api.cancel(id);
+      // The final frame may have come in while the request was out.
+      if (this.stream.live && this.mission?.id === id) this.setStatus('cancelling');
+    } catch (err) {
+      report(err);
+    }
+  }
+
+  // --- replay ---
+  seek(step, end) {
+    if (!this.result) return;
+    const paths = this.result.rovers.map((r) => r.path);
+    if (end) {
+      this.trails.setLimit(Infinity);
+      this.coverage.restoreFinal();
+    } else {
+      this.trails.setLimit(step);
+      this.coverage.replayTo(paths, step);
+    }
+    counters.replayStep = step;
+    this.drawCharts(end ? null : step);
+    this.view.invalidate();
+  }
+
+  // --- comparison: other runs' trails on the map ---
+  setCompare(runs) {
+    for (const s of this.compareSets) this.trailLayer.remove(s);
+    this.compareSets = runs.map((r, i) => {
+      const s = new TrailSet({ width: 2.5, dash: i === 0 ? null : [6, 4], colourOffset: i === 0 ? 0 : 4, label: r.label });
+      s.setPaths(r.paths);
+      return this.trailLayer.add(s);
+    });
+    this.trails.setPaths(runs.length ? [] : this.result ? this.result.rovers.map((r) => r.path) : this.trails.paths);
+    this.layers.renderLegends();
+    this.view.invalidate();
+  }
+
+  trailLegend() {
+    const sets = this.compareSets.length ? this.compareSets : [this.trails];
+    const rows = [];
+    sets.forEach((s) => {
+      s.paths.forEach((_, k) => {
+        const c = roverColour(k + (s.style.colourOffset || 0));
+        rows.push(el('span', {}, el('span', { class: 'swatch', style: `background:${c}` }), `${s.style.label ? `${s.style.label} ` : ''}rover ${k + 1}${s.style.dash ? ' (dashed)' : ''}`));
+      });
+    });
+    return rows.length ? el('div', { class: 'swatches' }, rows) : el('div', { class: 'muted small' }, 'no mission shown');
+  }
+
+  // --- dock widgets ---
+  setStatus(status) {
+    const badge = $('live-status');
+    const word = String(status || '').split(/[\s:(]/)[0];
+    badge.textContent = status || '';
+    badge.className = `badge ${word}`;
+    badge.hidden = !status;
+    const running = word === 'running' || word === 'queued';
+    $('live-cancel').disabled = !running;
+    if (['queued', 'running', 'succeeded', 'failed', 'cancelled', 'interrupted'].includes(word)) counters.missionStatus = word;
+  }
+
+  setProgress(f) {
+    $('live-progress').value = Math.max(0, Math.min(1, f || 0));
+  }
+
+  renderMetrics(metrics) {
+    const table = $('metrics');
+    if (!metrics) {
+      table.replaceChildren();
+      return;
+    }
+    const cells = SHOWN_METRICS.filter(([k]) => metrics[k] !== undefined).map(([k, label, f]) => [label, f ? f(metrics[k]) : fmt(metrics[k]), k]);
+    const rows = [];
+    for (let i = 0; i < cells.length; i += 2) {
+      const a = cells[i], b = cells[i + 1];
+      rows.push(el('tr', {},
+        el('td', {}, a[0]), el('td', { dataset: { metric: a[2] } }, a[1]),
+        el('td', {}, b ? b[0] : ''), el('td', b ? { dataset: { metric: b[2] } } : {}, b ? b[1] : '')));
+    }
+    table.replaceChildren(...rows);
+  }
+
+  setExports(id) {
+    for (const [node, file] of [[$('export-geojson'), 'result.geojson'], [$('export-csv'), 'result.csv']]) {
+      if (id) {
+        node.href = `/api/missions/${id}/${file}`;
+        node.setAttribute('download', `mission-${id}-${file}`);
+        node.classList.remove('disabled');
+        node.removeAttribute('aria-disabled');
+      } else {
+        node.removeAttribute('href');
+        node.classList.add('disabled');
+        node.setAttribute('aria-disabled', 'true');
+      }
+    }
+  }
+
+  drawCharts(cursorStep = null) {
+    const r = this.result;
+    const cov = r?.series?.coverage_vs_moves;
+    const rovers = r ? r.rovers.length : 1;
+    lineChart($('chart-coverage'), cov ? [{ x: cov.x, y: cov.y, colour: '#4fb3ff' }] : [{ ...this.progressCurve, colour: '#4fb3ff' }],
+      { yMin: 0, yMax: 1, empty: 'waiting for progress', cursorX: cursorStep !== null ? cursorStep * rovers : null });
+    const pitch = [];
+    if (r) {
+      for (const [key, s] of Object.entries(r.series || {})) {
+        const m = /^pitch_deg_rover_(\d+)$/.exec(key);
+        if (m) pitch.push({ x: s.x, y: s.y, colour: roverColour(Number(m[1])), width: 1, label: `rover ${Number(m[1]) + 1}` });
+      }
+    }
+    lineChart($('chart-pitch'), pitch, {
+      refLines: [{ y: 15, label: '+15°' }, { y: -15, label: '−15°' }], legend: true, cursorX: cursorStep,
+      empty: r ? 'no pitch series' : 'after the run (result.json)',
+    });
+    const bars = r ? r.rovers.map((rv, k) => ({ label: `rover ${k + 1}`, value: rv.metrics?.energy_j ?? 0, colour: roverColour(k) })) : [];
+    barChart($('chart-energy'), bars, { empty: r ? 'no energy metric' : 'after the run' });
+  }
+
+  // --- frames per second of the live view ---
+  // While a mission is live the view renders on every animation frame (the stream's data is
+  // applied as it comes, and drawn at the display's rate when the page keeps up).
+  countFrame(t) {
+    if (!this.stream.live) return;
+    this.view.invalidate();
+    counters.liveRenders++;
+    const times = this.renderTimes;
+    times.push(t);
+    while (times.length && times[0] < t - 1000) times.shift();
+    counters.fps = times.length;
+    if (times.length > counters.fpsPeak && t - (this.liveSince || 0) > 1000) counters.fpsPeak = times.length;
+    if (!this.statusTimer) this.statusTimer = setTimeout(() => this.updateStatusLine(), 250);
+  }
+
+  updateStatusLine(final = false) {
+    this.statusTimer = null;
+    this.renderCounters();
+    const c = counters;
+    if (final) c.fps = 0;
+    const cellInfo = this.coverage.ready ? ` · grid ${this.coverage.rows}×${this.coverage.cols}` : '';
+    if (!this.stream.live) final = true;
+    this.statusLine(`${final ? 'stream ended' : `live ${c.fps} fps`} · ${c.gridFrames} grid frames · ${c.posesFrames} poses${cellInfo}`, 'live');
+  }
+
+  cellReadout(x, y) {
+    const c = this.coverage.cellAt(x, y);
+    return c ? `cell ${CELL_STATE_NAMES[c.state] || c.state}${c.visits ? ` ×${c.visits}` : ''}` : '';
+  }
+}

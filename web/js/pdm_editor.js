@@ -1,0 +1,400 @@
+// The PDM tab: a Gaussian mixture edited on the map (click to add, drag the centre to move,
+// square handles for σx / σy, the round handle to rotate), numbers per component, random (G=4)
+// from the server, clear, save. While editing, the mixture density is drawn on a coarse grid as
+// an overlay; once saved, the server's pdm.png for the new id is shown instead.
+
+import { api } from './api.js';
+import { state } from './state.js';
+import { $, el, fmt, report, showError } from './util.js';
+
+const GRID = 160;           // overlay cells on the longer side
+const HANDLE = 7;           // px, half size
+const ROT_OFFSET = 26;      // px beyond the σx handle
+// A perceptual ramp (viridis-like) for the overlay and its legend.
+const RAMP = [[68, 1, 84], [59, 82, 139], [33, 145, 140], [94, 201, 98], [253, 231, 37]];
+
+function rampColour(t) {
+  const u = Math.max(0, Math.min(1, t)) * (RAMP.length - 1);
+  const i = Math.min(RAMP.length - 2, Math.floor(u)), f = u - i;
+  return RAMP[i].map((a, k) => Math.round(a + (RAMP[i + 1][k] - a) * f));
+}
+
+function density(comps, x, y) {
+  let sum = 0, wsum = 0;
+  for (const g of comps) wsum += g.weight;
+  if (!(wsum > 0)) return 0;
+  for (const g of comps) {
+    const a = (g.rotation_deg * Math.PI) / 180, c = Math.cos(a), s = Math.sin(a);
+    const dx = x - g.x, dy = y - g.y;
+    const u = (c * dx + s * dy) / g.sigma_x, v = (-s * dx + c * dy) / g.sigma_y;
+    sum += (g.weight / (2 * Math.PI * g.sigma_x * g.sigma_y)) * Math.exp(-0.5 * (u * u + v * v));
+  }
+  return sum / wsum;
+}
+
+export class PdmEditor {
+  constructor({ view, layers }) {
+    this.view = view;
+    this.layers = layers;
+    this.comps = [];
+    this.active = -1;
+    this.dirty = false;     // edited since the last save/load
+    this.drag = null;
+    this.overlay = document.createElement('canvas');
+    this.overlayCtx = this.overlay.getContext('2d');
+    this.overlayMax = 0;
+    this.editLayer = layers.addOverlay({ id: 'pdm-edit', label: 'PDM (editing)', legendTitle: 'PDM being edited (mixture density)', visible: true, opacity: 0.6, legend: () => this.legend() });
+    view.addLayer({ id: 'pdm-edit', order: 20, draw: (ctx, v) => this.draw(ctx, v) });
+    view.registerTool('pdm', {
+      down: (p) => this.pointerDown(p),
+      move: (p) => this.pointerMove(p),
+      up: () => this.pointerUp(),
+      click: (p) => this.add(p.x, p.y),
+    });
+    $('pdm-random').addEventListener('click', () => this.random());
+    $('pdm-clear').addEventListener('click', () => this.clear());
+    $('pdm-save').addEventListener('click', () => this.save());
+    state.on('map', () => {
+      this.comps = [];
+      this.active = -1;
+      this.dirty = false;
+      this.changed();
+      this.renderList();
+    });
+    state.on('pdms', () => this.renderList());
+    state.on('pdm-selected', () => this.renderList());
+    this.renderComponents();
+  }
+
+  // --- editing ---
+  defaultSigma() {
+    const m = state.map;
+    return m ? Math.max(m.cell_size_m * 2, Math.min(m.width_m, m.height_m) * 0.08) : 10;
+  }
+
+  add(x, y) {
+    const m = state.map;
+    if (!m || x < 0 || y < 0 || x > m.width_m || y > m.height_m) return;
+    const s = this.defaultSigma();
+    this.comps.push({ x, y, sigma_x: s, sigma_y: s * 0.6, rotation_deg: 0, weight: 1 });
+    this.active = this.comps.length - 1;
+    this.changed(true);
+  }
+
+  remove(i) {
+    this.comps.splice(i, 1);
+    this.active = Math.min(this.active, this.comps.length - 1);
+    this.changed(true);
+  }
+
+  clear() {
+    this.comps = [];
+    this.active = -1;
+    this.changed(true);
+    showError($('pdm-error'), null);
+  }
+
+  changed(edited = false) {
+    if (edited) this.dirty = true;
+    this.computeOverlay();
+    this.renderComponents();
+    this.layers.renderLegends();
+    this.view.invalidate();
+  }
+
+  // Screen positions of a component's handles.
+  handles(g) {
+    const v = this.view;
+    const a = (g.rotation_deg * Math.PI) / 180, c = Math.cos(a), s = Math.sin(a);
+    const [cx, cy] = v.worldToScreen(g.x, g.y);
+    const [hx, hy] = v.worldToScreen(g.x + c * g.sigma_x, g.y + s * g.sigma_x);
+    const [vx, vy] = v.worldToScreen(g.x - s * g.sigma_y, g.y + c * g.sigma_y);
+    const len = Math.hypot(hx - cx, hy - cy) || 1;
+    const rx = hx + ((hx - cx) / len) * ROT_OFFSET, ry = hy + ((hy - cy) / len) * ROT_OFFSET;
+    return { centre: [cx, cy], sx: [hx, hy], sy: [vx, vy], rot: [rx, ry] };
+  }
+
+  hit(p) {
+    // The active component's handles first, then any centre.
+    const order = [...this.comps.keys()].sort((a, b) => (b === this.active) - (a === this.active));
+    for (const i of order) {
+      const h = this.handles(this.comps[i]);
+      for (const kind of ['rot', 'sx', 'sy', 'centre']) {
+        const [hx, hy] = h[kind];
+        if (Math.abs(p.sx - hx) <= HANDLE + 3 && Math.abs(p.sy - hy) <= HANDLE + 3) return { i, kind };
+      }
+    }
+    return null;
+  }
+
+  pointerDown(p) {
+    const h = this.hit(p);
+    if (!h) return false;
+    this.active = h.i;
+    const g = this.comps[h.i];
+    this.drag = { ...h, dx: g.x - p.x, dy: g.y - p.y };
+    this.renderComponents();
+    this.view.invalidate();
+    return true;
+  }
+
+  pointerMove(p) {
+    const d = this.drag;
+    if (!d) return;
+    const g = this.comps[d.i];
+    const minSigma = state.map ? state.map.cell_size_m / 2 : 0.01;
+    const a = (g.rotation_deg * Math.PI) / 180, c = Math.cos(a), s = Math.sin(a);
+    const rx = p.x - g.x, ry = p.y - g.y;
+    if (d.kind === 'centre') {
+      g.x = p.x + d.dx;
+      g.y = p.y + d.dy;
+    } else if (d.kind === 'sx') {
+      g.sigma_x = Math.max(minSigma, Math.abs(c * rx + s * ry));
+    } else if (d.kind === 'sy') {
+      g.sigma_y = Math.max(minSigma, Math.abs(-s * rx + c * ry));
+    } else if (d.kind === 'rot') {
+      let deg = (Math.atan2(ry, rx) * 180) / Math.PI;
+      if (deg < 0) deg += 360;
+      g.rotation_deg = Math.round(deg * 10) / 10;
+    }
+    this.changed(true);
+  }
+
+  pointerUp() {
+    this.drag = null;
+  }
+
+  // --- overlay ---
+  computeOverlay() {
+    const m = state.map;
+    if (!m || this.comps.length === 0) {
+      this.overlayMax = 0;
+      return;
+    }
+    const k = GRID / Math.max(m.width_m, m.height_m);
+    const cols = Math.max(1, Math.round(m.width_m * k)), rows = Math.max(1, Math.round(m.height_m * k));
+    const dx = m.width_m / cols, dy = m.height_m / rows;
+    const values = new Float32Array(rows * cols);
+    let max = 0;
+    for (let r = 0; r < rows; r++) {
+      const y = m.height_m - (r + 0.5) * dy;
+      for (let c = 0; c < cols; c++) {
+        const v = density(this.comps, (c + 0.5) * dx, y);
+        values[r * cols + c] = v;
+        if (v > max) max = v;
+      }
+    }
+    this.overlay.width = cols;
+    this.overlay.height = rows;
+    const img = this.overlayCtx.createImageData(cols, rows);
+    for (let i = 0; i < values.length; i++) {
+      const t = max > 0 ? values[i] / max : 0;
+      const [R, G, B] = rampColour(t);
+      img.data.set([R, G, B, Math.round(255 * Math.min(1, t * 1.6))], 4 * i);
+    }
+    this.overlayCtx.putImageData(img, 0, 0);
+    this.overlayMax = max;
+  }
+
+  showOverlay() {
+    return Boolean(this.editLayer && this.editLayer.visible) && this.comps.length > 0 && (this.dirty || !state.pdmId);
+  }
+
+  draw(ctx, view) {
+    const m = state.map;
+    if (!m) return;
+    if (this.showOverlay() && this.overlayMax > 0) {
+      const [sx, sy, sw, sh] = view.rectToScreen(0, 0, m.width_m, m.height_m);
+      ctx.globalAlpha = this.editLayer.opacity;
+      ctx.imageSmoothingEnabled = true;
+      ctx.drawImage(this.overlay, sx, sy, sw, sh);
+      ctx.globalAlpha = 1;
+    }
+    if (state.tool !== 'pdm' || this.comps.length === 0) return;
+    this.comps.forEach((g, i) => {
+      const h = this.handles(g);
+      const activeOne = i === this.active;
+      ctx.strokeStyle = activeOne ? '#ffb347' : 'rgba(255,255,255,0.8)';
+      ctx.lineWidth = activeOne ? 2 : 1.2;
+      ctx.beginPath();
+      ctx.ellipse(h.centre[0], h.centre[1], g.sigma_x * view.scale, g.sigma_y * view.scale, (-g.rotation_deg * Math.PI) / 180, 0, 2 * Math.PI);
+      ctx.stroke();
+      ctx.setLineDash([3, 3]);
+      ctx.beginPath();
+      ctx.moveTo(...h.centre);
+      ctx.lineTo(...h.rot);
+      ctx.moveTo(...h.centre);
+      ctx.lineTo(...h.sy);
+      ctx.stroke();
+      ctx.setLineDash([]);
+      const square = ([x, y], fill) => {
+        ctx.fillStyle = fill;
+        ctx.fillRect(x - HANDLE / 1.4, y - HANDLE / 1.4, (2 * HANDLE) / 1.4, (2 * HANDLE) / 1.4);
+        ctx.strokeStyle = '#000';
+        ctx.lineWidth = 1;
+        ctx.strokeRect(x - HANDLE / 1.4, y - HANDLE / 1.4, (2 * HANDLE) / 1.4, (2 * HANDLE) / 1.4);
+      };
+      square(h.sx, '#4fb3ff');
+      square(h.sy, '#6bd58b');
+      ctx.beginPath();
+      ctx.arc(h.rot[0], h.rot[1], HANDLE - 1, 0, 2 * Math.PI);
+      ctx.fillStyle = '#ffb347';
+      ctx.fill();
+      ctx.stroke();
+      ctx.beginPath();
+      ctx.arc(h.centre[0], h.centre[1], HANDLE, 0, 2 * Math.PI);
+      ctx.fillStyle = activeOne ? '#ffb347' : '#ffffff';
+      ctx.fill();
+      ctx.stroke();
+      ctx.fillStyle = '#000';
+      ctx.font = 'bold 10px system-ui, sans-serif';
+      ctx.textAlign = 'center';
+      ctx.textBaseline = 'middle';
+      ctx.fillText(String(i + 1), h.centre[0], h.centre[1] + 0.5);
+    });
+  }
+
+  legend() {
+    if (!this.showOverlay()) return null;
+    const c = document.createElement('canvas');
+    c.width = 200;
+    c.height = 26;
+    const ctx = c.getContext('2d');
+    ctx.fillStyle = '#fff';
+    ctx.fillRect(0, 0, 200, 26);
+    for (let x = 0; x < 190; x++) {
+      const [r, g, b] = rampColour(x / 189);
+      ctx.fillStyle = `rgb(${r},${g},${b})`;
+      ctx.fillRect(5 + x, 2, 1, 12);
+    }
+    ctx.fillStyle = '#000';
+    ctx.font = '10px system-ui, sans-serif';
+    ctx.textBaseline = 'top';
+    ctx.fillText('0', 5, 15);
+    ctx.textAlign = 'right';
+    ctx.fillText(`${fmt(this.overlayMax)} /m² (density)`, 195, 15);
+    return c;
+  }
+
+  // --- panel ---
+  renderComponents() {
+    const node = $('pdm-components');
+    if (this.comps.length === 0) {
+      node.replaceChildren(el('div', { class: 'muted small' }, 'No component yet: click the map.'));
+      return;
+    }
+    // Keep focus and caret while typing into a field of this list.
+    const focused = document.activeElement && node.contains(document.activeElement) ? document.activeElement.dataset.key : null;
+    node.replaceChildren(...this.comps.map((g, i) => {
+      const field = (key, label, step, min) => el('label', {}, label,
+        el('input', {
+          type: 'number', step, min, value: String(Number(g[key].toFixed(3))), dataset: { key: `${i}.${key}` },
+          'aria-label': `component ${i + 1} ${label}`,
+          onchange: (e) => {
+            const v = Number(e.target.value);
+            if (!Number.isFinite(v) || (min !== undefined && v < Number(min)) || ((key === 'sigma_x' || key === 'sigma_y') && v <= 0)) {
+              e.target.classList.add('invalid');
+              return;
+            }
+            e.target.classList.remove('invalid');
+            g[key] = v;
+            this.active = i;
+            this.changed(true);
+          },
+        }));
+      return el('div', { class: `pdm-comp${i === this.active ? ' active' : ''}`, dataset: { component: String(i) } },
+        el('span', { class: 'idx' }, String(i + 1)),
+        field('x', 'x (m)', 'any'), field('y', 'y (m)', 'any'), field('weight', 'weight', 'any', '0'),
+        field('sigma_x', 'σx (m)', 'any', '0'), field('sigma_y', 'σy (m)', 'any', '0'), field('rotation_deg', 'rot (°)', 'any'),
+        el('button', { class: 'small remove', title: `remove component ${i + 1}`, onclick: () => this.remove(i) }, 'remove'));
+    }));
+    if (focused) {
+      const again = node.querySelector(`[data-key="${focused}"]`);
+      if (again) again.focus();
+    }
+  }
+
+  renderList() {
+    const list = $('pdm-list');
+    if (!state.pdms.length) {
+      list.replaceChildren(el('li', { class: 'muted small' }, 'none yet'));
+      return;
+    }
+    list.replaceChildren(...state.pdms.map((p) => el('li', { class: state.pdmId === p.id ? 'selected' : '', dataset: { pdm: p.id } },
+      el('button', { class: 'name', title: `${p.name} — ${p.id} (${p.kind || 'PDM'})`, onclick: () => this.select(p) }, p.name),
+      el('span', { class: 'meta' }, p.kind || ''),
+      el('button', { class: 'small', 'aria-label': `delete PDM ${p.name}`, title: 'delete', onclick: () => this.deletePdm(p) }, '✕'))));
+  }
+
+  // Shows a saved PDM (the server's layer) and loads its components for further editing.
+  select(p) {
+    this.comps = (p.components || []).map((g) => ({ ...g }));
+    this.active = this.comps.length ? 0 : -1;
+    this.dirty = false;
+    $('pdm-name').value = p.name;
+    state.pdmId = p.id;
+    state.emit('pdm-selected', p.id);
+    this.changed();
+  }
+
+  async random() {
+    const m = state.map;
+    if (!m) return;
+    showError($('pdm-error'), null);
+    const seed = Math.max(0, Math.floor(Number($('pdm-seed').value) || 0));
+    try {
+      const p = await api.createPdm(m.id, { name: $('pdm-name').value.trim() || `random G=4 seed ${seed}`, random: 4, seed });
+      await this.refresh();
+      this.select(state.pdms.find((q) => q.id === p.id) || p);
+      $('pdm-save-status').textContent = `saved “${p.name}”`;
+    } catch (err) {
+      showError($('pdm-error'), err);
+    }
+  }
+
+  async save() {
+    const m = state.map;
+    if (!m) return;
+    showError($('pdm-error'), null);
+    if (this.comps.length === 0) {
+      showError($('pdm-error'), 'add at least one Gaussian: click the map (field: components)');
+      return;
+    }
+    try {
+      const name = $('pdm-name').value.trim() || `PDM ${new Date().toISOString().slice(0, 16).replace('T', ' ')}`;
+      const p = await api.createPdm(m.id, { name, components: this.comps });
+      this.dirty = false;
+      await this.refresh();
+      state.pdmId = p.id;
+      state.emit('pdm-selected', p.id);
+      $('pdm-save-status').textContent = `saved “${p.name}” (${p.id})`;
+      this.changed();
+    } catch (err) {
+      showError($('pdm-error'), err);
+      const f = /^components\[(\d+)\]\.(\w+)$/.exec(err.field || '');
+      if (f) {
+        const input = document.querySelector(`[data-key="${f[1]}.${f[2] === 'rotation' ? 'rotation_deg' : f[2]}"]`);
+        if (input) input.classList.add('invalid');
+      }
+    }
+  }
+
+  async deletePdm(p) {
+    try {
+      await api.deletePdm(p.map, p.id);
+      if (state.pdmId === p.id) {
+        state.pdmId = '';
+        state.emit('pdm-selected', '');
+      }
+      await this.refresh();
+    } catch (err) {
+      report(err);
+    }
+  }
+
+  async refresh() {
+    if (!state.map) return;
+    state.pdms = await api.pdms(state.map.id);
+    state.emit('pdms', state.pdms);
+  }
+}

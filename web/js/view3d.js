@@ -1,0 +1,306 @@
+// The 3D view (three.js, loaded on first use): the elevation raster as a displaced mesh
+// (≤ 256 × 256 vertices), coloured by elevation or traversability, with the mission's trails
+// draped at terrain height plus a small offset. A small orbit control of our own: drag to orbit,
+// right-drag or shift-drag to pan, wheel to zoom.
+
+import { fetchF32, layerUrl } from './api.js';
+import { counters, state } from './state.js';
+import { roverColour } from './util.js';
+
+const MAX_VERTS = 256;
+const HYPSO = [[40, 80, 160], [60, 150, 110], [200, 190, 110], [170, 110, 70], [240, 240, 240]];
+const CLASS_RGB = [[70, 170, 80], [235, 190, 50], [200, 50, 50], [90, 90, 90]];
+
+// Colours are given in sRGB; three.js shades in linear light.
+const linear = (c) => Math.pow(c, 2.2);
+
+function ramp(t) {
+  const u = Math.max(0, Math.min(1, t)) * (HYPSO.length - 1);
+  const i = Math.min(HYPSO.length - 2, Math.floor(u)), f = u - i;
+  return HYPSO[i].map((a, k) => linear((a + (HYPSO[i + 1][k] - a) * f) / 255));
+}
+
+function webglAvailable() {
+  try {
+    const c = document.createElement('canvas');
+    return Boolean(c.getContext('webgl2') || c.getContext('webgl'));
+  } catch {
+    return false;
+  }
+}
+
+export class View3D {
+  constructor({ container, message, layers, missionView }) {
+    this.container = container;
+    this.message = message;
+    this.layers = layers;
+    this.missionView = missionView;
+    this.THREE = null;
+    this.renderer = null;
+    this.mapId = null;
+    this.trailKey = '';
+    this.orbit = { yaw: -0.6, pitch: 0.75, dist: 1, target: [0, 0, 0] };
+    this.visible = false;
+    $colour(this).addEventListener('change', () => this.rebuild());
+    $exag(this).addEventListener('change', () => this.rebuild());
+  }
+
+  async show() {
+    this.visible = true;
+    if (!webglAvailable()) {
+      this.say('The 3D view needs WebGL, which this browser does not offer (hardware acceleration off?). The 2D map has every layer.');
+      return;
+    }
+    try {
+      if (!this.THREE) this.THREE = await import('three');
+      if (!this.renderer) this.setup();
+      await this.rebuild();
+      this.resize();
+      this.frame();
+    } catch (err) {
+      this.say(`3D view unavailable: ${err.message}`);
+    }
+  }
+
+  hide() {
+    this.visible = false;
+  }
+
+  say(text) {
+    this.message.textContent = text;
+    this.message.hidden = !text;
+  }
+
+  setup() {
+    const THREE = this.THREE;
+    this.renderer = new THREE.WebGLRenderer({ antialias: true, preserveDrawingBuffer: true });
+    this.renderer.setPixelRatio(window.devicePixelRatio || 1);
+    this.container.prepend(this.renderer.domElement);
+    this.renderer.domElement.tabIndex = 0;
+    this.renderer.domElement.setAttribute('aria-label', '3D terrain: drag to orbit, wheel to zoom');
+    this.scene = new THREE.Scene();
+    this.scene.background = new THREE.Color(0x0b0d10);
+    this.camera = new THREE.PerspectiveCamera(45, 1, 0.1, 1e7);
+    this.scene.add(new THREE.AmbientLight(0xffffff, 0.8));
+    const sun = new THREE.DirectionalLight(0xffffff, 1.5);
+    sun.position.set(-1, 1.2, 0.6);
+    this.scene.add(sun);
+    this.group = new THREE.Group();
+    this.scene.add(this.group);
+    new ResizeObserver(() => this.resize()).observe(this.container);
+    this.bindOrbit(this.renderer.domElement);
+    state.on('map', () => this.visible && this.rebuild());
+    setInterval(() => this.visible && this.updateTrails(), 400);
+  }
+
+  resize() {
+    if (!this.renderer) return;
+    const r = this.container.getBoundingClientRect();
+    if (r.width < 2 || r.height < 2) return;
+    this.renderer.setSize(r.width, r.height, false);
+    this.camera.aspect = r.width / r.height;
+    this.camera.updateProjectionMatrix();
+    this.frame();
+  }
+
+  async raster(kind) {
+    const map = state.map;
+    if (kind === 'elevation' && this.layers.rasters.elevation) return this.layers.rasters.elevation;
+    if (kind === 'traversability' && this.layers.rasters.traversability) return this.layers.rasters.traversability;
+    return fetchF32(layerUrl(map.id, kind, 'f32'));
+  }
+
+  async rebuild() {
+    const THREE = this.THREE;
+    const map = state.map;
+    if (!THREE || !this.renderer || !map) return;
+    this.say('loading terrain…');
+    const z = await this.raster('elevation');
+    const colourBy = $colour(this).value;
+    const classes = colourBy === 'traversability' ? await this.raster('traversability') : null;
+    if (this.mapId !== map.id) {
+      // Relief exaggeration so that the relief is about a tenth of the map's width.
+      let lo = Infinity, hi = -Infinity;
+      for (const v of z.data) if (Number.isFinite(v)) { if (v < lo) lo = v; if (v > hi) hi = v; }
+      const auto = hi > lo ? (0.1 * Math.max(map.width_m, map.height_m)) / (hi - lo) : 1;
+      $exag(this).value = String(Math.max(1, Math.min(50, Number(auto.toPrecision(2)))));
+    }
+    const exag = Math.max(0.1, Number($exag(this).value) || 1);
+    this.say('');
+    for (const c of [...this.group.children]) {
+      this.group.remove(c);
+      c.geometry?.dispose();
+      c.material?.dispose();
+    }
+    const nx = Math.min(z.cols, MAX_VERTS), ny = Math.min(z.rows, MAX_VERTS);
+    let zMin = Infinity, zMax = -Infinity;
+    for (const v of z.data) if (Number.isFinite(v)) { if (v < zMin) zMin = v; if (v > zMax) zMax = v; }
+    if (!Number.isFinite(zMin)) zMin = zMax = 0;
+    const W = map.width_m, H = map.height_m;
+    this.extent = { W, H, zMin, zMax, exag };
+    const pos = new Float32Array(nx * ny * 3), col = new Float32Array(nx * ny * 3);
+    const valid = new Uint8Array(nx * ny);
+    for (let j = 0; j < ny; j++) {
+      const r = Math.min(z.rows - 1, Math.round((j / Math.max(1, ny - 1)) * (z.rows - 1)));
+      for (let i = 0; i < nx; i++) {
+        const c = Math.min(z.cols - 1, Math.round((i / Math.max(1, nx - 1)) * (z.cols - 1)));
+        const v = z.data[r * z.cols + c];
+        const k = j * nx + i;
+        const ok = Number.isFinite(v);
+        valid[k] = ok ? 1 : 0;
+        pos[3 * k] = (i / Math.max(1, nx - 1)) * W - W / 2;
+        pos[3 * k + 1] = ((ok ? v : zMin) - zMin) * exag;
+        pos[3 * k + 2] = (j / Math.max(1, ny - 1)) * H - H / 2;  // row 0 north → −z is north
+        let rgb;
+        if (!ok) rgb = [0.2, 0.2, 0.2];
+        else if (classes) rgb = (CLASS_RGB[Math.round(classes.data[r * classes.cols + c])] || [80, 80, 80]).map((x) => linear(x / 255));
+        else rgb = ramp((v - zMin) / Math.max(1e-9, zMax - zMin));
+        col.set(rgb, 3 * k);
+      }
+    }
+    const index = [];
+    for (let j = 0; j < ny - 1; j++) {
+      for (let i = 0; i < nx - 1; i++) {
+        const a = j * nx + i, b = a + 1, c = a + nx, d = c + 1;
+        if (valid[a] && valid[b] && valid[c] && valid[d]) index.push(a, c, b, b, c, d);
+      }
+    }
+    const geo = new THREE.BufferGeometry();
+    geo.setAttribute('position', new THREE.BufferAttribute(pos, 3));
+    geo.setAttribute('color', new THREE.BufferAttribute(col, 3));
+    geo.setIndex(index);
+    geo.computeVertexNormals();
+    const mesh = new THREE.Mesh(geo, new THREE.MeshLambertMaterial({ vertexColors: true, side: THREE.DoubleSide }));
+    mesh.name = 'terrain';
+    this.group.add(mesh);
+    this.z = z;
+    if (this.mapId !== map.id) {
+      this.mapId = map.id;
+      this.orbit = { yaw: -0.6, pitch: 0.75, dist: 1.75 * Math.max(W, H), target: [0, ((zMax - zMin) * exag) / 2, 0] };
+    }
+    this.trailKey = '';
+    this.updateTrails();
+    counters.view3dReady = true;
+    this.frame();
+  }
+
+  heightAt(x, y) {
+    const z = this.z;
+    const c = Math.floor(x / z.cellW), r = z.rows - 1 - Math.floor(y / z.cellH);
+    if (c < 0 || r < 0 || c >= z.cols || r >= z.rows) return this.extent.zMin;
+    const v = z.data[r * z.cols + c];
+    return Number.isFinite(v) ? v : this.extent.zMin;
+  }
+
+  // The shown mission's trails (and compared runs) as lines on the terrain.
+  updateTrails() {
+    if (!this.THREE || !this.z) return;
+    const THREE = this.THREE;
+    const sets = this.missionView.compareSets.length ? this.missionView.compareSets : [this.missionView.trails];
+    const key = sets.map((s) => `${s.version}:${s.paths.map((p) => p.length).join('/')}:${s.limit}`).join('|') + this.extent.exag;
+    if (key === this.trailKey) return;
+    this.trailKey = key;
+    for (const c of this.group.children.filter((o) => o.name === 'trail')) {
+      this.group.remove(c);
+      c.geometry.dispose();
+      c.material.dispose();
+    }
+    const { W, H, zMin, exag } = this.extent;
+    const lift = Math.max(0.15, 0.004 * Math.max(W, H));
+    for (const s of sets) {
+      s.paths.forEach((path, k) => {
+        const end = Math.min(path.length, s.limit + 1);
+        if (end < 2) return;
+        const stride = Math.max(1, Math.ceil(end / 20000));
+        const pts = [];
+        for (let i = 0; i < end; i += stride) pts.push(path[i]);
+        if ((end - 1) % stride) pts.push(path[end - 1]);
+        const arr = new Float32Array(pts.length * 3);
+        pts.forEach(([x, y], i) => arr.set([x - W / 2, (this.heightAt(x, y) - zMin) * exag + lift, H / 2 - y], 3 * i));
+        const geo = new THREE.BufferGeometry();
+        geo.setAttribute('position', new THREE.BufferAttribute(arr, 3));
+        const line = new THREE.Line(geo, new THREE.LineBasicMaterial({ color: roverColour(k + (s.style.colourOffset || 0)) }));
+        line.name = 'trail';
+        this.group.add(line);
+      });
+    }
+    this.frame();
+  }
+
+  bindOrbit(canvas) {
+    let drag = null;
+    canvas.addEventListener('contextmenu', (e) => e.preventDefault());
+    canvas.addEventListener('pointerdown', (e) => {
+      drag = { x: e.clientX, y: e.clientY, pan: e.button === 2 || e.shiftKey };
+      canvas.setPointerCapture(e.pointerId);
+    });
+    canvas.addEventListener('pointermove', (e) => {
+      if (!drag) return;
+      const dx = e.clientX - drag.x, dy = e.clientY - drag.y;
+      drag.x = e.clientX;
+      drag.y = e.clientY;
+      const o = this.orbit;
+      if (drag.pan) {
+        const s = o.dist / 800;
+        const cy = Math.cos(o.yaw), sy = Math.sin(o.yaw);
+        o.target[0] -= (dx * cy + dy * sy) * s;
+        o.target[2] -= (-dx * sy + dy * cy) * s;
+      } else {
+        o.yaw -= dx * 0.006;
+        o.pitch = Math.max(0.05, Math.min(1.5, o.pitch + dy * 0.006));
+      }
+      this.frame();
+    });
+    const end = () => { drag = null; };
+    canvas.addEventListener('pointerup', end);
+    canvas.addEventListener('pointercancel', end);
+    canvas.addEventListener('wheel', (e) => {
+      e.preventDefault();
+      this.orbit.dist = Math.max(1, this.orbit.dist * Math.exp(e.deltaY * 0.001));
+      this.frame();
+    }, { passive: false });
+    canvas.addEventListener('keydown', (e) => {
+      const o = this.orbit;
+      const k = { ArrowLeft: () => (o.yaw += 0.1), ArrowRight: () => (o.yaw -= 0.1), ArrowUp: () => (o.pitch = Math.min(1.5, o.pitch + 0.05)),
+        ArrowDown: () => (o.pitch = Math.max(0.05, o.pitch - 0.05)), '+': () => (o.dist *= 0.85), '-': () => (o.dist /= 0.85) }[e.key];
+      if (k) {
+        e.preventDefault();
+        k();
+        this.frame();
+      }
+    });
+  }
+
+  frame() {
+    if (!this.renderer || !this.visible) return;
+    if (this.pending) return;
+    this.pending = true;
+    requestAnimationFrame(() => {
+      this.pending = false;
+      const o = this.orbit;
+      const [tx, ty, tz] = o.target;
+      this.camera.position.set(
+        tx + o.dist * Math.cos(o.pitch) * Math.sin(o.yaw),
+        ty + o.dist * Math.sin(o.pitch),
+        tz + o.dist * Math.cos(o.pitch) * Math.cos(o.yaw));
+      this.camera.near = o.dist / 1000;
+      this.camera.far = o.dist * 20;
+      this.camera.updateProjectionMatrix();
+      this.camera.lookAt(tx, ty, tz);
+      this.renderer.render(this.scene, this.camera);
+    });
+  }
+
+  toDataURL() {
+    if (!this.renderer) return null;
+    this.renderer.render(this.scene, this.camera);
+    return this.renderer.domElement.toDataURL('image/png');
+  }
+}
+
+function $colour() {
+  return document.getElementById('view3d-colour');
+}
+function $exag() {
+  return document.getElementById('view3d-exag');
+}
