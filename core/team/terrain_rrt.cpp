@@ -1,9 +1,5 @@
 #include "core/team/terrain_rrt.hpp"
 
-#include <algorithm>
-#include <cmath>
-#include <memory>
-#include <mutex>
 #include <ompl/base/MotionValidator.h>
 #include <ompl/base/OptimizationObjective.h>
 #include <ompl/base/PlannerData.h>
@@ -17,6 +13,10 @@
 #include <ompl/geometric/planners/rrt/RRTstar.h>
 #include <ompl/util/Console.h>
 #include <ompl/util/RandomNumbers.h>
+#include <algorithm>
+#include <cmath>
+#include <memory>
+#include <mutex>
 #include <string>
 
 #include "core/common/error.hpp"
@@ -62,7 +62,8 @@ void RrtParams::validate() const {
   // A zero clearance would give a degenerate (zero-area) box when start and goal share an axis.
   requirePositive("clearance", clearance);
   requirePositive("attitude_limit", attitudeLimit);
-  if (attitudeLimit > std::numbers::pi / 2) throwInvalidParameter("attitude_limit", "must be <= 90°");
+  if (attitudeLimit > std::numbers::pi / 2)
+    throwInvalidParameter("attitude_limit", "must be <= 90°");
   requireNonNegative("edge_resolution", edgeResolution);
   requireFinite("goal_bias", goalBias);
   if (goalBias < 0 || goalBias > 1) throwInvalidParameter("goal_bias", "must be in [0, 1]");
@@ -88,7 +89,10 @@ double headingChange(double from, double to) {
 
 TerrainEdgeModel::TerrainEdgeModel(const terrain::Dem& dem, const Raster<std::uint8_t>& classes,
                                    SearchBounds bounds, double attitudeLimit, double edgeResolution)
-    : dem_(dem), classes_(classes), bounds_(bounds), limit_(attitudeLimit),
+    : dem_(dem),
+      classes_(classes),
+      bounds_(bounds),
+      limit_(attitudeLimit),
       resolution_(edgeResolution) {
   const GridGeometry &d = dem.geometry(), &c = classes.geometry;
   if (d.rows != c.rows || d.cols != c.cols)
@@ -110,7 +114,8 @@ bool cellAllowed(const terrain::Dem& dem, const Raster<std::uint8_t>& classes,
   auto cell = localToCell(classes.geometry, p);
   if (!cell) return false;
   auto cls = static_cast<terrain::TerrainClass>(classes(cell->row, cell->col));
-  if (cls == terrain::TerrainClass::Impassable || cls == terrain::TerrainClass::NoData) return false;
+  if (cls == terrain::TerrainClass::Impassable || cls == terrain::TerrainClass::NoData)
+    return false;
   return dem.valid(cell->row, cell->col);
 }
 
@@ -129,12 +134,11 @@ bool TerrainEdgeModel::pointValid(const Eigen::Vector2d& p) const {
   return cellAllowed(dem_, classes_, bounds_, p) && terrain::surfaceAt(dem_, p.x(), p.y());
 }
 
-// Roll and pitch follow SPEC §2 exactly as terrain::attitudeAt does — pitch = atan(∇h·(cosψ, sinψ)),
-// roll = atan(∇h·(−sinψ, cosψ)) on the bilinear surface — but with the edge's cos ψ, sin ψ computed
-// once and atan applied once to the largest tangent (atan is monotonic, so max|atan x| =
+// Roll and pitch follow SPEC §2 exactly as terrain::attitudeAt does — pitch = atan(∇h·(cosψ,
+// sinψ)), roll = atan(∇h·(−sinψ, cosψ)) on the bilinear surface — but with the edge's cos ψ, sin ψ
+// computed once and atan applied once to the largest tangent (atan is monotonic, so max|atan x| =
 // atan max|x|, and |atan x| >= limit <=> |x| >= tan limit). Calling attitudeAt per sample costs
 // two atan and a sincos each and made up most of a planning call; a test checks the two agree.
-
 bool TerrainEdgeModel::edgeValid(const Eigen::Vector2d& a, const Eigen::Vector2d& b) const {
   const Eigen::Vector2d d = b - a;
   const double len = d.norm();
@@ -191,8 +195,8 @@ double pathCost(const TerrainEdgeModel& model, const std::vector<Eigen::Vector2d
   double sum = 0, heading = startHeading;
   for (std::size_t i = 0; i + 1 < path.size(); ++i) {
     const Eigen::Vector2d &a = path[i], &b = path[i + 1];
-    EdgeTerms t = (i == 0 || turnsAtEveryVertex) ? model.edgeTerms(a, b, heading)
-                                                 : model.edgeTerms(a, b);
+    EdgeTerms t =
+        (i == 0 || turnsAtEveryVertex) ? model.edgeTerms(a, b, heading) : model.edgeTerms(a, b);
     sum += t.cost(weights);
     if (t.length > 0) heading = std::atan2(b.y() - a.y(), b.x() - a.x());
   }
@@ -201,12 +205,18 @@ double pathCost(const TerrainEdgeModel& model, const std::vector<Eigen::Vector2d
 
 const char* pathStatusName(PathStatus s) {
   switch (s) {
-    case PathStatus::Exact: return "exact";
-    case PathStatus::Approximate: return "approximate";
-    case PathStatus::NoSolution: return "no_solution";
-    case PathStatus::InvalidStart: return "invalid_start";
-    case PathStatus::InvalidGoal: return "invalid_goal";
-    case PathStatus::Cancelled: return "cancelled";
+    case PathStatus::Exact:
+      return "exact";
+    case PathStatus::Approximate:
+      return "approximate";
+    case PathStatus::NoSolution:
+      return "no_solution";
+    case PathStatus::InvalidStart:
+      return "invalid_start";
+    case PathStatus::InvalidGoal:
+      return "invalid_goal";
+    case PathStatus::Cancelled:
+      return "cancelled";
   }
   return "unknown";
 }
@@ -285,17 +295,22 @@ class TerrainMotionValidator : public ob::MotionValidator {
 // parent's incoming edge would break RRT*'s rewiring (a rewired vertex changes its children's edge
 // costs, which RRT* assumes fixed). An SE(2) space does not help either: OMPL's straight-line
 // interpolation of (x, y, ψ) turns the body while it drives, so ψ no longer is the direction of
-// travel. We therefore keep R² and charge Δψ where it is known exactly: on edges leaving the start
-// state, as the turn from the rover's start heading (its heading on arrival from the previous
-// segment). Interior turns are free in the search; the R term and RRT*'s rewiring already keep paths
-// close to straight, and PathResult::costWithTurns reports eq. 9 with every turn charged.
-// The cost is then Markov in (s1, s2), and symmetric except on edges into the start, which RRT*
-// never rewires (nothing beats the start's identity cost), so isSymmetric() stays true.
+// travel; a Dubins space would tie them but impose a turning radius on a skid-steered rover that
+// turns on the spot (paper 001 §2.3). We therefore keep R² and charge Δψ where it is known exactly:
+// on edges leaving the start state, as the turn from the rover's start heading (its heading on
+// arrival from the previous segment). Interior turns are free in the search; the R term and RRT*'s
+// rewiring already keep paths close to straight, and PathResult::costWithTurns reports eq. 9 with
+// every turn charged. The cost is then Markov in (s1, s2), and symmetric except on edges into the
+// start, which RRT* never rewires (nothing beats the start's identity cost), so isSymmetric() stays
+// true.
 class Eq9Objective : public ob::OptimizationObjective {
  public:
   Eq9Objective(const ob::SpaceInformationPtr& si, const TerrainEdgeModel& model,
                const TerrainCostWeights& weights, const Eigen::Vector2d& start, double startHeading)
-      : ob::OptimizationObjective(si), model_(model), weights_(weights), start_(start),
+      : ob::OptimizationObjective(si),
+        model_(model),
+        weights_(weights),
+        start_(start),
         startHeading_(startHeading) {
     description_ = "terrain cost, paper 001 eq. 9";
   }
@@ -322,12 +337,13 @@ class Eq9Objective : public ob::OptimizationObjective {
 };
 
 // Per-problem determinism. ompl::RNG::setSeed() fixes the seed of the *process-wide* generator of
-// seeds and only works before the first RNG is created, so it cannot give each of several concurrent
-// problems its own seed. Instead, every random stream RRT* draws from is re-seeded locally with
-// RNG::setLocalSeed(): the planner's own rng_ (goal biasing; a protected member, reached from this
-// subclass) and the uniform state sampler's rng_ (through a StateSamplerAllocator on the problem's
-// state space, below). The only other RNG involved, inside the GNAT nearest-neighbour structure,
-// picks pivots; GNAT's queries are exact, so it changes speed, not results.
+// seeds and only works before the first RNG is created, so it cannot give each of several
+// concurrent problems its own seed. Instead, every random stream RRT* draws from is re-seeded
+// locally with RNG::setLocalSeed(): the planner's own rng_ (goal biasing; a protected member,
+// reached from this subclass) and the uniform state sampler's rng_ (through a StateSamplerAllocator
+// on the problem's state space, below). The only other RNG involved, inside the GNAT
+// nearest-neighbour structure, picks pivots; GNAT's queries are exact, so it changes speed, not
+// results.
 class SeededRrtStar : public og::RRTstar {
  public:
   SeededRrtStar(const ob::SpaceInformationPtr& si, std::uint32_t seed) : og::RRTstar(si) {
@@ -339,7 +355,8 @@ class SeededRrtStar : public og::RRTstar {
 
 class SeededSampler : public ob::RealVectorStateSampler {
  public:
-  SeededSampler(const ob::StateSpace* space, std::uint32_t seed) : ob::RealVectorStateSampler(space) {
+  SeededSampler(const ob::StateSpace* space, std::uint32_t seed)
+      : ob::RealVectorStateSampler(space) {
     rng_.setLocalSeed(seed);
   }
 };
@@ -358,9 +375,8 @@ PathResult planPath(const terrain::Dem& dem, const Raster<std::uint8_t>& classes
   silenceOmpl();
 
   const GridGeometry& g = dem.geometry();
-  const double resolution = params.edgeResolution > 0
-                                ? params.edgeResolution
-                                : 0.25 * std::min(g.cellWidth, g.cellHeight);
+  const double resolution = params.edgeResolution > 0 ? params.edgeResolution
+                                                      : 0.25 * std::min(g.cellWidth, g.cellHeight);
   const SearchBounds box = searchBounds(g, start, goal, params.clearance);
   const TerrainEdgeModel model(dem, classes, box, params.attitudeLimit, resolution);
 
@@ -443,11 +459,21 @@ PathResult planPath(const terrain::Dem& dem, const Raster<std::uint8_t>& classes
     return r;
   }
   switch (ob::PlannerStatus::StatusType(status)) {
-    case ob::PlannerStatus::EXACT_SOLUTION: r.status = PathStatus::Exact; break;
-    case ob::PlannerStatus::APPROXIMATE_SOLUTION: r.status = PathStatus::Approximate; break;
-    case ob::PlannerStatus::INVALID_START: r.status = PathStatus::InvalidStart; return r;
-    case ob::PlannerStatus::INVALID_GOAL: r.status = PathStatus::InvalidGoal; return r;
-    default: r.status = PathStatus::NoSolution; return r;
+    case ob::PlannerStatus::EXACT_SOLUTION:
+      r.status = PathStatus::Exact;
+      break;
+    case ob::PlannerStatus::APPROXIMATE_SOLUTION:
+      r.status = PathStatus::Approximate;
+      break;
+    case ob::PlannerStatus::INVALID_START:
+      r.status = PathStatus::InvalidStart;
+      return r;
+    case ob::PlannerStatus::INVALID_GOAL:
+      r.status = PathStatus::InvalidGoal;
+      return r;
+    default:
+      r.status = PathStatus::NoSolution;
+      return r;
   }
   ob::PathPtr solution = pdef->getSolutionPath();
   if (!solution) {
@@ -457,7 +483,8 @@ PathResult planPath(const terrain::Dem& dem, const Raster<std::uint8_t>& classes
   // RRT*'s own vertices, neither simplified nor interpolated: every edge is already <= range.
   const auto& path = *solution->as<og::PathGeometric>();
   r.waypoints.reserve(path.getStateCount());
-  for (std::size_t i = 0; i < path.getStateCount(); ++i) r.waypoints.push_back(xyOf(path.getState(i)));
+  for (std::size_t i = 0; i < path.getStateCount(); ++i)
+    r.waypoints.push_back(xyOf(path.getState(i)));
   r.goalDistance = r.status == PathStatus::Exact ? 0.0 : (r.waypoints.back() - goal).norm();
   r.cost = pathCost(model, r.waypoints, startHeading, weights, false);
   r.costWithTurns = pathCost(model, r.waypoints, startHeading, weights, true);

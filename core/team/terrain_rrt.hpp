@@ -1,6 +1,6 @@
 #pragma once
-// Individual rover paths: RRT* (Karaman & Frazzoli 2011, OMPL's RRTstar) on terrain with the cost of
-// paper 001 §3.6 eq. 9 (after Takemura & Ishigami 2017), SPEC §3.2:
+// Individual rover paths: RRT* (Karaman & Frazzoli 2011, OMPL's RRTstar) on terrain with the cost
+// of paper 001 §3.6 eq. 9 (after Takemura & Ishigami 2017), SPEC §3.2:
 //   cost(q_i) = W_R·R_i/N_R + W_φ·φ_i/N_φ + W_θ·θ_i/N_θ + W_ψ·Δψ_i/N_ψ
 // One planning problem per rover per route segment; the tree grows to a fixed number of vertices so
 // that the result depends on the seed alone, never on the clock.
@@ -46,7 +46,7 @@ struct RrtParams {
   std::uint64_t seed = 1;  //                                                       key: seed
   // m between the attitude/validity samples of an edge; 0 = a quarter of the DEM cell
   double edgeResolution = 0.0;  //                                             key: edge_resolution
-  double goalBias = 0.05;  // probability of sampling the goal (OMPL's default)  key: goal_bias
+  double goalBias = 0.05;       // probability of sampling the goal (OMPL's default)  key: goal_bias
   // Safety cap on RRT* iterations (deterministic, like the vertex count): a start boxed in by
   // impassable cells could never grow the tree to maxVertices.           key: max_iterations
   int maxIterations = 100000;
@@ -66,7 +66,7 @@ struct SearchBounds {
 SearchBounds searchBounds(const GridGeometry& map, const Eigen::Vector2d& start,
                           const Eigen::Vector2d& goal, double clearance);
 
-// |a − b| wrapped to [0, π]: the turn from heading a to heading b.
+// |to − from| wrapped to [0, π]: the smaller turn from heading `from` to heading `to`.
 double headingChange(double from, double to);
 
 // The four quantities of eq. 9 for one edge.
@@ -88,11 +88,13 @@ class TerrainEdgeModel {
  public:
   // `classes` must have the DEM's grid (rows, cols); throws InvalidInput otherwise.
   // `edgeResolution` > 0 is the spacing of the samples along an edge.
-  TerrainEdgeModel(const terrain::Dem& dem, const Raster<std::uint8_t>& classes, SearchBounds bounds,
-                   double attitudeLimit, double edgeResolution);
+  TerrainEdgeModel(const terrain::Dem& dem, const Raster<std::uint8_t>& classes,
+                   SearchBounds bounds, double attitudeLimit, double edgeResolution);
   // Temporaries would dangle.
-  TerrainEdgeModel(terrain::Dem&&, const Raster<std::uint8_t>&, SearchBounds, double, double) = delete;
-  TerrainEdgeModel(const terrain::Dem&, Raster<std::uint8_t>&&, SearchBounds, double, double) = delete;
+  TerrainEdgeModel(terrain::Dem&&, const Raster<std::uint8_t>&, SearchBounds, double,
+                   double) = delete;
+  TerrainEdgeModel(const terrain::Dem&, Raster<std::uint8_t>&&, SearchBounds, double,
+                   double) = delete;
 
   // Inside the bounds and the map, on a cell with data that is not Impassable, with a defined
   // surface (bilinear interpolation needs the four surrounding cell centres to have data).
@@ -101,7 +103,8 @@ class TerrainEdgeModel {
   // has |roll| and |pitch| strictly below the attitude limit for the edge's heading.
   bool edgeValid(const Eigen::Vector2d& a, const Eigen::Vector2d& b) const;
   // R, φ, θ of the edge a→b (φ, θ over the same samples as edgeValid, samples without a surface
-  // skipped); Δψ is the turn from `previousHeading` to the edge's heading (0 for a zero-length edge).
+  // skipped); Δψ is the turn from `previousHeading` to the edge's heading (0 for a zero-length
+  // edge).
   EdgeTerms edgeTerms(const Eigen::Vector2d& a, const Eigen::Vector2d& b,
                       double previousHeading) const;
   // Same without a turn (Δψ = 0).
@@ -126,29 +129,30 @@ double pathCost(const TerrainEdgeModel& model, const std::vector<Eigen::Vector2d
                 double startHeading, const TerrainCostWeights& weights, bool turnsAtEveryVertex);
 
 enum class PathStatus {
-  Exact,        // the path ends at the goal
-  Approximate,  // no valid path found; the path ends at the tree vertex closest to the goal
-  NoSolution,   // the tree never left the start
-  InvalidStart, // start outside the map or not pointValid
-  InvalidGoal,  // goal outside the map or not pointValid
-  Cancelled,    // the cancel token was set; no path returned
+  Exact,         // the path ends at the goal
+  Approximate,   // no valid path found; the path ends at the tree vertex closest to the goal
+  NoSolution,    // the tree never left the start
+  InvalidStart,  // start outside the map or not pointValid
+  InvalidGoal,   // goal outside the map or not pointValid
+  Cancelled,     // the cancel token was set; no path returned
 };
 const char* pathStatusName(PathStatus s);
 
 struct PathResult {
   PathStatus status = PathStatus::NoSolution;
   std::vector<Eigen::Vector2d> waypoints;  // local frame, start first; RRT*'s own vertices
-  double cost = 0;             // eq. 9 as minimised by RRT* (pathCost(..., false)); 0 without path
-  double costWithTurns = 0;    // eq. 9 with Δψ at every vertex (pathCost(..., true))
-  double goalDistance = 0;     // m from the last waypoint to the goal (0 when Exact)
-  int vertices = 0;            // vertices of the RRT* tree (OMPL PlannerData) when it stopped
-  int iterations = 0;          // RRT* iterations (samples drawn)
+  double cost = 0;           // eq. 9 as minimised by RRT* (pathCost(..., false)); 0 without path
+  double costWithTurns = 0;  // eq. 9 with Δψ at every vertex (pathCost(..., true))
+  double goalDistance = 0;   // m from the last waypoint to the goal (0 when Exact)
+  int vertices = 0;          // vertices of the RRT* tree (OMPL PlannerData) when it stopped
+  int iterations = 0;        // RRT* iterations (samples drawn)
   bool hasPath() const { return status == PathStatus::Exact || status == PathStatus::Approximate; }
 };
 
-// Plans one rover's path from `start` (heading `startHeading`) to `goal` with RRT* (paper 001 §3.6):
-// bounds from searchBounds(), range `params.range`, eq. 9 cost, the tree grown until it has
+// Plans one rover's path from `start` (heading `startHeading`) to `goal` with RRT* (paper 001
+// §3.6): bounds from searchBounds(), range `params.range`, eq. 9 cost, the tree grown until it has
 // `params.maxVertices` vertices (or `params.maxIterations` iterations, or cancellation).
+// start == goal gives Exact with that one waypoint and no search.
 // Deterministic for a given seed; safe to call concurrently from several threads (each call builds
 // its own OMPL objects and seeded random generators). Bad parameters throw rover::Error.
 PathResult planPath(const terrain::Dem& dem, const Raster<std::uint8_t>& classes,

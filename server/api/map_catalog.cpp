@@ -326,13 +326,19 @@ store::PdmRecord MapCatalog::createPdm(const std::string& mapId, const std::stri
     throw ApiError(400, "invalid_parameter", e.what(), e.field());
   }
   mass.geo = map->dem.z.geo;
+  return storePdm(mapId, name.empty() ? "PDM " + store::nowIso() : name, mass, meta);
+}
+
+store::PdmRecord MapCatalog::storePdm(const std::string& mapId, const std::string& name,
+                                      const Raster<float>& mass, const nlohmann::json& meta) {
+  // Files first, then the row, as for maps.
   const std::string staging = dir_.stagingDir();
   try {
     maps::writeGeoTiff((fs::path(staging) / "pdm.tif").string(), mass);
     store::PdmRecord rec;
     rec.id = store::DataDir::newId();
     rec.mapId = mapId;
-    rec.name = name.empty() ? "PDM " + store::nowIso() : name;
+    rec.name = name;
     rec.createdAt = store::nowIso();
     rec.meta = meta;
     dir_.commitDir(staging, dir_.pdmDir(rec.id));
@@ -374,22 +380,7 @@ store::PdmRecord MapCatalog::createPdmFromRaster(const std::string& mapId, const
     throw ApiError(400, "invalid_pdm", e.what(), "file");
   }
   mass.geo = map->dem.z.geo;
-  const std::string staging = dir_.stagingDir();
-  try {
-    maps::writeGeoTiff((fs::path(staging) / "pdm.tif").string(), mass);
-    store::PdmRecord rec;
-    rec.id = store::DataDir::newId();
-    rec.mapId = mapId;
-    rec.name = name.empty() ? "raster PDM" : name;
-    rec.createdAt = store::nowIso();
-    rec.meta = {{"kind", "raster"}};
-    dir_.commitDir(staging, dir_.pdmDir(rec.id));
-    db_.insertPdm(rec);
-    return rec;
-  } catch (...) {
-    store::DataDir::removeTree(staging);
-    throw;
-  }
+  return storePdm(mapId, name.empty() ? "raster PDM" : name, mass, {{"kind", "raster"}});
 }
 
 Raster<float> MapCatalog::pdmMass(const std::string& pdmId) {

@@ -58,6 +58,8 @@ class MapCatalog {
 
  private:
   std::shared_ptr<const MapData> loadFromDisk(const store::MapRecord& r);
+  store::PdmRecord storePdm(const std::string& mapId, const std::string& name,
+                            const Raster<float>& mass, const nlohmann::json& meta);
 
   store::Database& db_;
   store::DataDir& dir_;

@@ -8,6 +8,7 @@
 #include <numbers>
 
 #include "core/common/error.hpp"
+#include "dem_literals.hpp"
 
 using namespace rover;
 using namespace rover::team;
@@ -16,21 +17,11 @@ namespace {
 constexpr double kPi = std::numbers::pi;
 constexpr double kRadPerDeg = kPi / 180.0;
 
-// A DEM sampled from z(x, y) at the cell centres of the local frame.
-terrain::Dem simDem(int rows, int cols, double cell, const std::function<double(double, double)>& z) {
-  terrain::Dem d;
-  d.z = Raster<float>(GridGeometry{rows, cols, cell, cell}, 0.0f);
-  for (int r = 0; r < rows; ++r)
-    for (int c = 0; c < cols; ++c) {
-      Eigen::Vector2d p = cellToLocal(d.geometry(), {r, c});
-      d.z(r, c) = static_cast<float>(z(p.x(), p.y()));
-    }
-  return d;
-}
+using rover::test::demFrom;
 
 // 20 × 20 m at 0.25 m.
 terrain::Dem flat20() {
-  return simDem(80, 80, 0.25, [](double, double) { return 1.0; });
+  return demFrom(80, 80, 0.25, [](double, double) { return 1.0; });
 }
 
 Trajectory run(const terrain::Dem& dem, std::vector<Eigen::Vector2d> wps, Pose start,
@@ -158,7 +149,7 @@ TEST_CASE("sim: on a slope the speed drops and roll/pitch match the plane") {
   // z = 0.1·x + 0.15·y: ∇h = (0.1, 0.15).
   const Eigen::Vector2d grad(0.1, 0.15);
   const terrain::Dem dem =
-      simDem(80, 80, 0.25, [&](double x, double y) { return grad.x() * x + grad.y() * y; });
+      demFrom(80, 80, 0.25, [&](double x, double y) { return grad.x() * x + grad.y() * y; });
   const ControllerParams ctl;
   for (double dir : {0.0, kPi / 2, kPi / 4, -3 * kPi / 4}) {
     CAPTURE(dir);
@@ -191,7 +182,7 @@ TEST_CASE("sim: on a slope the speed drops and roll/pitch match the plane") {
 TEST_CASE("sim: slip drifts the rover down the cross slope, reproducibly per seed") {
   // Rising to the north at 0.25 (14°); driving east the ground rises to the left: roll > 0, and
   // slip pushes the rover south.
-  const terrain::Dem dem = simDem(80, 80, 0.25, [](double, double y) { return 0.25 * y; });
+  const terrain::Dem dem = demFrom(80, 80, 0.25, [](double, double y) { return 0.25 * y; });
   const std::vector<Eigen::Vector2d> wps{{18.0, 10.0}};
   const Pose start{2.0, 10.0, 0.0};
   Trajectory dry = run(dem, wps, start);
@@ -237,7 +228,7 @@ TEST_CASE("sim: slip drifts the rover down the cross slope, reproducibly per see
 TEST_CASE("sim: exceedance counting on a steep ramp") {
   // Flat up to x = 10, then a 20° ramp.
   const double rise = std::tan(20.0 * kRadPerDeg);
-  const terrain::Dem dem = simDem(80, 80, 0.25, [&](double x, double) {
+  const terrain::Dem dem = demFrom(80, 80, 0.25, [&](double x, double) {
     return x < 10.0 ? 0.0 : rise * (x - 10.0);
   });
   Trajectory t = run(dem, {{18.0, 10.0}}, {2.0, 10.0, 0.0});

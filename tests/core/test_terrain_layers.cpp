@@ -6,6 +6,7 @@
 
 #include "core/common/error.hpp"
 #include "core/terrain/layers.hpp"
+#include "dem_literals.hpp"
 
 using namespace rover;
 using namespace rover::terrain;
@@ -13,17 +14,7 @@ using namespace rover::terrain;
 namespace {
 constexpr double kDeg = 180.0 / std::numbers::pi;
 
-// A DEM sampled from z(x, y) at cell centres of the local frame.
-Dem demFrom(int rows, int cols, double cell, const std::function<double(double, double)>& z) {
-  Dem d;
-  d.z = Raster<float>(GridGeometry{rows, cols, cell, cell}, 0.0f);
-  for (int r = 0; r < rows; ++r)
-    for (int c = 0; c < cols; ++c) {
-      Eigen::Vector2d p = cellToLocal(d.geometry(), {r, c});
-      d.z(r, c) = static_cast<float>(z(p.x(), p.y()));
-    }
-  return d;
-}
+using rover::test::demFrom;
 }  // namespace
 
 TEST_CASE("Horn slope and aspect of planes") {

@@ -9,6 +9,7 @@
 #include "core/common/error.hpp"
 #include "core/team/terrain_rrt.hpp"
 #include "core/terrain/layers.hpp"
+#include "dem_literals.hpp"
 
 using namespace rover;
 using namespace rover::team;
@@ -18,17 +19,7 @@ using terrain::TerrainClass;
 namespace {
 constexpr double kDeg = std::numbers::pi / 180.0;
 
-// A DEM sampled from z(x, y) at cell centres of the local frame.
-Dem demFrom(int rows, int cols, double cell, const std::function<double(double, double)>& z) {
-  Dem d;
-  d.z = Raster<float>(GridGeometry{rows, cols, cell, cell}, 0.0f);
-  for (int r = 0; r < rows; ++r)
-    for (int c = 0; c < cols; ++c) {
-      Eigen::Vector2d p = cellToLocal(d.geometry(), {r, c});
-      d.z(r, c) = static_cast<float>(z(p.x(), p.y()));
-    }
-  return d;
-}
+using rover::test::demFrom;
 
 Dem flatDem(int rows, int cols, double cell) {
   return demFrom(rows, cols, cell, [](double, double) { return 0.0; });
@@ -143,8 +134,8 @@ TEST_CASE("rrt: eq. 9 terms of known motions on a known plane") {
   CHECK(ne.pitch == doctest::Approx(a));
   CHECK(ne.roll == doctest::Approx(a));
   CHECK(ne.headingChange == doctest::Approx(45 * kDeg));
-  CHECK(ne.cost(w) == doctest::Approx(0.1 * 0.6 * std::sqrt(2.0) + 0.8 * a / (15 * kDeg) +
-                                      0.1 * 45.0 / 60.0));
+  CHECK(ne.cost(w) ==
+        doctest::Approx(0.1 * 0.6 * std::sqrt(2.0) + 0.8 * a / (15 * kDeg) + 0.1 * 45.0 / 60.0));
 
   // A polyline: what the planner minimises (Δψ on the first edge only) vs every turn charged.
   std::vector<Eigen::Vector2d> path{{3, 3}, {4, 3}, {4, 4}};
@@ -162,13 +153,13 @@ TEST_CASE("rrt: validity rejects impassable cells, nodata, the bounds and attitu
   setCell(cls, {4.1, 4.1}, TerrainClass::Impassable);
   setCell(cls, {6.1, 6.1}, TerrainClass::HighRisk);
   TerrainEdgeModel m(d, cls, {{1, 1}, {7, 7}}, 15 * kDeg, 0.0625);
-  CHECK(m.edgeValid({3.0, 4.1}, {3.95, 4.1}));  // stops short of it (the cell spans x 4..4.25)
+  CHECK(m.edgeValid({3.0, 4.1}, {3.95, 4.1}));       // stops short of it (the cell spans x 4..4.25)
   CHECK_FALSE(m.edgeValid({3.6, 4.1}, {4.6, 4.1}));  // crosses the impassable cell
   CHECK_FALSE(m.edgeValid({4.1, 3.6}, {4.1, 4.4}));
-  CHECK(m.edgeValid({3.6, 4.6}, {4.6, 4.6}));         // passes north of it
+  CHECK(m.edgeValid({3.6, 4.6}, {4.6, 4.6}));  // passes north of it
   CHECK_FALSE(m.pointValid({4.1, 4.1}));
-  CHECK(m.edgeValid({5.8, 6.1}, {6.6, 6.1}));         // high risk is allowed on flat ground
-  CHECK_FALSE(m.edgeValid({6.5, 6.5}, {7.5, 6.5}));   // leaves the bounds
+  CHECK(m.edgeValid({5.8, 6.1}, {6.6, 6.1}));        // high risk is allowed on flat ground
+  CHECK_FALSE(m.edgeValid({6.5, 6.5}, {7.5, 6.5}));  // leaves the bounds
   CHECK_FALSE(m.pointValid({0.5, 3}));
 
   // A 20° plane rising east, classes forced traversable so only the attitude limit decides:
@@ -237,7 +228,8 @@ TEST_CASE("rrt: a wall of impassable cells with a gap: the path goes through the
   for (int r = 0; r < 48; ++r)
     for (int c = 23; c < 25; ++c) {
       Eigen::Vector2d p = cellToLocal(d.geometry(), {r, c});
-      if (p.y() < 4.5 || p.y() >= 5.25) cls(r, c) = static_cast<std::uint8_t>(TerrainClass::Impassable);
+      if (p.y() < 4.5 || p.y() >= 5.25)
+        cls(r, c) = static_cast<std::uint8_t>(TerrainClass::Impassable);
     }
   const Eigen::Vector2d start(3, 3.5), goal(9, 3.5);
   RrtParams p;
@@ -364,17 +356,18 @@ TEST_CASE("rrt: the cost steers around a hill that the straight line climbs") {
 }
 
 TEST_CASE("rrt: two threads planning different problems match sequential runs") {
-  Dem d = demFrom(64, 64, 0.25,
-                  [](double x, double y) { return 0.25 * std::sin(0.8 * x + 0.3 * y); });
+  Dem d =
+      demFrom(64, 64, 0.25, [](double x, double y) { return 0.25 * std::sin(0.8 * x + 0.3 * y); });
   auto cls = terrain::traversability(d).classes;
   struct Problem {
     Eigen::Vector2d start, goal;
     double heading;
     std::uint64_t seed;
   };
-  const std::vector<Problem> problems{
-      {{3, 3}, {8, 6}, 0.0, 7}, {{12, 12}, {7, 10}, 3.0, 8}, {{4, 12}, {9, 13}, 1.0, 9},
-      {{13, 3}, {10, 7}, -1.5, 10}};
+  const std::vector<Problem> problems{{{3, 3}, {8, 6}, 0.0, 7},
+                                      {{12, 12}, {7, 10}, 3.0, 8},
+                                      {{4, 12}, {9, 13}, 1.0, 9},
+                                      {{13, 3}, {10, 7}, -1.5, 10}};
   auto run = [&](const Problem& pr) {
     RrtParams p;
     p.seed = pr.seed;
@@ -422,7 +415,8 @@ TEST_CASE("rrt: edge roll and pitch are terrain::attitudeAt's, maximised over th
       REQUIRE(att);
       roll = std::max(roll, std::abs(att->roll));
       pitch = std::max(pitch, std::abs(att->pitch));
-      withinLimit = withinLimit && std::abs(att->roll) < 15 * kDeg && std::abs(att->pitch) < 15 * kDeg;
+      withinLimit =
+          withinLimit && std::abs(att->roll) < 15 * kDeg && std::abs(att->pitch) < 15 * kDeg;
     }
     EdgeTerms t = m.edgeTerms(a, b);
     CHECK(t.roll == doctest::Approx(roll).epsilon(1e-12));
