@@ -50,12 +50,13 @@ ca_args=()
 if [ -f /etc/ssl/certs/ca-certificates.crt ]; then
   ca_args=(-v /etc/ssl/certs/ca-certificates.crt:/tmp/host-ca.crt:ro --build-arg NODE_EXTRA_CA_CERTS=/tmp/host-ca.crt)
 fi
-pm build --network host --pull=never "${ca_args[@]}" -t "$image" -f "$root/docker/Dockerfile" "$root" > "$state/build.log" 2>&1 \
+pm build --format docker --network host --pull=never "${ca_args[@]}" -t "$image" -f "$root/docker/Dockerfile" "$root" > "$state/build.log" 2>&1 \
   || { tail -30 "$state/build.log" >&2; fail "podman build"; }
 pass "image builds from docker/Dockerfile"
 
 [ "$(pm image inspect "$image" --format '{{.Config.User}}')" = roverplan ] || fail "the image does not run as the roverplan user"
-pm image inspect "$image" --format '{{json .Config.Healthcheck}}' | grep -q api/health || fail "no HEALTHCHECK on /api/health"
+pm image inspect "$image" --format '{{json .Config.Healthcheck}}' > "$state/healthcheck.json"
+grep -q api/health "$state/healthcheck.json" || fail "no HEALTHCHECK on /api/health"
 pass "non-root user and a HEALTHCHECK"
 
 pm run -d --rm --network host --name "$name" "$image" \
@@ -63,8 +64,9 @@ pm run -d --rm --network host --name "$name" "$image" \
 trap 'podman --runtime runc stop -t 2 "$name" >/dev/null 2>&1 || true' EXIT
 url="http://127.0.0.1:$port"
 for _ in $(seq 1 150); do curl -fs "$url/api/health" >/dev/null 2>&1 && break; sleep 0.2; done
-curl -fs "$url/api/health" | grep -q '"status":"ok"' || fail "health"
-curl -fs "$url/" | grep -qi "<html" || fail "the web page is not served"
+# (Bodies go to files first: with pipefail, `curl | grep -q` fails when grep stops reading early.)
+curl -fs "$url/api/health" > "$state/health.json" && grep -q '"status":"ok"' "$state/health.json" || fail "health"
+curl -fs "$url/" > "$state/index.html" && grep -qi "<html" "$state/index.html" || fail "the web page is not served"
 pass "container serves the API and the web page"
 
 pm exec "$name" roverplan terrain --preset moon --size 64 --cell 1 --seed 2 --out /tmp/moon.tif >/dev/null
@@ -80,7 +82,7 @@ for _ in $(seq 1 100); do
   sleep 0.2
 done
 [ "$status" = succeeded ] || fail "mission status $status"
-curl -fs "$url/api/missions/$mission/result.geojson" | grep -q FeatureCollection || fail "result"
+curl -fs "$url/api/missions/$mission/result.geojson" > "$state/result.geojson" && grep -q FeatureCollection "$state/result.geojson" || fail "result"
 pass "upload a map and run a mission through the published port"
 
 pm stop -t 5 "$name" >/dev/null
