@@ -2,25 +2,12 @@
 // cells), pace 2000 steps/s, coverage goal 0.5. Prints the frames per second the page renders
 // (window.__roverplan.fps); asserts only that frames arrived — timing depends on the machine.
 import assert from 'node:assert/strict';
-import { after, before, describe, test } from 'node:test';
-import { launchBrowser, missingPrerequisite, openPage, screenshot, startServer, waitForMap } from './lib/harness.mjs';
+import { test } from 'node:test';
+import { openPage, screenshot, suiteWithServer, waitForMap } from './lib/harness.mjs';
 
-const missing = missingPrerequisite();
-if (missing) console.log(`# browser tests skipped: ${missing}`);
-
-describe('live view on a 600×600 grid', { skip: missing || false, timeout: 240000 }, () => {
-  let server, browser;
-  before(async () => {
-    server = await startServer();
-    browser = await launchBrowser();
-  });
-  after(async () => {
-    await browser?.close();
-    await server?.stop();
-  });
-
+suiteWithServer('live view on a 600×600 grid', { timeout: 240000 }, (ctx) => {
   test('streams and renders a 360,000-cell coverage mission', async () => {
-    const { page, errors, context } = await openPage(browser, `${server.url}/`);
+    const { page, errors, context } = await openPage(ctx.browser, `${ctx.server.url}/`);
     await waitForMap(page);
     await page.click('#tab-mission');
     const map = await page.evaluate(() => window.__roverplanApp.state.map);

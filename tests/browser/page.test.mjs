@@ -1,25 +1,12 @@
 // The page loads cleanly, draws the default map, toggles layers, shows the cursor readout, keeps
 // its layout at 1280×800 and 1920×1080, and renders the 3D view.
 import assert from 'node:assert/strict';
-import { after, before, describe, test } from 'node:test';
-import { launchBrowser, mapPoint, missingPrerequisite, openPage, screenshot, startServer, waitForMap } from './lib/harness.mjs';
+import { test } from 'node:test';
+import { mapPoint, openPage, screenshot, suiteWithServer, waitForMap } from './lib/harness.mjs';
 
-const missing = missingPrerequisite();
-if (missing) console.log(`# browser tests skipped: ${missing}`);
-
-describe('page', { skip: missing || false, timeout: 180000 }, () => {
-  let server, browser;
-  before(async () => {
-    server = await startServer();
-    browser = await launchBrowser();
-  });
-  after(async () => {
-    await browser?.close();
-    await server?.stop();
-  });
-
+suiteWithServer('page', { timeout: 180000 }, (ctx) => {
   test('loads without console errors and draws the default map', async () => {
-    const { page, errors, context } = await openPage(browser, `${server.url}/`);
+    const { page, errors, context } = await openPage(ctx.browser, `${ctx.server.url}/`);
     const ms = await waitForMap(page);
     console.log(`page load to first map drawn: ${ms} ms`);
     assert.match(await page.textContent('#map-title'), /Default/);
@@ -32,7 +19,7 @@ describe('page', { skip: missing || false, timeout: 180000 }, () => {
   });
 
   test('the traversability layer toggles on and the cursor readout shows a class', async () => {
-    const { page, errors, context } = await openPage(browser, `${server.url}/`);
+    const { page, errors, context } = await openPage(ctx.browser, `${ctx.server.url}/`);
     await waitForMap(page);
     await page.check('#layer-traversability');
     await page.waitForFunction(() => window.__roverplan.layersLoaded.includes('traversability'));
@@ -56,7 +43,7 @@ describe('page', { skip: missing || false, timeout: 180000 }, () => {
   });
 
   test('keyboard zoom and tabs work', async () => {
-    const { page, errors, context } = await openPage(browser, `${server.url}/`);
+    const { page, errors, context } = await openPage(ctx.browser, `${ctx.server.url}/`);
     await waitForMap(page);
     const scale0 = await page.evaluate(() => window.__roverplanApp.view.scale);
     await page.focus('#map-canvas');
@@ -74,7 +61,7 @@ describe('page', { skip: missing || false, timeout: 180000 }, () => {
 
   test('the layout holds at 1920×1080 and 1280×800', async () => {
     for (const viewport of [{ width: 1920, height: 1080 }, { width: 1280, height: 800 }]) {
-      const { page, errors, context } = await openPage(browser, `${server.url}/`, { viewport });
+      const { page, errors, context } = await openPage(ctx.browser, `${ctx.server.url}/`, { viewport });
       await waitForMap(page);
       await page.waitForTimeout(300);
       await screenshot(page, `layout-${viewport.width}x${viewport.height}`);
@@ -93,7 +80,7 @@ describe('page', { skip: missing || false, timeout: 180000 }, () => {
   });
 
   test('the 3D view renders the terrain', async () => {
-    const { page, errors, context } = await openPage(browser, `${server.url}/`);
+    const { page, errors, context } = await openPage(ctx.browser, `${ctx.server.url}/`);
     await waitForMap(page);
     await page.click('#view-3d');
     await page.waitForFunction(() => window.__roverplan.view3dReady || !document.getElementById('view3d-message').hidden, null, { timeout: 30000 });

@@ -1,27 +1,14 @@
 // The PDM editor: two Gaussians added by clicking, one dragged, its sigma handle pulled, saved;
 // then the server's layer for the saved PDM is shown, and random (G=4) works.
 import assert from 'node:assert/strict';
-import { after, before, describe, test } from 'node:test';
-import { launchBrowser, mapPoint, missingPrerequisite, openPage, screenshot, startServer, waitForMap } from './lib/harness.mjs';
-
-const missing = missingPrerequisite();
-if (missing) console.log(`# browser tests skipped: ${missing}`);
+import { test } from 'node:test';
+import { mapPoint, openPage, screenshot, suiteWithServer, waitForMap } from './lib/harness.mjs';
 
 const comps = (page) => page.evaluate(() => window.__roverplanApp.pdmEditor.comps.map((g) => ({ ...g })));
 
-describe('PDM editor', { skip: missing || false, timeout: 180000 }, () => {
-  let server, browser;
-  before(async () => {
-    server = await startServer();
-    browser = await launchBrowser();
-  });
-  after(async () => {
-    await browser?.close();
-    await server?.stop();
-  });
-
+suiteWithServer('PDM editor', { timeout: 180000 }, (ctx) => {
   test('add two components by clicking, drag one, save, see the saved PDM layer', async () => {
-    const { page, errors, context } = await openPage(browser, `${server.url}/`);
+    const { page, errors, context } = await openPage(ctx.browser, `${ctx.server.url}/`);
     await waitForMap(page);
     await page.click('#tab-pdm');
     for (const [x, y] of [[40, 50], [105, 110]]) {
@@ -63,10 +50,10 @@ describe('PDM editor', { skip: missing || false, timeout: 180000 }, () => {
     // The saved PDM on the server holds the edited components.
     const pdmId = await page.evaluate(() => window.__roverplanApp.state.pdmId);
     const mapId = await page.evaluate(() => window.__roverplanApp.state.map.id);
-    const saved = await (await fetch(`${server.url}/api/maps/${mapId}/pdms/${pdmId}`)).json();
+    const saved = await (await fetch(`${ctx.server.url}/api/maps/${mapId}/pdms/${pdmId}`)).json();
     assert.equal(saved.components.length, 2);
     assert.ok(Math.abs(saved.components[0].x - 60) < 1);
-    const png = await fetch(`${server.url}/api/maps/${mapId}/layers/pdm.png?pdm=${pdmId}`);
+    const png = await fetch(`${ctx.server.url}/api/maps/${mapId}/layers/pdm.png?pdm=${pdmId}`);
     assert.equal(png.status, 200);
     // The readout gains the PDM value.
     await page.waitForFunction(() => window.__roverplanApp.layers.rasters.pdm);
@@ -80,7 +67,7 @@ describe('PDM editor', { skip: missing || false, timeout: 180000 }, () => {
   });
 
   test('random (G=4) creates a PDM on the server and loads its components', async () => {
-    const { page, errors, context } = await openPage(browser, `${server.url}/`);
+    const { page, errors, context } = await openPage(ctx.browser, `${ctx.server.url}/`);
     await waitForMap(page);
     await page.click('#tab-pdm');
     await page.fill('#pdm-seed', '7');

@@ -7,6 +7,7 @@ import { createServer } from 'node:net';
 import { tmpdir } from 'node:os';
 import { dirname, join, resolve } from 'node:path';
 import { fileURLToPath } from 'node:url';
+import { after, before, describe } from 'node:test';
 import { chromium } from 'playwright-core';
 
 export const browserDir = resolve(dirname(fileURLToPath(import.meta.url)), '..');
@@ -137,3 +138,23 @@ export function generatedDem(dir, size = 128) {
 }
 
 export { sleep };
+
+// A describe() block with its own server and browser, started before its tests and stopped after:
+// the tests read ctx.server and ctx.browser. Skipped, with a message, when Chromium or the
+// roverplan binary is missing.
+export function suiteWithServer(name, { timeout = 180000, serverOptions = {} } = {}, body) {
+  const missing = missingPrerequisite();
+  if (missing) console.log(`# browser tests skipped (${name}): ${missing}`);
+  describe(name, { skip: missing || false, timeout }, () => {
+    const ctx = {};
+    before(async () => {
+      ctx.server = await startServer(serverOptions);
+      ctx.browser = await launchBrowser();
+    });
+    after(async () => {
+      await ctx.browser?.close();
+      await ctx.server?.stop();
+    });
+    body(ctx);
+  });
+}
