@@ -7,6 +7,8 @@
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 cd "$root"
+# ccache keyed on paths relative to the checkout, so every clone on a machine shares one cache.
+export CCACHE_BASEDIR="$root" CCACHE_NOHASHDIR=1
 
 bash docker/install-deps.sh
 bash docker/setup-web.sh web tests/browser
