@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <cstring>
 #include <fstream>
+#include <set>
 
 #include "core/common/error.hpp"
 #include "maps/dem_io.hpp"
@@ -161,6 +162,26 @@ store::MapRecord MapCatalog::importDem(const std::vector<UploadedFile>& files, c
     store::DataDir::removeTree(staging);
     throw;
   }
+}
+
+int MapCatalog::sweepOrphans() {
+  std::set<std::string> maps, pdms;
+  for (const auto& m : db_.listMaps()) {
+    maps.insert(m.id);
+    for (const auto& p : db_.listPdms(m.id)) pdms.insert(p.id);
+  }
+  int removed = 0;
+  auto sweep = [&](const std::string& parent, const std::set<std::string>& keep) {
+    std::error_code ec;
+    for (const auto& e : fs::directory_iterator(parent, ec)) {
+      if (!e.is_directory() || keep.count(e.path().filename().string())) continue;
+      store::DataDir::removeTree(e.path().string());
+      ++removed;
+    }
+  };
+  sweep(fs::path(dir_.mapDir("x")).parent_path().string(), maps);
+  sweep(fs::path(dir_.pdmDir("x")).parent_path().string(), pdms);
+  return removed;
 }
 
 void MapCatalog::ensureDefaultMap() {

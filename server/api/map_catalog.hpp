@@ -34,6 +34,9 @@ class MapCatalog {
   // Validates and stores a DEM; throws http::ApiError 400 (field "file"/"cell"/"name") on bad input.
   store::MapRecord importDem(const std::vector<UploadedFile>& files, const std::string& name,
                              double cellSize);
+  // Start-up: removes map and PDM folders that have no database row (a crash between committing
+  // the files and inserting the row leaves one behind). Returns how many were removed.
+  int sweepOrphans();
   // The generated default map (synthetic Mars, 600×600 × 0.25 m, seed 1), created if no map exists.
   void ensureDefaultMap();
   // Throws ApiError 404 (field "id") for an unknown map.

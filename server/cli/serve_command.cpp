@@ -55,6 +55,7 @@ int serveCommand(const std::vector<std::string>& argv, std::ostream& out) {
   store::Database db(dir.databasePath());
   int interrupted = db.markUnfinishedInterrupted();
   api::MapCatalog maps(db, dir);
+  const int orphans = maps.sweepOrphans();
   maps.ensureDefaultMap();
   PlannerRegistry planners = makeBuiltinRegistry();
   missions::MissionManager manager(db, dir, planners, workers, queue);
@@ -71,6 +72,7 @@ int serveCommand(const std::vector<std::string>& argv, std::ostream& out) {
   out << "roverplan serving on http://" << shownHost << ":" << server.port() << "/  (data: "
       << std::filesystem::absolute(dir.root()).string() << ", " << workers << " workers"
       << (config.token.empty() ? "" : ", token required") << ")" << std::endl;
+  if (orphans > 0) out << "removed " << orphans << " half-stored map/PDM folder(s) left by a crash" << std::endl;
   if (interrupted > 0) out << interrupted << " mission(s) were running at the last stop: marked interrupted" << std::endl;
 
   int sig = 0;

@@ -39,6 +39,7 @@ struct TestServer {
   api::ApiContext ctx;
   std::unique_ptr<http::HttpServer> server;
   int interrupted = 0;
+  int orphans = 0;
 
   explicit TestServer(const std::string& data, Options o = {})
       : dataDir(data),
@@ -48,6 +49,7 @@ struct TestServer {
         manager(db, dir, planners, o.workers, o.queue),
         ctx{db, dir, maps, manager, planners} {
     interrupted = db.markUnfinishedInterrupted();
+    orphans = maps.sweepOrphans();
     maps.ensureDefaultMap();
     api::addApiRoutes(router, ctx);
     http::ServerConfig c;
@@ -398,4 +400,23 @@ TEST_CASE("api: maps, PDMs and finished missions survive a restart; running ones
     REQUIRE(replay.size() == 3);
     CHECK(json::parse(replay[2].data)["metrics"] == m["metrics"]);
   }
+}
+
+TEST_CASE("api: folders a crash left without a database row are swept at start-up") {
+  TempDir tmp;
+  std::string map;
+  {
+    TestServer s(tmp.str("data"));
+    map = s.defaultMap();
+    CHECK(s.orphans == 0);
+  }
+  // As if the server died after committing a map's files but before inserting its row.
+  fs::create_directories(tmp.path / "data" / "maps" / "0123456789abcdef");
+  std::ofstream(tmp.path / "data" / "maps" / "0123456789abcdef" / "dem.tif") << "half";
+  fs::create_directories(tmp.path / "data" / "pdms" / "fedcba9876543210");
+  TestServer s(tmp.str("data"));
+  CHECK(s.orphans == 2);
+  CHECK_FALSE(fs::exists(tmp.path / "data" / "maps" / "0123456789abcdef"));
+  CHECK(fs::exists(tmp.path / "data" / "maps" / map));  // the real map stays
+  CHECK(s.get("/api/maps").json().size() == 1);
 }
