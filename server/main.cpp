@@ -16,9 +16,11 @@ const char* kUsage =
     "commands:\n"
     "  serve      the planning server: REST API, live WebSocket streams, the web page\n"
     "  coverage   myopic coverage path planning on a random grid world (papers 002/000)\n"
-    "  sweep      many seeded coverage runs on all cores, summarised (--preset "
-    "laine-fig6|laine-fig8|frontier)\n"
-    "  bench      benchmarks that print their figures (bench coverage)\n"
+    "  mission    a team mission on a DEM: LHC_GW_CONV route, RRT*, simulation, coordination "
+    "(paper 001)\n"
+    "  sweep      many seeded runs on all cores, summarised (--preset "
+    "laine-fig6|laine-fig8|frontier|swinton)\n"
+    "  bench      benchmarks that print their figures (bench coverage|mission)\n"
     "  terrain    synthetic moon/mars terrain as a GeoTIFF (the default map)\n"
     "  traversability  traversability classes and their shares from any DEM GDAL reads\n"
     "  slope      Horn slope (degrees) as a GeoTIFF, as gdaldem slope\n"
@@ -42,6 +44,7 @@ int main(int argc, char** argv) {
   try {
     if (command == "serve") return rover::cli::serveCommand(args, std::cout);
     if (command == "coverage") return rover::cli::coverageCommand(args, std::cout);
+    if (command == "mission") return rover::cli::missionCommand(args, std::cout);
     if (command == "sweep") return rover::cli::sweepCommand(args, std::cout);
     if (command == "bench") return rover::cli::benchCommand(args, std::cout);
     if (command == "terrain") return rover::cli::terrainCommand(args, std::cout);

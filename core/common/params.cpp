@@ -105,4 +105,38 @@ std::string paramToString(const ParamValue& v) {
   return std::visit(Visitor{}, v);
 }
 
+ParamInfo realParam(std::string key, double min, double max, std::string unit, std::string doc) {
+  ParamInfo i;
+  i.key = std::move(key);
+  i.type = ParamType::Real;
+  i.min = min;
+  i.max = max;
+  i.unit = std::move(unit);
+  i.doc = std::move(doc);
+  return i;
+}
+
+ParamInfo intParam(std::string key, double min, double max, std::string unit, std::string doc) {
+  ParamInfo i = realParam(std::move(key), min, max, std::move(unit), std::move(doc));
+  i.type = ParamType::Int;
+  return i;
+}
+
+ParamInfo boolParam(std::string key, std::string doc) {
+  ParamInfo i;
+  i.key = std::move(key);
+  i.type = ParamType::Bool;
+  i.doc = std::move(doc);
+  return i;
+}
+
+ParamInfo choiceParam(std::string key, std::vector<std::string> choices, std::string doc) {
+  ParamInfo i;
+  i.key = std::move(key);
+  i.type = ParamType::Choice;
+  i.choices = std::move(choices);
+  i.doc = std::move(doc);
+  return i;
+}
+
 }  // namespace rover

@@ -32,6 +32,12 @@ struct ParamInfo {
   std::vector<std::string> choices;  // Choice only
 };
 
+// Descriptions for ParamTable::add (the default is filled in from the struct).
+ParamInfo realParam(std::string key, double min, double max, std::string unit, std::string doc);
+ParamInfo intParam(std::string key, double min, double max, std::string unit, std::string doc);
+ParamInfo boolParam(std::string key, std::string doc);
+ParamInfo choiceParam(std::string key, std::vector<std::string> choices, std::string doc);
+
 // Value coercions used by the tables; throw InvalidParameter naming `key`.
 bool paramAsBool(const std::string& key, const ParamValue& v);
 std::int64_t paramAsInt(const ParamInfo& info, const ParamValue& v);

@@ -14,37 +14,6 @@ namespace {
 
 using P = CoverageParams;
 
-ParamInfo real(std::string key, double min, double max, std::string unit, std::string doc) {
-  ParamInfo i;
-  i.key = std::move(key);
-  i.type = ParamType::Real;
-  i.min = min;
-  i.max = max;
-  i.unit = std::move(unit);
-  i.doc = std::move(doc);
-  return i;
-}
-ParamInfo integer(std::string key, double min, double max, std::string unit, std::string doc) {
-  ParamInfo i = real(std::move(key), min, max, std::move(unit), std::move(doc));
-  i.type = ParamType::Int;
-  return i;
-}
-ParamInfo flag(std::string key, std::string doc) {
-  ParamInfo i;
-  i.key = std::move(key);
-  i.type = ParamType::Bool;
-  i.doc = std::move(doc);
-  return i;
-}
-ParamInfo choice(std::string key, std::vector<std::string> choices, std::string doc) {
-  ParamInfo i;
-  i.key = std::move(key);
-  i.type = ParamType::Choice;
-  i.choices = std::move(choices);
-  i.doc = std::move(doc);
-  return i;
-}
-
 // A real-valued field bound by pointer to member.
 void addReal(ParamTable<P>& t, ParamInfo info, double P::*field) {
   t.add(
@@ -67,7 +36,7 @@ void addFlag(ParamTable<P>& t, ParamInfo info, bool P::*field) {
 ParamTable<P> buildTable() {
   ParamTable<P> t;
   t.add(
-      choice("mode", {"overlap", "voronoi"},
+      choiceParam("mode", {"overlap", "voronoi"},
              "Team strategy (paper 002 §2.3): one shared map, or one Voronoi region per rover."),
       [](const P& p) -> ParamValue {
         return std::string(p.mode == TeamMode::Overlap ? "overlap" : "voronoi");
@@ -76,7 +45,7 @@ ParamTable<P> buildTable() {
         p.mode = paramAsChoice(i, v) == "overlap" ? TeamMode::Overlap : TeamMode::Voronoi;
       });
   t.add(
-      choice("pattern", {"spiral", "boustrophedon", "custom"},
+      choiceParam("pattern", {"spiral", "boustrophedon", "custom"},
              "Motion pattern: the static cost table preset, or custom (then give cost_table)."),
       [](const P& p) -> ParamValue { return p.pattern; },
       [](P& p, const ParamInfo& i, const ParamValue& v) { p.pattern = paramAsChoice(i, v); });
@@ -94,51 +63,51 @@ ParamTable<P> buildTable() {
         });
   }
   addFlag(t,
-          flag("circumnavigate",
+          boolParam("circumnavigate",
                "Follow an obstacle's contour when it blocks the way ahead, "
                "until the original line is regained (paper 002 §2.2)."),
           &P::circumnavigate);
   addFlag(t,
-          flag("frontier",
+          boolParam("frontier",
                "When every neighbour is visited, take the shortest known path to the "
                "nearest unexplored cell; stop when none is reachable (ours)."),
           &P::frontier);
   t.add(
-      integer("sense_radius", 1, 2, "cells",
+      intParam("sense_radius", 1, 2, "cells",
               "Myopic sensing radius (Chebyshev): 1 = 8 cells, 2 = 24."),
       [](const P& p) -> ParamValue { return std::int64_t{p.senseRadius}; },
       [](P& p, const ParamInfo& i, const ParamValue& v) {
         p.senseRadius = static_cast<int>(paramAsInt(i, v));
       });
   addReal(t,
-          real("coverage", 0.01, 1.0, "",
+          realParam("coverage", 0.01, 1.0, "",
                "Coverage goal: stop when visited >= goal·(n − known obstacles)."),
           &P::coverage);
   addReal(t,
-          real("alpha", 0.0, 1.0, "",
+          realParam("alpha", 0.0, 1.0, "",
                "Weight of static + visited cost (paper 000 eq. 3); alpha + beta = 1."),
           &P::alpha);
-  addReal(t, real("beta", 0.0, 1.0, "", "Weight of the height difference |Δh| (paper 000 eq. 3)."),
+  addReal(t, realParam("beta", 0.0, 1.0, "", "Weight of the height difference |Δh| (paper 000 eq. 3)."),
           &P::beta);
   addReal(t,
-          real("mc_visited", 1.1, 1000.0, "",
+          realParam("mc_visited", 1.1, 1000.0, "",
                "Cost added per previous visit of a cell (paper 000: >= 1.1)."),
           &P::mcVisited);
   t.add(
-      integer("max_steps", 0, 1e9, "steps", "Step budget; 0 = 20 × number of cells."),
+      intParam("max_steps", 0, 1e9, "steps", "Step budget; 0 = 20 × number of cells."),
       [](const P& p) -> ParamValue { return p.maxSteps; },
       [](P& p, const ParamInfo& i, const ParamValue& v) { p.maxSteps = paramAsInt(i, v); });
-  addReal(t, real("coverage_cell", 0.0, 1e5, "m", "Coverage grid cell on a DEM (the map is resampled to it; 0 = the map's own cells)."),
+  addReal(t, realParam("coverage_cell", 0.0, 1e5, "m", "Coverage grid cell on a DEM (the map is resampled to it; 0 = the map's own cells)."),
           &P::coverageCell);
-  addEnergy(t, real("rover_mass", 0.1, 1000.0, "kg", "Rover mass (CLOVER: 7 kg)."),
+  addEnergy(t, realParam("rover_mass", 0.1, 1000.0, "kg", "Rover mass (CLOVER: 7 kg)."),
             &EnergyModel::massKg);
-  addEnergy(t, real("gravity", 0.1, 30.0, "m/s²", "Surface gravity (Moon 1.62, Mars 3.71)."),
+  addEnergy(t, realParam("gravity", 0.1, 30.0, "m/s²", "Surface gravity (Moon 1.62, Mars 3.71)."),
             &EnergyModel::gravity);
-  addEnergy(t, real("rolling_resistance", 0.0, 2.0, "", "Rolling resistance coefficient μ."),
+  addEnergy(t, realParam("rolling_resistance", 0.0, 2.0, "", "Rolling resistance coefficient μ."),
             &EnergyModel::rollingResistance);
-  addEnergy(t, real("drive_efficiency", 0.01, 1.0, "", "Drive-train efficiency η."),
+  addEnergy(t, realParam("drive_efficiency", 0.01, 1.0, "", "Drive-train efficiency η."),
             &EnergyModel::efficiency);
-  addEnergy(t, real("turn_energy", 0.0, 1000.0, "J/rad", "Energy per radian of spot turn."),
+  addEnergy(t, realParam("turn_energy", 0.0, 1000.0, "J/rad", "Energy per radian of spot turn."),
             &EnergyModel::turnJoulesPerRad);
   return t;
 }

@@ -5,6 +5,9 @@
 // what it wants; a planner handed no sink builds no events at all.
 #include <cstdint>
 #include <span>
+#include <string_view>
+
+#include "core/planning/plan_result.hpp"
 
 namespace rover {
 
@@ -30,6 +33,12 @@ struct Progress {
   std::int64_t moves = 0;
 };
 
+// A point of an overlay polyline (local frame, metres).
+struct Point2 {
+  double x = 0;
+  double y = 0;
+};
+
 class EventSink {
  public:
   virtual ~EventSink() = default;
@@ -39,6 +48,15 @@ class EventSink {
     (void)poses;
   }
   virtual void progress(const Progress& p) { (void)p; }
+  // A polyline drawn over the map: `kind` "route" (the team route, rover −1, replaces the last
+  // one) or "path" (points appended to a rover's planned path, as each piece is accepted).
+  virtual void overlay(std::string_view kind, int rover, std::span<const Point2> points) {
+    (void)kind;
+    (void)rover;
+    (void)points;
+  }
+  // Metrics known before the run ends (the team planners report theirs once simulation is done).
+  virtual void metrics(std::span<const Metric> metrics) { (void)metrics; }
 };
 
 }  // namespace rover

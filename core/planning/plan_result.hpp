@@ -25,6 +25,26 @@ struct Series {
   std::vector<double> x, y;
 };
 
+// A polyline to draw (e.g. the team route, a rover's planned path); rover −1 = the team.
+struct Polyline {
+  std::string key;
+  int rover = -1;
+  std::vector<Eigen::Vector2d> points;  // local frame, metres
+};
+
+// Something the user must be told about, with where and when: kind "collision" (two rovers
+// closer than the safety distance in the returned plan), "skipped" or "short" (a rover's leg given
+// up or ended away from its goal).
+struct Incident {
+  std::string kind;
+  int rover = 0;
+  int other = -1;  // the other rover of a collision
+  double time = 0;  // s from the mission start
+  Eigen::Vector2d position{0, 0};
+  double value = 0;  // collision: the closest distance, m
+  std::string note;
+};
+
 struct PlanResult {
   std::string planner;
   std::string stopReason;  // planner-defined, e.g. goal_reached, step_budget, cancelled
@@ -32,6 +52,8 @@ struct PlanResult {
   std::vector<Metric> metrics;
   std::vector<Track> tracks;
   std::vector<Series> series;
+  std::vector<Polyline> overlays;
+  std::vector<Incident> incidents;
 
   // The value of a metric; throws NotFound if the planner did not report it.
   double metric(const std::string& key) const;

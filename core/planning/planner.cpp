@@ -3,6 +3,7 @@
 #include "core/common/error.hpp"
 #include "core/common/strings.hpp"
 #include "core/coverage/coverage_entry.hpp"
+#include "core/team/team_entry.hpp"
 
 namespace rover {
 
@@ -31,6 +32,8 @@ std::vector<std::string> PlannerRegistry::names() const {
 PlannerRegistry makeBuiltinRegistry() {
   PlannerRegistry r;
   r.add(coverage::makeCoveragePlanner());
+  r.add(team::makeTeamSearchPlanner());
+  r.add(team::makeHybridPlanner());
   return r;
 }
 

@@ -10,6 +10,7 @@
 #include "core/common/cancel.hpp"
 #include "core/common/params.hpp"
 #include "core/coverage/world.hpp"
+#include "core/terrain/dem.hpp"
 #include "core/planning/events.hpp"
 #include "core/planning/plan_result.hpp"
 
@@ -20,10 +21,13 @@ struct RoverStart {
   double heading = 0;              // radians counter-clockwise from east
 };
 
-// Everything a planner plans on. Grows with the planner families (terrain layers, PDM).
+// Everything a planner plans on. Each family reads its part: the coverage planner the grid
+// world, the team planners the DEM and the PDM.
 struct PlanningProblem {
   coverage::World world;  // the coverage grid: obstacles and optional heights
   std::vector<RoverStart> rovers;
+  std::shared_ptr<const terrain::Dem> dem;  // the map at its planning resolution
+  std::shared_ptr<const Raster<float>> pdm;  // PDM masses on the DEM's grid; null = none given
 };
 
 class Planner {
@@ -34,6 +38,12 @@ class Planner {
   virtual std::vector<ParamInfo> params() const = 0;
   // Full validation, so a server can answer 400 before it queues anything. Throws rover::Error.
   virtual void validate(const PlanningProblem& problem, const ParamSet& params) const = 0;
+  // The grid of the planner's cellsChanged events (the coverage grid; the team route's search
+  // cells), so a viewer can size it before the run starts.
+  virtual GridGeometry eventGrid(const PlanningProblem& problem, const ParamSet& params) const {
+    (void)params;
+    return problem.world.geometry();
+  }
   // Runs to completion or cancellation; `sink` and `cancel` may be null.
   virtual PlanResult run(const PlanningProblem& problem, const ParamSet& params, EventSink* sink,
                          const CancelToken* cancel) const = 0;

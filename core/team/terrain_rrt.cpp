@@ -130,8 +130,15 @@ Eigen::Vector2d sampleAt(const Eigen::Vector2d& a, const Eigen::Vector2d& b, int
 
 }  // namespace
 
+bool TerrainEdgeModel::outsideKeepOut(const Eigen::Vector2d& p) const {
+  for (const auto& z : keepOut_)
+    if ((p - z.centre).squaredNorm() <= z.radius * z.radius) return false;
+  return true;
+}
+
 bool TerrainEdgeModel::pointValid(const Eigen::Vector2d& p) const {
-  return cellAllowed(dem_, classes_, bounds_, p) && terrain::surfaceAt(dem_, p.x(), p.y());
+  return cellAllowed(dem_, classes_, bounds_, p) && outsideKeepOut(p) &&
+         terrain::surfaceAt(dem_, p.x(), p.y());
 }
 
 // Roll and pitch follow SPEC §2 exactly as terrain::attitudeAt does — pitch = atan(∇h·(cosψ,
@@ -147,7 +154,7 @@ bool TerrainEdgeModel::edgeValid(const Eigen::Vector2d& a, const Eigen::Vector2d
   const int n = segmentsFor(len, resolution_);
   for (int i = 0; i <= n; ++i) {
     const Eigen::Vector2d p = sampleAt(a, b, i, n);
-    if (!cellAllowed(dem_, classes_, bounds_, p)) return false;
+    if (!cellAllowed(dem_, classes_, bounds_, p) || !outsideKeepOut(p)) return false;
     auto sp = terrain::surfaceAt(dem_, p.x(), p.y());
     if (!sp) return false;
     if (std::abs(sp->dzdx * c + sp->dzdy * s) >= tanLimit ||
@@ -366,7 +373,7 @@ class SeededSampler : public ob::RealVectorStateSampler {
 PathResult planPath(const terrain::Dem& dem, const Raster<std::uint8_t>& classes,
                     const Eigen::Vector2d& start, double startHeading, const Eigen::Vector2d& goal,
                     const RrtParams& params, const TerrainCostWeights& weights,
-                    const CancelToken* cancel) {
+                    const CancelToken* cancel, const std::vector<KeepOutZone>& keepOut) {
   params.validate();
   weights.validate();
   requireFinite("start_heading", startHeading);
@@ -378,7 +385,11 @@ PathResult planPath(const terrain::Dem& dem, const Raster<std::uint8_t>& classes
   const double resolution = params.edgeResolution > 0 ? params.edgeResolution
                                                       : 0.25 * std::min(g.cellWidth, g.cellHeight);
   const SearchBounds box = searchBounds(g, start, goal, params.clearance);
-  const TerrainEdgeModel model(dem, classes, box, params.attitudeLimit, resolution);
+  TerrainEdgeModel model(dem, classes, box, params.attitudeLimit, resolution);
+  for (const auto& z : keepOut)
+    if (!z.centre.allFinite() || !std::isfinite(z.radius) || z.radius < 0)
+      throwInvalidParameter("keep_out", "zones need a finite centre and a radius >= 0");
+  model.setKeepOut(keepOut);
 
   PathResult r;
   if (!model.pointValid(start)) {

@@ -12,6 +12,7 @@
 #include <Eigen/Core>
 #include <cstdint>
 #include <numbers>
+#include <utility>
 #include <vector>
 
 #include "core/common/cancel.hpp"
@@ -69,6 +70,15 @@ SearchBounds searchBounds(const GridGeometry& map, const Eigen::Vector2d& start,
 // |to − from| wrapped to [0, π]: the smaller turn from heading `from` to heading `to`.
 double headingChange(double from, double to);
 
+// A disc the path must stay out of (ours, for prioritised planning, SPEC §3.4): where a
+// higher-priority rover was when a candidate path came too close to it. Re-planning with only a
+// new seed cannot separate a head-on pair on open ground — RRT* converges to the same straight
+// line whatever the seed — so each retry also keeps out of the places the earlier tries collided.
+struct KeepOutZone {
+  Eigen::Vector2d centre{0, 0};  // local frame, m
+  double radius = 0;             // m
+};
+
 // The four quantities of eq. 9 for one edge.
 struct EdgeTerms {
   double length = 0;         // R, m
@@ -96,8 +106,12 @@ class TerrainEdgeModel {
   TerrainEdgeModel(const terrain::Dem&, Raster<std::uint8_t>&&, SearchBounds, double,
                    double) = delete;
 
-  // Inside the bounds and the map, on a cell with data that is not Impassable, with a defined
-  // surface (bilinear interpolation needs the four surrounding cell centres to have data).
+  // Zones every point must stay out of (strictly outside the radius). Empty by default.
+  void setKeepOut(std::vector<KeepOutZone> zones) { keepOut_ = std::move(zones); }
+
+  // Inside the bounds and the map, outside every keep-out zone, on a cell with data that is not
+  // Impassable, with a defined surface (bilinear interpolation needs the four surrounding cell
+  // centres to have data).
   bool pointValid(const Eigen::Vector2d& p) const;
   // Every sample of the edge (both ends included, at most edgeResolution apart) is pointValid and
   // has |roll| and |pitch| strictly below the attitude limit for the edge's heading.
@@ -119,6 +133,8 @@ class TerrainEdgeModel {
   SearchBounds bounds_;
   double limit_;
   double resolution_;
+  std::vector<KeepOutZone> keepOut_;
+  bool outsideKeepOut(const Eigen::Vector2d& p) const;
 };
 
 // eq. 9 summed over a polyline (first point = start). With `turnsAtEveryVertex` false this is what
@@ -155,9 +171,11 @@ struct PathResult {
 // start == goal gives Exact with that one waypoint and no search.
 // Deterministic for a given seed; safe to call concurrently from several threads (each call builds
 // its own OMPL objects and seeded random generators). Bad parameters throw rover::Error.
+// `keepOut`: discs the path stays out of (a start or goal inside one is InvalidStart/InvalidGoal).
 PathResult planPath(const terrain::Dem& dem, const Raster<std::uint8_t>& classes,
                     const Eigen::Vector2d& start, double startHeading, const Eigen::Vector2d& goal,
                     const RrtParams& params = {}, const TerrainCostWeights& weights = {},
-                    const CancelToken* cancel = nullptr);
+                    const CancelToken* cancel = nullptr,
+                    const std::vector<KeepOutZone>& keepOut = {});
 
 }  // namespace rover::team

@@ -7,12 +7,24 @@
 #include <string>
 #include <vector>
 
+#include "core/common/error.hpp"
+
 namespace rover::cli {
 
 class UsageError : public std::runtime_error {
  public:
   using std::runtime_error::runtime_error;
 };
+
+// Runs `fn`, turning a rover::Error it throws into a one-line usage error (exit status 2).
+template <class Fn>
+auto orUsage(Fn&& fn) {
+  try {
+    return fn();
+  } catch (const Error& e) {
+    throw UsageError(e.what());
+  }
+}
 
 class ArgParser {
  public:

@@ -8,6 +8,7 @@
 namespace rover::cli {
 
 int coverageCommand(const std::vector<std::string>& args, std::ostream& out);
+int missionCommand(const std::vector<std::string>& args, std::ostream& out);
 int sweepCommand(const std::vector<std::string>& args, std::ostream& out);
 int benchCommand(const std::vector<std::string>& args, std::ostream& out);
 int terrainCommand(const std::vector<std::string>& args, std::ostream& out);

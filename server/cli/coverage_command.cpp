@@ -20,28 +20,6 @@ namespace rover::cli {
 
 namespace {
 
-// "x,y,deg;x,y,deg" -> rover starts (local frame, heading converted to radians).
-std::vector<RoverStart> readStarts(const ArgParser& args) {
-  std::vector<RoverStart> out;
-  if (!args.has("start")) return out;
-  std::stringstream all(args.str("start", ""));
-  for (std::string one; std::getline(all, one, ';');) {
-    std::vector<double> v;
-    std::stringstream ss(one);
-    for (std::string item; std::getline(ss, item, ',');) {
-      char* end = nullptr;
-      double d = std::strtod(item.c_str(), &end);
-      if (item.empty() || *end != '\0' || !std::isfinite(d))
-        throw UsageError("invalid value for --start: '" + one + "' is not X,Y,DEG");
-      v.push_back(d);
-    }
-    if (v.size() != 3) throw UsageError("invalid value for --start: '" + one + "' is not X,Y,DEG");
-    out.push_back({{v[0], v[1]}, v[2] * std::numbers::pi / 180.0});
-  }
-  if (out.empty() || out.size() > 64) throw UsageError("invalid value for --start: 1 to 64 rovers");
-  return out;
-}
-
 void printSummary(std::ostream& out, const coverage::World& world, const coverage::WorldParams& wp,
                   const coverage::CoverageParams& p, int rovers, const PlanResult& r) {
   auto m = [&](const char* key) { return r.metric(key); };
@@ -92,7 +70,7 @@ int coverageCommand(const std::vector<std::string>& argv, std::ostream& out) {
   coverage::WorldParams wp = readWorldOptions(args);
   int rovers = static_cast<int>(args.integer("rovers", 1, 1, 64));
   ParamSet params = readCoverageParamOptions(args);
-  std::vector<RoverStart> starts = readStarts(args);
+  std::vector<RoverStart> starts = readStartOption(args);
   if (!starts.empty()) rovers = static_cast<int>(starts.size());
 
   PlannerRegistry registry = makeBuiltinRegistry();

@@ -1,11 +1,36 @@
 #include "server/cli/coverage_options.hpp"
 
 #include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <sstream>
 
 #include "core/common/strings.hpp"
 #include "core/coverage/coverage_params.hpp"
 
 namespace rover::cli {
+
+// "x,y,deg;x,y,deg" -> rover starts (local frame, heading converted to radians).
+std::vector<RoverStart> readStartOption(const ArgParser& args) {
+  std::vector<RoverStart> out;
+  if (!args.has("start")) return out;
+  std::stringstream all(args.str("start", ""));
+  for (std::string one; std::getline(all, one, ';');) {
+    std::vector<double> v;
+    std::stringstream ss(one);
+    for (std::string item; std::getline(ss, item, ',');) {
+      char* end = nullptr;
+      double d = std::strtod(item.c_str(), &end);
+      if (item.empty() || *end != '\0' || !std::isfinite(d))
+        throw UsageError("invalid value for --start: '" + one + "' is not X,Y,DEG");
+      v.push_back(d);
+    }
+    if (v.size() != 3) throw UsageError("invalid value for --start: '" + one + "' is not X,Y,DEG");
+    out.push_back({{v[0], v[1]}, v[2] * std::numbers::pi / 180.0});
+  }
+  if (out.empty() || out.size() > 64) throw UsageError("invalid value for --start: 1 to 64 rovers");
+  return out;
+}
 
 std::string optionForParam(const std::string& key) {
   if (key == "sense_radius") return "sense";
@@ -46,8 +71,14 @@ coverage::WorldParams readWorldOptions(const ArgParser& a) {
 }
 
 void addCoverageParamOptions(ArgParser& a) {
-  for (const ParamInfo& info : coverage::coverageParamTable().infos()) {
-    if (info.key == "coverage_cell") continue;  // --coverage-cell comes with the DEM options
+  // --coverage-cell comes with the DEM options.
+  addParamOptions(a, coverage::coverageParamTable().infos(), {"coverage_cell"});
+}
+
+void addParamOptions(ArgParser& a, const std::vector<ParamInfo>& infos,
+                     const std::vector<std::string>& skip) {
+  for (const ParamInfo& info : infos) {
+    if (std::find(skip.begin(), skip.end(), info.key) != skip.end()) continue;
     std::string help = info.doc;
     if (!info.unit.empty()) help += " [" + info.unit + "]";
     const std::string name = optionForParam(info.key);
@@ -69,11 +100,12 @@ void addCoverageParamOptions(ArgParser& a) {
   }
 }
 
-ParamSet readCoverageParamOptions(const ArgParser& a) {
+ParamSet readParamOptions(const ArgParser& a, const std::vector<ParamInfo>& infos,
+                          const std::vector<std::string>& skip) {
   ParamSet set;
-  for (const ParamInfo& info : coverage::coverageParamTable().infos()) {
+  for (const ParamInfo& info : infos) {
     const std::string name = optionForParam(info.key);
-    if (!a.has(name) || info.key == "coverage_cell") continue;
+    if (!a.has(name) || std::find(skip.begin(), skip.end(), info.key) != skip.end()) continue;
     switch (info.type) {
       case ParamType::Bool:
         set[info.key] = true;
@@ -92,6 +124,11 @@ ParamSet readCoverageParamOptions(const ArgParser& a) {
         break;
     }
   }
+  return set;
+}
+
+ParamSet readCoverageParamOptions(const ArgParser& a) {
+  ParamSet set = readParamOptions(a, coverage::coverageParamTable().infos(), {"coverage_cell"});
   // Paper 000 eq. 3 has α + β = 1: giving one implies the other.
   // Only a weight that is itself in range implies the other, so a bad one is reported by name.
   auto implies = [&](const char* given, const char* other) {

@@ -5,6 +5,7 @@
 #include "core/common/error.hpp"
 #include "core/common/params.hpp"
 #include "core/coverage/world.hpp"
+#include "core/planning/planner.hpp"
 #include "server/cli/arg_parser.hpp"
 
 namespace rover::cli {
@@ -14,6 +15,17 @@ coverage::WorldParams readWorldOptions(const ArgParser& args);
 
 void addCoverageParamOptions(ArgParser& args);
 ParamSet readCoverageParamOptions(const ArgParser& args);
+
+// One option per parameter of a planner's table (flags for booleans), `skip` keys left out.
+void addParamOptions(ArgParser& args, const std::vector<ParamInfo>& infos,
+                     const std::vector<std::string>& skip = {});
+// The parameters given on the command line (defaults are left to the planner).
+ParamSet readParamOptions(const ArgParser& args, const std::vector<ParamInfo>& infos,
+                          const std::vector<std::string>& skip = {});
+
+// --start "X,Y,DEG[;X,Y,DEG...]": rover starts in the local frame, headings in degrees (returned
+// in radians); empty when the option is not given.
+std::vector<RoverStart> readStartOption(const ArgParser& args);
 
 // The option name of a planner parameter key (sense_radius -> sense, max_steps -> max-steps).
 std::string optionForParam(const std::string& key);

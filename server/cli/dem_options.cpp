@@ -1,6 +1,13 @@
 #include "server/cli/dem_options.hpp"
 
+#include <cmath>
+#include <fstream>
+
+#include <nlohmann/json.hpp>
+
 #include "core/common/error.hpp"
+#include "core/pdm/pdm.hpp"
+#include "server/json/pdm_json.hpp"
 
 namespace rover::cli {
 
@@ -34,6 +41,69 @@ maps::LoadedDem loadDemOrFail(const std::string& path, const maps::LoadOptions& 
   } catch (const Error& e) {
     throw UsageError(e.what());
   }
+}
+
+namespace {
+
+
+std::vector<std::uint8_t> validMask(const terrain::Dem& dem) {
+  std::vector<std::uint8_t> m(dem.geometry().cellCount());
+  for (std::size_t i = 0; i < m.size(); ++i) m[i] = !std::isnan(dem.z.at(static_cast<int>(i)));
+  return m;
+}
+
+}  // namespace
+
+void addPdmOptions(ArgParser& a, const PdmOptionNames& n) {
+  a.option(n.gaussians, "FILE.json", "", "PDM: Gaussian components {\"components\":[{x,y,sigma_x,"
+                                         "sigma_y,rotation_deg,weight}]} in the local frame (metres).");
+  a.option(n.random, "G", "", "PDM: G random Gaussian components (paper 001: G = 4).");
+  if (n.seed != "seed") a.option(n.seed, "S", "the --seed", "Seed for --" + n.random + ".");
+  else a.option("seed", "S", "1", "Seed for --" + n.random + ".");
+  a.option(n.raster, "FILE", "", "PDM: a raster of non-negative weights, resampled onto the map's grid.");
+}
+
+Raster<float> readPdmOptions(const ArgParser& a, const terrain::Dem& dem, const PdmOptionNames& n,
+                             bool optional) {
+  const int sources = a.has(n.gaussians) + a.has(n.random) + a.has(n.raster);
+  if (sources == 0 && optional) return {};
+  if (sources != 1)
+    throw UsageError("give exactly one of --" + n.gaussians + ", --" + n.random + ", --" + n.raster);
+  const GridGeometry& g = dem.geometry();
+  auto valid = validMask(dem);
+  if (a.has(n.random)) {
+    int count = static_cast<int>(a.integer(n.random, 4, 1, 1000));
+    const std::string seedOption = a.has(n.seed) ? n.seed : "seed";
+    auto seed = static_cast<std::uint64_t>(a.integer(seedOption, 1, 0, INT64_MAX));
+    Raster<float> p = orUsage([&] { return pdm::discretise(pdm::randomGaussians(g, count, seed), g, valid); });
+    p.geo = dem.z.geo;
+    return p;
+  }
+  if (a.has(n.gaussians)) {
+    const std::string path = a.str(n.gaussians, "");
+    std::ifstream in(path);
+    if (!in) throw UsageError(path + ": cannot open");
+    nlohmann::json j = nlohmann::json::parse(in, nullptr, false);
+    if (j.is_discarded()) throw UsageError(path + ": not valid JSON");
+    Raster<float> p = orUsage([&] { return pdm::discretise(json::gaussiansFromJson(j), g, valid); });
+    p.geo = dem.z.geo;
+    return p;
+  }
+  // A weight raster on the map's grid: warp it onto the DEM's extent and cell size.
+  maps::LoadOptions o;
+  if (dem.z.geo.valid) {
+    const auto& gt = dem.z.geo.geotransform;
+    o.crop = std::array<double, 4>{gt[0], gt[3] + g.rows * gt[5], g.cols * gt[1], -g.rows * gt[5]};
+  }
+  const std::string path = a.str(n.raster, "");
+  maps::LoadedDem w = loadDemOrFail(path, o);
+  if (w.dem.geometry().rows != g.rows || w.dem.geometry().cols != g.cols)
+    throw UsageError(path + ": the PDM raster does not cover the map on its grid (" +
+                     std::to_string(w.dem.geometry().rows) + " x " +
+                     std::to_string(w.dem.geometry().cols) + " cells)");
+  Raster<float> p = orUsage([&] { return pdm::normaliseWeights(w.dem.z, valid); });
+  p.geo = dem.z.geo;
+  return p;
 }
 
 }  // namespace rover::cli

@@ -1,6 +1,8 @@
 #pragma once
 // Options shared by every command that reads a DEM: cell size, crop window, vertical scale,
 // resampling and the cell budget.
+#include "core/grid/raster.hpp"
+#include "core/terrain/dem.hpp"
 #include "maps/dem_io.hpp"
 #include "server/cli/arg_parser.hpp"
 
@@ -13,5 +15,19 @@ maps::LoadOptions readDemOptions(const ArgParser& args, const std::string& cellO
                                  double cellDefault = 0);
 // Loads a DEM, turning loader errors into one-line usage errors ("FILE: reason").
 maps::LoadedDem loadDemOrFail(const std::string& path, const maps::LoadOptions& options);
+
+// Where a PDM comes from: Gaussians JSON, G random Gaussians, or a raster of weights. The option
+// names differ between `pdm` (--gaussians/--random/--raster) and `mission` (--pdm/--random-pdm/
+// --pdm-raster); `seed` empty = the command's own --seed.
+struct PdmOptionNames {
+  std::string gaussians = "gaussians";
+  std::string random = "random";
+  std::string raster = "raster";
+  std::string seed = "seed";
+};
+void addPdmOptions(ArgParser& args, const PdmOptionNames& names);
+// Exactly one source required unless `optional` (then an empty raster when none is given).
+Raster<float> readPdmOptions(const ArgParser& args, const terrain::Dem& dem,
+                             const PdmOptionNames& names, bool optional = false);
 
 }  // namespace rover::cli

@@ -35,66 +35,10 @@ terrain::TraversabilityParams readThresholds(const ArgParser& a) {
   return p;
 }
 
-// Wraps a call that may throw rover::Error into a one-line usage error.
-template <class Fn>
-auto orUsage(Fn&& fn) {
-  try {
-    return fn();
-  } catch (const Error& e) {
-    throw UsageError(e.what());
-  }
-}
 
-std::vector<std::uint8_t> validMask(const terrain::Dem& dem) {
-  std::vector<std::uint8_t> m(dem.geometry().cellCount());
-  for (std::size_t i = 0; i < m.size(); ++i) m[i] = !std::isnan(dem.z.at(static_cast<int>(i)));
-  return m;
-}
-
-void addPdmSourceOptions(ArgParser& a) {
-  a.option("gaussians", "FILE.json", "", "Gaussian components {\"components\":[{x,y,sigma_x,sigma_y,"
-                                         "rotation_deg,weight}]} in the local frame (metres).");
-  a.option("random", "G", "", "G random Gaussian components (paper 001: G = 4).");
-  a.option("seed", "S", "1", "Seed for --random.");
-  a.option("raster", "FILE", "", "A raster of non-negative weights, resampled onto the map's grid.");
-}
-
+void addPdmSourceOptions(ArgParser& a) { addPdmOptions(a, PdmOptionNames{}); }
 Raster<float> readPdm(const ArgParser& a, const terrain::Dem& dem) {
-  int sources = a.has("gaussians") + a.has("random") + a.has("raster");
-  if (sources != 1) throw UsageError("give exactly one of --gaussians, --random, --raster");
-  const GridGeometry& g = dem.geometry();
-  auto valid = validMask(dem);
-  if (a.has("random")) {
-    int count = static_cast<int>(a.integer("random", 4, 1, 1000));
-    auto seed = static_cast<std::uint64_t>(a.integer("seed", 1, 0, INT64_MAX));
-    Raster<float> p = orUsage([&] { return pdm::discretise(pdm::randomGaussians(g, count, seed), g, valid); });
-    p.geo = dem.z.geo;
-    return p;
-  }
-  if (a.has("gaussians")) {
-    const std::string path = a.str("gaussians", "");
-    std::ifstream in(path);
-    if (!in) throw UsageError(path + ": cannot open");
-    nlohmann::json j = nlohmann::json::parse(in, nullptr, false);
-    if (j.is_discarded()) throw UsageError(path + ": not valid JSON");
-    Raster<float> p = orUsage([&] { return pdm::discretise(json::gaussiansFromJson(j), g, valid); });
-    p.geo = dem.z.geo;
-    return p;
-  }
-  // A weight raster on the map's grid: warp it onto the DEM's extent and cell size.
-  maps::LoadOptions o;
-  if (dem.z.geo.valid) {
-    const auto& gt = dem.z.geo.geotransform;
-    o.crop = std::array<double, 4>{gt[0], gt[3] + g.rows * gt[5], g.cols * gt[1], -g.rows * gt[5]};
-  }
-  maps::LoadedDem w = loadDemOrFail(a.str("raster", ""), o);
-  if (w.dem.geometry().rows != g.rows || w.dem.geometry().cols != g.cols)
-    throw UsageError(a.str("raster", "") + ": the PDM raster does not cover the map on its grid (" +
-                     std::to_string(w.dem.geometry().rows) + " x " +
-                     std::to_string(w.dem.geometry().cols) + " cells)");
-  Raster<float> p = orUsage([&] { return pdm::normaliseWeights(w.dem.z, valid); });
-  p.geo = dem.z.geo;
-  return p;
+  return readPdmOptions(a, dem, PdmOptionNames{});
 }
 
 bool helpOr(ArgParser& a, const std::vector<std::string>& argv, std::ostream& out) {

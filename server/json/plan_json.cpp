@@ -59,6 +59,25 @@ json toJson(const PlanResult& r) {
   for (const auto& s : r.series)
     series[s.key] = {{"x_label", s.xLabel}, {"y_label", s.yLabel}, {"x", s.x}, {"y", s.y}};
   j["series"] = series;
+  if (!r.overlays.empty()) {
+    json overlays = json::array();
+    for (const auto& o : r.overlays) {
+      json pts = json::array();
+      for (const auto& p : o.points) pts.push_back({p.x(), p.y()});
+      overlays.push_back({{"key", o.key}, {"rover", o.rover}, {"points", pts}});
+    }
+    j["overlays"] = overlays;
+  }
+  json incidents = json::array();
+  for (const auto& i : r.incidents) {
+    json x{{"kind", i.kind},       {"rover", i.rover}, {"time_s", i.time},
+           {"x", i.position.x()}, {"y", i.position.y()}, {"note", i.note}};
+    if (i.other >= 0) x["other"] = i.other;
+    if (i.kind == "collision") x["distance_m"] = i.value;
+    else if (i.value >= 0) x["target"] = static_cast<int>(i.value);
+    incidents.push_back(std::move(x));
+  }
+  j["incidents"] = incidents;
   return j;
 }
 

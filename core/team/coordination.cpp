@@ -1,0 +1,478 @@
+#include "core/team/coordination.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <optional>
+
+#include "core/common/error.hpp"
+#include "core/common/parallel.hpp"
+#include "core/common/random.hpp"
+
+namespace rover::team {
+
+void CoordinationParams::validate() const {
+  rrt.validate();
+  weights.validate();
+  model.validate();
+  controller.validate();
+  slip.validate();
+  if (!std::isfinite(safetyDistance) || safetyDistance < 0)
+    throwInvalidParameter("safety_distance", "must be a finite number >= 0");
+  if (maxReplans < 0 || maxReplans > 1000)
+    throwInvalidParameter("max_replans", "must be an integer in [0, 1000]");
+  if (!std::isfinite(waitStep) || !(waitStep > 0) || waitStep > 3600)
+    throwInvalidParameter("wait_step", "must be a number of seconds in (0, 3600]");
+  if (maxWaits < 0 || maxWaits > 1000)
+    throwInvalidParameter("max_waits", "must be an integer in [0, 1000]");
+  if (!std::isfinite(keepOutRadius) || keepOutRadius < 0)
+    throwInvalidParameter("keep_out_radius", "must be a finite number >= 0");
+  if (maxPieces < 1 || maxPieces > 100)
+    throwInvalidParameter("max_pieces", "must be an integer in [1, 100]");
+}
+
+const char* legStatusName(LegStatus s) {
+  switch (s) {
+    case LegStatus::Reached:
+      return "reached";
+    case LegStatus::Short:
+      return "short";
+    case LegStatus::Skipped:
+      return "skipped";
+  }
+  return "unknown";
+}
+
+namespace {
+
+Eigen::Vector2d xyOf(const TrajectorySample& s) { return {s.x, s.y}; }
+
+// Position at sample index i: before the start the rover waits at its first sample, after the
+// end it is parked at its last (SPEC §3.4 as implemented here: parked rovers are obstacles).
+Eigen::Vector2d positionAtIndex(const Trajectory& t, std::size_t i) {
+  return xyOf(t.samples[std::min(i, t.samples.size() - 1)]);
+}
+
+std::uint64_t seedFor(std::uint64_t seed, int rover, int leg, int piece, int attempt) {
+  std::uint64_t s = deriveSeed(seed, static_cast<std::uint64_t>(rover));
+  s = deriveSeed(s, static_cast<std::uint64_t>(leg));
+  s = deriveSeed(s, static_cast<std::uint64_t>(piece));
+  return deriveSeed(s, static_cast<std::uint64_t>(attempt));
+}
+
+Eigen::Vector2d legGoal(const Leg& leg) { return leg.via.empty() ? leg.goal : leg.via.back(); }
+
+class Coordinator {
+ public:
+  Coordinator(const terrain::Dem& dem, const Raster<std::uint8_t>& classes,
+              const std::vector<RoverTask>& tasks, const CoordinationParams& params,
+              std::uint64_t seed, CoordinationObserver* observer, const CancelToken* cancel)
+      : dem_(dem),
+        classes_(classes),
+        tasks_(tasks),
+        p_(params),
+        seed_(seed),
+        observer_(observer),
+        cancel_(cancel),
+        period_(params.controller.samplePeriod),
+        wholeMap_(dem, classes, mapBounds(dem), params.rrt.attitudeLimit, edgeResolution()) {}
+
+  CoordinationResult run() {
+    const int n = static_cast<int>(tasks_.size());
+    out_.trajectories.resize(n);
+    out_.paths.resize(n);
+    for (int k = 0; k < n; ++k) startRover(k);
+    for (const auto& t : tasks_) legsTotal_ += static_cast<int>(t.legs.size());
+    planAhead();
+    for (int k = 0; k < n && !out_.cancelled; ++k) {
+      for (int i = 0; i < static_cast<int>(tasks_[k].legs.size()); ++i) {
+        runLeg(k, i);
+        if (out_.cancelled) break;
+      }
+    }
+    out_.conflicts = checkSeparation(out_.trajectories, p_.safetyDistance).conflicts;
+    return std::move(out_);
+  }
+
+ private:
+  enum class Outcome { Accepted, Skipped, NoPath, Cancelled };
+
+  struct Candidate {
+    std::vector<Eigen::Vector2d> path;         // waypoints, the rover's position first
+    std::vector<TrajectorySample> samples;     // new samples (waits, then driving)
+    bool reached = false;                      // the simulation entered the last waypoint's circle
+  };
+
+  struct Ahead {
+    bool planned = false;
+    Eigen::Vector2d start{0, 0};
+    PathResult path;
+  };
+
+  static SearchBounds mapBounds(const terrain::Dem& dem) {
+    const GridGeometry& g = dem.geometry();
+    return {{0, 0}, {g.widthMetres(), g.heightMetres()}};
+  }
+  double edgeResolution() const {
+    const GridGeometry& g = dem_.geometry();
+    return p_.rrt.edgeResolution > 0 ? p_.rrt.edgeResolution
+                                     : 0.25 * std::min(g.cellWidth, g.cellHeight);
+  }
+  bool cancelled() const { return cancel_ && cancel_->cancelled(); }
+  const TrajectorySample& last(int k) const { return out_.trajectories[k].samples.back(); }
+  Eigen::Vector2d here(int k) const { return xyOf(last(k)); }
+
+  // The first sample: the rover at rest on its start (simulate with the start as its only
+  // waypoint records exactly that, with the terrain height and attitude).
+  void startRover(int k) {
+    const Pose& s = tasks_[k].start;
+    Trajectory t;
+    try {
+      t = simulate(dem_, {Eigen::Vector2d(s.x, s.y)}, s, 0.0, p_.model, p_.controller, p_.slip);
+    } catch (const Error&) {
+      const std::string field = "rovers[" + std::to_string(k) + "]";
+      throw Error(ErrorCode::InvalidInput, field,
+                  field + ": start is outside the map or next to nodata");
+    }
+    t.samples.resize(1);
+    t.samples[0].time = 0;
+    t.status = SimStatus::Reached;
+    out_.trajectories[k] = std::move(t);
+    out_.paths[k].push_back({s.x, s.y});
+  }
+
+  // Plans every RRT* leg from its nominal start in parallel (the legs are independent problems).
+  void planAhead() {
+    ahead_.resize(tasks_.size());
+    struct Job {
+      int rover, leg;
+      Eigen::Vector2d start;
+      double heading;
+    };
+    std::vector<Job> jobs;
+    for (int k = 0; k < static_cast<int>(tasks_.size()); ++k) {
+      const RoverTask& task = tasks_[k];
+      ahead_[k].resize(task.legs.size());
+      Eigen::Vector2d start(task.start.x, task.start.y);
+      double heading = task.start.heading;
+      for (int i = 0; i < static_cast<int>(task.legs.size()); ++i) {
+        const Eigen::Vector2d goal = legGoal(task.legs[i]);
+        if (task.legs[i].via.empty()) jobs.push_back({k, i, start, heading});
+        if ((goal - start).norm() > 1e-9) heading = std::atan2(goal.y() - start.y(), goal.x() - start.x());
+        start = goal;
+      }
+    }
+    parallelFor(jobs.size(), p_.threads, [&](std::size_t j) {
+      const Job& job = jobs[j];
+      RrtParams rrt = p_.rrt;
+      rrt.seed = seedFor(seed_, job.rover, job.leg, 0, 0);
+      Ahead& a = ahead_[job.rover][job.leg];
+      a.start = job.start;
+      a.path = planPath(dem_, classes_, job.start, job.heading, tasks_[job.rover].legs[job.leg].goal,
+                        rrt, p_.weights, cancel_);
+      a.planned = true;
+    });
+    out_.rrtCalls += static_cast<int>(jobs.size());
+  }
+
+  // The path of one try: the fixed points of a via leg (first try, if every edge is valid), the
+  // path planned ahead (first try, if the rover stopped where that plan started), else RRT* now.
+  PathResult tryPath(int k, int i, int piece, int attempt, const Eigen::Vector2d& goal,
+                     const std::vector<KeepOutZone>& keepOut) {
+    const Leg& leg = tasks_[k].legs[i];
+    const Eigen::Vector2d from = here(k);
+    if (attempt == 0 && piece == 0 && !leg.via.empty()) {
+      PathResult r;
+      r.waypoints.push_back(from);
+      bool valid = true;
+      for (const auto& v : leg.via) {
+        valid = valid && wholeMap_.edgeValid(r.waypoints.back(), v);
+        r.waypoints.push_back(v);
+      }
+      if (valid) {
+        r.status = PathStatus::Exact;
+        return r;
+      }
+    }
+    if (attempt == 0 && piece == 0 && leg.via.empty()) {
+      const Ahead& a = ahead_[k][i];
+      if (a.planned && a.path.hasPath() &&
+          (a.start - from).norm() <= p_.controller.acceptanceRadius + 0.05) {
+        PathResult r = a.path;
+        r.waypoints.front() = from;
+        return r;
+      }
+    }
+    RrtParams rrt = p_.rrt;
+    rrt.seed = seedFor(seed_, k, i, piece, attempt);
+    ++out_.rrtCalls;
+    return planPath(dem_, classes_, from, last(k).heading, goal, rrt, p_.weights, cancel_,
+                    keepOut);
+  }
+
+  Candidate simulateTry(int k, const std::vector<Eigen::Vector2d>& path, int waitTicks,
+                        std::uint64_t slipSeed) {
+    const TrajectorySample origin = last(k);
+    const std::size_t base = out_.trajectories[k].samples.size() - 1;  // index of `origin`
+    Candidate c;
+    c.path = path;
+    for (int j = 1; j <= waitTicks; ++j) {
+      TrajectorySample s = origin;
+      s.time = static_cast<double>(base + j) * period_;
+      s.speed = 0;
+      c.samples.push_back(s);
+    }
+    std::vector<Eigen::Vector2d> waypoints(path.begin() + 1, path.end());
+    if (waypoints.empty()) {
+      c.reached = true;
+      return c;
+    }
+    SlipParams slip = p_.slip;
+    slip.seed = slipSeed;
+    const std::size_t startIndex = base + waitTicks;
+    Trajectory sim = simulate(dem_, waypoints, {origin.x, origin.y, origin.heading},
+                              static_cast<double>(startIndex) * period_, p_.model, p_.controller,
+                              slip, cancel_);
+    for (std::size_t m = 1; m < sim.samples.size(); ++m) {
+      TrajectorySample s = sim.samples[m];
+      s.time = static_cast<double>(startIndex + m) * period_;
+      s.distance += origin.distance;
+      c.samples.push_back(s);
+    }
+    c.reached = sim.status == SimStatus::Reached;
+    return c;
+  }
+
+  // The first sample of `samples` (appended to rover k's trajectory) closer than the safety
+  // distance to a higher-priority rover; with `parkedAfter`, also rover k parked at its last
+  // position for as long as any higher-priority rover still moves.
+  std::optional<Conflict> firstConflict(int k, const std::vector<TrajectorySample>& samples,
+                                        bool parkedAfter) const {
+    const auto& trajectories = out_.trajectories;
+    const std::size_t base = trajectories[k].samples.size();
+    auto check = [&](std::size_t idx, const Eigen::Vector2d& p) -> std::optional<Conflict> {
+      for (int j = 0; j < k; ++j) {
+        const Eigen::Vector2d o = positionAtIndex(trajectories[j], idx);
+        const double d = (p - o).norm();
+        if (d < p_.safetyDistance)
+          return Conflict{k, j, static_cast<double>(idx) * period_, 0.0, d, p, o};
+      }
+      return std::nullopt;
+    };
+    for (std::size_t m = 0; m < samples.size(); ++m)
+      if (auto c = check(base + m, xyOf(samples[m]))) return c;
+    if (parkedAfter) {
+      std::size_t end = 0;
+      for (int j = 0; j < k; ++j) end = std::max(end, trajectories[j].samples.size());
+      const Eigen::Vector2d p = samples.empty() ? here(k) : xyOf(samples.back());
+      for (std::size_t idx = base + samples.size(); idx < end; ++idx)
+        if (auto c = check(idx, p)) return c;
+    }
+    return std::nullopt;
+  }
+
+  void commit(int k, const Candidate& c) {
+    auto& t = out_.trajectories[k].samples;
+    t.insert(t.end(), c.samples.begin(), c.samples.end());
+    auto& path = out_.paths[k];
+    path.insert(path.end(), c.path.begin() + 1, c.path.end());
+    if (observer_) observer_->pieceAccepted(k, c.path, c.samples);
+  }
+
+  // One piece of a leg: tries with new seeds (each keeping out of the earlier conflicts), then
+  // waits, then gives up (the caller skips the leg).
+  Outcome runPiece(int k, int i, int piece, const Eigen::Vector2d& goal, LegRecord& rec,
+                   bool& reachedGoal) {
+    const bool lastLeg = i + 1 == static_cast<int>(tasks_[k].legs.size());
+    std::vector<KeepOutZone> keepOut;
+    std::optional<Candidate> firstTry;
+    std::optional<Conflict> conflict;
+    std::string noPath;
+    for (int attempt = 0; attempt <= p_.maxReplans; ++attempt) {
+      if (cancelled()) return Outcome::Cancelled;
+      if (attempt > 0) {
+        ++rec.replans;
+        ++out_.replans;
+      }
+      PathResult path = tryPath(k, i, piece, attempt, goal, keepOut);
+      if (path.status == PathStatus::Cancelled) return Outcome::Cancelled;
+      if (!path.hasPath() || path.waypoints.size() < 2) {
+        noPath = pathStatusName(path.status);
+        // Without keep-out zones a new seed cannot turn an invalid start or goal valid.
+        const bool hopeless = path.status == PathStatus::InvalidGoal ||
+                              path.status == PathStatus::InvalidStart;
+        if (keepOut.empty() && hopeless) break;
+        continue;
+      }
+      Candidate c = simulateTry(k, path.waypoints, 0, seedFor(deriveSeed(seed_ ^ 0x51ee5ull, p_.slip.seed), k, i, piece, attempt));
+      if (cancelled()) return Outcome::Cancelled;
+      // The leg's last piece decides whether the rover parks here for good.
+      conflict = firstConflict(k, c.samples, lastLeg && reachesGoal(c, goal));
+      if (!conflict) {
+        reachedGoal = path.status == PathStatus::Exact && c.reached;
+        commit(k, c);
+        return Outcome::Accepted;
+      }
+      if (!firstTry) firstTry = c;
+      // Keep out of where the other rover was, unless that would wall in the start or the goal
+      // (then only the seed changes).
+      const KeepOutZone zone{conflict->otherPosition, p_.keepOutRadius};
+      if ((here(k) - zone.centre).norm() > zone.radius && (goal - zone.centre).norm() > zone.radius)
+        keepOut.push_back(zone);
+    }
+    if (!firstTry) {
+      rec.note = "no path: " + noPath;
+      return Outcome::NoPath;
+    }
+    for (int w = 1; w <= p_.maxWaits; ++w) {
+      if (cancelled()) return Outcome::Cancelled;
+      const int ticks = static_cast<int>(std::lround(w * p_.waitStep / period_));
+      Candidate c = simulateTry(k, firstTry->path, ticks, seedFor(deriveSeed(seed_ ^ 0x3a17ull, p_.slip.seed), k, i, piece, w));
+      conflict = firstConflict(k, c.samples, lastLeg && reachesGoal(c, goal));
+      if (!conflict) {
+        rec.waits = w;
+        out_.waits += w;
+        reachedGoal = c.reached && (firstTry->path.back() - goal).norm() < 1e-9;
+        commit(k, c);
+        return Outcome::Accepted;
+      }
+    }
+    char buf[160];
+    std::snprintf(buf, sizeof buf, "within %.2f m of rover %d at t = %.1f s (%.2f, %.2f)",
+                  conflict->distance, conflict->other, conflict->time, conflict->position.x(),
+                  conflict->position.y());
+    rec.note = buf;
+    return Outcome::Skipped;
+  }
+
+  bool reachesGoal(const Candidate& c, const Eigen::Vector2d& goal) const {
+    const Eigen::Vector2d end = c.samples.empty() ? c.path.front() : xyOf(c.samples.back());
+    return (end - goal).norm() <= p_.controller.acceptanceRadius + 0.1;
+  }
+
+  void runLeg(int k, int i) {
+    const Leg& leg = tasks_[k].legs[i];
+    const Eigen::Vector2d goal = legGoal(leg);
+    LegRecord rec;
+    rec.rover = k;
+    rec.leg = i;
+    rec.target = leg.target;
+    rec.startTime = last(k).time;
+    rec.status = LegStatus::Short;
+    for (int piece = 0; piece < p_.maxPieces; ++piece) {
+      const double before = (here(k) - goal).norm();
+      if (before <= p_.controller.acceptanceRadius) {
+        rec.status = LegStatus::Reached;
+        break;
+      }
+      bool reached = false;
+      const Outcome o = runPiece(k, i, piece, goal, rec, reached);
+      if (o == Outcome::Cancelled) {
+        out_.cancelled = true;
+        return;
+      }
+      if (o == Outcome::Skipped) {
+        rec.status = LegStatus::Skipped;
+        break;
+      }
+      if (o == Outcome::NoPath) break;  // Short, with the note
+      ++rec.pieces;
+      if (reached) {
+        rec.status = LegStatus::Reached;
+        break;
+      }
+      if ((here(k) - goal).norm() > before - 0.25) {  // no progress: stop chaining
+        rec.note = "the tree ends short of the goal and makes no progress";
+        break;
+      }
+      if (piece + 1 == p_.maxPieces) rec.note = "goal not reached after max_pieces RRT* pieces";
+    }
+    // A goal off passable ground is skipped outright, not "short".
+    if (rec.status == LegStatus::Short && rec.pieces == 0 &&
+        rec.note.find("invalid_goal") != std::string::npos)
+      rec.status = LegStatus::Skipped;
+    rec.endTime = last(k).time;
+    out_.legs.push_back(rec);
+    ++legsDone_;
+    if (observer_) observer_->legDone(rec, legsDone_, legsTotal_);
+  }
+
+  const terrain::Dem& dem_;
+  const Raster<std::uint8_t>& classes_;
+  const std::vector<RoverTask>& tasks_;
+  const CoordinationParams& p_;
+  const std::uint64_t seed_;
+  CoordinationObserver* observer_;
+  const CancelToken* cancel_;
+  const double period_;
+  TerrainEdgeModel wholeMap_;
+  std::vector<std::vector<Ahead>> ahead_;
+  CoordinationResult out_;
+  int legsDone_ = 0;
+  int legsTotal_ = 0;
+};
+
+}  // namespace
+
+CoordinationResult coordinate(const terrain::Dem& dem, const Raster<std::uint8_t>& classes,
+                              const std::vector<RoverTask>& tasks,
+                              const CoordinationParams& params, std::uint64_t seed,
+                              CoordinationObserver* observer, const CancelToken* cancel) {
+  params.validate();
+  if (tasks.empty()) throw Error(ErrorCode::InvalidInput, "rovers", "rovers: none given");
+  for (std::size_t k = 0; k < tasks.size(); ++k) {
+    const std::string field = "rovers[" + std::to_string(k) + "]";
+    const Pose& s = tasks[k].start;
+    if (!std::isfinite(s.x) || !std::isfinite(s.y) || !std::isfinite(s.heading))
+      throw Error(ErrorCode::InvalidInput, field, field + ": start must be finite");
+    for (const Leg& leg : tasks[k].legs) {
+      bool finite = leg.goal.allFinite();
+      for (const auto& v : leg.via) finite = finite && v.allFinite();
+      if (!finite) throw Error(ErrorCode::InvalidInput, field, field + ": a leg goal is not finite");
+    }
+  }
+  Coordinator c(dem, classes, tasks, params, seed, observer, cancel);
+  return c.run();
+}
+
+SeparationReport checkSeparation(const std::vector<Trajectory>& trajectories, double safety) {
+  SeparationReport r;
+  r.minimumDistance = std::numeric_limits<double>::infinity();
+  std::size_t end = 0;
+  for (const auto& t : trajectories) {
+    if (t.samples.empty()) throw Error(ErrorCode::InvalidInput, "trajectory", "a trajectory has no samples");
+    end = std::max(end, t.samples.size());
+  }
+  const double period = trajectories.empty() ? 0.1 : trajectories.front().samplePeriod;
+  for (std::size_t a = 0; a < trajectories.size(); ++a) {
+    for (std::size_t b = a + 1; b < trajectories.size(); ++b) {
+      std::optional<Conflict> open;
+      for (std::size_t i = 0; i < end; ++i) {
+        const Eigen::Vector2d pa = positionAtIndex(trajectories[a], i);
+        const Eigen::Vector2d pb = positionAtIndex(trajectories[b], i);
+        const double d = (pa - pb).norm();
+        if (d < r.minimumDistance) {
+          r.minimumDistance = d;
+          r.minimumTime = static_cast<double>(i) * period;
+          r.minimumPair[0] = static_cast<int>(a);
+          r.minimumPair[1] = static_cast<int>(b);
+        }
+        if (d < safety) {
+          if (!open) open = Conflict{static_cast<int>(b), static_cast<int>(a),
+                                     static_cast<double>(i) * period, 0.0, d, pb, pa};
+          open->distance = std::min(open->distance, d);
+          open->duration = static_cast<double>(i) * period - open->time;
+        } else if (open) {
+          r.conflicts.push_back(*open);
+          open.reset();
+        }
+      }
+      if (open) r.conflicts.push_back(*open);
+    }
+  }
+  std::sort(r.conflicts.begin(), r.conflicts.end(),
+            [](const Conflict& x, const Conflict& y) { return x.time < y.time; });
+  return r;
+}
+
+}  // namespace rover::team

@@ -1,0 +1,153 @@
+#pragma once
+// Prioritised multi-rover planning (paper 001 §3.6 and fig. 8, SPEC §3.4). Rovers are taken in
+// priority order (index 0 first). Each rover's task is a list of legs; each leg is planned with
+// RRT* (terrain_rrt) or given as fixed points (the hybrid mission's coverage moves), simulated
+// (rover_sim) from where the rover really stopped, and checked sample by sample in time against
+// every higher-priority rover's committed trajectory. A leg that comes closer than the safety
+// distance is planned again with a new seed, up to a bound; then the rover waits and tries again;
+// then it skips the leg. Whatever is left is reported: a returned plan is collision-free or lists
+// exactly where it is not (`conflicts`).
+//
+// Choices made here where the paper is silent (each repeated where it is implemented):
+// - Every rover starts at t = 0 and all trajectories share one 10 Hz clock, so "the same time" is
+//   "the same sample index" and a check is one distance per sample and rover.
+// - A rover is present before it starts and after it ends (parked where it stopped): later rovers
+//   are checked against parked ones, and a rover's own parking spot is checked against every
+//   higher-priority rover still moving after it has finished.
+// - A retry keeps out of a disc around where the higher-priority rover was at each earlier
+//   conflict (KeepOutZone): with only a new seed, RRT* converges to the same straight line on
+//   open ground and a head-on pair could never separate.
+// - The rover stops at the end of each leg (it looks at its target) and starts the next at rest.
+// - Legs are planned ahead in parallel from their nominal start (the previous leg's goal), which
+//   is within the acceptance radius of where the rover stops; a leg whose rover ended elsewhere
+//   (a skip, a short leg) is planned again from the real position.
+#include <Eigen/Core>
+#include <cstdint>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "core/common/cancel.hpp"
+#include "core/grid/raster.hpp"
+#include "core/team/rover_sim.hpp"
+#include "core/team/terrain_rrt.hpp"
+#include "core/terrain/dem.hpp"
+
+namespace rover::team {
+
+// One leg of a rover's task.
+struct Leg {
+  Eigen::Vector2d goal{0, 0};         // local frame; RRT* goal (target centre + formation slot)
+  std::vector<Eigen::Vector2d> via;   // non-empty: follow these points as given; goal = via.back()
+  int target = -1;                    // route target the leg serves (-1: none)
+};
+
+struct RoverTask {
+  Pose start;
+  std::vector<Leg> legs;
+};
+
+struct CoordinationParams {
+  RrtParams rrt;
+  TerrainCostWeights weights;
+  RoverModel model;
+  ControllerParams controller;
+  SlipParams slip;
+  double safetyDistance = 1.0;  // m, SPEC §3.4                              [safety_distance]
+  int maxReplans = 20;          // re-plans with a new seed per leg, SPEC §3.4    [max_replans]
+  double waitStep = 5.0;        // s, each wait adds this much (ours)            [wait_step]
+  int maxWaits = 6;             // waits before the leg is skipped (ours)         [max_waits]
+  // m, radius of the disc a retry keeps out of around each conflict (ours): the safety distance
+  // plus half a metre of margin for the simulated rover's deviation from its path.
+  double keepOutRadius = 1.5;  //                                               [keep_out_radius]
+  // RRT* calls chained in one leg when a tree ends short of its goal (a long first leg, a goal
+  // behind a ridge), each from where the last one ended (ours).                 [max_pieces]
+  int maxPieces = 6;
+  unsigned threads = 0;  // for the parallel look-ahead planning; 0 = all cores
+
+  // Throws InvalidParameter with the key (and those of the nested structs).
+  void validate() const;
+};
+
+enum class LegStatus {
+  Reached,  // the rover entered its goal's acceptance circle
+  Short,    // it ended away from its goal: no path (unreachable goal, tree short after every piece)
+  Skipped,  // given up by the wait-then-skip fallback, or the goal is not on passable ground
+};
+const char* legStatusName(LegStatus s);
+
+struct LegRecord {
+  int rover = 0;
+  int leg = 0;
+  int target = -1;
+  LegStatus status = LegStatus::Reached;
+  int replans = 0;      // planning attempts after the first, over all pieces
+  int waits = 0;        // waits before the accepted try
+  int pieces = 0;       // accepted path pieces
+  double startTime = 0;  // s
+  double endTime = 0;    // s
+  std::string note;      // why it was skipped or ended short
+};
+
+// Two rovers closer than the safety distance.
+struct Conflict {
+  int rover = 0;  // the lower-priority rover
+  int other = 0;  // the higher-priority rover
+  double time = 0;        // s, first sample of the episode
+  double duration = 0;    // s, until the pair is apart again
+  double distance = 0;    // m, the smallest distance in the episode
+  Eigen::Vector2d position{0, 0};       // the rover, at `time`
+  Eigen::Vector2d otherPosition{0, 0};  // the other rover, at `time`
+};
+
+// Told about each accepted piece as soon as it is committed (the server streams it).
+class CoordinationObserver {
+ public:
+  virtual ~CoordinationObserver() = default;
+  // `path`: the waypoints the rover follows (its current position first); `samples`: the 10 Hz
+  // samples this piece adds to its trajectory (waits included).
+  virtual void pieceAccepted(int rover, std::span<const Eigen::Vector2d> path,
+                             std::span<const TrajectorySample> samples) {
+    (void)rover;
+    (void)path;
+    (void)samples;
+  }
+  virtual void legDone(const LegRecord& leg, int legsDone, int legsTotal) {
+    (void)leg;
+    (void)legsDone;
+    (void)legsTotal;
+  }
+};
+
+struct CoordinationResult {
+  std::vector<Trajectory> trajectories;             // per rover; samples at k × period from 0
+  std::vector<std::vector<Eigen::Vector2d>> paths;  // per rover: accepted waypoints, in order
+  std::vector<LegRecord> legs;                      // rover-major, in task order
+  std::vector<Conflict> conflicts;                  // left in the plan; empty = collision-free
+  int replans = 0;
+  int waits = 0;
+  int rrtCalls = 0;
+  bool cancelled = false;
+};
+
+// Plans, simulates and coordinates the team. `classes` holds terrain::TerrainClass values on the
+// DEM's grid. `seed` drives every RRT* call (deriveSeed per rover, leg, piece and attempt) and the
+// slip noise, so the result is the same for a seed whatever the thread count. Throws
+// InvalidParameter for bad parameters and InvalidInput naming rovers[k] for a start off the map.
+CoordinationResult coordinate(const terrain::Dem& dem, const Raster<std::uint8_t>& classes,
+                              const std::vector<RoverTask>& tasks,
+                              const CoordinationParams& params, std::uint64_t seed,
+                              CoordinationObserver* observer = nullptr,
+                              const CancelToken* cancel = nullptr);
+
+// Every episode in which two rovers are closer than `safety` (compared at every sample index,
+// parked rovers included), and the smallest distance between any two rovers over the mission.
+struct SeparationReport {
+  std::vector<Conflict> conflicts;
+  double minimumDistance = 0;  // m; +∞ with fewer than two rovers
+  double minimumTime = 0;      // s
+  int minimumPair[2] = {0, 0};
+};
+SeparationReport checkSeparation(const std::vector<Trajectory>& trajectories, double safety);
+
+}  // namespace rover::team

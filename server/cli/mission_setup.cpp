@@ -1,0 +1,84 @@
+#include "server/cli/mission_setup.hpp"
+
+#include "core/team/team_entry.hpp"
+#include "server/cli/coverage_options.hpp"
+#include "server/cli/dem_options.hpp"
+
+namespace rover::cli {
+
+namespace {
+
+PdmOptionNames missionPdmNames() {
+  PdmOptionNames n;
+  n.gaussians = "pdm";
+  n.random = "random-pdm";
+  n.raster = "pdm-raster";
+  n.seed = "pdm-seed";
+  return n;
+}
+
+}  // namespace
+
+void addMissionOptions(ArgParser& a) {
+  a.option("dem", "FILE", "", "The DEM to plan on (any raster GDAL reads). Required.");
+  addDemOptions(a, "cell", "native");
+  addPdmOptions(a, missionPdmNames());
+  a.option("planner", "NAME", "team-search", "team-search | hybrid.");
+  a.option("rovers", "N", "5", "Number of rovers, placed in formation around the map centre.");
+  a.option("start", "X,Y,DEG[;X,Y,DEG...]", "formation",
+           "Rover starts in the local frame (metres from the lower-left corner) and headings "
+           "(degrees counter-clockwise from east); overrides --rovers.");
+  addParamOptions(a, team::teamParamTable().infos());
+}
+
+MissionSetup readMissionOptions(const ArgParser& a) {
+  MissionSetup s;
+  if (!a.has("dem")) throw UsageError("missing option --dem FILE");
+  s.plannerName = a.str("planner", "team-search");
+  if (s.plannerName != "team-search" && s.plannerName != "hybrid")
+    throw UsageError("invalid value for --planner: '" + s.plannerName + "' (team-search | hybrid)");
+  s.params = readParamOptions(a, team::teamParamTable().infos());
+  team::TeamPlannerParams typed;
+  try {
+    typed = team::parseTeamParams(s.params);
+  } catch (const Error& e) {
+    throwAsUsage(e);
+  }
+  s.demPath = a.str("dem", "");
+  maps::LoadedDem loaded = loadDemOrFail(s.demPath, readDemOptions(a, "cell", 0));
+  auto dem = std::make_shared<terrain::Dem>(std::move(loaded.dem));
+  s.problem.dem = dem;
+  const PdmOptionNames names = missionPdmNames();
+  Raster<float> pdm = readPdmOptions(a, *dem, names, true);
+  if (a.has(names.random)) {
+    s.pdmSource = "random " + a.str(names.random, "") + " Gaussians, seed " +
+                  (a.has(names.seed) ? a.str(names.seed, "") : a.str("seed", "1"));
+  } else if (a.has(names.gaussians)) {
+    s.pdmSource = a.str(names.gaussians, "");
+  } else if (a.has(names.raster)) {
+    s.pdmSource = a.str(names.raster, "");
+  } else {
+    s.pdmSource = "uniform";
+  }
+  if (!pdm.empty()) s.problem.pdm = std::make_shared<Raster<float>>(std::move(pdm));
+
+  std::vector<RoverStart> starts = readStartOption(a);
+  if (starts.empty()) {
+    const int n = static_cast<int>(a.integer("rovers", 5, 1, 64));
+    const GridGeometry& g = dem->geometry();
+    const Eigen::Vector2d centre(g.widthMetres() / 2, g.heightMetres() / 2);
+    for (const auto& p : orUsage([&] { return team::formationStarts(*dem, typed.mission, centre, n); }))
+      starts.push_back({{p.x, p.y}, p.heading});
+  }
+  s.problem.rovers = starts;
+  try {
+    s.registry.get(s.plannerName).validate(s.problem, s.params);
+  } catch (const Error& e) {
+    if (e.field().rfind("rovers", 0) == 0) throw UsageError(std::string("invalid value for --start: ") + e.what());
+    if (e.field() == "map" || e.field() == "pdm") throw UsageError(e.what());
+    throwAsUsage(e);
+  }
+  return s;
+}
+
+}  // namespace rover::cli

@@ -1,0 +1,27 @@
+#pragma once
+// Options of a team mission on the command line, shared by `mission` and `bench mission`: the
+// DEM (with --crop/--cell), the PDM source, the rovers and every team planner parameter
+// (generated from the planner's table, so the CLI never drifts from the API).
+#include <memory>
+#include <string>
+
+#include "core/planning/planner.hpp"
+#include "server/cli/arg_parser.hpp"
+
+namespace rover::cli {
+
+struct MissionSetup {
+  PlannerRegistry registry = makeBuiltinRegistry();
+  std::string plannerName = "team-search";
+  PlanningProblem problem;  // dem, pdm and rovers filled in and validated
+  ParamSet params;
+  std::string demPath;
+  std::string pdmSource;  // how the PDM was made, for the summary ("random 4, seed 1", a file)
+};
+
+void addMissionOptions(ArgParser& args);
+// Loads the DEM and the PDM, places the rovers and validates everything through the planner;
+// throws UsageError naming the option.
+MissionSetup readMissionOptions(const ArgParser& args);
+
+}  // namespace rover::cli
