@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <numbers>
 #include <optional>
 
 #include "core/common/error.hpp"
@@ -27,6 +28,8 @@ void CoordinationParams::validate() const {
     throwInvalidParameter("max_waits", "must be an integer in [0, 1000]");
   if (!std::isfinite(keepOutRadius) || keepOutRadius < 0)
     throwInvalidParameter("keep_out_radius", "must be a finite number >= 0");
+  if (!std::isfinite(dwellCheck) || dwellCheck < 0 || dwellCheck > 3600)
+    throwInvalidParameter("dwell_check", "must be a number of seconds in [0, 3600]");
   if (maxPieces < 1 || maxPieces > 100)
     throwInvalidParameter("max_pieces", "must be an integer in [1, 100]");
 }
@@ -89,6 +92,7 @@ class Coordinator {
         runLeg(k, i);
         if (out_.cancelled) break;
       }
+      if (!out_.cancelled) park(k);
     }
     out_.conflicts = checkSeparation(out_.trajectories, p_.safetyDistance).conflicts;
     return std::move(out_);
@@ -247,7 +251,7 @@ class Coordinator {
   // distance to a higher-priority rover; with `parkedAfter`, also rover k parked at its last
   // position for as long as any higher-priority rover still moves.
   std::optional<Conflict> firstConflict(int k, const std::vector<TrajectorySample>& samples,
-                                        bool parkedAfter) const {
+                                        bool parkedForGood) const {
     const auto& trajectories = out_.trajectories;
     const std::size_t base = trajectories[k].samples.size();
     auto check = [&](std::size_t idx, const Eigen::Vector2d& p) -> std::optional<Conflict> {
@@ -261,13 +265,15 @@ class Coordinator {
     };
     for (std::size_t m = 0; m < samples.size(); ++m)
       if (auto c = check(base + m, xyOf(samples[m]))) return c;
-    if (parkedAfter) {
-      std::size_t end = 0;
-      for (int j = 0; j < k; ++j) end = std::max(end, trajectories[j].samples.size());
-      const Eigen::Vector2d p = samples.empty() ? here(k) : xyOf(samples.back());
-      for (std::size_t idx = base + samples.size(); idx < end; ++idx)
-        if (auto c = check(idx, p)) return c;
-    }
+    // Standing at the end: for good after the last leg, else for the dwell check.
+    std::size_t end = 0;
+    for (int j = 0; j < k; ++j) end = std::max(end, trajectories[j].samples.size());
+    const std::size_t from = base + samples.size();
+    if (!parkedForGood)
+      end = std::min(end, from + static_cast<std::size_t>(std::lround(p_.dwellCheck / period_)));
+    const Eigen::Vector2d p = samples.empty() ? here(k) : xyOf(samples.back());
+    for (std::size_t idx = from; idx < end; ++idx)
+      if (auto c = check(idx, p)) return c;
     return std::nullopt;
   }
 
@@ -314,6 +320,8 @@ class Coordinator {
         return Outcome::Accepted;
       }
       if (!firstTry) firstTry = c;
+      // A conflict in the first second: no other path can dodge it, only waiting can.
+      if (conflict->time - last(k).time < 1.0) break;
       // Keep out of where the other rover was, unless that would wall in the start or the goal
       // (then only the seed changes).
       const KeepOutZone zone{conflict->otherPosition, p_.keepOutRadius};
@@ -348,6 +356,41 @@ class Coordinator {
   bool reachesGoal(const Candidate& c, const Eigen::Vector2d& goal) const {
     const Eigen::Vector2d end = c.samples.empty() ? c.path.front() : xyOf(c.samples.back());
     return (end - goal).norm() <= p_.controller.acceptanceRadius + 0.1;
+  }
+
+  // The rover stays where its last leg left it for the rest of the mission. If a higher-priority
+  // rover still moving would pass too close, it drives out of the way (ours): to the first spot,
+  // in rings of growing radius around it, that it can reach and stay at without a conflict.
+  void park(int k) {
+    if (!firstConflict(k, {}, true)) return;
+    const Eigen::Vector2d from = here(k);
+    int attempt = 0;
+    for (double radius : {1.5, 2.5, 3.5, 5.0, 7.0}) {
+      for (int d = 0; d < 8; ++d) {
+        if (cancelled()) return;
+        const double a = d * std::numbers::pi / 4;
+        const Eigen::Vector2d spot = from + radius * Eigen::Vector2d(std::cos(a), std::sin(a));
+        if (!wholeMap_.turnValid(spot)) continue;
+        RrtParams rrt = p_.rrt;
+        rrt.seed = seedFor(seed_ ^ 0x9a4cull, k, attempt, 0, 0);
+        ++attempt;
+        ++out_.rrtCalls;
+        PathResult path = planPath(dem_, classes_, from, last(k).heading, spot, rrt, p_.weights, cancel_);
+        if (path.status != PathStatus::Exact || path.waypoints.size() < 2) continue;
+        Candidate c = simulateTry(k, path.waypoints, 0, seedFor(seed_ ^ 0x9a4dull, k, attempt, 0, 0));
+        if (!c.reached || firstConflict(k, c.samples, true)) continue;
+        commit(k, c);
+        LegRecord rec;
+        rec.rover = k;
+        rec.leg = static_cast<int>(tasks_[k].legs.size());
+        rec.startTime = c.samples.front().time;
+        rec.endTime = last(k).time;
+        rec.pieces = 1;
+        rec.note = "parked out of the way";
+        out_.legs.push_back(rec);
+        return;
+      }
+    }
   }
 
   void runLeg(int k, int i) {

@@ -85,6 +85,8 @@ ParamTable<P> buildTable() {
          [](auto& p) -> auto& { return p.mission.coordination.maxWaits; });
   addReal(t, realParam("keep_out_radius", 0, 100, "m", "A re-plan keeps out of this radius around where the other rover was at each earlier conflict."),
           [](auto& p) -> auto& { return p.mission.coordination.keepOutRadius; });
+  addReal(t, realParam("dwell_check", 0, 3600, "s", "Each leg is also checked with the rover standing at its end this long."),
+          [](auto& p) -> auto& { return p.mission.coordination.dwellCheck; });
   addInt(t, intParam("max_pieces", 1, 100, "", "RRT* calls chained in one leg when a tree ends short of its goal."),
          [](auto& p) -> auto& { return p.mission.coordination.maxPieces; });
   // RRT* and eq. 9 (SPEC §3.2).
@@ -96,6 +98,8 @@ ParamTable<P> buildTable() {
           [](auto& p) -> auto& { return p.mission.coordination.rrt.clearance; });
   addReal(t, realParam("attitude_limit", 0.1, 90, "deg", "Roll/pitch limit of a valid edge and of the exceedance count (15°)."),
           [](auto& p) -> auto& { return p.mission.coordination.rrt.attitudeLimit; }, kDeg);
+  addReal(t, realParam("exceedance_limit", 0.1, 90, "deg", "Samples with |roll| or |pitch| above this count as exceedances (paper 001: 15°)."),
+          [](auto& p) -> auto& { return p.mission.exceedanceLimit; }, kDeg);
   addReal(t, realParam("goal_bias", 0, 1, "", "RRT* probability of sampling the goal."),
           [](auto& p) -> auto& { return p.mission.coordination.rrt.goalBias; });
   addInt(t, intParam("max_iterations", 1, 10000000, "", "Safety cap on RRT* iterations per tree."),
@@ -213,7 +217,7 @@ PlanResult toPlanResult(const TeamMissionResult& r, const TeamPlannerParams& p, 
   const auto every = static_cast<std::size_t>(std::max(1L, std::lround(1.0 / period)));
   for (std::size_t k = 0; k < r.plan.trajectories.size(); ++k) {
     const Trajectory& t = r.plan.trajectories[k];
-    const AttitudeExceedance e = attitudeExceedance(t, p.mission.coordination.rrt.attitudeLimit);
+    const AttitudeExceedance e = attitudeExceedance(t, p.mission.exceedanceLimit);
     int reached = 0, skipped = 0, shortLegs = 0, replans = 0, waits = 0;
     for (const auto& leg : r.plan.legs) {
       if (leg.rover != static_cast<int>(k)) continue;

@@ -34,6 +34,8 @@ void TeamMissionParams::validate() const {
     throwInvalidParameter("high_risk_deg", "must be in (0, 90]");
   if (!std::isfinite(t.impassableDeg) || t.impassableDeg < t.highRiskDeg || t.impassableDeg > 90)
     throwInvalidParameter("impassable_deg", "must be in [high_risk_deg, 90]");
+  if (!std::isfinite(exceedanceLimit) || !(exceedanceLimit > 0) || exceedanceLimit > M_PI / 2)
+    throwInvalidParameter("exceedance_limit", "must be in (0, 90] degrees");
   if (!std::isfinite(hybridCell) || !(hybridCell > 0) || hybridCell > footprint)
     throwInvalidParameter("hybrid_cell_m", "must be > 0 and at most the footprint");
   if (!std::isfinite(hybridCoverage) || !(hybridCoverage > 0) || hybridCoverage > 1)
@@ -120,7 +122,7 @@ std::optional<Eigen::Vector2d> nearestValid(const TerrainEdgeModel& model, Eigen
                                             double reach, double safety,
                                             const std::vector<Eigen::Vector2d>& taken) {
   auto ok = [&](const Eigen::Vector2d& p) {
-    if (!model.pointValid(p)) return false;
+    if (!model.turnValid(p)) return false;
     for (const auto& t : taken)
       if ((t - p).norm() < safety) return false;
     return true;
@@ -448,7 +450,7 @@ TeamMissionResult runTeamMission(const terrain::Dem& dem, const Raster<float>& p
   out.plan = coordinate(dem, trav.classes, tasks, p.coordination, params.seed, observer, cancel);
   if (cancel && cancel->cancelled()) out.plan.cancelled = true;
   out.curves = accumulatedProbability(pdm, out.plan.trajectories, params.sensingDiameter);
-  out.metrics = teamMetrics(out.plan, out.curves, out.route, params.coordination.rrt.attitudeLimit,
+  out.metrics = teamMetrics(out.plan, out.curves, out.route, params.exceedanceLimit,
                             params.coordination.safetyDistance);
   return out;
 }

@@ -26,6 +26,9 @@ struct TeamMissionParams {
   double sensingDiameter = 1.0;  // m, each rover's sensed disc, SPEC §3       [sensing_diameter_m]
   terrain::TraversabilityParams traversability;  // [high_risk_deg, impassable_deg]
   CoordinationParams coordination;
+  // rad; samples with |roll| or |pitch| above it are exceedances (paper 001 §4.3: 15°). Kept apart
+  // from the planning limit (coordination.rrt.attitudeLimit) so a margin can be planned in.
+  double exceedanceLimit = kDefaultAttitudeLimit;  //                            [exceedance_limit]
   std::uint64_t seed = 1;  // RRT*, slip and the hybrid's coverage                        [seed]
   // Hybrid only (SPEC §4): the footprint is covered on a grid of this cell (the sensing
   // diameter by default) up to this fraction of its free cells, each rover in its own Voronoi

@@ -141,6 +141,13 @@ bool TerrainEdgeModel::pointValid(const Eigen::Vector2d& p) const {
          terrain::surfaceAt(dem_, p.x(), p.y());
 }
 
+bool TerrainEdgeModel::turnValid(const Eigen::Vector2d& p) const {
+  if (!cellAllowed(dem_, classes_, bounds_, p) || !outsideKeepOut(p)) return false;
+  auto sp = terrain::surfaceAt(dem_, p.x(), p.y());
+  const double t = std::tan(limit_);
+  return sp && sp->dzdx * sp->dzdx + sp->dzdy * sp->dzdy < t * t;
+}
+
 // Roll and pitch follow SPEC §2 exactly as terrain::attitudeAt does — pitch = atan(∇h·(cosψ,
 // sinψ)), roll = atan(∇h·(−sinψ, cosψ)) on the bilinear surface — but with the edge's cos ψ, sin ψ
 // computed once and atan applied once to the largest tangent (atan is monotonic, so max|atan x| =
@@ -248,14 +255,22 @@ void silenceOmpl() {
   });
 }
 
+// Tree vertices are where the rover turns in place: turnValid. The start is exempt (the rover is
+// already there, possibly pushed by the simulation onto a steeper spot); it only has to be
+// pointValid.
 class TerrainValidityChecker : public ob::StateValidityChecker {
  public:
-  TerrainValidityChecker(const ob::SpaceInformationPtr& si, const TerrainEdgeModel& model)
-      : ob::StateValidityChecker(si), model_(model) {}
-  bool isValid(const ob::State* s) const override { return model_.pointValid(xyOf(s)); }
+  TerrainValidityChecker(const ob::SpaceInformationPtr& si, const TerrainEdgeModel& model,
+                         const Eigen::Vector2d& start)
+      : ob::StateValidityChecker(si), model_(model), start_(start) {}
+  bool isValid(const ob::State* s) const override {
+    const Eigen::Vector2d p = xyOf(s);
+    return p == start_ ? model_.pointValid(p) : model_.turnValid(p);
+  }
 
  private:
   const TerrainEdgeModel& model_;
+  Eigen::Vector2d start_;
 };
 
 class TerrainMotionValidator : public ob::MotionValidator {
@@ -396,7 +411,7 @@ PathResult planPath(const terrain::Dem& dem, const Raster<std::uint8_t>& classes
     r.status = PathStatus::InvalidStart;
     return r;
   }
-  if (!model.pointValid(goal)) {
+  if (!model.turnValid(goal)) {
     r.status = PathStatus::InvalidGoal;
     return r;
   }
@@ -426,7 +441,7 @@ PathResult planPath(const terrain::Dem& dem, const Raster<std::uint8_t>& classes
   });
 
   auto si = std::make_shared<ob::SpaceInformation>(space);
-  si->setStateValidityChecker(std::make_shared<TerrainValidityChecker>(si, model));
+  si->setStateValidityChecker(std::make_shared<TerrainValidityChecker>(si, model, start));
   si->setMotionValidator(std::make_shared<TerrainMotionValidator>(si, model));
   si->setup();
 

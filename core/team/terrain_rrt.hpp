@@ -113,6 +113,11 @@ class TerrainEdgeModel {
   // Impassable, with a defined surface (bilinear interpolation needs the four surrounding cell
   // centres to have data).
   bool pointValid(const Eigen::Vector2d& p) const;
+  // pointValid, and the terrain's full slope (the gradient's magnitude) below the attitude limit:
+  // the rover stops and turns in place at a path vertex, sweeping through every heading, so a
+  // vertex must be safe whichever way it faces (ours: checking only the two edges' headings let
+  // the simulated rover exceed 15° while turning on a slope).
+  bool turnValid(const Eigen::Vector2d& p) const;
   // Every sample of the edge (both ends included, at most edgeResolution apart) is pointValid and
   // has |roll| and |pitch| strictly below the attitude limit for the edge's heading.
   bool edgeValid(const Eigen::Vector2d& a, const Eigen::Vector2d& b) const;
