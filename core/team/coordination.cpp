@@ -28,6 +28,8 @@ void CoordinationParams::validate() const {
     throwInvalidParameter("max_waits", "must be an integer in [0, 1000]");
   if (!std::isfinite(keepOutRadius) || keepOutRadius < 0)
     throwInvalidParameter("keep_out_radius", "must be a finite number >= 0");
+  if (!std::isfinite(attitudeCheck) || attitudeCheck < 0 || attitudeCheck > std::numbers::pi / 2)
+    throwInvalidParameter("attitude_check", "must be in [0, 90] degrees");
   if (!std::isfinite(dwellCheck) || dwellCheck < 0 || dwellCheck > 3600)
     throwInvalidParameter("dwell_check", "must be a number of seconds in [0, 3600]");
   if (maxPieces < 1 || maxPieces > 100)
@@ -277,6 +279,15 @@ class Coordinator {
     return std::nullopt;
   }
 
+  // The first sample with |roll| or |pitch| above the attitude check, if any.
+  std::optional<Eigen::Vector2d> firstExceedance(const std::vector<TrajectorySample>& samples) const {
+    if (!(p_.attitudeCheck > 0)) return std::nullopt;
+    for (const auto& s : samples)
+      if (std::abs(s.roll) > p_.attitudeCheck || std::abs(s.pitch) > p_.attitudeCheck)
+        return xyOf(s);
+    return std::nullopt;
+  }
+
   void commit(int k, const Candidate& c) {
     auto& t = out_.trajectories[k].samples;
     t.insert(t.end(), c.samples.begin(), c.samples.end());
@@ -293,6 +304,8 @@ class Coordinator {
     std::vector<KeepOutZone> keepOut;
     std::optional<Candidate> firstTry;
     std::optional<Conflict> conflict;
+    std::optional<Candidate> steepButSafe;
+    bool steepReached = false;
     std::string noPath;
     for (int attempt = 0; attempt <= p_.maxReplans; ++attempt) {
       if (cancelled()) return Outcome::Cancelled;
@@ -314,19 +327,32 @@ class Coordinator {
       if (cancelled()) return Outcome::Cancelled;
       // The leg's last piece decides whether the rover parks here for good.
       conflict = firstConflict(k, c.samples, lastLeg && reachesGoal(c, goal));
-      if (!conflict) {
+      const std::optional<Eigen::Vector2d> steep = firstExceedance(c.samples);
+      if (!conflict && !steep) {
         reachedGoal = path.status == PathStatus::Exact && c.reached;
         commit(k, c);
         return Outcome::Accepted;
       }
+      if (!conflict && !steepButSafe) {
+        steepButSafe = c;
+        steepReached = path.status == PathStatus::Exact && c.reached;
+      }
       if (!firstTry) firstTry = c;
       // A conflict in the first second: no other path can dodge it, only waiting can.
-      if (conflict->time - last(k).time < 1.0) break;
-      // Keep out of where the other rover was, unless that would wall in the start or the goal
-      // (then only the seed changes).
-      const KeepOutZone zone{conflict->otherPosition, p_.keepOutRadius};
+      if (conflict && conflict->time - last(k).time < 1.0) break;
+      // Keep out of where the other rover was (or where the simulated rover tilted past the
+      // limit), unless that would wall in the start or the goal (then only the seed changes).
+      const KeepOutZone zone{conflict ? conflict->otherPosition : *steep,
+                             conflict ? p_.keepOutRadius : 0.5};
       if ((here(k) - zone.centre).norm() > zone.radius && (goal - zone.centre).norm() > zone.radius)
         keepOut.push_back(zone);
+    }
+    // No try was both clear and within the attitude limit: a clear one goes ahead (reported as
+    // an exceedance); only conflicts make the rover wait.
+    if (steepButSafe) {
+      reachedGoal = steepReached;
+      commit(k, *steepButSafe);
+      return Outcome::Accepted;
     }
     if (!firstTry) {
       rec.note = "no path: " + noPath;
@@ -344,6 +370,10 @@ class Coordinator {
         commit(k, c);
         return Outcome::Accepted;
       }
+    }
+    if (!conflict) {
+      rec.note = "no clear try";
+      return Outcome::Skipped;
     }
     char buf[160];
     std::snprintf(buf, sizeof buf, "within %.2f m of rover %d at t = %.1f s (%.2f, %.2f)",

@@ -79,6 +79,10 @@ struct CoordinationParams {
   // seconds to get going again, so a leg ending where a higher-priority rover passes a moment
   // later is refused then, while waiting can still help, not on the next leg.   [dwell_check]
   double dwellCheck = 10.0;
+  // rad; a simulated try whose |roll| or |pitch| goes above this is planned again like a
+  // conflict, keeping out of half a metre around the spot (ours; 0 = off). If no try is within
+  // it, the first conflict-free one is kept and the exceedance reported.        [attitude_check]
+  double attitudeCheck = kDefaultAttitudeLimit;
   unsigned threads = 0;  // for the parallel look-ahead planning; 0 = all cores
 
   // Throws InvalidParameter with the key (and those of the nested structs).

@@ -87,6 +87,8 @@ ParamTable<P> buildTable() {
           [](auto& p) -> auto& { return p.mission.coordination.keepOutRadius; });
   addReal(t, realParam("dwell_check", 0, 3600, "s", "Each leg is also checked with the rover standing at its end this long."),
           [](auto& p) -> auto& { return p.mission.coordination.dwellCheck; });
+  addReal(t, realParam("attitude_check", 0, 90, "deg", "A simulated try tilting past this is planned again, like a conflict (0 = off)."),
+          [](auto& p) -> auto& { return p.mission.coordination.attitudeCheck; }, kDeg);
   addInt(t, intParam("max_pieces", 1, 100, "", "RRT* calls chained in one leg when a tree ends short of its goal."),
          [](auto& p) -> auto& { return p.mission.coordination.maxPieces; });
   // RRT* and eq. 9 (SPEC §3.2).
@@ -254,6 +256,29 @@ PlanResult toPlanResult(const TeamMissionResult& r, const TeamPlannerParams& p, 
     std::snprintf(note, sizeof note, "rovers %d and %d within %.2f m for %.1f s", c.other, c.rover,
                   c.distance, c.duration);
     out.incidents.push_back({"collision", c.rover, c.other, c.time, c.position, c.distance, note});
+  }
+  // Exceedance episodes: consecutive samples over the limit, reported once with the worst angle.
+  const double limit = p.mission.exceedanceLimit;
+  for (std::size_t k = 0; k < r.plan.trajectories.size(); ++k) {
+    const auto& samples = r.plan.trajectories[k].samples;
+    for (std::size_t i = 0; i < samples.size();) {
+      auto over = [&](std::size_t j) {
+        return std::max(std::abs(samples[j].roll), std::abs(samples[j].pitch));
+      };
+      if (over(i) <= limit) {
+        ++i;
+        continue;
+      }
+      std::size_t j = i;
+      double worst = 0;
+      for (; j < samples.size() && over(j) > limit; ++j) worst = std::max(worst, over(j));
+      char note[120];
+      std::snprintf(note, sizeof note, "|roll| or |pitch| up to %.2f° for %zu samples",
+                    worst * 180.0 / std::numbers::pi, j - i);
+      out.incidents.push_back({"exceedance", static_cast<int>(k), -1, samples[i].time,
+                               {samples[i].x, samples[i].y}, worst * 180.0 / std::numbers::pi, note});
+      i = j;
+    }
   }
   for (const LegRecord& leg : r.plan.legs) {
     if (leg.status == LegStatus::Reached) continue;

@@ -187,20 +187,32 @@ missions::MissionJob buildMission(ApiContext& ctx, const json& body) {
       throw ApiError(400, "invalid_field", "pace must be a number of steps per second in [0, 1e6]", "pace");
     job.pace = body["pace"].get<double>();
   }
-  // The planning grid: the map resampled to the planner's cell.
-  double cell = 1.0;
-  try {
-    if (job.record.planner == "coverage") cell = coverage::parseCoverageParams(job.params).coverageCell;
-  } catch (const Error& e) {
-    throw fromCore(e, "params.");
+  // What the planner plans on: the coverage planner a grid world (the map resampled to its
+  // cell); the team planners the map at its own resolution and the PDM.
+  if (job.record.planner == "coverage") {
+    double cell = 1.0;
+    try {
+      cell = coverage::parseCoverageParams(job.params).coverageCell;
+    } catch (const Error& e) {
+      throw fromCore(e, "params.");
+    }
+    auto dem = ctx.maps.demAtCell(job.record.mapId, cell);
+    job.problem.world = coverage::worldFromDem(*dem);
+    job.geo = dem->z.geo;
+    job.mapGrid = dem->geometry();
+  } else {
+    auto dem = ctx.maps.demAtCell(job.record.mapId, 0);
+    job.problem.dem = dem;
+    if (!job.record.pdmId.empty())
+      job.problem.pdm = std::make_shared<Raster<float>>(ctx.maps.pdmMass(job.record.pdmId));
+    job.geo = dem->z.geo;
+    job.mapGrid = dem->geometry();
   }
-  auto dem = ctx.maps.demAtCell(job.record.mapId, cell);
-  job.problem.world = coverage::worldFromDem(*dem);
-  job.geo = dem->z.geo;
   try {
     planner->validate(job.problem, job.params);
+    job.eventGrid = planner->eventGrid(job.problem, job.params);
   } catch (const Error& e) {
-    bool roverField = e.field().rfind("rovers", 0) == 0;
+    bool roverField = e.field().rfind("rovers", 0) == 0 || e.field() == "map" || e.field() == "pdm";
     throw fromCore(e, roverField || e.field().empty() ? "" : "params.");
   }
   json spec = body;

@@ -74,6 +74,7 @@ json toJson(const PlanResult& r) {
            {"x", i.position.x()}, {"y", i.position.y()}, {"note", i.note}};
     if (i.other >= 0) x["other"] = i.other;
     if (i.kind == "collision") x["distance_m"] = i.value;
+    else if (i.kind == "exceedance") x["max_angle_deg"] = i.value;
     else if (i.value >= 0) x["target"] = static_cast<int>(i.value);
     incidents.push_back(std::move(x));
   }

@@ -39,7 +39,7 @@ void MissionManager::submit(MissionJob job) {
                          "the mission queue is full (" + std::to_string(capacity_) + " waiting); try again later");
   job.record.status = "queued";
   db_.insertMission(job.record);
-  const GridGeometry& g = job.problem.world.geometry();
+  const GridGeometry& g = job.eventGrid;
   Active a;
   a.stream = std::make_shared<MissionStream>(job.record.id, g, static_cast<int>(job.problem.rovers.size()), job.pace);
   a.cancel = std::make_shared<CancelToken>();
@@ -89,6 +89,8 @@ std::shared_ptr<MissionStream> MissionManager::stream(const std::string& id) {
   if (trails.is_discarded()) trails = nlohmann::json::array();
   std::string grid = fs::exists(dir / "grid.bin") ? readFile(dir / "grid.bin") : std::string();
   auto s = MissionStream::fromStored(id, grid, trails, rec->status, rec->message, rec->metrics);
+  if (fs::exists(dir / "overlays.json"))
+    s->restoreOverlays(nlohmann::json::parse(readFile(dir / "overlays.json"), nullptr, false));
   std::lock_guard lock(mutex_);
   finished_[id] = s;
   finishedOrder_.push_back(id);
@@ -173,7 +175,7 @@ void MissionManager::saveResult(const MissionJob& job, const PlanResult& result,
   store::DataDir::writeFileAtomic((s / "result.json").string(), j.dump());
   store::DataDir::writeFileAtomic(
       (s / "result.geojson").string(),
-      maps::tracksToGeoJson(result.tracks, job.problem.world.geometry(), job.geo));
+      maps::tracksToGeoJson(result.tracks, job.mapGrid, job.geo));
   std::ostringstream csv;
   csv << "rover,index,x_m,y_m\n";
   for (const auto& t : result.tracks)
@@ -182,6 +184,7 @@ void MissionManager::saveResult(const MissionJob& job, const PlanResult& result,
   store::DataDir::writeFileAtomic((s / "result.csv").string(), csv.str());
   store::DataDir::writeFileAtomic((s / "grid.bin").string(), stream.fullGridFrame());
   store::DataDir::writeFileAtomic((s / "trails.json").string(), stream.trailsJson().dump());
+  store::DataDir::writeFileAtomic((s / "overlays.json").string(), stream.overlaysJson().dump());
   dir_.commitDir(staging, dir_.missionDir(job.record.id));
 }
 

@@ -24,6 +24,8 @@ struct MissionJob {
   PlanningProblem problem;      // validated
   ParamSet params;
   GeoReference geo;             // the map's georeferencing, for the GeoJSON result
+  GridGeometry mapGrid;         // the grid positions are relative to (for the GeoJSON result)
+  GridGeometry eventGrid;       // the planner's cellsChanged grid (Planner::eventGrid)
   double pace = 0;              // steps per second, 0 = full speed
 };
 

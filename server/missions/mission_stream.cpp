@@ -58,14 +58,41 @@ class MissionStream::Subscription : public http::WsSource {
       nlohmann::json j{{"type", "snapshot"}, {"mission", s.id_},   {"status", s.status_},
                        {"grid", grid},       {"rovers", rovers},   {"step", s.step_},
                        {"progress", s.progress_}, {"metrics", s.metrics_}};
+      if (!s.route_.empty() || !s.paths_.empty()) {
+        j["route"] = s.route_;
+        j["paths"] = s.paths_;
+      }
+      routeSeen_ = s.routeVersion_;
+      pathSent_.assign(s.paths_.size(), 0);
+      for (std::size_t k = 0; k < s.paths_.size(); ++k) pathSent_[k] = s.paths_[k].size();
       progressSeen_ = s.progressVersion_;
       statusSeen_ = s.statusVersion_;
       return http::WsFrame{false, j.dump(), false};
     }
-    // Grid diffs, poses and progress take turns, so a planner that changes cells every step
-    // cannot starve the trails and the progress bar.
-    for (int tries = 0; tries < 3; ++tries) {
-      const int kind = (lastKind_ + 1 + tries) % 3;
+    // Grid diffs, poses, progress and overlays take turns, so a planner that changes cells every
+    // step cannot starve the trails and the progress bar.
+    for (int tries = 0; tries < 4; ++tries) {
+      const int kind = (lastKind_ + 1 + tries) % 4;
+      if (kind == 3) {
+        if (pathSent_.size() < s.paths_.size()) pathSent_.resize(s.paths_.size(), 0);
+        nlohmann::json j{{"type", "overlay"}};
+        if (routeSeen_ != s.routeVersion_) {
+          routeSeen_ = s.routeVersion_;
+          j["route"] = s.route_;
+        }
+        nlohmann::json paths = nlohmann::json::array();
+        for (std::size_t k = 0; k < s.paths_.size(); ++k) {
+          if (pathSent_[k] == s.paths_[k].size()) continue;
+          nlohmann::json append(std::vector<std::array<float, 2>>(s.paths_[k].begin() + pathSent_[k], s.paths_[k].end()));
+          paths.push_back({{"rover", k}, {"append", append}});
+          pathSent_[k] = s.paths_[k].size();
+        }
+        if (j.contains("route") || !paths.empty()) {
+          j["paths"] = paths;
+          lastKind_ = 3;
+          return http::WsFrame{false, j.dump(), false};
+        }
+      }
       if (kind == 0 && s.grid_.cellCount() > 0 && (!gridSent_ || gridSeen_ != gridVersion)) {
         std::string frame;
         // A full grid for a new client, or when it fell behind the compacted log, or when the
@@ -101,6 +128,7 @@ class MissionStream::Subscription : public http::WsSource {
         progressSeen_ = s.progressVersion_;
         nlohmann::json j = s.progress_;
         j["type"] = "progress";
+        if (!s.liveMetrics_.is_null()) j["metrics"] = s.liveMetrics_;
         lastKind_ = 2;
         return http::WsFrame{false, j.dump(), false};
       }
@@ -122,8 +150,9 @@ class MissionStream::Subscription : public http::WsSource {
   std::shared_ptr<MissionStream> stream_;
   bool snapshotSent_ = false, gridSent_ = false, doneSent_ = false;
   std::uint64_t gridSeen_ = 0, progressSeen_ = 0, statusSeen_ = 0;
-  std::vector<std::size_t> trailSent_;
-  int lastKind_ = 2;  // 0 grid, 1 poses, 2 progress: the kind sent last, for taking turns
+  std::vector<std::size_t> trailSent_, pathSent_;
+  std::uint64_t routeSeen_ = 0;
+  int lastKind_ = 3;  // 0 grid, 1 poses, 2 progress, 3 overlays: the kind sent last, for taking turns
 };
 
 MissionStream::MissionStream(std::string missionId, const GridGeometry& grid, int rovers,
@@ -186,6 +215,49 @@ void MissionStream::progress(const Progress& p) {
     ++progressVersion_;
   }
   wakeAll(false);
+}
+
+void MissionStream::overlay(std::string_view kind, int rover, std::span<const Point2> points) {
+  {
+    std::lock_guard lock(mutex_);
+    if (kind == "route") {
+      route_.clear();
+      for (const auto& p : points) route_.push_back({static_cast<float>(p.x), static_cast<float>(p.y)});
+      ++routeVersion_;
+    } else if (kind == "path" && rover >= 0 && rover < 4096) {
+      if (static_cast<std::size_t>(rover) >= paths_.size()) paths_.resize(rover + 1);
+      for (const auto& p : points) paths_[rover].push_back({static_cast<float>(p.x), static_cast<float>(p.y)});
+    }
+  }
+  wakeAll(false);
+}
+
+void MissionStream::metrics(std::span<const Metric> metrics) {
+  {
+    std::lock_guard lock(mutex_);
+    liveMetrics_ = nlohmann::json::object();
+    for (const auto& m : metrics) liveMetrics_[m.key] = m.value;
+    ++progressVersion_;
+  }
+  wakeAll(false);
+}
+
+nlohmann::json MissionStream::overlaysJson() const {
+  std::lock_guard lock(mutex_);
+  return {{"route", route_}, {"paths", paths_}};
+}
+
+void MissionStream::restoreOverlays(const nlohmann::json& o) {
+  std::lock_guard lock(mutex_);
+  if (!o.is_object()) return;
+  try {
+    route_ = o.value("route", std::vector<std::array<float, 2>>{});
+    paths_ = o.value("paths", std::vector<std::vector<std::array<float, 2>>>{});
+    ++routeVersion_;
+  } catch (const nlohmann::json::exception&) {
+    route_.clear();
+    paths_.clear();
+  }
 }
 
 void MissionStream::setStatus(const std::string& status) {

@@ -10,11 +10,15 @@
 //   1. text   {"type":"snapshot", mission, status, grid{rows,cols,cell_size_m}|null, rovers[{trail,pose}], progress, metrics}
 //   2. binary full grid (type 2), then diffs (type 1) as cells change
 //   3. text   {"type":"poses", step, rovers[{rover, append[[x,y]...], pose{x,y,heading_deg}}]}
-//   4. text   {"type":"progress", ...} and {"type":"status", status}
+//   4. text   {"type":"progress", ..., metrics?} and {"type":"status", status}
+//      text   {"type":"overlay", route?[[x,y]...], paths[{rover, append[[x,y]...]}]} — the team
+//             route (replaces the last) and each rover's planned path as it is accepted; the
+//             snapshot carries both whole as "route" and "paths"
 //   5. text   {"type":"done", status, message, metrics} — the last frame, then a normal close
 // Binary frames, little-endian: u32 type, u32 rows, u32 cols, u32 count, then
 //   type 1: count × (u32 cell index, u8 state, u8×3 zero, u32 visits)
 //   type 2: rows·cols × u8 state, then rows·cols × u32 visits
+#include <array>
 #include <chrono>
 #include <cstdint>
 #include <memory>
@@ -42,6 +46,8 @@ class MissionStream : public EventSink, public std::enable_shared_from_this<Miss
   void cellsChanged(std::span<const CellUpdate> cells) override;
   void roverPoses(std::int64_t step, std::span<const RoverPose> poses) override;
   void progress(const Progress& p) override;
+  void overlay(std::string_view kind, int rover, std::span<const Point2> points) override;
+  void metrics(std::span<const Metric> metrics) override;
 
   void setStatus(const std::string& status);
   // The final frame's content; wakes every subscriber.
@@ -54,6 +60,9 @@ class MissionStream : public EventSink, public std::enable_shared_from_this<Miss
   // Final grid (type 2 frame bytes) and trails, for storing and replaying a finished mission.
   std::string fullGridFrame() const;
   nlohmann::json trailsJson() const;
+  // {"route": [[x,y]...], "paths": [[[x,y]...] per rover]} — stored beside the trails.
+  nlohmann::json overlaysJson() const;
+  void restoreOverlays(const nlohmann::json& overlays);
   // Rebuilds a finished mission's stream from its stored grid frame and result.
   static std::shared_ptr<MissionStream> fromStored(const std::string& missionId,
                                                    const std::string& gridFrame,
@@ -87,6 +96,9 @@ class MissionStream : public EventSink, public std::enable_shared_from_this<Miss
   std::vector<std::int32_t> changeLog_;  // cell indices in change order
   std::uint64_t logBase_ = 0;            // version of changeLog_[0]
   std::vector<std::vector<Pose>> trails_;
+  std::vector<std::array<float, 2>> route_;
+  std::uint64_t routeVersion_ = 0;
+  std::vector<std::vector<std::array<float, 2>>> paths_;
   std::int64_t step_ = 0;
   nlohmann::json progress_ = nullptr;
   std::uint64_t progressVersion_ = 0;
@@ -95,6 +107,7 @@ class MissionStream : public EventSink, public std::enable_shared_from_this<Miss
   bool finished_ = false;
   std::string message_;
   nlohmann::json metrics_ = nullptr;
+  nlohmann::json liveMetrics_ = nullptr;  // from the planner's metrics event, before the end
   std::vector<std::weak_ptr<http::WsConnection>> subscribers_;
   std::chrono::steady_clock::time_point lastWake_{};
 };
