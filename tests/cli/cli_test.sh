@@ -203,5 +203,51 @@ expect_status 2 "coverage --dem with a start outside the map"
 grep -q -- "--start" "$ERR" || fail "coverage --start outside: stderr does not name --start"
 pass "a start outside the DEM exits 2 naming --start"
 
+# Team mission (paper 001): metrics keys, determinism, GeoJSON, errors.
+run mission --dem "$TMP/t.tif" --random-pdm 4 --rovers 3 --targets 4 --seed 3 --json --geojson "$TMP/team.geojson"
+expect_status 0 "mission --json"
+cp "$OUT" "$TMP/mission1.json"
+python3 -c '
+import json, sys
+d = json.load(open(sys.argv[1]))
+m = d["metrics"]
+for k in ["mean_trajectory_m", "mission_time_s", "samples", "exceedances", "exceedance_fraction",
+          "collisions", "min_separation_m", "accumulated_probability", "targets_reached",
+          "targets_skipped", "plan_wall_s"]:
+    assert k in m, k
+assert m["collisions"] == 0, m
+assert len(d["rovers"]) == 3
+assert d["overlays"][0]["key"] == "route" and len(d["overlays"][0]["points"]) == 5
+' "$OUT" || fail "mission --json: bad JSON"
+if command -v ogrinfo >/dev/null; then
+  ogrinfo -ro -al -so "$TMP/team.geojson" >/dev/null 2>&1 || fail "mission --geojson: ogrinfo cannot read it"
+fi
+run mission --dem "$TMP/t.tif" --random-pdm 4 --rovers 3 --targets 4 --seed 3 --json
+python3 -c '
+import json, sys
+a, b = (json.load(open(p)) for p in sys.argv[1:3])
+for d in (a, b): d["metrics"].pop("plan_wall_s")
+assert a["metrics"] == b["metrics"] and a["rovers"] == b["rovers"], "not reproducible"
+' "$TMP/mission1.json" "$OUT" || fail "mission: the same seed gave another result"
+pass "mission --json reports the metrics, reproducibly"
+
+run mission --dem "$TMP/t.tif" --planner hybrid --rovers 2 --targets 2
+expect_status 0 "mission --planner hybrid"
+grep -q "^team " "$OUT" || fail "mission: no summary"
+pass "hybrid mission prints a summary"
+
+run mission --random-pdm 4
+expect_status 2 "mission without --dem"
+grep -q -- "--dem" "$ERR" || fail "mission without --dem: stderr does not name --dem"
+run mission --dem "$TMP/t.tif" --targets 0
+expect_status 2 "mission --targets 0"
+grep -q -- "--targets" "$ERR" || fail "mission --targets 0: stderr does not name --targets"
+run mission --dem "$TMP/t.tif" --start "999,5,0"
+expect_status 2 "mission with a start off the map"
+grep -q -- "--start" "$ERR" || fail "mission --start off the map: stderr does not name --start"
+run mission --dem "$TMP/t.tif" --random-pdm 4 --pdm "$TMP/nope.json"
+expect_status 2 "mission with two PDM sources"
+pass "mission errors exit 2 naming the option"
+
 echo "$passed passed, 0 failed"
 exit 0

@@ -420,3 +420,65 @@ TEST_CASE("api: folders a crash left without a database row are swept at start-u
   CHECK(fs::exists(tmp.path / "data" / "maps" / map));  // the real map stays
   CHECK(s.get("/api/maps").json().size() == 1);
 }
+
+TEST_CASE("api: a team-search mission with a PDM streams the route and paths, and exports") {
+  TempDir tmp;
+  TestServer s(tmp.str("data"));
+  const std::string map = s.defaultMap();
+  auto pdm = s.postJson("/api/maps/" + map + "/pdms", {{"random", 4}, {"seed", 5}});
+  REQUIRE(pdm.status == 201);
+  const std::string pdmId = pdm.json()["id"];
+  json body{{"map", map},
+            {"pdm", pdmId},
+            {"planner", "team-search"},
+            {"rovers", {{{"x", 70}, {"y", 70}, {"heading", 0}}, {{"x", 73}, {"y", 70}, {"heading", 90}}}},
+            {"params", {{"targets", 4}}}};
+  // Bad input is refused before queueing, naming the field.
+  json bad = body;
+  bad["params"]["targets"] = 0;
+  checkError(s.postJson("/api/missions", bad), 400, "params.targets");
+  bad = body;
+  bad["rovers"][1]["x"] = 70.3;  // closer than the safety distance
+  checkError(s.postJson("/api/missions", bad), 400, "rovers[1]");
+  bad = body;
+  bad["pdm"] = "nope";
+  checkError(s.postJson("/api/missions", bad), 400, "pdm");
+
+  auto r = s.postJson("/api/missions", body);
+  REQUIRE(r.status == 202);
+  const std::string id = r.json()["id"];
+  auto frames = test::readAllFrames(s.port(), "/api/missions/" + id + "/stream");
+  json m = s.waitFinished(id, 120);
+  REQUIRE(m["status"] == "succeeded");
+  CHECK(m["metrics"]["collisions"] == 0);
+  CHECK(m["metrics"]["targets"] == 4);
+  CHECK(m["metrics"]["accumulated_probability"].get<double>() > 0);
+  bool sawRoute = false, sawPath = false, sawGrid = false;
+  for (const auto& f : frames) {
+    if (f.binary) {
+      sawGrid = true;
+      continue;
+    }
+    json j = json::parse(f.data);
+    if (j["type"] == "overlay") {
+      sawRoute |= j.contains("route") && j["route"].size() == 5;
+      sawPath |= !j["paths"].empty();
+    }
+    if (j["type"] == "snapshot" && j.contains("route")) sawRoute |= j["route"].size() == 5;
+  }
+  CHECK(sawRoute);
+  CHECK(sawPath);
+  CHECK(sawGrid);
+  // The search grid of 5 m cells over the 150 m map.
+  json first = json::parse(frames.front().data);
+  REQUIRE(first["grid"].is_object());
+  CHECK(first["grid"]["rows"] == 30);
+  auto res = s.get("/api/missions/" + id + "/result.json").json();
+  CHECK(res["rovers"].size() == 2);
+  CHECK(res["overlays"][0]["key"] == "route");
+  CHECK(res["incidents"].is_array());
+  CHECK(s.get("/api/missions/" + id + "/result.geojson").json()["features"].size() == 2);
+  // A late joiner gets the overlays in its snapshot.
+  auto late = test::readAllFrames(s.port(), "/api/missions/" + id + "/stream");
+  CHECK(json::parse(late[0].data)["route"].size() == 5);
+}
