@@ -1,5 +1,5 @@
 // The mission WebSocket (server/missions/mission_stream.hpp): a JSON snapshot, binary grid
-// frames (type 2 full, type 1 diff), JSON poses / progress / status, and a final JSON "done"
+// frames (type 2 full, type 1 diff), JSON poses / progress / status / overlay, and a final JSON "done"
 // before a normal close. This module only speaks the protocol and counts frames; what to do with
 // them is up to the handlers (mission_view.js).
 
@@ -7,7 +7,7 @@ import { streamUrl } from './api.js';
 import { counters } from './state.js';
 
 export class LiveStream {
-  // handlers: {snapshot(msg), grid(buffer), poses(msg), progress(msg), status(msg), done(msg), closed(info)}
+  // handlers: {snapshot(msg), grid(buffer), poses(msg), progress(msg), status(msg), overlay(msg), done(msg), closed(info)}
   constructor(handlers) {
     this.handlers = handlers;
     this.ws = null;
@@ -45,6 +45,7 @@ export class LiveStream {
         case 'poses': counters.posesFrames++; h.poses && h.poses(msg); break;
         case 'progress': counters.progressFrames++; h.progress && h.progress(msg); break;
         case 'status': h.status && h.status(msg); break;
+        case 'overlay': counters.overlayFrames = (counters.overlayFrames || 0) + 1; h.overlay && h.overlay(msg); break;
         case 'done':
           counters.doneFrames++;
           this.done = true;

@@ -6,6 +6,7 @@ import { api, downloadWithToken, hasToken } from './api.js';
 import { barChart, lineChart } from './charts.js';
 import { CELL_STATE_NAMES, CoverageLayer } from './coverage_layer.js';
 import { LiveStream } from './live_stream.js';
+import { PlanLayer } from './plan_layer.js';
 import { counters, state } from './state.js';
 import { TrailLayer, TrailSet } from './trails.js';
 import { $, el, fmt, report, roverColour } from './util.js';
@@ -24,6 +25,19 @@ const SHOWN_METRICS = [
   ['revisits', 'revisits'],
   ['unreachable_cells', 'unreachable'],
   ['steps', 'steps'],
+  // Team missions (paper 001 §4, SPEC §3.5).
+  ['mean_trajectory_m', 'mean trajectory', (v) => `${fmt(v)} m`],
+  ['mission_time_min', 'mission time', (v) => `${v.toFixed(1)} min`],
+  ['accumulated_probability', 'probability', (v) => v.toFixed(3)],
+  ['single_rover_probability', 'one rover', (v) => v.toFixed(3)],
+  ['collisions', 'collisions'],
+  ['min_separation_m', 'min separation', (v) => `${v.toFixed(2)} m`],
+  ['exceedances', 'over 15°'],
+  ['exceedance_fraction', 'over 15° share', (v) => `${(v * 100).toFixed(4)} %`],
+  ['targets_reached', 'targets reached'],
+  ['targets_skipped', 'skipped'],
+  ['replans', 're-plans'],
+  ['plan_wall_s', 'planning', (v) => `${v.toFixed(1)} s`],
 ];
 
 export class MissionView {
@@ -36,6 +50,7 @@ export class MissionView {
     this.coverage = new CoverageLayer();
     this.trailLayer = new TrailLayer(view);
     this.trails = this.trailLayer.add(new TrailSet({ width: 2 }));
+    this.plan = new PlanLayer();
     this.compareSets = [];
     this.mission = null;
     this.result = null;
@@ -45,7 +60,9 @@ export class MissionView {
 
     const covLayer = layers.addOverlay({ id: 'coverage', label: 'coverage', legendTitle: 'coverage grid (cell state, visits)', visible: true, opacity: 0.75, legend: () => CoverageLayer.legend() });
     const trailLayer = layers.addOverlay({ id: 'trails', label: 'trails', legendTitle: 'rover trails', visible: true, opacity: 0.95, legend: () => this.trailLegend() });
+    const planLayer = layers.addOverlay({ id: 'plan', label: 'team plan', legendTitle: 'team plan', visible: true, opacity: 0.9, legend: () => el('div', { class: 'muted small' }, 'white: team route through the numbered targets; dashed: each rover\'s planned RRT* path') });
     view.addLayer({ id: 'coverage', order: 30, draw: (ctx, v) => covLayer.visible && this.coverage.draw(ctx, v, covLayer.opacity) });
+    view.addLayer({ id: 'plan', order: 35, draw: (ctx, v) => planLayer.visible && this.plan.draw(ctx, v, planLayer.opacity) });
     view.addLayer({ id: 'trails', order: 40, draw: (ctx, v) => this.trailLayer.draw(ctx, v, trailLayer.opacity, trailLayer.visible) });
     view.onRender((t) => this.countFrame(t));
 
@@ -89,6 +106,7 @@ export class MissionView {
     this.result = null;
     this.progressCurve = { x: [], y: [] };
     this.coverage.reset();
+    this.plan.clear();
     this.trails.clear((mission.spec?.rovers || []).length);
     this.layers.renderLegends();
     this.lastProgress = mission.progress || null;
@@ -118,6 +136,8 @@ export class MissionView {
         if (m.grid) this.coverage.reset(m.grid.rows, m.grid.cols, m.grid.cell_size_m);
         this.trails.clear(m.rovers.length);
         for (const r of m.rovers) this.trails.append(r.rover, r.trail, r.pose);
+        this.plan.clear();
+        if (m.route || m.paths) this.plan.apply(m, true);
         this.layers.renderLegends();
         this.setStatus(m.status);
         if (m.progress) this.onProgress(m.progress);
@@ -132,6 +152,10 @@ export class MissionView {
       poses: (m) => {
         for (const r of m.rovers) this.trails.append(r.rover, r.append, r.pose);
         this.step = m.step;
+        this.view.invalidate();
+      },
+      overlay: (m) => {
+        this.plan.apply(m);
         this.view.invalidate();
       },
       progress: (m) => this.onProgress(m),
@@ -192,6 +216,7 @@ export class MissionView {
         this.result = await api.result(m.mission);
         if (this.mission?.id !== m.mission) return;
         this.trails.setPaths(this.result.rovers.map((r) => r.path));
+        if (this.result.overlays) this.plan.setFromResult(this.result.overlays);
         this.setExports(m.mission);
         this.replay.enable(this.trails.longest - 1);
       } catch (err) {
@@ -308,8 +333,22 @@ export class MissionView {
     const r = this.result;
     const cov = r?.series?.coverage_vs_moves;
     const rovers = r ? r.rovers.length : 1;
-    lineChart($('chart-coverage'), cov ? [{ x: cov.x, y: cov.y, colour: '#4fb3ff' }] : [{ ...this.progressCurve, colour: '#4fb3ff' }],
-      { yMin: 0, yMax: 1, empty: 'waiting for progress', cursorX: cursorStep !== null ? cursorStep * rovers : null });
+    const team = r?.series?.probability_vs_distance_team;
+    const caption = (id, text) => { $(id).previousElementSibling.textContent = text; };
+    caption('chart-coverage', team ? 'accumulated probability vs distance (m)' : 'coverage vs moves');
+    caption('chart-energy', team ? 'trajectory per rover (m)' : 'energy per rover (J)');
+    if (team) {
+      // Team missions: accumulated probability vs distance, the team against one rover (paper 001 fig. 11).
+      const single = r.series.probability_vs_distance_single;
+      const yMax = Math.max(0.05, ...team.y);
+      lineChart($('chart-coverage'), [
+        { x: team.x, y: team.y, colour: '#4fb3ff', label: 'team' },
+        ...(single ? [{ x: single.x, y: single.y, colour: '#ffb14f', label: 'one rover' }] : []),
+      ], { yMin: 0, yMax, legend: true, empty: 'no probability curve' });
+    } else {
+      lineChart($('chart-coverage'), cov ? [{ x: cov.x, y: cov.y, colour: '#4fb3ff' }] : [{ ...this.progressCurve, colour: '#4fb3ff' }],
+        { yMin: 0, yMax: 1, empty: 'waiting for progress', cursorX: cursorStep !== null ? cursorStep * rovers : null });
+    }
     const pitch = [];
     if (r) {
       for (const [key, s] of Object.entries(r.series || {})) {
@@ -321,7 +360,7 @@ export class MissionView {
       refLines: [{ y: 15, label: '+15°' }, { y: -15, label: '−15°' }], legend: true, cursorX: cursorStep,
       empty: r ? 'no pitch series' : 'after the run (result.json)',
     });
-    const bars = r ? r.rovers.map((rv, k) => ({ label: `rover ${k + 1}`, value: rv.metrics?.energy_j ?? 0, colour: roverColour(k) })) : [];
+    const bars = r ? r.rovers.map((rv, k) => ({ label: `rover ${k + 1}`, value: rv.metrics?.energy_j ?? rv.metrics?.trajectory_m ?? 0, colour: roverColour(k) })) : [];
     barChart($('chart-energy'), bars, { empty: r ? 'no energy metric' : 'after the run' });
   }
 
