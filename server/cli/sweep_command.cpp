@@ -2,6 +2,7 @@
 #include <fstream>
 #include <iomanip>
 #include <iostream>
+#include <sstream>
 
 #include <nlohmann/json.hpp>
 
@@ -9,6 +10,7 @@
 #include "server/cli/arg_parser.hpp"
 #include "server/cli/commands.hpp"
 #include "server/cli/sweep.hpp"
+#include "server/cli/team_sweep.hpp"
 
 namespace rover::cli {
 
@@ -16,8 +18,8 @@ namespace {
 
 void printTable(std::ostream& out, const SweepOutcome& o) {
   out << std::left << std::setw(24) << "config" << std::setw(26) << "metric" << std::right
-      << std::setw(6) << "n" << std::setw(10) << "mean" << std::setw(10) << "std" << std::setw(10)
-      << "p5" << std::setw(10) << "p50" << std::setw(10) << "p95"
+      << std::setw(6) << "n" << std::setw(12) << "mean" << std::setw(12) << "std" << std::setw(12)
+      << "p5" << std::setw(12) << "p50" << std::setw(12) << "p95"
       << "\n";
   out << std::fixed << std::setprecision(4);
   std::string last;
@@ -25,9 +27,9 @@ void printTable(std::ostream& out, const SweepOutcome& o) {
     if (!last.empty() && r.config != last) out << "\n";
     last = r.config;
     out << std::left << std::setw(24) << r.config << std::setw(26) << r.metric << std::right
-        << std::setw(6) << r.summary.count << std::setw(10) << r.summary.mean << std::setw(10)
-        << r.summary.stddev << std::setw(10) << r.summary.p5 << std::setw(10) << r.summary.p50
-        << std::setw(10) << r.summary.p95 << "\n";
+        << std::setw(6) << r.summary.count << std::setw(12) << r.summary.mean << std::setw(12)
+        << r.summary.stddev << std::setw(12) << r.summary.p5 << std::setw(12) << r.summary.p50
+        << std::setw(12) << r.summary.p95 << "\n";
   }
 }
 
@@ -76,8 +78,13 @@ int sweepCommand(const std::vector<std::string>& argv, std::ostream& out) {
   ArgParser args("sweep",
                  "Many seeded coverage runs on all cores, summarised as mean, std, p5, "
                  "p50, p95 per configuration (SPEC §4).");
-  args.option("preset", "NAME", "", "laine-fig6 | laine-fig8 | frontier (required).");
-  args.option("runs", "N", "3000 (frontier: 1000)", "Seeded runs per configuration.");
+  args.option("preset", "NAME", "", "laine-fig6 | laine-fig8 | frontier | swinton (required).");
+  args.option("runs", "N", "3000 (frontier: 1000, swinton: 20)", "Seeded runs per configuration (swinton: random PDMs per site).");
+  args.option("hirise", "FILE", "../shared/dems/mars_gale_hirise_1m/missionDEM.tif",
+              "swinton: the HiRISE DEM cropped to its central 150 × 150 m at 0.25 m ('none' = synthetic site only).");
+  args.option("configs", "LIST", "all", "swinton: any of lhc_gw_conv,lhc,lawnmower,hybrid.");
+  args.option("rovers", "N", "5", "swinton: rovers per mission.");
+  args.option("targets", "N", "64", "swinton: route targets per mission.");
   args.option("seed", "S", "1", "First seed; runs use seeds S, S+1, ...");
   args.option("threads", "N", "all cores", "Worker threads.");
   args.option("out", "DIR", "", "Write summary.json and summary.csv into DIR.");
@@ -85,8 +92,33 @@ int sweepCommand(const std::vector<std::string>& argv, std::ostream& out) {
     out << args.help();
     return 0;
   }
-  if (!args.has("preset")) throw UsageError("missing --preset (laine-fig6, laine-fig8, frontier)");
+  if (!args.has("preset")) throw UsageError("missing --preset (laine-fig6, laine-fig8, frontier, swinton)");
   const std::string preset = args.str("preset", "");
+  if (preset == "swinton") {
+    TeamSweepOptions t;
+    t.runs = static_cast<int>(args.integer("runs", 20, 1, 100000));
+    t.firstSeed = static_cast<std::uint64_t>(args.integer("seed", 1, 0, INT64_MAX));
+    t.threads = static_cast<unsigned>(args.integer("threads", hardwareThreads(), 1, 1024));
+    t.rovers = static_cast<int>(args.integer("rovers", 5, 1, 64));
+    t.targets = static_cast<int>(args.integer("targets", 64, 1, 10000));
+    t.hirisePath = args.str("hirise", "../shared/dems/mars_gale_hirise_1m/missionDEM.tif");
+    if (t.hirisePath == "none") t.hirisePath.clear();
+    if (args.has("configs")) {
+      std::stringstream ss(args.str("configs", ""));
+      for (std::string c; std::getline(ss, c, ',');) t.configs.push_back(c);
+    }
+    out << "sweep swinton: " << t.runs << " random PDMs per site, " << t.rovers << " rovers, "
+        << t.targets << " targets, " << t.threads << " threads\n";
+    SweepOutcome o = runTeamSweep(t, out);
+    out << "\n" << o.totalRuns << " missions, " << std::fixed << std::setprecision(1) << o.wallSeconds
+        << " s wall\n\n";
+    printTable(out, o);
+    if (args.has("out")) {
+      writeFiles(args.str("out", ""), preset, t.runs, t.firstSeed, t.threads, o);
+      out << "\nwrote " << args.str("out", "") << "/summary.json and summary.csv\n";
+    }
+    return 0;
+  }
   auto configs = sweepPreset(preset);
   int runs = static_cast<int>(args.integer("runs", presetDefaultRuns(preset), 1, 1000000));
   auto seed = static_cast<std::uint64_t>(args.integer("seed", 1, 0, INT64_MAX));
