@@ -394,32 +394,44 @@ class Coordinator {
   void park(int k) {
     if (!firstConflict(k, {}, true)) return;
     const Eigen::Vector2d from = here(k);
-    int attempt = 0;
-    for (double radius : {1.5, 2.5, 3.5, 5.0, 7.0}) {
+    // Candidates: first back along its own trajectory (ground it has driven, so reachable even
+    // in a dead end), every 2 m up to 40 m; then rings of growing radius around it.
+    std::vector<Eigen::Vector2d> spots;
+    const auto& samples = out_.trajectories[k].samples;
+    const double end = samples.back().distance;
+    double next = 2.0;
+    for (auto it = samples.rbegin(); it != samples.rend() && next <= 40.0; ++it) {
+      if (end - it->distance < next) continue;
+      spots.emplace_back(it->x, it->y);
+      next += 2.0;
+    }
+    for (double radius : {1.5, 2.5, 3.5, 5.0, 7.0})
       for (int d = 0; d < 8; ++d) {
-        if (cancelled()) return;
         const double a = d * std::numbers::pi / 4;
-        const Eigen::Vector2d spot = from + radius * Eigen::Vector2d(std::cos(a), std::sin(a));
-        if (!wholeMap_.turnValid(spot)) continue;
-        RrtParams rrt = p_.rrt;
-        rrt.seed = seedFor(seed_ ^ 0x9a4cull, k, attempt, 0, 0);
-        ++attempt;
-        ++out_.rrtCalls;
-        PathResult path = planPath(dem_, classes_, from, last(k).heading, spot, rrt, p_.weights, cancel_);
-        if (path.status != PathStatus::Exact || path.waypoints.size() < 2) continue;
-        Candidate c = simulateTry(k, path.waypoints, 0, seedFor(seed_ ^ 0x9a4dull, k, attempt, 0, 0));
-        if (!c.reached || firstConflict(k, c.samples, true)) continue;
-        commit(k, c);
-        LegRecord rec;
-        rec.rover = k;
-        rec.leg = static_cast<int>(tasks_[k].legs.size());
-        rec.startTime = c.samples.front().time;
-        rec.endTime = last(k).time;
-        rec.pieces = 1;
-        rec.note = "parked out of the way";
-        out_.legs.push_back(rec);
-        return;
+        spots.push_back(from + radius * Eigen::Vector2d(std::cos(a), std::sin(a)));
       }
+    int attempt = 0;
+    for (const Eigen::Vector2d& spot : spots) {
+      if (cancelled()) return;
+      if (!wholeMap_.turnValid(spot)) continue;
+      RrtParams rrt = p_.rrt;
+      rrt.seed = seedFor(seed_ ^ 0x9a4cull, k, attempt, 0, 0);
+      ++attempt;
+      ++out_.rrtCalls;
+      PathResult path = planPath(dem_, classes_, from, last(k).heading, spot, rrt, p_.weights, cancel_);
+      if (path.status != PathStatus::Exact || path.waypoints.size() < 2) continue;
+      Candidate c = simulateTry(k, path.waypoints, 0, seedFor(seed_ ^ 0x9a4dull, k, attempt, 0, 0));
+      if (!c.reached || firstConflict(k, c.samples, true)) continue;
+      commit(k, c);
+      LegRecord rec;
+      rec.rover = k;
+      rec.leg = static_cast<int>(tasks_[k].legs.size());
+      rec.startTime = c.samples.front().time;
+      rec.endTime = last(k).time;
+      rec.pieces = 1;
+      rec.note = "parked out of the way";
+      out_.legs.push_back(rec);
+      return;
     }
   }
 

@@ -137,11 +137,14 @@ bool TerrainEdgeModel::outsideKeepOut(const Eigen::Vector2d& p) const {
 }
 
 bool TerrainEdgeModel::pointValid(const Eigen::Vector2d& p) const {
+  if (inEscape(p))
+    return bounds_.contains(p) && outsideKeepOut(p) && terrain::surfaceAt(dem_, p.x(), p.y());
   return cellAllowed(dem_, classes_, bounds_, p) && outsideKeepOut(p) &&
          terrain::surfaceAt(dem_, p.x(), p.y());
 }
 
 bool TerrainEdgeModel::turnValid(const Eigen::Vector2d& p) const {
+  if (inEscape(p)) return pointValid(p);
   if (!cellAllowed(dem_, classes_, bounds_, p) || !outsideKeepOut(p)) return false;
   auto sp = terrain::surfaceAt(dem_, p.x(), p.y());
   const double t = std::tan(limit_);
@@ -161,6 +164,10 @@ bool TerrainEdgeModel::edgeValid(const Eigen::Vector2d& a, const Eigen::Vector2d
   const int n = segmentsFor(len, resolution_);
   for (int i = 0; i <= n; ++i) {
     const Eigen::Vector2d p = sampleAt(a, b, i, n);
+    if (inEscape(p)) {
+      if (!pointValid(p)) return false;
+      continue;
+    }
     if (!cellAllowed(dem_, classes_, bounds_, p) || !outsideKeepOut(p)) return false;
     auto sp = terrain::surfaceAt(dem_, p.x(), p.y());
     if (!sp) return false;
@@ -408,8 +415,12 @@ PathResult planPath(const terrain::Dem& dem, const Raster<std::uint8_t>& classes
 
   PathResult r;
   if (!model.pointValid(start)) {
-    r.status = PathStatus::InvalidStart;
-    return r;
+    // On the map with data but on impassable or steep ground: let the rover drive off.
+    if (box.contains(start) && terrain::surfaceAt(dem, start.x(), start.y())) model.setEscape(start, 0.5);
+    if (!model.pointValid(start)) {
+      r.status = PathStatus::InvalidStart;
+      return r;
+    }
   }
   if (!model.turnValid(goal)) {
     r.status = PathStatus::InvalidGoal;

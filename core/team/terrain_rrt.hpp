@@ -106,6 +106,14 @@ class TerrainEdgeModel {
   TerrainEdgeModel(const terrain::Dem&, Raster<std::uint8_t>&&, SearchBounds, double,
                    double) = delete;
 
+  // A disc around a start that is not pointValid (the simulated rover cut a corner onto an
+  // impassable cell or too steep a spot): inside it the class and attitude checks are waived so
+  // the rover can drive off; data, bounds and keep-out zones still apply. Radius 0 = none.
+  void setEscape(const Eigen::Vector2d& centre, double radius) {
+    escapeCentre_ = centre;
+    escapeRadius_ = radius;
+  }
+
   // Zones every point must stay out of (strictly outside the radius). Empty by default.
   void setKeepOut(std::vector<KeepOutZone> zones) { keepOut_ = std::move(zones); }
 
@@ -139,7 +147,12 @@ class TerrainEdgeModel {
   double limit_;
   double resolution_;
   std::vector<KeepOutZone> keepOut_;
+  Eigen::Vector2d escapeCentre_{0, 0};
+  double escapeRadius_ = 0;
   bool outsideKeepOut(const Eigen::Vector2d& p) const;
+  bool inEscape(const Eigen::Vector2d& p) const {
+    return escapeRadius_ > 0 && (p - escapeCentre_).squaredNorm() <= escapeRadius_ * escapeRadius_;
+  }
 };
 
 // eq. 9 summed over a polyline (first point = start). With `turnsAtEveryVertex` false this is what
@@ -176,7 +189,8 @@ struct PathResult {
 // start == goal gives Exact with that one waypoint and no search.
 // Deterministic for a given seed; safe to call concurrently from several threads (each call builds
 // its own OMPL objects and seeded random generators). Bad parameters throw rover::Error.
-// `keepOut`: discs the path stays out of (a start or goal inside one is InvalidStart/InvalidGoal).
+// A start on impassable or too steep ground (but on the map, with data) is escaped: the checks are
+// waived within 0.5 m of it (TerrainEdgeModel::setEscape). `keepOut`: discs the path stays out of (a start or goal inside one is InvalidStart/InvalidGoal).
 PathResult planPath(const terrain::Dem& dem, const Raster<std::uint8_t>& classes,
                     const Eigen::Vector2d& start, double startHeading, const Eigen::Vector2d& goal,
                     const RrtParams& params = {}, const TerrainCostWeights& weights = {},

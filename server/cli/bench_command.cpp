@@ -4,6 +4,9 @@
 
 #include "core/common/parallel.hpp"
 #include "core/coverage/coverage_planner.hpp"
+#include "core/pdm/pdm.hpp"
+#include "core/team/team_mission.hpp"
+#include "maps/synthetic_terrain.hpp"
 #include "server/cli/arg_parser.hpp"
 #include "server/cli/commands.hpp"
 #include "server/cli/sweep.hpp"
@@ -39,18 +42,55 @@ BenchFigures benchCoverage(int runs, unsigned threads, bool frontier) {
   return f;
 }
 
+// One paper-scale mission (SPEC §3 defaults): the default synthetic Mars map (600 × 600 × 0.25 m),
+// a random PDM (G = 4, seed 1), 5 rovers in formation at the centre, 64 targets, seed 1; team
+// search and hybrid, on one thread and on all cores. The target: ≤ 30 s wall.
+int benchMission(std::ostream& out) {
+  const terrain::Dem dem = maps::generateTerrain({});
+  const GridGeometry& g = dem.geometry();
+  std::vector<std::uint8_t> valid(g.cellCount(), 1);
+  const Raster<float> pdm = pdm::discretise(pdm::randomGaussians(g, 4, 1), g, valid);
+  team::TeamMissionParams p;
+  const auto starts = team::formationStarts(dem, p, {g.widthMetres() / 2, g.heightMetres() / 2}, 5);
+  out << "bench mission: synthetic Mars 600x600 x 0.25 m, random PDM (G = 4, seed 1), 5 rovers, "
+         "64 targets, seed 1 (target: <= 30 s wall)\n";
+  out << std::left << std::setw(14) << "planner" << std::right << std::setw(9) << "threads"
+      << std::setw(10) << "wall s" << std::setw(12) << "RRT* trees" << std::setw(12) << "trees/s"
+      << std::setw(12) << "sim s" << std::setw(12) << "collisions" << "\n";
+  const unsigned all = hardwareThreads();
+  for (bool hybrid : {false, true}) {
+    double single = 0;
+    for (unsigned threads : {1u, all}) {
+      p.coordination.threads = threads;
+      const auto t0 = std::chrono::steady_clock::now();
+      team::TeamMissionResult r = team::runTeamMission(dem, pdm, starts, p, hybrid);
+      const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      if (threads == 1) single = wall;
+      out << std::left << std::setw(14) << (hybrid ? "hybrid" : "team-search") << std::right
+          << std::setw(9) << threads << std::fixed << std::setprecision(2) << std::setw(10) << wall
+          << std::setw(12) << r.metrics.rrtCalls << std::setprecision(0) << std::setw(12)
+          << r.metrics.rrtCalls / wall << std::setw(12) << r.metrics.missionTimeS
+          << std::setw(12) << r.metrics.collisions;
+      if (threads != 1) out << "   speed-up x" << std::setprecision(2) << single / wall;
+      out << "\n";
+    }
+  }
+  return 0;
+}
+
 }  // namespace
 
 int benchCommand(const std::vector<std::string>& argv, std::ostream& out) {
-  ArgParser args("bench", "Benchmarks that print their figures. Targets: coverage.");
-  args.positional("TARGET", "coverage");
+  ArgParser args("bench", "Benchmarks that print their figures. Targets: coverage, mission.");
+  args.positional("TARGET", "coverage | mission");
   args.option("runs", "N", "2000", "Runs per measurement.");
   if (!args.parse(argv)) {
     out << args.help();
     return 0;
   }
+  if (args.positionals()[0] == "mission") return benchMission(out);
   if (args.positionals()[0] != "coverage")
-    throw UsageError("unknown benchmark '" + args.positionals()[0] + "' (coverage)");
+    throw UsageError("unknown benchmark '" + args.positionals()[0] + "' (coverage, mission)");
   int runs = static_cast<int>(args.integer("runs", 2000, 1, 10000000));
   unsigned all = hardwareThreads();
   out << "bench coverage: spiral to 95 % on 60x60, 5 % obstacles, " << runs
