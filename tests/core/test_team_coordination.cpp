@@ -224,6 +224,14 @@ TEST_CASE("team: a whole mission is collision-free and the same for a seed") {
       CHECK(sa[i].y == sb[i].y);
     }
   }
+  // The same on one thread: the look-ahead planning is parallel, the result is not thread-bound.
+  p.coordination.threads = 1;
+  TeamMissionResult one = runTeamMission(dem, pdm, starts, p, false);
+  for (std::size_t k = 0; k < a.plan.trajectories.size(); ++k) {
+    const auto &sa = a.plan.trajectories[k].samples, &so = one.plan.trajectories[k].samples;
+    REQUIRE(sa.size() == so.size());
+    for (std::size_t i = 0; i < sa.size(); ++i) CHECK(sa[i].x == so[i].x);
+  }
   // Another seed plans other trees.
   p.seed = 2;
   TeamMissionResult c = runTeamMission(dem, pdm, starts, p, false);
