@@ -310,7 +310,6 @@ class SinkObserver final : public TeamObserver {
     for (int i = 0; i < grid.geometry().cellCount(); ++i)
       cells.push_back({i, static_cast<std::uint8_t>(grid.impassable.at(i) ? 2 : 1), 0});
     sink_.cellsChanged(cells);
-    grid_ = &grid;
   }
   void pieceAccepted(int rover, std::span<const Eigen::Vector2d> path,
                      std::span<const TrajectorySample> samples) override {
@@ -373,7 +372,6 @@ class SinkObserver final : public TeamObserver {
 
  private:
   EventSink& sink_;
-  const SearchGrid* grid_ = nullptr;
 };
 
 class TeamPlanner final : public Planner {
