@@ -304,8 +304,6 @@ class Coordinator {
     std::vector<KeepOutZone> keepOut;
     std::optional<Candidate> firstTry;
     std::optional<Conflict> conflict;
-    std::optional<Candidate> steepButSafe;
-    bool steepReached = false;
     std::string noPath;
     for (int attempt = 0; attempt <= p_.maxReplans; ++attempt) {
       if (cancelled()) return Outcome::Cancelled;
@@ -333,11 +331,8 @@ class Coordinator {
         commit(k, c);
         return Outcome::Accepted;
       }
-      if (!conflict && !steepButSafe) {
-        steepButSafe = c;
-        steepReached = path.status == PathStatus::Exact && c.reached;
-      }
-      if (!firstTry) firstTry = c;
+      // Waiting can only help a try that is within the attitude limit.
+      if (!firstTry && !steep) firstTry = c;
       // A conflict in the first second: no other path can dodge it, only waiting can.
       if (conflict && conflict->time - last(k).time < 1.0) break;
       // Keep out of where the other rover was (or where the simulated rover tilted past the
@@ -347,15 +342,8 @@ class Coordinator {
       if ((here(k) - zone.centre).norm() > zone.radius && (goal - zone.centre).norm() > zone.radius)
         keepOut.push_back(zone);
     }
-    // No try was both clear and within the attitude limit: a clear one goes ahead (reported as
-    // an exceedance); only conflicts make the rover wait.
-    if (steepButSafe) {
-      reachedGoal = steepReached;
-      commit(k, *steepButSafe);
-      return Outcome::Accepted;
-    }
     if (!firstTry) {
-      rec.note = "no path: " + noPath;
+      rec.note = noPath.empty() ? "every try tilts past the attitude limit" : "no path: " + noPath;
       return Outcome::NoPath;
     }
     for (int w = 1; w <= p_.maxWaits; ++w) {
@@ -363,7 +351,7 @@ class Coordinator {
       const int ticks = static_cast<int>(std::lround(w * p_.waitStep / period_));
       Candidate c = simulateTry(k, firstTry->path, ticks, seedFor(deriveSeed(seed_ ^ 0x3a17ull, p_.slip.seed), k, i, piece, w));
       conflict = firstConflict(k, c.samples, lastLeg && reachesGoal(c, goal));
-      if (!conflict) {
+      if (!conflict && !firstExceedance(c.samples)) {
         rec.waits = w;
         out_.waits += w;
         reachedGoal = c.reached && (firstTry->path.back() - goal).norm() < 1e-9;
@@ -410,7 +398,10 @@ class Coordinator {
         const double a = d * std::numbers::pi / 4;
         spots.push_back(from + radius * Eigen::Vector2d(std::cos(a), std::sin(a)));
       }
+    // Within the attitude limit if at all possible; a collision is worse than a tilt, so the
+    // second pass accepts a move that exceeds it (reported as an exceedance).
     int attempt = 0;
+    for (int pass = 0; pass < 2; ++pass)
     for (const Eigen::Vector2d& spot : spots) {
       if (cancelled()) return;
       if (!wholeMap_.turnValid(spot)) continue;
@@ -421,7 +412,8 @@ class Coordinator {
       PathResult path = planPath(dem_, classes_, from, last(k).heading, spot, rrt, p_.weights, cancel_);
       if (path.status != PathStatus::Exact || path.waypoints.size() < 2) continue;
       Candidate c = simulateTry(k, path.waypoints, 0, seedFor(seed_ ^ 0x9a4dull, k, attempt, 0, 0));
-      if (!c.reached || firstConflict(k, c.samples, true)) continue;
+      if (!c.reached || firstConflict(k, c.samples, true) || (pass == 0 && firstExceedance(c.samples)))
+        continue;
       commit(k, c);
       LegRecord rec;
       rec.rover = k;
