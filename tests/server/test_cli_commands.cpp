@@ -462,7 +462,7 @@ TEST_CASE("bench usage errors") {
   std::ostringstream out;
   CHECK_THROWS_WITH_AS(rover::cli::benchCommand({}, out), "missing argument TARGET", UsageError);
   CHECK_THROWS_WITH_AS(rover::cli::benchCommand({"planner"}, out),
-                       "unknown benchmark 'planner' (coverage)", UsageError);
+                       "unknown benchmark 'planner' (coverage, mission)", UsageError);
   try {
     rover::cli::benchCommand({"coverage", "--runs", "0"}, out);
     FAIL("bench --runs 0 ran");
