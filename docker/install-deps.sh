@@ -20,6 +20,7 @@ test_pkgs=(
   time       # /usr/bin/time: peak memory in the benchmark scripts
   chromium   # the browser tests drive Debian's Chromium through playwright-core
   curl python3
+  clang libclang-rt-14-dev   # libFuzzer harnesses (tests/fuzz/run.sh)
 )
 runtime_pkgs=(libompl16 libgdal32 libsqlite3-0 gdal-data curl ca-certificates)  # curl: HEALTHCHECK
 bench_pkgs=(wrk nginx-light time curl)  # tests/bench/*: load generator and the nginx baseline

@@ -2,7 +2,8 @@
 # The README's test command: installs what is missing, builds, and runs every test —
 # the Release build's full CTest suite, the unit tests again under AddressSanitizer +
 # UndefinedBehaviorSanitizer (a second build directory, failing on any report), the browser tests in
-# Debian's Chromium, and the container smoke test (podman). ROVERPLAN_SKIP_CONTAINER=1 skips the
+# Debian's Chromium, every libFuzzer harness for a bounded time (tests/fuzz/run.sh), and the
+# container smoke test (podman). ROVERPLAN_SKIP_CONTAINER=1 skips the
 # last one for quick local runs; CI runs everything.
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
@@ -30,6 +31,9 @@ echo "== Unit tests under sanitizers"
 export ASAN_OPTIONS=abort_on_error=1:detect_leaks=1:strict_string_checks=1
 export UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
 ctest --test-dir build-asan --output-on-failure -j "$jobs" -R '^(core|maps|server)/' -E 'serve-restart'
+
+echo "== Fuzzing (libFuzzer, ${ROVERPLAN_FUZZ_SECONDS:-30} s per target)"
+bash tests/fuzz/run.sh "${ROVERPLAN_FUZZ_SECONDS:-30}"
 
 echo "== Browser tests (Chromium via playwright-core)"
 ROVERPLAN_BIN="$root/build/bin/roverplan" node --test tests/browser/

@@ -155,7 +155,10 @@ missions::MissionJob buildMission(ApiContext& ctx, const json& body) {
   json params = body.value("params", json::object());
   if (!params.is_object()) throw ApiError(400, "invalid_field", "params must be an object", "params");
   auto infos = planner->params();
-  for (const auto& [key, value] : params.items()) {
+  for (const auto& item : params.items()) {
+    // Not a structured binding: clang 14 (the fuzz build) cannot capture one in a lambda.
+    const std::string& key = item.key();
+    const json& value = item.value();
     auto info = std::find_if(infos.begin(), infos.end(), [&](const ParamInfo& i) { return i.key == key; });
     if (info == infos.end())
       throw ApiError(400, "unknown_parameter", "unknown parameter '" + key + "' for planner " + job.record.planner,
