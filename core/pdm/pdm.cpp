@@ -3,6 +3,9 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <sstream>
+#include <string>
+#include <utility>
 
 #include "core/common/error.hpp"
 #include "core/common/random.hpp"
@@ -37,19 +40,46 @@ double totalWeight(const std::vector<Gaussian>& cs) {
 
 void validateGaussians(const std::vector<Gaussian>& cs) {
   if (cs.empty()) throwInvalidParameter("components", "at least one Gaussian component is needed");
-  if (cs.size() > 1000) throwInvalidParameter("components", "at most 1000 components");
+  if (cs.size() > kMaxComponents)
+    throwInvalidParameter("components", "at most " + std::to_string(kMaxComponents) + " components");
   for (std::size_t i = 0; i < cs.size(); ++i) {
     const Gaussian& g = cs[i];
-    if (!g.mean.allFinite()) throwInvalidParameter(field(i, "mean"), "must be finite");
+    if (!std::isfinite(g.mean.x())) throwInvalidParameter(field(i, "x"), "must be finite");
+    if (!std::isfinite(g.mean.y())) throwInvalidParameter(field(i, "y"), "must be finite");
     if (!(g.sigmaX > 0) || !std::isfinite(g.sigmaX))
       throwInvalidParameter(field(i, "sigma_x"), "must be a positive number of metres");
     if (!(g.sigmaY > 0) || !std::isfinite(g.sigmaY))
       throwInvalidParameter(field(i, "sigma_y"), "must be a positive number of metres");
-    if (!std::isfinite(g.rotation)) throwInvalidParameter(field(i, "rotation"), "must be finite");
+    if (!std::isfinite(g.rotation)) throwInvalidParameter(field(i, "rotation_deg"), "must be finite");
     if (!(g.weight >= 0) || !std::isfinite(g.weight))
       throwInvalidParameter(field(i, "weight"), "must be a finite number >= 0");
   }
   if (!(totalWeight(cs) > 0)) throwInvalidParameter("components", "the weights sum to 0");
+}
+
+void validateGaussians(const std::vector<Gaussian>& cs, const GridGeometry& g) {
+  validateGaussians(cs);
+  const double w = g.widthMetres(), h = g.heightMetres(), diag = std::hypot(w, h);
+  const double sigmaMin = std::min(g.cellWidth, g.cellHeight) / 1000.0, sigmaMax = 100.0 * diag;
+  auto text = [](double v) {
+    std::ostringstream s;
+    s << v;
+    return s.str();
+  };
+  for (std::size_t i = 0; i < cs.size(); ++i) {
+    const Gaussian& c = cs[i];
+    if (c.mean.x() < -diag || c.mean.x() > w + diag)
+      throwInvalidParameter(field(i, "x"), "must lie on the map or at most one map diagonal (" + text(diag) +
+                                               " m) outside it: [" + text(-diag) + ", " + text(w + diag) + "]");
+    if (c.mean.y() < -diag || c.mean.y() > h + diag)
+      throwInvalidParameter(field(i, "y"), "must lie on the map or at most one map diagonal (" + text(diag) +
+                                               " m) outside it: [" + text(-diag) + ", " + text(h + diag) + "]");
+    const std::string range = "must be in [cell/1000, 100 × map diagonal] = [" + text(sigmaMin) + ", " +
+                              text(sigmaMax) + "] m";
+    if (c.sigmaX < sigmaMin || c.sigmaX > sigmaMax) throwInvalidParameter(field(i, "sigma_x"), range);
+    if (c.sigmaY < sigmaMin || c.sigmaY > sigmaMax) throwInvalidParameter(field(i, "sigma_y"), range);
+    if (c.weight > 1e9) throwInvalidParameter(field(i, "weight"), "must be in [0, 1e9] (a relative weight)");
+  }
 }
 
 double density(const std::vector<Gaussian>& cs, const Eigen::Vector2d& xy) {
@@ -63,27 +93,80 @@ double density(const std::vector<Gaussian>& cs, const Eigen::Vector2d& xy) {
   return sum / totalWeight(cs);
 }
 
+namespace {
+
+// A cell index from a coordinate in cells, clamped in floating point first (a far-away mean must
+// not overflow the int conversion).
+int clampedIndex(double v, int lo, int hi) {
+  if (!(v > lo)) return lo;  // also NaN
+  if (v >= hi) return hi;
+  return static_cast<int>(v);
+}
+
+// The component's kWindowSigmas-σ ellipse {d : dᵀ Σ⁻¹ d <= k²} around its mean, in the form the
+// scan needs: for a horizontal strip of offsets dy ∈ [ya, yb], the range of dx it covers. Built
+// from the covariance Σ directly (Σxx, Σxy, Σyy and det Σ = σx²σy²), which stays accurate for
+// very elongated components where A·C − B² of the inverse would cancel.
+struct Window {
+  double sxx, sxy, syy, k;
+  double condSd, slope;
+  explicit Window(const Gaussian& gs) : k(kWindowSigmas) {
+    const double c = std::cos(gs.rotation), s = std::sin(gs.rotation);
+    const double vx = gs.sigmaX * gs.sigmaX, vy = gs.sigmaY * gs.sigmaY;
+    sxx = c * c * vx + s * s * vy;
+    syy = s * s * vx + c * c * vy;
+    sxy = c * s * (vx - vy);
+    condSd = gs.sigmaX * gs.sigmaY / std::sqrt(syy);  // σ of x given y
+    slope = sxy / syy;                                 // E[x | y] = slope · y
+  }
+  double halfHeight() const { return k * std::sqrt(syy); }
+  // dx range of the ellipse over the strip [ya, yb] (already clipped to ±halfHeight()). The left
+  // edge x(dy) = slope·dy − halfWidth(dy) is convex, so its minimum is the ellipse's leftmost
+  // point when that lies in the strip, else an end of the strip; the right edge likewise.
+  std::pair<double, double> xRange(double ya, double yb) const {
+    auto half = [&](double dy) { return condSd * std::sqrt(std::max(0.0, k * k - dy * dy / syy)); };
+    const double xExtent = k * std::sqrt(sxx), yAtRight = k * sxy / std::sqrt(sxx);
+    double lo = std::min(slope * ya - half(ya), slope * yb - half(yb));
+    double hi = std::max(slope * ya + half(ya), slope * yb + half(yb));
+    if (-yAtRight >= ya && -yAtRight <= yb) lo = -xExtent;
+    if (yAtRight >= ya && yAtRight <= yb) hi = xExtent;
+    return {lo, hi};
+  }
+};
+
+}  // namespace
+
 Raster<float> discretise(const std::vector<Gaussian>& cs, const GridGeometry& g,
                          const std::vector<std::uint8_t>& valid) {
-  validateGaussians(cs);
+  validateGaussians(cs, g);
   std::vector<double> mass(g.cellCount(), 0.0);
   const double wTotal = totalWeight(cs);
   const double area = g.cellWidth * g.cellHeight;
   for (const auto& gs : cs) {
     if (gs.weight == 0) continue;
     Quadratic q = quadratic(gs);
+    const Window window(gs);
     const double reach = 6.0 * std::max(gs.sigmaX, gs.sigmaY);
     // Sub-samples per cell side: enough that the narrower σ spans >= ~2 samples.
     const double sMin = std::min(gs.sigmaX, gs.sigmaY);
-    const int s = std::clamp(static_cast<int>(std::ceil(2.0 * std::max(g.cellWidth, g.cellHeight) / sMin)), 1, 16);
-    const int c0 = std::max(0, static_cast<int>(std::floor((gs.mean.x() - reach) / g.cellWidth)));
-    const int c1 = std::min(g.cols - 1, static_cast<int>(std::floor((gs.mean.x() + reach) / g.cellWidth)));
+    const int s = clampedIndex(std::ceil(2.0 * std::max(g.cellWidth, g.cellHeight) / sMin), 1, 16);
+    // The ±6σ box (the integration domain), clipped to the map.
+    const int c0 = clampedIndex(std::floor((gs.mean.x() - reach) / g.cellWidth), 0, g.cols);
+    const int c1 = clampedIndex(std::floor((gs.mean.x() + reach) / g.cellWidth), -1, g.cols - 1);
     // Rows count from the top: y = (rows − row − 0.5)·cellHeight at a centre.
-    const int r0 = std::max(0, g.rows - 1 - static_cast<int>(std::floor((gs.mean.y() + reach) / g.cellHeight)));
-    const int r1 = std::min(g.rows - 1, g.rows - 1 - static_cast<int>(std::floor((gs.mean.y() - reach) / g.cellHeight)));
+    const int r0 = g.rows - 1 - clampedIndex(std::floor((gs.mean.y() + reach) / g.cellHeight), -1, g.rows - 1);
+    const int r1 = g.rows - 1 - clampedIndex(std::floor((gs.mean.y() - reach) / g.cellHeight), 0, g.rows);
     const double wNorm = gs.weight / wTotal * q.norm * area / (s * s);
+    const double yHalf = window.halfHeight();
     for (int r = r0; r <= r1; ++r) {
-      for (int c = c0; c <= c1; ++c) {
+      // This row's strip of y offsets from the mean, clipped to the ellipse.
+      const double ya = std::max((g.rows - r - 1) * g.cellHeight - gs.mean.y(), -yHalf);
+      const double yb = std::min((g.rows - r) * g.cellHeight - gs.mean.y(), yHalf);
+      if (ya > yb) continue;
+      const auto [xlo, xhi] = window.xRange(ya, yb);
+      const int ca = std::max(c0, clampedIndex(std::floor((gs.mean.x() + xlo) / g.cellWidth), 0, g.cols));
+      const int cb = std::min(c1, clampedIndex(std::floor((gs.mean.x() + xhi) / g.cellWidth), -1, g.cols - 1));
+      for (int c = ca; c <= cb; ++c) {
         double sum = 0;
         for (int a = 0; a < s; ++a) {
           const double y = (g.rows - r - (a + 0.5) / s) * g.cellHeight - gs.mean.y();
@@ -110,7 +193,8 @@ Raster<float> discretise(const std::vector<Gaussian>& cs, const GridGeometry& g,
 }
 
 std::vector<Gaussian> randomGaussians(const GridGeometry& g, int count, std::uint64_t seed) {
-  if (count < 1 || count > 1000) throwInvalidParameter("count", "must be in [1, 1000]");
+  if (count < 1 || count > static_cast<int>(kMaxComponents))
+    throwInvalidParameter("count", "must be in [1, " + std::to_string(kMaxComponents) + "]");
   Rng rng(deriveSeed(seed, 3));
   const double side = std::min(g.widthMetres(), g.heightMetres());
   std::vector<Gaussian> out;

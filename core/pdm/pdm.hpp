@@ -4,6 +4,7 @@
 // (1/G) Σ_{i=1..G} N(x; μ_i, Σ_i). Discretised as probability *mass* per cell, normalised so the
 // valid cells of the map sum to 1.
 #include <Eigen/Core>
+#include <cstddef>
 #include <cstdint>
 #include <vector>
 
@@ -19,16 +20,31 @@ struct Gaussian {
   double weight = 1.0;         // relative; >= 0
 };
 
-// Throws InvalidParameter naming "components[i].field" for a bad component or an empty list.
+// At most this many components per PDM: discretising costs up to one window of cells per
+// component (see discretise), so the count bounds the work.
+inline constexpr std::size_t kMaxComponents = 256;
+
+// Throws InvalidParameter naming "components[i].field" (x, y, sigma_x, sigma_y, rotation_deg,
+// weight) for a bad component, an empty list or more than kMaxComponents.
 void validateGaussians(const std::vector<Gaussian>& components);
+// The same, plus bounds relative to the map `g` (so every later step stays in range): a mean at
+// most one map diagonal outside the map; sigmas in [cell / 1000, 100 × diagonal]; weights
+// <= 1e9.
+void validateGaussians(const std::vector<Gaussian>& components, const GridGeometry& g);
 
 // Mixture density at a local point (per square metre).
 double density(const std::vector<Gaussian>& components, const Eigen::Vector2d& xy);
 
-// Probability mass per cell. Each component is integrated over ±6σ around its mean by sampling
-// every cell on an s×s sub-grid (s grows when σ is small against the cell, so narrow peaks are not
-// missed between cell centres). Cells with valid[i] == 0 (nodata) get 0; `valid` empty = all.
-// Throws InvalidInput if no mass falls on valid cells of the map.
+// Probability mass per cell of the mixture (paper 001 eq. 5). Each component is integrated over
+// ±6σ around its mean by sampling every cell on an s×s sub-grid (s grows when σ is small against
+// the cell, so narrow peaks are not missed between cell centres). Only cells that meet the
+// component's kWindowSigmas-σ ellipse (Mahalanobis distance) are visited, so a long thin
+// component costs its own area, not its bounding box: the work is at most
+// Σ_components (cells in its window) × s², with s <= 16. The samples left out have
+// exp(-q/2) <= exp(-32) ≈ 1e-14 of the component's peak. Cells with valid[i] == 0 (nodata) get 0;
+// `valid` empty = all. Validates against `g` (above). Throws InvalidInput if no mass falls on
+// valid cells of the map.
+inline constexpr double kWindowSigmas = 8.0;
 Raster<float> discretise(const std::vector<Gaussian>& components, const GridGeometry& g,
                          const std::vector<std::uint8_t>& valid = {});
 
