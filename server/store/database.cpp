@@ -254,12 +254,19 @@ std::optional<MapRecord> Database::getMap(const std::string& id) {
   return readMap(s);
 }
 
-std::vector<MapRecord> Database::listMaps() {
+std::vector<MapRecord> Database::listMaps(long long limit, long long offset) {
   std::lock_guard lock(mutex_);
-  Stmt s(db_, "SELECT id, name, created_at, meta FROM maps ORDER BY created_at ASC, id ASC");
+  Stmt s(db_, "SELECT id, name, created_at, meta FROM maps ORDER BY created_at ASC, id ASC LIMIT ?1 OFFSET ?2");
+  s.bindInt(1, limit).bindInt(2, offset);
   std::vector<MapRecord> out;
   while (s.step()) out.push_back(readMap(s));
   return out;
+}
+
+long long Database::countMaps() {
+  std::lock_guard lock(mutex_);
+  Stmt s(db_, "SELECT COUNT(*) FROM maps");
+  return s.step() ? s.integer(0) : 0;
 }
 
 bool Database::deleteMap(const std::string& id) {
@@ -287,15 +294,22 @@ std::optional<PdmRecord> Database::getPdm(const std::string& id) {
   return readPdm(s);
 }
 
-std::vector<PdmRecord> Database::listPdms(const std::string& mapId) {
+std::vector<PdmRecord> Database::listPdms(const std::string& mapId, long long limit, long long offset) {
   std::lock_guard lock(mutex_);
   Stmt s(db_,
          "SELECT id, map_id, name, created_at, meta FROM pdms WHERE map_id = ?1 "
-         "ORDER BY created_at ASC, id ASC");
-  s.bind(1, mapId);
+         "ORDER BY created_at ASC, id ASC LIMIT ?2 OFFSET ?3");
+  s.bind(1, mapId).bindInt(2, limit).bindInt(3, offset);
   std::vector<PdmRecord> out;
   while (s.step()) out.push_back(readPdm(s));
   return out;
+}
+
+long long Database::countPdms(const std::string& mapId) {
+  std::lock_guard lock(mutex_);
+  Stmt s(db_, "SELECT COUNT(*) FROM pdms WHERE map_id = ?1");
+  s.bind(1, mapId);
+  return s.step() ? s.integer(0) : 0;
 }
 
 bool Database::deletePdm(const std::string& id) {
@@ -328,14 +342,21 @@ std::optional<MissionRecord> Database::getMission(const std::string& id) {
   return readMission(s);
 }
 
-std::vector<MissionRecord> Database::listMissions() {
+std::vector<MissionRecord> Database::listMissions(long long limit, long long offset) {
   std::lock_guard lock(mutex_);
   Stmt s(db_, (std::string("SELECT ") + kMissionColumns +
-               " FROM missions ORDER BY created_at DESC, id ASC")
+               " FROM missions ORDER BY created_at DESC, id ASC LIMIT ?1 OFFSET ?2")
                   .c_str());
+  s.bindInt(1, limit).bindInt(2, offset);
   std::vector<MissionRecord> out;
   while (s.step()) out.push_back(readMission(s));
   return out;
+}
+
+long long Database::countMissions() {
+  std::lock_guard lock(mutex_);
+  Stmt s(db_, "SELECT COUNT(*) FROM missions");
+  return s.step() ? s.integer(0) : 0;
 }
 
 void Database::updateMission(const std::string& id, const std::string& status,

@@ -51,17 +51,21 @@ class Database {
 
   void insertMap(const MapRecord& m);
   std::optional<MapRecord> getMap(const std::string& id);
-  std::vector<MapRecord> listMaps();  // oldest first
+  // Listings page in SQL (LIMIT/OFFSET): `limit` < 0 means all, `offset` rows are skipped.
+  std::vector<MapRecord> listMaps(long long limit = -1, long long offset = 0);  // oldest first
+  long long countMaps();
   bool deleteMap(const std::string& id);  // also deletes its PDMs' rows; returns false if absent
 
   void insertPdm(const PdmRecord& p);
   std::optional<PdmRecord> getPdm(const std::string& id);
-  std::vector<PdmRecord> listPdms(const std::string& mapId);
+  std::vector<PdmRecord> listPdms(const std::string& mapId, long long limit = -1, long long offset = 0);
+  long long countPdms(const std::string& mapId);
   bool deletePdm(const std::string& id);
 
   void insertMission(const MissionRecord& m);
   std::optional<MissionRecord> getMission(const std::string& id);
-  std::vector<MissionRecord> listMissions();  // newest first
+  std::vector<MissionRecord> listMissions(long long limit = -1, long long offset = 0);  // newest first
+  long long countMissions();
   // Updates status and message; sets startedAt when status becomes running and finishedAt for
   // a final status; stores metrics when given.
   void updateMission(const std::string& id, const std::string& status, const std::string& message,

@@ -69,16 +69,31 @@ export async function sendJson(method, path, body) {
   return response.json();
 }
 
+// A paginated listing (server: ?limit=&offset=, the next page in a Link rel="next" header), all
+// pages concatenated; at most `maxPages` requests of up to 500 items each.
+export async function getAllPages(path, maxPages = 100) {
+  const items = [];
+  let next = `${path}${path.includes('?') ? '&' : '?'}limit=500`;
+  for (let page = 0; next && page < maxPages; ++page) {
+    const response = await request(next);
+    items.push(...(await response.json()));
+    const link = response.headers.get('Link') || '';
+    const m = /<([^>]+)>\s*;\s*rel="next"/.exec(link);
+    next = m ? m[1] : null;
+  }
+  return items;
+}
+
 export const api = {
   health: () => getJson('/api/health'),
   planners: () => getJson('/api/planners'),
-  maps: () => getJson('/api/maps'),
+  maps: () => getAllPages('/api/maps'),
   map: (id) => getJson(`/api/maps/${id}`),
   deleteMap: (id) => sendJson('DELETE', `/api/maps/${id}`),
-  pdms: (mapId) => getJson(`/api/maps/${mapId}/pdms`),
+  pdms: (mapId) => getAllPages(`/api/maps/${mapId}/pdms`),
   createPdm: (mapId, body) => sendJson('POST', `/api/maps/${mapId}/pdms`, body),
   deletePdm: (mapId, pdmId) => sendJson('DELETE', `/api/maps/${mapId}/pdms/${pdmId}`),
-  missions: () => getJson('/api/missions'),
+  missions: () => getAllPages('/api/missions'),
   mission: (id) => getJson(`/api/missions/${id}`),
   launch: (body) => sendJson('POST', '/api/missions', body),
   cancel: (id) => sendJson('DELETE', `/api/missions/${id}`),

@@ -57,6 +57,8 @@ async function selectMap(id) {
   const map = await api.map(id);
   state.map = map;
   state.pdms = map.pdms || [];
+  // The map's body holds its first PDMs only; pdms_total says when the listing has more.
+  if ((map.pdms_total || 0) > state.pdms.length) state.pdms = await api.pdms(id);
   state.pdmId = '';
   $('map-title').textContent = `${map.name} — ${map.cols}×${map.rows} × ${Number(map.cell_size_m.toPrecision(4))} m`;
   $('map-title').title = `map ${map.id}`;
