@@ -3,12 +3,15 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <iostream>
 #include <numbers>
 
 #include "core/common/error.hpp"
 #include "core/coverage/coverage_params.hpp"
 #include "core/coverage/terrain_world.hpp"
 #include "server/api/multipart.hpp"
+#include "server/json/json_edge.hpp"
+#include "server/json/mission_request.hpp"
 #include "server/json/pdm_json.hpp"
 #include "server/json/plan_json.hpp"
 
@@ -23,19 +26,31 @@ namespace rj = rover::json;
 
 namespace {
 
-json parseJsonBody(const Request& req) {
-  json j = json::parse(req.body, nullptr, false);
-  if (j.is_discarded()) throw ApiError(400, "bad_json", "the request body is not valid JSON", "body");
-  if (!j.is_object()) throw ApiError(400, "bad_json", "the request body must be a JSON object", "body");
-  return j;
+// An ApiError for a core validation error; `prefix` qualifies the field (e.g. "params."), and an
+// error that names no field is attributed to `fallback` (every error names its field).
+ApiError fromCore(const Error& e, const std::string& prefix = "", const std::string& fallback = "body") {
+  std::string field = e.field().empty() ? fallback : prefix + e.field();
+  return ApiError(400, errorCodeName(e.code()), e.what(), field);
 }
 
-// An ApiError for a core validation error; `prefix` qualifies the field (e.g. "params.").
-ApiError fromCore(const Error& e, const std::string& prefix = "") {
-  std::string code = errorCodeName(e.code());
-  int status = e.code() == ErrorCode::NotFound ? 400 : 400;
-  std::string field = e.field().empty() ? "" : prefix + e.field();
-  return ApiError(status, code, e.what(), field);
+// Every handler runs inside this: expected failures leave as ApiError; a core Error is bad input
+// (400 with its field); a JSON type error is a body of the wrong shape; anything else is a 500
+// whose message shows no server paths (the detail goes to the server's log).
+http::Handler guarded(http::Handler handler) {
+  return [handler = std::move(handler)](const Request& req) -> Response {
+    try {
+      return handler(req);
+    } catch (const ApiError&) {
+      throw;
+    } catch (const Error& e) {
+      throw fromCore(e);
+    } catch (const nlohmann::json::exception&) {
+      throw ApiError(400, "bad_json", "the request body has a value of the wrong type", "body");
+    } catch (const std::exception& e) {
+      std::cerr << "roverplan: " << req.method << " " << req.path << ": internal error: " << e.what() << "\n";
+      throw ApiError(500, "internal", "internal error (details are in the server log)", "");
+    }
+  };
 }
 
 json mapJson(const store::MapRecord& m) {
@@ -82,6 +97,44 @@ double queryNumber(const Request& req, const std::string& key, double fallback) 
   return v;
 }
 
+// An integer query parameter in [lo, hi], range-checked as a double before the conversion (a
+// static_cast<int> of 1e300 is undefined behaviour).
+long long queryInteger(const Request& req, const std::string& key, long long fallback, long long lo, long long hi) {
+  const double v = queryNumber(req, key, static_cast<double>(fallback));
+  if (v < static_cast<double>(lo) || v > static_cast<double>(hi) || std::trunc(v) != v)
+    throw ApiError(400, "invalid_parameter",
+                   key + " must be an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]", key);
+  return static_cast<long long>(v);
+}
+
+// Listing pages: ?limit= (default 50, at most 500) and ?offset= (rows skipped). The body stays a
+// JSON array; X-Total-Count holds the total and, when more rows follow, a Link header
+// <path?limit=L&offset=O>; rel="next" (RFC 8288) points at the next page.
+constexpr long long kDefaultPage = 50, kMaxPage = 500;
+struct Page {
+  long long limit, offset;
+};
+Page pageOf(const Request& req) {
+  return {queryInteger(req, "limit", kDefaultPage, 1, kMaxPage), queryInteger(req, "offset", 0, 0, 1'000'000'000)};
+}
+Response pageResponse(const Request& req, const Page& page, json items, long long total) {
+  const long long next = page.offset + static_cast<long long>(items.size());
+  Response r = Response::json(200, items);
+  r.headers.emplace_back("X-Total-Count", std::to_string(total));
+  if (!items.empty() && next < total)
+    r.headers.emplace_back("Link", "<" + req.path + "?limit=" + std::to_string(page.limit) +
+                                       "&offset=" + std::to_string(next) + ">; rel=\"next\"");
+  return r;
+}
+
+// Invalidates a map's cached body when the write that changes it has finished, on success or
+// failure (after, not before: see ApiContext::mapCacheTicket).
+struct InvalidateMapAfter {
+  ApiContext& ctx;
+  std::string id;
+  ~InvalidateMapAfter() { ctx.invalidateMap(id); }
+};
+
 std::string queryString(const Request& req, const std::string& key) {
   auto it = req.query.find(key);
   return it == req.query.end() ? "" : it->second;
@@ -121,74 +174,21 @@ std::vector<UploadedFile> uploadedFiles(const Request& req, store::DataDir& dir,
 
 // Builds the planning problem for a mission request; every error names its field.
 missions::MissionJob buildMission(ApiContext& ctx, const json& body) {
-  static const std::vector<std::string> known{"map", "pdm", "planner", "rovers", "params", "pace", "name"};
-  for (const auto& [key, value] : body.items())
-    if (std::find(known.begin(), known.end(), key) == known.end())
-      throw ApiError(400, "unknown_field", "unknown field '" + key + "'", key);
-  auto str = [&](const char* key, bool required) -> std::string {
-    auto it = body.find(key);
-    if (it == body.end() || it->is_null()) {
-      if (required) throw ApiError(400, "missing_field", std::string(key) + " is required", key);
-      return "";
-    }
-    if (!it->is_string()) throw ApiError(400, "invalid_field", std::string(key) + " must be a string", key);
-    return it->get<std::string>();
-  };
+  rj::MissionRequest request = rj::parseMissionRequest(body, ctx.planners);
   missions::MissionJob job;
-  job.record.mapId = str("map", true);
-  job.record.pdmId = str("pdm", false);
-  job.record.planner = str("planner", true);
-  const Planner* planner = nullptr;
-  try {
-    planner = &ctx.planners.get(job.record.planner);
-  } catch (const Error& e) {
-    throw ApiError(400, "unknown_planner", e.what(), "planner");
-  }
+  job.record.mapId = request.mapId;
+  job.record.pdmId = request.pdmId;
+  job.record.planner = request.planner;
+  job.params = std::move(request.params);
+  job.problem.rovers = std::move(request.rovers);
+  if (request.pace) job.pace = *request.pace;
+  const Planner* planner = &ctx.planners.get(job.record.planner);
   if (!ctx.db.getMap(job.record.mapId))
     throw ApiError(400, "not_found", "no map '" + job.record.mapId + "'", "map");
   if (!job.record.pdmId.empty()) {
     auto p = ctx.db.getPdm(job.record.pdmId);
     if (!p || p->mapId != job.record.mapId)
       throw ApiError(400, "not_found", "no PDM '" + job.record.pdmId + "' on this map", "pdm");
-  }
-  // Parameters: typed by the planner's own table; unknown keys rejected.
-  json params = body.value("params", json::object());
-  if (!params.is_object()) throw ApiError(400, "invalid_field", "params must be an object", "params");
-  auto infos = planner->params();
-  for (const auto& item : params.items()) {
-    // Not a structured binding: clang 14 (the fuzz build) cannot capture one in a lambda.
-    const std::string& key = item.key();
-    const json& value = item.value();
-    auto info = std::find_if(infos.begin(), infos.end(), [&](const ParamInfo& i) { return i.key == key; });
-    if (info == infos.end())
-      throw ApiError(400, "unknown_parameter", "unknown parameter '" + key + "' for planner " + job.record.planner,
-                     "params." + key);
-    try {
-      job.params[key] = rj::paramFromJson(*info, value);
-    } catch (const Error& e) {
-      throw fromCore(e, "params.");
-    }
-  }
-  // Rovers in the local frame (metres from the lower-left corner), heading in degrees.
-  auto rovers = body.find("rovers");
-  if (rovers == body.end() || !rovers->is_array() || rovers->empty() || rovers->size() > 64)
-    throw ApiError(400, "invalid_field", "rovers must be an array of 1 to 64 {x, y, heading}", "rovers");
-  for (std::size_t k = 0; k < rovers->size(); ++k) {
-    const json& r = (*rovers)[k];
-    const std::string f = "rovers[" + std::to_string(k) + "]";
-    if (!r.is_object()) throw ApiError(400, "invalid_field", f + " must be an object {x, y, heading}", f);
-    for (const char* key : {"x", "y"})
-      if (!r.contains(key) || !r[key].is_number())
-        throw ApiError(400, "invalid_field", f + "." + key + " must be a number", f + "." + key);
-    if (r.contains("heading") && !r["heading"].is_number())
-      throw ApiError(400, "invalid_field", f + ".heading must be a number (degrees)", f + ".heading");
-    job.problem.rovers.push_back({{r["x"].get<double>(), r["y"].get<double>()},
-                                  r.value("heading", 0.0) * std::numbers::pi / 180.0});
-  }
-  if (body.contains("pace")) {
-    if (!body["pace"].is_number() || body["pace"].get<double>() < 0 || body["pace"].get<double>() > 1e6)
-      throw ApiError(400, "invalid_field", "pace must be a number of steps per second in [0, 1e6]", "pace");
-    job.pace = body["pace"].get<double>();
   }
   // What the planner plans on: the coverage planner a grid world (the map resampled to its
   // cell); the team planners the map at its own resolution and the PDM.
@@ -218,11 +218,7 @@ missions::MissionJob buildMission(ApiContext& ctx, const json& body) {
     bool roverField = e.field().rfind("rovers", 0) == 0 || e.field() == "map" || e.field() == "pdm";
     throw fromCore(e, roverField || e.field().empty() ? "" : "params.");
   }
-  json spec = body;
-  spec.erase("map");
-  spec.erase("pdm");
-  spec.erase("planner");
-  job.record.spec = spec;
+  job.record.spec = std::move(request.spec);
   return job;
 }
 
@@ -248,7 +244,7 @@ void addApiRoutes(http::Router& router, ApiContext& ctx) {
   router.add("GET", "/api/health", [&ctx](const Request&) {
     return Response::json(200, {{"status", "ok"},
                                 {"version", ctx.version},
-                                {"maps", ctx.db.listMaps().size()},
+                                {"maps", ctx.db.countMaps()},
                                 {"missions_running", ctx.missions.running()},
                                 {"missions_queued", ctx.missions.queued()},
                                 {"planners", ctx.planners.names()}});
@@ -258,47 +254,49 @@ void addApiRoutes(http::Router& router, ApiContext& ctx) {
     return Response::json(200, openApiDocument(router, ctx.version));
   }, doc("This document."));
 
-  router.add("GET", "/api/planners", [&ctx](const Request&) {
+  router.add("GET", "/api/planners", guarded([&ctx](const Request&) {
     json out = json::array();
     for (const auto& name : ctx.planners.names()) {
       const Planner& p = ctx.planners.get(name);
       out.push_back({{"name", name}, {"summary", p.summary()}, {"params", rj::toJson(p.params())}});
     }
     return Response::json(200, out);
-  }, doc("Registered planners with every parameter, its default, unit and range."));
+  }), doc("Registered planners with every parameter, its default, unit and range."));
 
   // --- maps ---
-  router.add("GET", "/api/maps", [&ctx](const Request&) {
+  router.add("GET", "/api/maps", guarded([&ctx](const Request& req) {
+    const Page page = pageOf(req);
     json out = json::array();
-    for (const auto& m : ctx.db.listMaps()) out.push_back(mapJson(m));
-    return Response::json(200, out);
-  }, doc("List maps."));
+    for (const auto& m : ctx.db.listMaps(page.limit, page.offset)) out.push_back(mapJson(m));
+    return pageResponse(req, page, std::move(out), ctx.db.countMaps());
+  }), doc("List maps, oldest first: ?limit= (50, at most 500), ?offset=; X-Total-Count and Link rel=next."));
 
   http::RouteOptions upload;
   upload.streamBody = true;
   upload.summary = "Upload a DEM (raw body with ?filename=, or multipart/form-data with file parts; "
                    "PDS3 .IMG+.LBL pairs as two parts or a zip), ?name=&cell=.";
-  router.add("POST", "/api/maps", [&ctx](const Request& req) {
+  router.add("POST", "/api/maps", guarded([&ctx](const Request& req) {
     std::string name = queryString(req, "name"), cellText = queryString(req, "cell");
     auto files = uploadedFiles(req, ctx.dir, name, cellText);
-    double cell = 0;
-    if (!cellText.empty()) {
-      char* end = nullptr;
-      cell = std::strtod(cellText.c_str(), &end);
-      if (*end != '\0' || !std::isfinite(cell) || cell < 0) {
-        for (auto& f : files) store::DataDir::removeTree(f.path);
-        throw ApiError(400, "invalid_parameter", "cell must be a positive number of metres", "cell");
-      }
-    }
     try {
+      rj::checkName(name, "name");
+      // 0 (or none) keeps the file's own cell size; otherwise [1 mm, 100 km].
+      double cell = 0;
+      if (!cellText.empty()) {
+        char* end = nullptr;
+        cell = std::strtod(cellText.c_str(), &end);
+        if (*end != '\0' || !std::isfinite(cell) || (cell != 0 && (cell < 1e-3 || cell > 1e5)))
+          throw ApiError(400, "invalid_parameter", "cell must be 0 (the file's own) or a number of metres in [0.001, 100000]",
+                         "cell");
+      }
       return Response::json(201, mapJson(ctx.maps.importDem(files, name, cell)));
     } catch (...) {
       for (auto& f : files) store::DataDir::removeTree(f.path);
       throw;
     }
-  }, upload);
+  }), upload);
 
-  router.add("GET", "/api/maps/{id}", [&ctx](const Request& req) {
+  router.add("GET", "/api/maps/{id}", guarded([&ctx](const Request& req) {
     const std::string& id = req.params.at("id");
     Response r;
     {
@@ -308,29 +306,33 @@ void addApiRoutes(http::Router& router, ApiContext& ctx) {
         return r;
       }
     }
+    const std::uint64_t ticket = ctx.mapCacheTicket();  // before the reads
     auto m = ctx.db.getMap(id);
     if (!m) throw ApiError(404, "not_found", "no map '" + id + "'", "id");
     json j = mapJson(*m);
+    // The first kMaxPage PDMs; pdms_total says when /api/maps/{id}/pdms holds more.
     j["pdms"] = json::array();
-    for (const auto& p : ctx.db.listPdms(m->id)) j["pdms"].push_back(pdmJson(p));
-    r.body = j.dump();
-    std::lock_guard lock(ctx.mapCacheMutex);
-    ctx.mapBodyCache[id] = r.body;
+    for (const auto& p : ctx.db.listPdms(m->id, kMaxPage, 0)) j["pdms"].push_back(pdmJson(p));
+    j["pdms_total"] = ctx.db.countPdms(m->id);
+    r = Response::json(200, j);
+    ctx.cacheMapBody(id, r.body, ticket);
     return r;
-  }, doc("One map: size, cell size, CRS, elevation range, class percentages, PDMs."));
+  }), doc("One map: size, cell size, CRS, elevation range, class percentages, its first 500 PDMs "
+          "(pdms_total counts them all)."));
 
-  router.add("DELETE", "/api/maps/{id}", [&ctx](const Request& req) {
-    ctx.invalidateMap(req.params.at("id"));
+  router.add("DELETE", "/api/maps/{id}", guarded([&ctx](const Request& req) {
+    InvalidateMapAfter after{ctx, req.params.at("id")};
     ctx.maps.remove(req.params.at("id"));
     return Response::json(200, {{"deleted", req.params.at("id")}});
-  }, doc("Delete a map and its PDMs (missions keep their records and results)."));
+  }), doc("Delete a map and its PDMs (missions keep their records and results)."));
 
-  router.add("GET", "/api/maps/{id}/layers/{file}", [&ctx](const Request& req) {
+  router.add("GET", "/api/maps/{id}/layers/{file}", guarded([&ctx](const Request& req) {
     const std::string file = req.params.at("file");
     auto dot = file.rfind('.');
     if (dot == std::string::npos) throw ApiError(404, "not_found", "layer files are NAME.png|tif|f32", "file");
     const std::string layer = file.substr(0, dot), format = file.substr(dot + 1);
-    int max = static_cast<int>(queryNumber(req, "max", 0));
+    // Range-checked before the conversion; the catalog narrows it to the sizes it renders.
+    const int max = static_cast<int>(queryInteger(req, "max", 0, 0, 1'000'000));
     std::string path = ctx.maps.layerFile(req.params.at("id"), layer, format, max, queryString(req, "pdm"));
     Response r = fileResponse(path, format == "png" ? "image/png" : format == "tif" ? "image/tiff" : "application/octet-stream");
     if (format == "f32") {
@@ -342,37 +344,49 @@ void addApiRoutes(http::Router& router, ApiContext& ctx) {
     }
     r.headers.emplace_back("Cache-Control", "max-age=3600");
     return r;
-  }, doc("A layer (elevation|hillshade|slope|traversability|pdm) as .png (?max= overview), "
+  }), doc("A layer (elevation|hillshade|slope|traversability|pdm) as .png (?max= overview), "
                    ".tif (GeoTIFF) or .f32 (raw little-endian float32, size in X-Rows/X-Cols); ?pdm=ID for pdm."));
 
   // --- PDMs ---
-  router.add("GET", "/api/maps/{id}/pdms", [&ctx](const Request& req) {
-    if (!ctx.db.getMap(req.params.at("id"))) throw ApiError(404, "not_found", "no map '" + req.params.at("id") + "'", "id");
+  router.add("GET", "/api/maps/{id}/pdms", guarded([&ctx](const Request& req) {
+    const std::string& id = req.params.at("id");
+    if (!ctx.db.getMap(id)) throw ApiError(404, "not_found", "no map '" + id + "'", "id");
+    const Page page = pageOf(req);
     json out = json::array();
-    for (const auto& p : ctx.db.listPdms(req.params.at("id"))) out.push_back(pdmJson(p));
-    return Response::json(200, out);
-  }, doc("List a map's PDMs."));
+    for (const auto& p : ctx.db.listPdms(id, page.limit, page.offset)) out.push_back(pdmJson(p));
+    return pageResponse(req, page, std::move(out), ctx.db.countPdms(id));
+  }), doc("List a map's PDMs, oldest first: ?limit= (50, at most 500), ?offset=; X-Total-Count and Link rel=next."));
 
   http::RouteOptions pdmUpload;
   pdmUpload.streamBody = true;
   pdmUpload.summary = "Create a PDM: JSON {name, components:[{x,y,sigma_x,sigma_y,rotation_deg,weight}]} "
                       "or {name, random: G, seed: S}, or a raster body (any GDAL format) of weights.";
-  router.add("POST", "/api/maps/{id}/pdms", [&ctx](const Request& req) {
+  router.add("POST", "/api/maps/{id}/pdms", guarded([&ctx](const Request& req) {
     const std::string mapId = req.params.at("id");
     ctx.maps.get(mapId);  // 404 for an unknown map
-    ctx.invalidateMap(mapId);
+    InvalidateMapAfter after{ctx, mapId};
     if (req.bodyFile.empty() || req.bodySize == 0) throw ApiError(400, "invalid_input", "the request has no body", "body");
     std::string type = req.header("content-type");
     if (type.rfind("application/json", 0) == 0) {
-      if (req.bodySize > (4u << 20)) throw ApiError(413, "payload_too_large", "PDM JSON over 4 MiB", "body");
-      std::ifstream in(req.bodyFile);
-      json j = json::parse(in, nullptr, false);
-      if (j.is_discarded() || !j.is_object()) throw ApiError(400, "bad_json", "the body is not a JSON object", "body");
-      std::string name = j.value("name", "");
+      const auto& limits = rj::kPdmJsonLimits;
+      if (req.bodySize > limits.maxBytes)
+        throw ApiError(413, "payload_too_large",
+                       "PDM JSON over " + std::to_string(limits.maxBytes >> 10) + " KiB", "body");
+      std::string text(static_cast<std::size_t>(req.bodySize), '\0');
+      std::ifstream in(req.bodyFile, std::ios::binary);
+      in.read(text.data(), static_cast<std::streamsize>(text.size()));
+      text.resize(static_cast<std::size_t>(in.gcount()));
+      json j = rj::parseJsonLimited(text, limits);
+      std::string name;
+      if (auto it = j.find("name"); it != j.end() && !it->is_null()) {
+        if (!it->is_string()) throw ApiError(400, "invalid_field", "name must be a string", "name");
+        name = it->get<std::string>();
+        rj::checkName(name, "name");
+      }
       std::vector<pdm::Gaussian> comps;
       json meta;
       if (j.contains("random")) {
-        if (!j["random"].is_number_integer() || j["random"].get<int>() < 1 || j["random"].get<int>() > 100)
+        if (!j["random"].is_number_integer() || j["random"].get<std::int64_t>() < 1 || j["random"].get<std::int64_t>() > 100)
           throw ApiError(400, "invalid_field", "random must be an integer in [1, 100]", "random");
         if (j.contains("seed") && !j["seed"].is_number_unsigned())
           throw ApiError(400, "invalid_field", "seed must be a non-negative integer", "seed");
@@ -383,59 +397,62 @@ void addApiRoutes(http::Router& router, ApiContext& ctx) {
         try {
           comps = rj::gaussiansFromJson(j);
         } catch (const Error& e) {
-          throw fromCore(e);
+          throw fromCore(e, "", "components");
         }
         meta = {{"kind", "gaussians"}};
       }
       meta["components"] = rj::toJson(comps)["components"];
       return Response::json(201, pdmJson(ctx.maps.createPdm(mapId, name, comps, meta)));
     }
+    const std::string name = queryString(req, "name");
+    rj::checkName(name, "name");
     const std::string moved = (fs::path(ctx.dir.tmpDir()) / (store::DataDir::newId() + fs::path(queryString(req, "filename")).extension().string())).string();
     fs::rename(req.bodyFile, moved);
     try {
-      auto rec = ctx.maps.createPdmFromRaster(mapId, queryString(req, "name"), moved);
+      auto rec = ctx.maps.createPdmFromRaster(mapId, name, moved);
       store::DataDir::removeTree(moved);
       return Response::json(201, pdmJson(rec));
     } catch (...) {
       store::DataDir::removeTree(moved);
       throw;
     }
-  }, pdmUpload);
+  }), pdmUpload);
 
-  router.add("GET", "/api/maps/{id}/pdms/{pdm}", [&ctx](const Request& req) {
+  router.add("GET", "/api/maps/{id}/pdms/{pdm}", guarded([&ctx](const Request& req) {
     auto p = ctx.db.getPdm(req.params.at("pdm"));
     if (!p || p->mapId != req.params.at("id")) throw ApiError(404, "not_found", "no PDM '" + req.params.at("pdm") + "' on this map", "pdm");
     return Response::json(200, pdmJson(*p));
-  }, doc("One PDM."));
+  }), doc("One PDM."));
 
-  router.add("DELETE", "/api/maps/{id}/pdms/{pdm}", [&ctx](const Request& req) {
+  router.add("DELETE", "/api/maps/{id}/pdms/{pdm}", guarded([&ctx](const Request& req) {
     auto p = ctx.db.getPdm(req.params.at("pdm"));
     if (!p || p->mapId != req.params.at("id")) throw ApiError(404, "not_found", "no PDM '" + req.params.at("pdm") + "' on this map", "pdm");
-    ctx.invalidateMap(p->mapId);
+    InvalidateMapAfter after{ctx, p->mapId};
     ctx.db.deletePdm(p->id);
     store::DataDir::removeTree(ctx.dir.pdmDir(p->id));
     return Response::json(200, {{"deleted", p->id}});
-  }, doc("Delete a PDM."));
+  }), doc("Delete a PDM."));
 
   // --- missions ---
-  router.add("POST", "/api/missions", [&ctx](const Request& req) {
-    json body = parseJsonBody(req);
+  router.add("POST", "/api/missions", guarded([&ctx](const Request& req) {
+    json body = rj::parseJsonLimited(req.body, rj::kMissionJsonLimits);
     missions::MissionJob job = buildMission(ctx, body);
     job.record.id = store::DataDir::newId();
     job.record.createdAt = store::nowIso();
     const std::string id = job.record.id;
     ctx.missions.submit(std::move(job));
     return Response::json(202, missionJson(*ctx.db.getMission(id)));
-  }, doc("Launch a mission {map, pdm?, planner, rovers:[{x,y,heading}], params:{...}, pace?}; "
+  }), doc("Launch a mission {map, pdm?, planner, rovers:[{x,y,heading}], params:{...}, pace?}; "
                    "validated fully, then queued (202)."));
 
-  router.add("GET", "/api/missions", [&ctx](const Request&) {
+  router.add("GET", "/api/missions", guarded([&ctx](const Request& req) {
+    const Page page = pageOf(req);
     json out = json::array();
-    for (const auto& m : ctx.db.listMissions()) out.push_back(missionJson(m));
-    return Response::json(200, out);
-  }, doc("List missions, newest first."));
+    for (const auto& m : ctx.db.listMissions(page.limit, page.offset)) out.push_back(missionJson(m));
+    return pageResponse(req, page, std::move(out), ctx.db.countMissions());
+  }), doc("List missions, newest first: ?limit= (50, at most 500), ?offset=; X-Total-Count and Link rel=next."));
 
-  router.add("GET", "/api/missions/{id}", [&ctx](const Request& req) {
+  router.add("GET", "/api/missions/{id}", guarded([&ctx](const Request& req) {
     auto m = ctx.db.getMission(req.params.at("id"));
     if (!m) throw ApiError(404, "not_found", "no mission '" + req.params.at("id") + "'", "id");
     json j = missionJson(*m);
@@ -445,17 +462,17 @@ void addApiRoutes(http::Router& router, ApiContext& ctx) {
       j["step"] = live["step"];
     }
     return Response::json(200, j);
-  }, doc("One mission: status, progress, metrics."));
+  }), doc("One mission: status, progress, metrics."));
 
-  router.add("DELETE", "/api/missions/{id}", [&ctx](const Request& req) {
+  router.add("DELETE", "/api/missions/{id}", guarded([&ctx](const Request& req) {
     const std::string id = req.params.at("id");
     auto m = ctx.db.getMission(id);
     if (!m) throw ApiError(404, "not_found", "no mission '" + id + "'", "id");
     if (ctx.missions.cancel(id)) return Response::json(202, {{"id", id}, {"status", "cancelling"}});
     return Response::json(409, {{"error", {{"code", "not_running"}, {"message", "mission " + id + " is " + m->status + ", not running"}, {"field", "id"}}}});
-  }, doc("Cancel a queued or running mission (the planner stops within one step)."));
+  }), doc("Cancel a queued or running mission (the planner stops within one step)."));
 
-  router.add("GET", "/api/missions/{id}/{file}", [&ctx](const Request& req) {
+  router.add("GET", "/api/missions/{id}/{file}", guarded([&ctx](const Request& req) {
     const std::string id = req.params.at("id"), file = req.params.at("file");
     auto m = ctx.db.getMission(id);
     if (!m) throw ApiError(404, "not_found", "no mission '" + id + "'", "id");
@@ -470,7 +487,7 @@ void addApiRoutes(http::Router& router, ApiContext& ctx) {
     Response r = fileResponse(path.string(), t->second);
     r.headers.emplace_back("Content-Disposition", "attachment; filename=\"mission-" + id + "-" + file + "\"");
     return r;
-  }, doc("A finished mission's result: result.json, result.geojson (map CRS), result.csv."));
+  }), doc("A finished mission's result: result.json, result.geojson (map CRS), result.csv."));
 
   http::RouteOptions ws;
   ws.summary = "WebSocket: a snapshot, then live events (binary grid frames, JSON poses/progress), "

@@ -1,5 +1,6 @@
 #pragma once
 // The REST + WebSocket API (issue: server): every route, its handler and its OpenAPI entry.
+#include <cstdint>
 #include <mutex>
 #include <string>
 #include <unordered_map>
@@ -23,11 +24,27 @@ struct ApiContext {
   std::string version = "0.1.0";
 
   // Serialized GET /api/maps/{id} bodies: the hottest read, changed only by the writes below.
+  // Writers call invalidateMap *after* their write. A reader takes a ticket before it reads the
+  // database and caches its body only if no invalidation happened since, so a GET racing a
+  // delete cannot put the deleted map back into the cache.
   std::mutex mapCacheMutex;
   std::unordered_map<std::string, std::string> mapBodyCache;
+  std::uint64_t mapCacheGeneration = 0;
   void invalidateMap(const std::string& id) {
     std::lock_guard lock(mapCacheMutex);
+    ++mapCacheGeneration;
     mapBodyCache.erase(id);
+  }
+  std::uint64_t mapCacheTicket() {
+    std::lock_guard lock(mapCacheMutex);
+    return mapCacheGeneration;
+  }
+  // Stores `body` unless an invalidation came after `ticket`; returns whether it did.
+  bool cacheMapBody(const std::string& id, std::string body, std::uint64_t ticket) {
+    std::lock_guard lock(mapCacheMutex);
+    if (ticket != mapCacheGeneration) return false;
+    mapBodyCache[id] = std::move(body);
+    return true;
   }
 };
 

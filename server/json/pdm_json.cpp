@@ -1,6 +1,9 @@
 #include "server/json/pdm_json.hpp"
 
+#include <algorithm>
+#include <cmath>
 #include <numbers>
+#include <string>
 
 #include "core/common/error.hpp"
 
@@ -16,7 +19,9 @@ double number(const nlohmann::json& obj, const char* key, std::size_t i, bool re
     return fallback;
   }
   if (!it->is_number()) throwInvalidParameter(field, "must be a number");
-  return it->get<double>();
+  const double v = it->get<double>();
+  if (!std::isfinite(v)) throwInvalidParameter(field, "must be a finite number");
+  return v;
 }
 }  // namespace
 
@@ -28,6 +33,10 @@ std::vector<pdm::Gaussian> gaussiansFromJson(const nlohmann::json& j) {
     list = &*it;
   }
   if (!list->is_array()) throwInvalidParameter("components", "must be an array of Gaussians");
+  // Bounded before anything is built: the discretisation costs one window per component.
+  if (list->size() > pdm::kMaxComponents)
+    throwInvalidParameter("components", "at most " + std::to_string(pdm::kMaxComponents) + " components, got " +
+                                            std::to_string(list->size()));
   std::vector<pdm::Gaussian> out;
   for (std::size_t i = 0; i < list->size(); ++i) {
     const auto& c = (*list)[i];
@@ -36,14 +45,17 @@ std::vector<pdm::Gaussian> gaussiansFromJson(const nlohmann::json& j) {
     for (const auto& [key, value] : c.items()) {
       static const char* known[] = {"x", "y", "sigma_x", "sigma_y", "rotation_deg", "weight"};
       if (std::find(std::begin(known), std::end(known), key) == std::end(known))
-        throw Error(ErrorCode::UnknownParameter,
-                    "components[" + std::to_string(i) + "]." + key, "unknown field '" + key + "'");
+        throw Error(ErrorCode::UnknownParameter, "components[" + std::to_string(i) + "]." + key.substr(0, 64),
+                    "unknown field '" + key.substr(0, 64) + "'");
     }
     pdm::Gaussian g;
     g.mean = {number(c, "x", i, true, 0), number(c, "y", i, true, 0)};
     g.sigmaX = number(c, "sigma_x", i, true, 0);
     g.sigmaY = number(c, "sigma_y", i, false, g.sigmaX);
-    g.rotation = number(c, "rotation_deg", i, false, 0) * std::numbers::pi / 180.0;
+    const double rotationDeg = number(c, "rotation_deg", i, false, 0);
+    if (std::fabs(rotationDeg) > 360)
+      throwInvalidParameter("components[" + std::to_string(i) + "].rotation_deg", "must be in [-360, 360] degrees");
+    g.rotation = rotationDeg * std::numbers::pi / 180.0;
     g.weight = number(c, "weight", i, false, 1.0);
     out.push_back(g);
   }

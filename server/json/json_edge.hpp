@@ -1,0 +1,40 @@
+#pragma once
+// The one way the server reads an untrusted JSON body (issue 14): size and nesting depth are checked
+// before any DOM exists. nlohmann's parser itself is iterative, but copying a parsed value and
+// dump() recurse once per nesting level, so a 70 000-deep array overflowed the stack in the
+// handler. The depth check is a single byte scan (no recursion, no allocation) done first.
+#include <cstddef>
+#include <string>
+#include <string_view>
+
+#include <nlohmann/json.hpp>
+
+namespace rover::json {
+
+struct JsonLimits {
+  std::size_t maxBytes = std::size_t{1} << 20;  // larger bodies: 413 payload_too_large
+  int maxDepth = 64;                            // deeper nesting of [ and {: 400 too_deep
+};
+
+// A mission request is a few KB (64 rovers, ~40 parameters); 64 KiB also bounds what every listed
+// mission carries in its stored spec.
+inline constexpr JsonLimits kMissionJsonLimits{std::size_t{64} << 10, 64};
+// A PDM holds at most pdm::kMaxComponents (256) Gaussians of ~120 bytes; 1 MiB leaves room for
+// pretty-printed bodies.
+inline constexpr JsonLimits kPdmJsonLimits{std::size_t{1} << 20, 64};
+
+// The deepest nesting of arrays/objects in `text`, scanning outside strings only; stops counting
+// once `stopAt` is exceeded. Does not validate the JSON.
+int jsonNestingDepth(std::string_view text, int stopAt);
+
+// Parses a request body under `limits`. Throws http::ApiError with field "body":
+// 413 payload_too_large, 400 too_deep, 400 bad_json (not JSON, or not an object when
+// `requireObject`).
+nlohmann::json parseJsonLimited(std::string_view text, const JsonLimits& limits, bool requireObject = true);
+
+// Names of maps, PDMs and missions: valid UTF-8 of at most kMaxNameChars characters (code points).
+// Throws http::ApiError 400 invalid_field naming `field`.
+inline constexpr std::size_t kMaxNameChars = 200;
+void checkName(std::string_view name, const std::string& field);
+
+}  // namespace rover::json

@@ -1,0 +1,139 @@
+#include "server/json/mission_request.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+#include "core/common/error.hpp"
+#include "server/http/http_types.hpp"
+#include "server/json/json_edge.hpp"
+#include "server/json/plan_json.hpp"
+
+namespace rover::json {
+
+using http::ApiError;
+using nlohmann::json;
+
+namespace {
+
+// Echoed user text is cut, so an error about a 60 KB key is not itself 60 KB.
+std::string shown(const std::string& s) {
+  return s.size() <= 64 ? s : s.substr(0, 64) + "...";
+}
+
+std::string stringField(const json& body, const char* key, bool required) {
+  auto it = body.find(key);
+  if (it == body.end() || it->is_null()) {
+    if (required) throw ApiError(400, "missing_field", std::string(key) + " is required", key);
+    return "";
+  }
+  if (!it->is_string()) throw ApiError(400, "invalid_field", std::string(key) + " must be a string", key);
+  std::string value = it->get<std::string>();
+  checkName(value, key);
+  return value;
+}
+
+// A finite number in [lo, hi], or 400 naming `field`.
+double boundedNumber(const json& v, const std::string& field, double lo, double hi, const std::string& what) {
+  if (!v.is_number()) throw ApiError(400, "invalid_field", field + " must be " + what, field);
+  const double d = v.get<double>();
+  if (!std::isfinite(d) || d < lo || d > hi) throw ApiError(400, "invalid_field", field + " must be " + what, field);
+  return d;
+}
+
+// Typed by the table, then checked against its range / choices, so an absurd value is refused
+// here with its field rather than deep inside a planner.
+ParamValue paramValue(const ParamInfo& info, const json& value) {
+  ParamValue v = paramFromJson(info, value);
+  switch (info.type) {
+    case ParamType::Bool:
+      paramAsBool(info.key, v);
+      break;
+    case ParamType::Int:
+      paramAsInt(info, v);
+      break;
+    case ParamType::Real:
+      paramAsReal(info, v);
+      break;
+    case ParamType::Choice:
+      paramAsChoice(info, v);
+      break;
+    case ParamType::RealList:
+      paramAsRealList(info.key, v);
+      break;
+  }
+  return v;
+}
+
+}  // namespace
+
+MissionRequest parseMissionRequest(const json& body, const PlannerRegistry& planners) {
+  if (!body.is_object()) throw ApiError(400, "bad_json", "the request body must be a JSON object", "body");
+  static const std::vector<std::string> known{"map", "pdm", "planner", "rovers", "params", "pace", "name"};
+  for (const auto& item : body.items())
+    if (std::find(known.begin(), known.end(), item.key()) == known.end())
+      throw ApiError(400, "unknown_field", "unknown field '" + shown(item.key()) + "'", shown(item.key()));
+  MissionRequest req;
+  req.mapId = stringField(body, "map", true);
+  req.pdmId = stringField(body, "pdm", false);
+  req.planner = stringField(body, "planner", true);
+  req.name = stringField(body, "name", false);
+  const Planner* planner = nullptr;
+  try {
+    planner = &planners.get(req.planner);
+  } catch (const Error& e) {
+    throw ApiError(400, "unknown_planner", e.what(), "planner");
+  }
+
+  // Parameters: typed by the planner's own table; unknown keys rejected.
+  if (auto params = body.find("params"); params != body.end() && !params->is_null()) {
+    if (!params->is_object()) throw ApiError(400, "invalid_field", "params must be an object", "params");
+    const auto infos = planner->params();
+    for (const auto& item : params->items()) {
+      // Not a structured binding: clang 14 (the fuzz build) cannot capture one in a lambda.
+      const std::string& key = item.key();
+      auto info = std::find_if(infos.begin(), infos.end(), [&](const ParamInfo& i) { return i.key == key; });
+      if (info == infos.end())
+        throw ApiError(400, "unknown_parameter",
+                       "unknown parameter '" + shown(key) + "' for planner " + req.planner,
+                       "params." + shown(key));
+      try {
+        req.params[key] = paramValue(*info, item.value());
+      } catch (const Error& e) {
+        throw ApiError(400, errorCodeName(e.code()), e.what(), "params." + key);
+      }
+    }
+  }
+
+  // Rovers in the local frame (metres from the lower-left corner), heading in degrees.
+  auto rovers = body.find("rovers");
+  if (rovers == body.end() || !rovers->is_array() || rovers->empty() || rovers->size() > kMaxRovers)
+    throw ApiError(400, "invalid_field",
+                   "rovers must be an array of 1 to " + std::to_string(kMaxRovers) + " {x, y, heading}", "rovers");
+  for (std::size_t k = 0; k < rovers->size(); ++k) {
+    const json& r = (*rovers)[k];
+    const std::string f = "rovers[" + std::to_string(k) + "]";
+    if (!r.is_object()) throw ApiError(400, "invalid_field", f + " must be an object {x, y, heading}", f);
+    for (const char* key : {"x", "y"})
+      if (!r.contains(key))
+        throw ApiError(400, "invalid_field", f + "." + key + " must be a number", f + "." + key);
+    const std::string coord = "a finite number of metres with |value| <= 1e9";
+    const double x = boundedNumber(r["x"], f + ".x", -kMaxCoordinateM, kMaxCoordinateM, coord);
+    const double y = boundedNumber(r["y"], f + ".y", -kMaxCoordinateM, kMaxCoordinateM, coord);
+    double heading = 0;
+    if (r.contains("heading") && !r["heading"].is_null())
+      heading = boundedNumber(r["heading"], f + ".heading", -kMaxHeadingDeg, kMaxHeadingDeg,
+                              "a number of degrees in [-360, 360]");
+    req.rovers.push_back({{x, y}, heading * std::numbers::pi / 180.0});
+  }
+  if (auto pace = body.find("pace"); pace != body.end())
+    req.pace = boundedNumber(*pace, "pace", 0, kMaxPace, "a number of steps per second in [0, 1e6]");
+
+  req.spec = body;
+  req.spec.erase("map");
+  req.spec.erase("pdm");
+  req.spec.erase("planner");
+  return req;
+}
+
+}  // namespace rover::json

@@ -1,0 +1,37 @@
+#pragma once
+// A mission request read from its JSON body into a typed struct (DESIGN.md: "validated at the edge
+// into a typed struct"). Pure: it sees the planner registry's parameter tables, never the database
+// or a map, so a fuzzer can drive it. What needs the map (rovers inside it, the PDM's map) is
+// checked afterwards by the route and the planner's own validate().
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "core/planning/planner.hpp"
+
+namespace rover::json {
+
+struct MissionRequest {
+  std::string mapId;
+  std::string pdmId;  // "" when none
+  std::string planner;
+  std::string name;   // "" when none
+  ParamSet params;    // every value typed and inside its table range
+  std::vector<RoverStart> rovers;  // local metres; heading in radians
+  std::optional<double> pace;      // steps per second
+  nlohmann::json spec;             // the body as accepted, without map, pdm and planner
+};
+
+// Limits stated in README (API): at most kMaxRovers rovers; x and y finite with |v| <= 1e9 m (the
+// planner then checks they lie on the map); heading in [-360, 360] degrees; pace in [0, 1e6].
+inline constexpr std::size_t kMaxRovers = 64;
+inline constexpr double kMaxCoordinateM = 1e9;
+inline constexpr double kMaxHeadingDeg = 360;
+inline constexpr double kMaxPace = 1e6;
+
+// Throws http::ApiError (400) naming the field: "map", "planner", "params.KEY", "rovers[2].x", ...
+MissionRequest parseMissionRequest(const nlohmann::json& body, const PlannerRegistry& planners);
+
+}  // namespace rover::json
