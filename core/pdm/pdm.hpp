@@ -38,13 +38,14 @@ double density(const std::vector<Gaussian>& components, const Eigen::Vector2d& x
 // Probability mass per cell of the mixture (paper 001 eq. 5). Each component is integrated over
 // ±6σ around its mean by sampling every cell on an s×s sub-grid (s grows when σ is small against
 // the cell, so narrow peaks are not missed between cell centres). Only cells that meet the
-// component's kWindowSigmas-σ ellipse (Mahalanobis distance) are visited, so a long thin
+// component's kWindowSigmas-σ (10σ) ellipse (Mahalanobis distance) are visited, so a long thin
 // component costs its own area, not its bounding box: the work is at most
 // Σ_components (cells in its window) × s², with s <= 16. The samples left out have
-// exp(-q/2) <= exp(-32) ≈ 1e-14 of the component's peak. Cells with valid[i] == 0 (nodata) get 0;
+// exp(-q/2) <= exp(-50) ≈ 2e-22 of the component's peak; for a round component the ±6σ box lies
+// inside the 10σ circle, so nothing changes. Cells with valid[i] == 0 (nodata) get 0;
 // `valid` empty = all. Validates against `g` (above). Throws InvalidInput if no mass falls on
 // valid cells of the map.
-inline constexpr double kWindowSigmas = 8.0;
+inline constexpr double kWindowSigmas = 10.0;
 Raster<float> discretise(const std::vector<Gaussian>& components, const GridGeometry& g,
                          const std::vector<std::uint8_t>& valid = {});
 
