@@ -43,14 +43,16 @@ int jsonNestingDepth(std::string_view text, int stopAt) {
 }
 
 nlohmann::json parseJsonLimited(std::string_view text, const JsonLimits& limits, bool requireObject) {
+  // Depth first (one cheap pass over what the HTTP layer already holds, itself bounded), so a
+  // nesting attack is named as such even when it is also too large.
+  if (jsonNestingDepth(text, limits.maxDepth) > limits.maxDepth)
+    throw ApiError(400, "too_deep",
+                   "the JSON body nests arrays/objects deeper than " + std::to_string(limits.maxDepth) + " levels",
+                   "body");
   if (text.size() > limits.maxBytes)
     throw ApiError(413, "payload_too_large",
                    "the JSON body is " + std::to_string(text.size()) + " bytes, over the limit of " +
                        std::to_string(limits.maxBytes),
-                   "body");
-  if (jsonNestingDepth(text, limits.maxDepth) > limits.maxDepth)
-    throw ApiError(400, "too_deep",
-                   "the JSON body nests arrays/objects deeper than " + std::to_string(limits.maxDepth) + " levels",
                    "body");
   nlohmann::json j = nlohmann::json::parse(text.begin(), text.end(), nullptr, false);
   if (j.is_discarded()) throw ApiError(400, "bad_json", "the request body is not valid JSON", "body");

@@ -28,7 +28,7 @@ inline constexpr JsonLimits kPdmJsonLimits{std::size_t{1} << 20, 64};
 int jsonNestingDepth(std::string_view text, int stopAt);
 
 // Parses a request body under `limits`. Throws http::ApiError with field "body":
-// 413 payload_too_large, 400 too_deep, 400 bad_json (not JSON, or not an object when
+// 400 too_deep, 413 payload_too_large, 400 bad_json (not JSON, or not an object when
 // `requireObject`).
 nlohmann::json parseJsonLimited(std::string_view text, const JsonLimits& limits, bool requireObject = true);
 
