@@ -137,7 +137,7 @@ LoadedDem loadDem(const std::string& path, const LoadOptions& opt) {
       }
     }
   }
-  if (!refusal.empty()) fail(shown, refusal);
+  if (!refusal.empty()) throw Error(ErrorCode::InvalidInput, "file", refusal);  // names the file itself
   if (!src) fail(shown, unreadableReason(path, sandbox != nullptr));
   if (GDALGetRasterCount(src.get()) < 1) fail(shown, "the file holds no raster band");
 

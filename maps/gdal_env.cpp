@@ -11,6 +11,8 @@
 #include <ogr_srs_api.h>
 
 #include <algorithm>
+#include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <map>
@@ -120,6 +122,7 @@ std::string baseName(const std::string& p) {
 }
 
 void noteRefusedFile(UploadSandbox::State& s, const char* path) {
+  if (std::getenv("ROVER_SANDBOX_DEBUG")) std::fprintf(stderr, "sandbox refused: '%s'\n", path ? path : "(null)");
   std::string name = baseName(path ? path : "");
   if (name.empty()) name = "?";
   // GDAL probes case variants (passwd, PASSWD): name each file once.
@@ -205,6 +208,7 @@ class GuardedFilesystem final : public VSIFilesystemHandler {
     }
     UploadSandbox::State* s = tlsSandbox;
     if (!s) return true;
+    if (!path || !*path) return false;  // GDAL probes "" (a warped VRT's name): nothing to note
     bool ok = false;
     if (reach_ == Reach::LocalFiles) {
       const std::string c = canonicalLocal(path ? path : "");
@@ -270,9 +274,21 @@ struct OriginalOpen {
 // Filled once in ensureGdal, read-only afterwards.
 std::unordered_map<GDALDriver*, OriginalOpen>* kOriginalOpen = new std::unordered_map<GDALDriver*, OriginalOpen>();
 
+// Drivers that fetch from the network by themselves (some with their own HTTP code): refused in
+// every open, not only an upload's.
+bool networkDriver(const std::string& name) {
+  static const std::vector<std::string> kNetworkDrivers{
+      "WMS", "WMTS", "WCS", "HTTP", "DAAS", "EEDA", "EEDAI", "PLMOSAIC", "PLSCENES", "OGCAPI",
+      "STACTA", "STACIT", "NGW", "WFS", "OAPIF", "CSW", "Elasticsearch", "CouchDB", "Carto",
+      "AmigoCloud", "GNMServer", "TileDB"};
+  return std::find(kNetworkDrivers.begin(), kNetworkDrivers.end(), name) != kNetworkDrivers.end();
+}
+
 // Stands in for the open function of every driver not allowed for uploads: refuses while a
-// sandbox is live on the thread (so a dataset nested in an allowed one cannot use it either).
+// sandbox is live on the thread (so a dataset nested in an allowed one cannot use it either),
+// and always for a network driver.
 GDALDataset* gatedOpen(GDALDriver* driver, GDALOpenInfo* info) {
+  if (networkDriver(driver->GetDescription())) return nullptr;
   if (UploadSandbox::State* s = tlsSandbox) {
     if (driver->pfnIdentify && driver->pfnIdentify(info) > 0) {
       std::string name = driver->GetDescription();
