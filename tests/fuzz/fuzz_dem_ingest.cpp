@@ -12,6 +12,8 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <cstdio>
+#include <cstdlib>
 #include <string>
 #include <unistd.h>
 
@@ -69,11 +71,16 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     rover::maps::LoadOptions o;
     o.upload = &sandbox;
     o.maxCells = 1 << 20;  // the pixel budget, checked before anything is read
+    // ROVER_FUZZ_VERBOSE=1 prints each outcome (to check that the seeds load).
+    static const bool verbose = std::getenv("ROVER_FUZZ_VERBOSE") != nullptr;
     try {
       rover::maps::LoadedDem d = rover::maps::loadDem(path, o);
-      (void)d;
-    } catch (const rover::Error&) {
+      if (verbose)
+        std::fprintf(stderr, "loaded %s: %s %d x %d\n", main.c_str(), d.info.driver.c_str(),
+                     d.dem.geometry().rows, d.dem.geometry().cols);
+    } catch (const rover::Error& e) {
       // a refused or unreadable input: the expected outcome for most bytes
+      if (verbose) std::fprintf(stderr, "refused %s: %s\n", main.c_str(), e.what());
     }
   }
   VSIRmdirRecursive(root.c_str());
