@@ -303,10 +303,14 @@ std::shared_ptr<const terrain::Dem> MapCatalog::demAtCell(const std::string& id,
   o.cellSize = cellSize;
   o.maxCells = maxCells_;
   std::shared_ptr<const terrain::Dem> dem;
+  const std::string stored = (fs::path(dir_.mapDir(id)) / "dem.tif").string();
   try {
-    dem = std::make_shared<terrain::Dem>(maps::loadDem((fs::path(dir_.mapDir(id)) / "dem.tif").string(), o).dem);
+    dem = std::make_shared<terrain::Dem>(maps::loadDem(stored, o).dem);
   } catch (const Error& e) {
-    throw ApiError(400, "invalid_parameter", std::string("coverage_cell: ") + e.what(), "params.coverage_cell");
+    // Name the map, never the file the server keeps it in.
+    std::string msg = e.what();
+    if (msg.rfind(stored, 0) == 0) msg = "the map" + msg.substr(stored.size());
+    throw ApiError(400, "invalid_parameter", "coverage_cell: " + maps::withoutPaths(msg), "params.coverage_cell");
   }
   std::lock_guard lock(mutex_);
   cellCache_.emplace_front(key, dem);

@@ -317,3 +317,18 @@ TEST_CASE("layer cache: least recently used files go past the cap; each file is 
   cache.get(file("d.png"), make);
   CHECK(fs::exists(file("d.png")));
 }
+
+TEST_CASE("hostile upload: a coverage cell the map cannot hold is refused without the stored file's path") {
+  Scratch tmp;
+  const std::string data = tmp.str("data");
+  Server s(data);
+  const std::string map = request(s.port(), "GET", "/api/maps").json()[0]["id"];
+  const json mission = {{"map", map}, {"planner", "coverage"}, {"rovers", {{{"x", 10}, {"y", 10}, {"heading", 0}}}},
+                        {"params", {{"coverage_cell", 0.001}}}};
+  auto r = request(s.port(), "POST", "/api/missions", mission.dump(), "application/json");
+  CHECK(r.status == 400);
+  const std::string msg = r.json()["error"].value("message", "");
+  CHECK_MESSAGE(msg.find("the map") != std::string::npos, msg);
+  CHECK_MESSAGE(msg.find(data) == std::string::npos, msg);
+  CHECK_MESSAGE(msg.find("dem.tif") == std::string::npos, msg);
+}
