@@ -8,7 +8,9 @@ namespace rover::api {
 
 namespace fs = std::filesystem;
 
-LayerCache::LayerCache(const std::string& mapsRoot, std::uint64_t capBytes) : cap_(capBytes) {
+LayerCache::LayerCache(const std::string& mapsRoot, std::uint64_t capBytes,
+                       const std::function<bool(const std::string&)>& stale)
+    : cap_(capBytes) {
   std::vector<std::pair<fs::file_time_type, std::pair<std::string, std::uint64_t>>> found;
   std::error_code ec;
   for (const auto& map : fs::directory_iterator(mapsRoot, ec)) {
@@ -16,6 +18,10 @@ LayerCache::LayerCache(const std::string& mapsRoot, std::uint64_t capBytes) : ca
     for (const auto& f : fs::directory_iterator(map.path() / "layers", ec2)) {
       std::error_code ec3;
       if (!f.is_regular_file(ec3)) continue;
+      if (stale && stale(f.path().filename().string())) {
+        fs::remove(f.path(), ec3);
+        continue;
+      }
       found.push_back({f.last_write_time(ec3), {f.path().string(), f.file_size(ec3)}});
     }
   }

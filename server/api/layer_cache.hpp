@@ -15,8 +15,10 @@ namespace rover::api {
 
 class LayerCache {
  public:
-  // Counts the layer files already under mapsRoot/*/layers/ (oldest first by modification time).
-  LayerCache(const std::string& mapsRoot, std::uint64_t capBytes);
+  // Counts the layer files already under mapsRoot/*/layers/ (oldest first by modification time),
+  // deleting those `stale` says no request can name any more (an older naming scheme).
+  LayerCache(const std::string& mapsRoot, std::uint64_t capBytes,
+             const std::function<bool(const std::string& fileName)>& stale = {});
 
   // `path`, made by `make(path)` (which writes it atomically) unless it is there already. A file
   // larger than the cap on its own is still kept until the next one arrives.

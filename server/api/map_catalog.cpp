@@ -49,6 +49,19 @@ int overviewSide(int max, int nativeSide) {
   return 0;
 }
 
+// A PNG overview named by a size off the ladder (LAYER-N.png, pdm-ID-N.png): written before the
+// ladder existed, never asked for again.
+bool offLadderOverview(const std::string& file) {
+  if (file.size() < 5 || file.compare(file.size() - 4, 4, ".png") != 0) return false;
+  const std::string stem = file.substr(0, file.size() - 4);
+  const auto dashes = std::count(stem.begin(), stem.end(), '-');
+  if (dashes != (stem.rfind("pdm-", 0) == 0 ? 2 : 1)) return false;
+  const std::string n = stem.substr(stem.rfind('-') + 1);
+  if (n.empty() || n.size() > 6 || !std::all_of(n.begin(), n.end(), [](unsigned char c) { return std::isdigit(c); }))
+    return false;
+  return std::find(std::begin(kOverviewLadder), std::end(kOverviewLadder), std::stoi(n)) == std::end(kOverviewLadder);
+}
+
 constexpr std::size_t kMaxArchiveMembers = 100;  // files a zip or tar upload may hold
 
 // The file GDAL should open among the ones given (all under the live sandbox): a PDS3 label
@@ -130,7 +143,7 @@ nlohmann::json metaFor(const maps::LoadedDem& d, const terrain::Traversability& 
 MapCatalog::MapCatalog(store::Database& db, store::DataDir& dir, std::int64_t maxCells,
                        std::uint64_t layerCacheBytes)
     : db_(db), dir_(dir), maxCells_(maxCells),
-      layers_(fs::path(dir.mapDir("x")).parent_path().string(), layerCacheBytes) {}
+      layers_(fs::path(dir.mapDir("x")).parent_path().string(), layerCacheBytes, offLadderOverview) {}
 
 store::MapRecord MapCatalog::importDem(const std::vector<UploadedFile>& files, const std::string& name,
                                        double cellSize) {

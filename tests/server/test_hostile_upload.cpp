@@ -273,6 +273,14 @@ TEST_CASE("hostile upload: 40 distinct ?max= values make at most the ladder's fi
   // 37..1480: rungs 256 and 512, and the full 1000² rendering for anything above 512.
   CHECK(files == std::vector<std::string>{"elevation-256.png", "elevation-512.png", "elevation.png"});
   MESSAGE("40 distinct max values on a 1000² map: " << files.size() << " files, " << bytes << " bytes");
+  // Overviews of the old naming (any ?max= had its own file) are deleted at the next start.
+  const fs::path layers = fs::path(s.dir.mapDir(id)) / "layers";
+  std::ofstream((layers / "elevation-1480.png").string()) << "stale";
+  std::ofstream((layers / "pdm-0123456789abcdef-777.png").string()) << "stale";
+  { api::MapCatalog restarted(s.db, s.dir); }
+  CHECK_FALSE(fs::exists(layers / "elevation-1480.png"));
+  CHECK_FALSE(fs::exists(layers / "pdm-0123456789abcdef-777.png"));
+  CHECK(fs::exists(layers / "elevation-512.png"));
 
   // Two GETs of the same new layer at once both succeed; one file results.
   std::vector<std::thread> gets;
@@ -309,9 +317,11 @@ TEST_CASE("layer cache: least recently used files go past the cap; each file is 
   CHECK_FALSE(fs::exists(file("b.png")));
   CHECK(fs::exists(file("c.png")));
   CHECK(cache.bytes() == 2000);
-  // A new cache over the same folder counts what is there.
-  api::LayerCache again(maps.string(), 2500);
+  // A new cache over the same folder counts what is there, less what `stale` names.
+  std::ofstream((maps / "m1" / "layers" / "elevation-3013.png").string()) << std::string(10, 'x');
+  api::LayerCache again(maps.string(), 2500, [](const std::string& f) { return f == "elevation-3013.png"; });
   CHECK(again.bytes() == 2000);
+  CHECK_FALSE(fs::exists(maps / "m1" / "layers" / "elevation-3013.png"));
   // A failure in making leaves nothing behind and the next request tries again.
   CHECK_THROWS(cache.get(file("d.png"), [](const std::string&) { throw std::runtime_error("render failed"); }));
   cache.get(file("d.png"), make);
