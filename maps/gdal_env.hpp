@@ -30,7 +30,8 @@ std::string formatInWords(const std::string& driver);
 // canonical paths, so symlinks and ".." cannot leave it), no virtual file system but /vsizip/ and
 // /vsitar/ (whose archive must itself lie inside) and, for a /vsimem/ root, that folder; and no
 // driver outside uploadDrivers() opens anything, also a dataset nested in an allowed one (an
-// ISIS3 cube whose core is a VRT). Scopes do not nest.
+// ISIS3 cube whose core is a VRT). Scopes do not nest. ROVER_SANDBOX_DEBUG=1 in the environment
+// prints each refused path to stderr (to see what a format probes).
 class UploadSandbox {
  public:
   explicit UploadSandbox(const std::string& root);
