@@ -32,13 +32,6 @@ std::string gdalMessage() {
   return m.empty() ? "" : " (" + m + ")";
 }
 
-struct DatasetCloser {
-  void operator()(void* ds) const {
-    if (ds) GDALClose(ds);
-  }
-};
-using Dataset = std::unique_ptr<void, DatasetCloser>;
-
 std::string num(double v) {
   std::ostringstream s;
   s.precision(17);
@@ -46,19 +39,56 @@ std::string num(double v) {
   return s.str();
 }
 
+std::string lowerExt(const std::string& path) {
+  std::string e = std::filesystem::path(path).extension().string();
+  std::transform(e.begin(), e.end(), e.begin(), [](unsigned char c) { return std::tolower(c); });
+  return e;
+}
+
+std::string headBytes(const std::string& path, std::size_t n) {
+  VSILFILE* f = VSIFOpenL(path.c_str(), "rb");
+  if (!f) return "";
+  std::string b(n, '\0');
+  b.resize(VSIFReadL(b.data(), 1, n, f));
+  VSIFCloseL(f);
+  return b;
+}
+
+bool isTiff(const std::string& head) {
+  return head.rfind(std::string("II*\0", 4), 0) == 0 || head.rfind(std::string("MM\0*", 4), 0) == 0 ||
+         head.rfind(std::string("II+\0", 4), 0) == 0 || head.rfind(std::string("MM\0+", 4), 0) == 0;
+}
+
+// Why a file did not open, in words: the label a PDS3 .IMG needs, a damaged GeoTIFF, or a format
+// we do not read.
+std::string unreadableReason(const std::string& path, bool upload) {
+  const std::string head = headBytes(path, 64);
+  if (isTiff(head)) return "truncated or corrupt GeoTIFF";
+  const bool attachedLabel = head.find("PDS_VERSION_ID") != std::string::npos ||
+                             head.find("ODL_VERSION_ID") != std::string::npos;
+  if (lowerExt(path) == ".img" && !attachedLabel)
+    return "the label is missing: a PDS3 .IMG needs its .LBL (an ENVI .img its .hdr) — upload both "
+           "files together, or a zip holding both";
+  if (attachedLabel) return "truncated or corrupt PDS3 product (its label or image does not read)";
+  if (upload) return "not a raster format roverplan reads (accepted: " + uploadFormatsInWords() + ")";
+  return "not a raster GDAL can read" + gdalMessage();
+}
+
 // Runs GDAL's warper into a lazy in-memory VRT: nothing is read until RasterIO, so the size can be
 // checked against the budget first.
-Dataset warpToVrt(GDALDatasetH src, const std::vector<std::string>& args, const std::string& path) {
+// `detail` adds GDAL's own message (the command line's files are the user's own; an upload's
+// messages never show GDAL internals).
+Dataset warpToVrt(GDALDatasetH src, const std::vector<std::string>& args, const std::string& path, bool detail) {
   std::vector<char*> argv;
   for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
   argv.push_back(nullptr);
   GDALWarpAppOptions* opts = GDALWarpAppOptionsNew(argv.data(), nullptr);
-  if (!opts) fail(path, "invalid warp options" + gdalMessage());
+  if (!opts) fail(path, "invalid warp options" + (detail ? gdalMessage() : ""));
   int usageError = 0;
   CPLErrorReset();
   GDALDatasetH out = GDALWarp("", nullptr, 1, &src, opts, &usageError);
   GDALWarpAppOptionsFree(opts);
-  if (!out) fail(path, "cannot crop/resample" + gdalMessage());
+  if (!out) fail(path, "cannot crop/resample" + (detail ? gdalMessage() : ""));
   return Dataset(out);
 }
 
@@ -74,40 +104,46 @@ const char* resamplingFor(const std::string& requested, double from, double to) 
 
 LoadedDem loadDem(const std::string& path, const LoadOptions& opt) {
   ensureGdal();
-  std::error_code ec;
-  if (!std::filesystem::exists(path, ec)) fail(path, "no such file");
-  if (std::filesystem::is_regular_file(path, ec) && std::filesystem::file_size(path, ec) == 0)
-    fail(path, "empty file");
+  const UploadSandbox* sandbox = opt.upload;
+  if (sandbox && !sandbox->live()) throw std::logic_error("loadDem: the upload sandbox is not live on this thread");
+  // A user's file is named as uploaded, never by the server's path.
+  const std::string shown = sandbox ? sandbox->uploadName(path) : path;
+  VSIStatBufL st;
+  if (VSIStatL(path.c_str(), &st) != 0) fail(shown, "no such file");
+  if (!VSI_ISDIR(st.st_mode) && st.st_size == 0) fail(shown, "empty file");
   if (!(opt.verticalScale != 0) || !std::isfinite(opt.verticalScale))
-    fail(path, "vertical scale must be a finite non-zero number", "vertical_scale");
+    fail(shown, "vertical scale must be a finite non-zero number", "vertical_scale");
   if (opt.cellSize < 0 || !std::isfinite(opt.cellSize))
-    fail(path, "cell size must be a positive number of metres", "cell");
+    fail(shown, "cell size must be a positive number of metres", "cell");
   const std::vector<std::string> algs{"auto", "near", "average", "bilinear", "cubic"};
   if (std::find(algs.begin(), algs.end(), opt.resampling) == algs.end())
-    fail(path, "resampling must be auto, near, average, bilinear or cubic", "resampling");
+    fail(shown, "resampling must be auto, near, average, bilinear or cubic", "resampling");
 
-  CPLErrorReset();
-  Dataset src(GDALOpenEx(path.c_str(), GDAL_OF_RASTER | GDAL_OF_READONLY, nullptr, nullptr, nullptr));
-  if (!src) {
+  GdalErrorLog errors;  // GDAL's own words stay here; users get ours
+  std::string refusal;
+  auto open = [&](const std::string& p) {
+    CPLErrorReset();
+    if (sandbox) return openUpload(p, *sandbox, refusal);
+    return Dataset(GDALOpenEx(p.c_str(), GDAL_OF_RASTER | GDAL_OF_READONLY, nullptr, nullptr, nullptr));
+  };
+  Dataset src = open(path);
+  if (!src && refusal.empty() && lowerExt(path) == ".img") {
     // A PDS3 product with a detached label: users often pick the .IMG; GDAL opens the .LBL.
-    const std::string ext = std::filesystem::path(path).extension().string();
-    if (ext == ".IMG" || ext == ".img") {
-      for (const char* lbl : {".LBL", ".lbl"}) {
-        auto label = std::filesystem::path(path).replace_extension(lbl);
-        if (std::filesystem::exists(label, ec)) {
-          src.reset(GDALOpenEx(label.c_str(), GDAL_OF_RASTER | GDAL_OF_READONLY, nullptr, nullptr,
-                               nullptr));
-          if (src) break;
-        }
+    for (const char* lbl : {".LBL", ".lbl"}) {
+      const std::string label = std::filesystem::path(path).replace_extension(lbl).string();
+      if (VSIStatL(label.c_str(), &st) == 0) {
+        src = open(label);
+        if (src || !refusal.empty()) break;
       }
     }
   }
-  if (!src) fail(path, "not a raster GDAL can read" + gdalMessage());
-  if (GDALGetRasterCount(src.get()) < 1) fail(path, "the file holds no raster band");
+  if (!refusal.empty()) throw Error(ErrorCode::InvalidInput, "file", refusal);  // names the file itself
+  if (!src) fail(shown, unreadableReason(path, sandbox != nullptr));
+  if (GDALGetRasterCount(src.get()) < 1) fail(shown, "the file holds no raster band");
 
   LoadedDem out;
   DemInfo& info = out.info;
-  info.path = path;
+  info.path = shown;
   info.driver = GDALGetDriverShortName(GDALGetDatasetDriver(src.get()));
   info.sourceCols = GDALGetRasterXSize(src.get());
   info.sourceRows = GDALGetRasterYSize(src.get());
@@ -139,8 +175,14 @@ LoadedDem loadDem(const std::string& path, const LoadOptions& opt) {
   const bool southUp = gt[5] > 0;
   Dataset warped;
   GDALDatasetH grid = src.get();
+  // An upload's own grid is bounded too, before the warper reads it (a tiny file may declare a
+  // huge sparse raster).
+  if (sandbox && static_cast<std::int64_t>(info.sourceCols) * info.sourceRows > 4 * opt.maxCells)
+    fail(shown, "the file's raster of " + std::to_string(info.sourceRows) + " x " + std::to_string(info.sourceCols) +
+                    " cells exceeds the source budget of " + std::to_string(4 * opt.maxCells) + " cells",
+         "max_cells");
   if (opt.cellSize > 0 || opt.crop || rotated || southUp) {
-    if (!info.georeferenced) fail(path, "cropping or resampling needs a georeferenced file", "crop");
+    if (!info.georeferenced) fail(shown, "cropping or resampling needs a georeferenced file", "crop");
     std::vector<std::string> args{"-of", "VRT", "-ot", "Float32", "-dstnodata", "nan",
                                   "-wo", "NUM_THREADS=ALL_CPUS"};
     if (info.nodata) args.insert(args.end(), {"-srcnodata", num(*info.nodata)});
@@ -148,18 +190,18 @@ LoadedDem loadDem(const std::string& path, const LoadOptions& opt) {
     if (opt.crop) {
       const auto& c = *opt.crop;
       if (!(c[2] > 0 && c[3] > 0) || !std::isfinite(c[0] + c[1] + c[2] + c[3]))
-        fail(path, "crop width and height must be positive", "crop");
+        fail(shown, "crop width and height must be positive", "crop");
       if (!rotated) {
         double x0 = gt[0], x1 = gt[0] + info.sourceCols * gt[1];
         double y0 = gt[3] + info.sourceRows * gt[5], y1 = gt[3];
         if (southUp) std::swap(y0, y1);
         if (c[0] >= x1 || c[0] + c[2] <= x0 || c[1] >= y1 || c[1] + c[3] <= y0)
-          fail(path, "the crop window lies outside the raster", "crop");
+          fail(shown, "the crop window lies outside the raster", "crop");
       }
       args.insert(args.end(), {"-te", num(c[0]), num(c[1]), num(c[0] + c[2]), num(c[1] + c[3])});
     }
     if (opt.cellSize > 0) {
-      double nativeMetres = nativeRes;
+      double nativeMetres = nativeRes, metresPerUnitY = 1.0;
       if (info.geographic) {
         // Resample in metres: an equidistant cylindrical projection centred on the raster, on the
         // file's own ellipsoid or sphere.
@@ -180,9 +222,21 @@ LoadedDem loadDem(const std::string& path, const LoadOptions& opt) {
           CPLFree(wkt);
         }
         nativeMetres = nativeRes * unit * a * std::cos(lat * unit);
+        metresPerUnitY = unit * a;
       } else if (srs) {
         nativeMetres = nativeRes * OSRGetLinearUnits(srs, nullptr);
+        metresPerUnitY = OSRGetLinearUnits(srs, nullptr);
       }
+      // A cell that does not fit twice across the map leaves no grid: say so in metres.
+      const double metresPerUnitX = nativeRes > 0 ? nativeMetres / nativeRes : 1.0;
+      const double widthM = (opt.crop ? (*opt.crop)[2] : info.sourceCols * std::fabs(gt[1])) * metresPerUnitX;
+      const double heightM = (opt.crop ? (*opt.crop)[3] : info.sourceRows * std::fabs(gt[5])) * metresPerUnitY;
+      if (!rotated && opt.cellSize * 2 > std::min(widthM, heightM))
+        fail(shown, "a cell size of " + num(opt.cellSize) + " m is larger than the map allows: the map is " +
+                        num(std::round(widthM * 10) / 10) + " x " + num(std::round(heightM * 10) / 10) +
+                        " m, so a cell can be at most " + num(std::floor(std::min(widthM, heightM) / 2 * 100) / 100) +
+                        " m (2 x 2 cells)",
+             "cell");
       info.resampling = resamplingFor(opt.resampling, nativeMetres, opt.cellSize);
       args.insert(args.end(), {"-tr", num(opt.cellSize), num(opt.cellSize), "-r", info.resampling});
     } else if (!rotated) {
@@ -192,7 +246,7 @@ LoadedDem loadDem(const std::string& path, const LoadOptions& opt) {
       info.resampling = opt.resampling == "auto" ? "bilinear" : opt.resampling;
       args.insert(args.end(), {"-r", info.resampling});
     }
-    warped = warpToVrt(src.get(), args, path);
+    warped = warpToVrt(src.get(), args, shown, !sandbox);
     grid = warped.get();
     GDALGetGeoTransform(grid, gt);
     srs = GDALGetSpatialRef(grid);
@@ -200,10 +254,10 @@ LoadedDem loadDem(const std::string& path, const LoadOptions& opt) {
 
   const int cols = GDALGetRasterXSize(grid), rows = GDALGetRasterYSize(grid);
   if (static_cast<std::int64_t>(cols) * rows > opt.maxCells)
-    fail(path, "raster of " + std::to_string(rows) + " x " + std::to_string(cols) +
+    fail(shown, "raster of " + std::to_string(rows) + " x " + std::to_string(cols) +
                    " cells exceeds the cell budget of " + std::to_string(opt.maxCells),
          "max_cells");
-  if (rows < 2 || cols < 2) fail(path, "raster is smaller than 2 x 2 cells");
+  if (rows < 2 || cols < 2) fail(shown, "raster is smaller than 2 x 2 cells");
 
   // Cell spacing in metres.
   terrain::Dem& dem = out.dem;
@@ -261,7 +315,8 @@ LoadedDem loadDem(const std::string& path, const LoadOptions& opt) {
   CPLErrorReset();
   if (GDALRasterIO(GDALGetRasterBand(grid, 1), GF_Read, 0, 0, cols, rows, dem.z.values.data(), cols,
                    rows, GDT_Float32, 0, 0) != CE_None)
-    fail(path, "truncated or unreadable raster data" + gdalMessage());
+    fail(shown, "truncated or corrupt " + formatInWords(info.driver) + " (its data does not read)" +
+                    (sandbox ? "" : gdalMessage()));
 
   const bool compareNodata = info.nodata && !warped;
   const float nodataF = info.nodata ? static_cast<float>(*info.nodata) : 0.0f;
@@ -275,13 +330,13 @@ LoadedDem loadDem(const std::string& path, const LoadOptions& opt) {
       ++info.nodataCells;
       continue;
     }
-    if (std::isinf(v)) fail(path, "the raster holds infinite values");
+    if (std::isinf(v)) fail(shown, "the raster holds infinite values");
     double h = v * k + o;
     z[i] = static_cast<float>(h);
     lo = std::min(lo, h);
     hi = std::max(hi, h);
   }
-  if (info.nodataCells == static_cast<std::int64_t>(rows) * cols) fail(path, "every cell is nodata");
+  if (info.nodataCells == static_cast<std::int64_t>(rows) * cols) fail(shown, "every cell is nodata");
   info.minHeight = lo;
   info.maxHeight = hi;
 

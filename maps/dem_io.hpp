@@ -13,6 +13,8 @@
 
 namespace rover::maps {
 
+class UploadSandbox;
+
 struct LoadOptions {
   double cellSize = 0;  // metres; 0 = the file's own grid
   // Window in the file's CRS units: lower-left X0, Y0, width W, height H.
@@ -20,6 +22,10 @@ struct LoadOptions {
   double verticalScale = 1.0;                // multiplies heights after the file's scale/offset
   std::int64_t maxCells = 200'000'000;       // refused before anything is allocated
   std::string resampling = "auto";           // auto | near | average | bilinear | cubic
+  // Set for a user's file (an upload): opened through openUpload() under this sandbox, which
+  // must be live on the calling thread for the whole call; its own grid may hold at most
+  // 4 × maxCells cells; messages name files as uploaded and carry no GDAL internals.
+  const UploadSandbox* upload = nullptr;
 };
 
 struct DemInfo {
@@ -42,8 +48,10 @@ struct LoadedDem {
 };
 
 // Throws rover::Error (InvalidInput, field "file") with a message "PATH: reason" for a missing,
-// empty, truncated or non-raster file, an over-budget size (field "max_cells"), all-nodata,
-// infinite values, or a crop outside the raster (field "crop").
+// empty, truncated ("truncated or corrupt GeoTIFF") or non-raster file, a PDS3 .IMG without its
+// label, an upload refused by the sandbox (a VRT, a file outside the upload), an over-budget size
+// (field "max_cells"), all-nodata, infinite values, a crop outside the raster (field "crop") or a
+// cell size the map cannot hold twice (field "cell"). PATH may be a /vsizip/ or /vsitar/ member.
 LoadedDem loadDem(const std::string& path, const LoadOptions& options = {});
 
 // GeoTIFF writers, atomic (temporary file + rename). Float layers: NaN written as nodata -9999.

@@ -32,37 +32,74 @@ std::string safeName(const std::string& name, const std::string& fallback) {
   return out;
 }
 
-bool opensAsRaster(const std::string& path) {
-  maps::ensureGdal();
-  GDALDatasetH ds = GDALOpenEx(path.c_str(), GDAL_OF_RASTER | GDAL_OF_READONLY, nullptr, nullptr, nullptr);
-  if (!ds) return false;
-  bool ok = GDALGetRasterCount(ds) > 0;
-  GDALClose(ds);
-  return ok;
-}
-
 std::string lower(std::string s) {
   std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return std::tolower(c); });
   return s;
 }
 
-// The file GDAL should open among the ones given: a PDS3 label first, else the first raster.
-std::string pickRaster(const std::vector<std::string>& candidates) {
+// PNG overviews come in a fixed ladder of sizes: ?max= rounds up to the next rung, and a rung at
+// least the map's own size is the full-size rendering, so a layer has at most 6 PNG files.
+constexpr int kOverviewLadder[] = {256, 512, 1024, 2048, 4096};
+
+// The longest side of the overview for ?max= (0 = full size).
+int overviewSide(int max, int nativeSide) {
+  if (max <= 0) return 0;
+  for (int rung : kOverviewLadder)
+    if (max <= rung) return rung >= nativeSide ? 0 : rung;
+  return 0;
+}
+
+// A PNG overview named by a size off the ladder (LAYER-N.png, pdm-ID-N.png): written before the
+// ladder existed, never asked for again.
+bool offLadderOverview(const std::string& file) {
+  if (file.size() < 5 || file.compare(file.size() - 4, 4, ".png") != 0) return false;
+  const std::string stem = file.substr(0, file.size() - 4);
+  const auto dashes = std::count(stem.begin(), stem.end(), '-');
+  if (dashes != (stem.rfind("pdm-", 0) == 0 ? 2 : 1)) return false;
+  const std::string n = stem.substr(stem.rfind('-') + 1);
+  if (n.empty() || n.size() > 6 || !std::all_of(n.begin(), n.end(), [](unsigned char c) { return std::isdigit(c); }))
+    return false;
+  return std::find(std::begin(kOverviewLadder), std::end(kOverviewLadder), std::stoi(n)) == std::end(kOverviewLadder);
+}
+
+constexpr std::size_t kMaxArchiveMembers = 100;  // files a zip or tar upload may hold
+
+// The file GDAL should open among the ones given (all under the live sandbox): a PDS3 label
+// first, then any raster, sidecars last (a PDS4 .xml label). A file refused for what it is or
+// where it reads (a VRT, a label pointing outside the upload) refuses the whole upload.
+std::string pickRaster(const std::vector<std::string>& candidates, const maps::UploadSandbox& sandbox) {
+  auto opens = [&](const std::string& c) {
+    std::string refusal;
+    maps::Dataset ds = maps::openUpload(c, sandbox, refusal);
+    if (!refusal.empty()) throw ApiError(400, "refused_file", refusal, "file");
+    return ds && GDALGetRasterCount(ds.get()) > 0;
+  };
+  auto ext = [](const std::string& c) { return lower(fs::path(c).extension().string()); };
   for (const auto& c : candidates)
-    if (lower(fs::path(c).extension().string()) == ".lbl" && opensAsRaster(c)) return c;
+    if (ext(c) == ".lbl" && opens(c)) return c;
   for (const auto& c : candidates) {
-    std::string ext = lower(fs::path(c).extension().string());
-    if (ext == ".hdr" || ext == ".xml" || ext == ".aux" || ext == ".txt" || ext == ".prj") continue;
-    if (opensAsRaster(c)) return c;
+    const std::string e = ext(c);
+    if (e == ".hdr" || e == ".xml" || e == ".aux" || e == ".txt" || e == ".prj" || e == ".lbl") continue;
+    if (opens(c)) return c;
   }
   for (const auto& c : candidates)  // PDS4 (.xml labels) and anything else GDAL opens
-    if (opensAsRaster(c)) return c;
+    if (opens(c)) return c;
   return "";
 }
 
-std::vector<std::string> zipMembers(const std::string& zipPath) {
+// "/vsizip/" or "/vsitar/" for an archive upload, "" otherwise.
+std::string archivePrefix(const std::string& fname) {
+  const std::string n = lower(fname);
+  auto ends = [&](const std::string& e) { return n.size() > e.size() && n.compare(n.size() - e.size(), e.size(), e) == 0; };
+  if (ends(".zip")) return "/vsizip/";
+  if (ends(".tar") || ends(".tgz") || ends(".tar.gz")) return "/vsitar/";
+  return "";
+}
+
+std::vector<std::string> archiveMembers(const std::string& prefix, const std::string& archivePath,
+                                        const std::string& shownName) {
   std::vector<std::string> out;
-  const std::string root = "/vsizip/" + zipPath;
+  const std::string root = prefix + archivePath;
   char** list = VSIReadDirRecursive(root.c_str());
   for (char** p = list; p && *p; ++p) {
     std::string member = root + "/" + *p;
@@ -70,6 +107,10 @@ std::vector<std::string> zipMembers(const std::string& zipPath) {
     if (VSIStatL(member.c_str(), &st) == 0 && !VSI_ISDIR(st.st_mode)) out.push_back(member);
   }
   CSLDestroy(list);
+  if (out.size() > kMaxArchiveMembers)
+    throw ApiError(400, "invalid_dem", shownName + ": the archive holds " + std::to_string(out.size()) +
+                   " files, more than the " + std::to_string(kMaxArchiveMembers) + " an upload may hold", "file");
+  if (out.empty()) throw ApiError(400, "invalid_dem", shownName + ": not a readable archive, or an empty one", "file");
   std::sort(out.begin(), out.end());
   return out;
 }
@@ -99,8 +140,10 @@ nlohmann::json metaFor(const maps::LoadedDem& d, const terrain::Traversability& 
 
 }  // namespace
 
-MapCatalog::MapCatalog(store::Database& db, store::DataDir& dir, std::int64_t maxCells)
-    : db_(db), dir_(dir), maxCells_(maxCells) {}
+MapCatalog::MapCatalog(store::Database& db, store::DataDir& dir, std::int64_t maxCells,
+                       std::uint64_t layerCacheBytes)
+    : db_(db), dir_(dir), maxCells_(maxCells),
+      layers_(fs::path(dir.mapDir("x")).parent_path().string(), layerCacheBytes, offLadderOverview) {}
 
 store::MapRecord MapCatalog::importDem(const std::vector<UploadedFile>& files, const std::string& name,
                                        double cellSize) {
@@ -110,7 +153,7 @@ store::MapRecord MapCatalog::importDem(const std::vector<UploadedFile>& files, c
   if (name.size() > 200) throw ApiError(400, "invalid_parameter", "name is longer than 200 characters", "name");
   const std::string staging = dir_.stagingDir();
   try {
-    std::vector<std::string> sources, candidates;
+    std::vector<std::string> sources;
     for (std::size_t i = 0; i < files.size(); ++i) {
       std::string fallback = "upload";
       fallback += std::to_string(i);
@@ -120,32 +163,53 @@ store::MapRecord MapCatalog::importDem(const std::vector<UploadedFile>& files, c
         unique += '_';
         fname = unique + fname;
       }
-      const std::string target = (fs::path(staging) / fname).string();
-      fs::rename(files[i].path, target);
+      fs::rename(files[i].path, fs::path(staging) / fname);
       sources.push_back(fname);
-      if (lower(fs::path(fname).extension().string()) == ".zip") {
-        auto members = zipMembers(target);
-        candidates.insert(candidates.end(), members.begin(), members.end());
-      } else {
-        candidates.push_back(target);
-      }
     }
-    const std::string raster = pickRaster(candidates);
-    if (raster.empty())
-      throw ApiError(400, "invalid_dem",
-                     "no raster GDAL can read in the upload (" + std::to_string(files.size()) + " file(s))", "file");
-    maps::LoadOptions o;
-    o.cellSize = cellSize;
-    o.maxCells = maxCells_;
     maps::LoadedDem d;
-    try {
-      d = maps::loadDem(raster, o);
-    } catch (const Error& e) {
-      std::string msg = e.what();
-      // Report the client's file name, not our staging path.
-      if (msg.rfind(raster, 0) == 0) msg = fs::path(raster).filename().string() + msg.substr(raster.size());
-      throw ApiError(400, e.field() == "max_cells" ? "too_large" : "invalid_dem", msg,
-                     e.field() == "max_cells" ? "file" : e.field());
+    std::string raster;
+    {
+      // Everything GDAL reads from here on must be one of the uploaded files (issue 14).
+      maps::UploadSandbox sandbox(staging);
+      std::vector<std::string> candidates;
+      for (const auto& fname : sources) {
+        const std::string target = (fs::path(staging) / fname).string();
+        const std::string prefix = archivePrefix(fname);
+        if (prefix.empty()) {
+          candidates.push_back(target);
+          continue;
+        }
+        auto members = archiveMembers(prefix, target, fname);
+        candidates.insert(candidates.end(), members.begin(), members.end());
+      }
+      raster = pickRaster(candidates, sandbox);
+      if (raster.empty()) {
+        // One file we cannot read: say why in words (a lone PDS3 .IMG, a damaged GeoTIFF).
+        if (candidates.size() == 1) {
+          maps::LoadOptions probe;
+          probe.upload = &sandbox;
+          try {
+            maps::loadDem(candidates[0], probe);
+          } catch (const Error& e) {
+            throw ApiError(400, "invalid_dem", e.what(), "file");
+          }
+        }
+        throw ApiError(400, "invalid_dem",
+                       "no raster roverplan reads in the upload (" + std::to_string(candidates.size()) +
+                           " file(s); accepted: " + maps::uploadFormatsInWords() + ")",
+                       "file");
+      }
+      maps::LoadOptions o;
+      o.cellSize = cellSize;
+      o.maxCells = maxCells_;
+      o.upload = &sandbox;
+      try {
+        d = maps::loadDem(raster, o);
+      } catch (const Error& e) {
+        const bool tooLarge = e.field() == "max_cells";
+        throw ApiError(400, tooLarge ? "too_large" : "invalid_dem", e.what(), tooLarge ? "file" : e.field());
+      }
+      raster = sandbox.uploadName(raster);
     }
     terrain::Traversability t = terrain::traversability(d.dem);
     maps::writeGeoTiff((fs::path(staging) / "dem.tif").string(), d.dem.z);
@@ -234,6 +298,7 @@ void MapCatalog::remove(const std::string& id) {
     cellCache_.remove_if([&](const auto& e) { return e.first.rfind(id + "@", 0) == 0; });
   }
   for (const auto& p : pdms) store::DataDir::removeTree(dir_.pdmDir(p.id));
+  layers_.forgetUnder(dir_.mapDir(id));
   store::DataDir::removeTree(dir_.mapDir(id));
 }
 
@@ -251,10 +316,14 @@ std::shared_ptr<const terrain::Dem> MapCatalog::demAtCell(const std::string& id,
   o.cellSize = cellSize;
   o.maxCells = maxCells_;
   std::shared_ptr<const terrain::Dem> dem;
+  const std::string stored = (fs::path(dir_.mapDir(id)) / "dem.tif").string();
   try {
-    dem = std::make_shared<terrain::Dem>(maps::loadDem((fs::path(dir_.mapDir(id)) / "dem.tif").string(), o).dem);
+    dem = std::make_shared<terrain::Dem>(maps::loadDem(stored, o).dem);
   } catch (const Error& e) {
-    throw ApiError(400, "invalid_parameter", std::string("coverage_cell: ") + e.what(), "params.coverage_cell");
+    // Name the map, never the file the server keeps it in.
+    std::string msg = e.what();
+    if (msg.rfind(stored, 0) == 0) msg = "the map" + msg.substr(stored.size());
+    throw ApiError(400, "invalid_parameter", "coverage_cell: " + maps::withoutPaths(msg), "params.coverage_cell");
   }
   std::lock_guard lock(mutex_);
   cellCache_.emplace_front(key, dem);
@@ -282,18 +351,27 @@ std::string MapCatalog::layerFile(const std::string& id, const std::string& laye
     if (!rec || rec->mapId != id) throw ApiError(404, "not_found", "no PDM '" + pdm + "' on this map", "pdm");
   }
   const fs::path dir = fs::path(dir_.mapDir(id)) / "layers";
+  const GridGeometry& geom = map->dem.geometry();
+  const int side = format == "png" ? overviewSide(max, std::max(geom.rows, geom.cols)) : 0;
   std::string file = layer;
   if (layer == "pdm") file += "-" + pdm;
-  if (format == "png" && max > 0) {
+  if (side > 0) {
     file += '-';
-    file += std::to_string(max);
+    file += std::to_string(side);
   }
   file += '.';
   file += format;
-  const fs::path path = dir / file;
-  std::lock_guard lock(mutex_);
-  if (fs::exists(path)) return path.string();
-  fs::create_directories(dir);
+  // Made once per file, outside the catalog's lock (other layers and maps go on meanwhile).
+  return layers_.get((dir / file).string(), [&](const std::string& path) {
+    std::error_code ec;
+    fs::create_directories(dir, ec);
+    renderLayerFile(*map, layer, format, side, pdm, path);
+  });
+}
+
+void MapCatalog::renderLayerFile(const MapData& mapData, const std::string& layer, const std::string& format,
+                                 int side, const std::string& pdm, const std::string& path) {
+  const MapData* map = &mapData;
   const terrain::Dem& dem = map->dem;
   Raster<float> values;
   if (layer == "elevation") values = dem.z;
@@ -302,8 +380,8 @@ std::string MapCatalog::layerFile(const std::string& id, const std::string& laye
   else if (layer == "pdm") values = maps::loadDem(pdmFile(pdm)).dem.z;
   values.geo = dem.z.geo;
   if (format == "tif") {
-    if (layer == "traversability") maps::writeClassesGeoTiff(path.string(), map->traversability.classes);
-    else maps::writeGeoTiff(path.string(), values);
+    if (layer == "traversability") maps::writeClassesGeoTiff(path, map->traversability.classes);
+    else maps::writeGeoTiff(path, values);
   } else if (format == "f32") {
     std::string bytes;
     const int n = dem.geometry().cellCount();
@@ -312,7 +390,7 @@ std::string MapCatalog::layerFile(const std::string& id, const std::string& laye
       float v = layer == "traversability" ? static_cast<float>(map->traversability.classes.at(i)) : values.at(i);
       std::memcpy(&bytes[4ull * i], &v, 4);  // x86-64 and aarch64 are little-endian
     }
-    store::DataDir::writeFileAtomic(path.string(), bytes);
+    store::DataDir::writeFileAtomic(path, bytes);
   } else {
     maps::RenderInput in;
     in.dem = &dem;
@@ -325,11 +403,10 @@ std::string MapCatalog::layerFile(const std::string& id, const std::string& laye
     if (layer == "traversability") in.classes = &map->traversability.classes;
     if (layer == "pdm") in.pdm = &values;
     maps::RenderOptions ro;
-    ro.maxSize = max;
+    ro.maxSize = side;
     auto png = maps::encodePng(maps::renderLayer(maps::renderLayerFromName(layer), in, ro));
-    store::DataDir::writeFileAtomic(path.string(), std::string(png.begin(), png.end()));
+    store::DataDir::writeFileAtomic(path, std::string(png.begin(), png.end()));
   }
-  return path.string();
 }
 
 std::string MapCatalog::pdmFile(const std::string& pdmId) const {
@@ -380,14 +457,26 @@ store::PdmRecord MapCatalog::createPdmFromRaster(const std::string& mapId, const
   const auto& gt = map->dem.z.geo.geotransform;
   if (map->dem.z.geo.valid && !map->record.meta.value("geographic", false))
     o.crop = std::array<double, 4>{gt[0], gt[3] + g.rows * gt[5], g.cols * gt[1], -g.rows * gt[5]};
+  // The raster is read in a folder of its own, so that it can read nothing else.
+  const std::string staging = dir_.stagingDir();
+  const std::string staged = (fs::path(staging) / ("pdm-raster" + fs::path(rasterPath).extension().string())).string();
   maps::LoadedDem w;
   try {
-    w = maps::loadDem(rasterPath, o);
+    fs::rename(rasterPath, staged);
+    maps::UploadSandbox sandbox(staging);
+    o.upload = &sandbox;
+    w = maps::loadDem(staged, o);
   } catch (const Error& e) {
+    store::DataDir::removeTree(staging);
     std::string msg = e.what();
-    if (msg.rfind(rasterPath, 0) == 0) msg = "PDM raster" + msg.substr(rasterPath.size());
+    const std::string shown = fs::path(staged).filename().string();
+    if (msg.rfind(shown, 0) == 0) msg = "PDM raster" + msg.substr(shown.size());
     throw ApiError(400, "invalid_pdm", msg, "file");
+  } catch (...) {
+    store::DataDir::removeTree(staging);
+    throw;
   }
+  store::DataDir::removeTree(staging);
   if (w.dem.geometry().rows != g.rows || w.dem.geometry().cols != g.cols)
     throw ApiError(400, "invalid_pdm",
                    "the PDM raster does not cover the map on its grid (" + std::to_string(w.dem.geometry().rows) +

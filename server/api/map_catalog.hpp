@@ -1,7 +1,8 @@
 #pragma once
 // Maps and PDMs of the server: imports uploaded DEMs (any GDAL format, also PDS3 pairs and zips)
 // into the data dir, keeps recently used maps loaded, and produces layers (PNG/GeoTIFF/raw float32)
-// on demand, cached as files next to the map.
+// on demand, cached as files next to the map (LayerCache: a size cap, made once per file). Every
+// user-supplied raster is read through maps::openUpload inside its own staging folder.
 #include <list>
 #include <memory>
 #include <mutex>
@@ -10,6 +11,7 @@
 
 #include "core/pdm/pdm.hpp"
 #include "core/terrain/layers.hpp"
+#include "server/api/layer_cache.hpp"
 #include "server/store/data_dir.hpp"
 #include "server/store/database.hpp"
 
@@ -29,7 +31,10 @@ struct UploadedFile {
 
 class MapCatalog {
  public:
-  MapCatalog(store::Database& db, store::DataDir& dir, std::int64_t maxCells = 50'000'000);
+  // Layer files (PNG/GeoTIFF/f32 renderings) are a cache of at most layerCacheBytes per data dir.
+  static constexpr std::uint64_t kDefaultLayerCacheBytes = 1ull << 30;
+  MapCatalog(store::Database& db, store::DataDir& dir, std::int64_t maxCells = 50'000'000,
+             std::uint64_t layerCacheBytes = kDefaultLayerCacheBytes);
 
   // Validates and stores a DEM; throws http::ApiError 400 (field "file"/"cell"/"name") on bad input.
   store::MapRecord importDem(const std::vector<UploadedFile>& files, const std::string& name,
@@ -47,7 +52,8 @@ class MapCatalog {
   std::shared_ptr<const terrain::Dem> demAtCell(const std::string& id, double cellSize);
 
   // A layer file (elevation|hillshade|slope|traversability|pdm) as png/tif/f32, created on first
-  // use; `max` > 0 for a downsampled PNG overview. Returns the file path.
+  // use; `max` > 0 for a downsampled PNG overview, its size rounded up to the ladder 256, 512,
+  // 1024, 2048, 4096 (or the full size when that is smaller). Returns the file path.
   std::string layerFile(const std::string& id, const std::string& layer, const std::string& format,
                         int max, const std::string& pdmId);
 
@@ -61,13 +67,16 @@ class MapCatalog {
 
  private:
   std::shared_ptr<const MapData> loadFromDisk(const store::MapRecord& r);
+  void renderLayerFile(const MapData& map, const std::string& layer, const std::string& format, int side,
+                       const std::string& pdm, const std::string& path);
   store::PdmRecord storePdm(const std::string& mapId, const std::string& name,
                             const Raster<float>& mass, const nlohmann::json& meta);
 
   store::Database& db_;
   store::DataDir& dir_;
   std::int64_t maxCells_;
-  std::mutex mutex_;  // guards the caches and layer creation
+  std::mutex mutex_;  // guards the map caches
+  LayerCache layers_;
   std::list<std::shared_ptr<const MapData>> cache_;  // most recent first, a few maps
   std::list<std::pair<std::string, std::shared_ptr<const terrain::Dem>>> cellCache_;
 };

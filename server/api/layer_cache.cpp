@@ -1,0 +1,117 @@
+#include "server/api/layer_cache.hpp"
+
+#include <algorithm>
+#include <filesystem>
+#include <vector>
+
+namespace rover::api {
+
+namespace fs = std::filesystem;
+
+LayerCache::LayerCache(const std::string& mapsRoot, std::uint64_t capBytes,
+                       const std::function<bool(const std::string&)>& stale)
+    : cap_(capBytes) {
+  std::vector<std::pair<fs::file_time_type, std::pair<std::string, std::uint64_t>>> found;
+  std::error_code ec;
+  for (const auto& map : fs::directory_iterator(mapsRoot, ec)) {
+    std::error_code ec2;
+    for (const auto& f : fs::directory_iterator(map.path() / "layers", ec2)) {
+      std::error_code ec3;
+      if (!f.is_regular_file(ec3)) continue;
+      if (stale && stale(f.path().filename().string())) {
+        fs::remove(f.path(), ec3);
+        continue;
+      }
+      found.push_back({f.last_write_time(ec3), {f.path().string(), f.file_size(ec3)}});
+    }
+  }
+  std::sort(found.begin(), found.end());
+  std::lock_guard lock(mutex_);
+  for (const auto& [when, file] : found) addLocked(file.first, file.second);
+  evictLocked("");
+}
+
+void LayerCache::addLocked(const std::string& path, std::uint64_t size) {
+  auto [it, fresh] = entries_.try_emplace(path);
+  if (!fresh) total_ -= it->second.size;
+  it->second = {size, ++clock_};
+  total_ += size;
+}
+
+void LayerCache::evictLocked(const std::string& keep) {
+  while (total_ > cap_ && entries_.size() > (keep.empty() ? 0u : 1u)) {
+    auto oldest = entries_.end();
+    for (auto it = entries_.begin(); it != entries_.end(); ++it)
+      if (it->first != keep && (oldest == entries_.end() || it->second.lastUse < oldest->second.lastUse)) oldest = it;
+    if (oldest == entries_.end()) break;
+    std::error_code ec;
+    fs::remove(oldest->first, ec);
+    total_ -= oldest->second.size;
+    entries_.erase(oldest);
+  }
+}
+
+std::string LayerCache::get(const std::string& path, const std::function<void(const std::string&)>& make) {
+  std::shared_ptr<std::mutex> once;
+  {
+    std::lock_guard lock(mutex_);
+    if (auto it = entries_.find(path); it != entries_.end()) {
+      it->second.lastUse = ++clock_;
+      return path;
+    }
+    auto& m = making_[path];
+    if (!m) m = std::make_shared<std::mutex>();
+    once = m;
+  }
+  std::lock_guard making(*once);  // a second request for the same file waits here, then finds it
+  auto release = [&] {
+    std::lock_guard lock(mutex_);
+    if (auto it = making_.find(path); it != making_.end() && it->second == once && once.use_count() <= 2)
+      making_.erase(it);
+  };
+  {
+    std::unique_lock lock(mutex_);
+    if (auto it = entries_.find(path); it != entries_.end()) {
+      it->second.lastUse = ++clock_;
+      lock.unlock();
+      release();
+      return path;
+    }
+  }
+  try {
+    make(path);
+  } catch (...) {
+    release();
+    throw;
+  }
+  std::error_code ec;
+  const std::uint64_t size = fs::file_size(path, ec);
+  {
+    std::lock_guard lock(mutex_);
+    addLocked(path, ec ? 0 : size);
+    evictLocked(path);
+  }
+  release();
+  return path;
+}
+
+void LayerCache::forgetUnder(const std::string& dir) {
+  std::string prefix = dir;
+  if (!prefix.empty() && prefix.back() != '/') prefix += '/';
+  std::lock_guard lock(mutex_);
+  for (auto it = entries_.begin(); it != entries_.end();) {
+    if (it->first.rfind(prefix, 0) == 0) {
+      total_ -= it->second.size;
+      it = entries_.erase(it);
+    } else {
+      ++it;
+    }
+  }
+}
+
+std::uint64_t LayerCache::bytes() const {
+  std::lock_guard lock(mutex_);
+  return total_;
+}
+
+}  // namespace rover::api

@@ -1,0 +1,47 @@
+#pragma once
+// Rendered layer files (PNG overviews, GeoTIFF and float32 exports in DATA/maps/ID/layers/) kept
+// as a cache with a size cap per data dir: when a new file takes the total past the cap, the least
+// recently used files are deleted (issue 14: 40 distinct ?max= values once wrote 686 MB). Each file
+// is produced once however many requests ask for it at the same time (a once-lock per file), and
+// producing one blocks neither other layers nor other maps.
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <unordered_map>
+
+namespace rover::api {
+
+class LayerCache {
+ public:
+  // Counts the layer files already under mapsRoot/*/layers/ (oldest first by modification time),
+  // deleting those `stale` says no request can name any more (an older naming scheme).
+  LayerCache(const std::string& mapsRoot, std::uint64_t capBytes,
+             const std::function<bool(const std::string& fileName)>& stale = {});
+
+  // `path`, made by `make(path)` (which writes it atomically) unless it is there already. A file
+  // larger than the cap on its own is still kept until the next one arrives.
+  std::string get(const std::string& path, const std::function<void(const std::string&)>& make);
+  // Forgets the files under `dir` (a deleted map's folder).
+  void forgetUnder(const std::string& dir);
+
+  std::uint64_t bytes() const;
+  std::uint64_t capBytes() const { return cap_; }
+
+ private:
+  struct Entry {
+    std::uint64_t size = 0;
+    std::uint64_t lastUse = 0;
+  };
+  void addLocked(const std::string& path, std::uint64_t size);
+  void evictLocked(const std::string& keep);
+
+  const std::uint64_t cap_;
+  mutable std::mutex mutex_;  // guards everything below; never held while a file is made
+  std::unordered_map<std::string, Entry> entries_;
+  std::unordered_map<std::string, std::shared_ptr<std::mutex>> making_;  // once-locks in use
+  std::uint64_t total_ = 0, clock_ = 0;
+};
+
+}  // namespace rover::api
