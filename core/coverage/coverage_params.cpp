@@ -112,8 +112,9 @@ ParamTable<P> buildTable() {
                     "from the map (its own cell, or the smallest size that fits cell_budget)."),
           &P::coverageCell);
   t.add(
-      intParam("cell_budget", 4, 1e8, "cells",
-               "Most cells a DEM's coverage grid may hold (the default coverage_cell fits it)."),
+      intParam("cell_budget", 4, 1e6, "cells",
+               "On a DEM, the default coverage_cell is the map's own cell or the smallest that "
+               "keeps the grid within this many cells."),
       [](const P& p) -> ParamValue { return p.cellBudget; },
       [](P& p, const ParamInfo& i, const ParamValue& v) { p.cellBudget = paramAsInt(i, v); });
   addReal(t,

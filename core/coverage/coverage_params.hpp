@@ -39,10 +39,10 @@ struct CoverageParams {
   // whose grid fits cellBudget (core/coverage/terrain_world.hpp). The planner itself runs on
   // whatever grid it is given; the server and CLI build it from the DEM with worldFromDem.
   double coverageCell = 0.0;
-  // Most cells a DEM's coverage grid may hold: bounds memory (~40 bytes a cell) and run time (a
-  // paper-mode run may use its whole step budget of 20 moves a cell on a DEM whose obstacle
-  // interiors are never sensed). 400 000 keeps the default map's own 0.25 m cells (600 × 600).
-  std::int64_t cellBudget = 400'000;
+  // The default coverage cell keeps a DEM's grid within this many cells (an explicit coverage_cell
+  // may give up to kMaxCoverageCells): 40 000 = 200 × 200 keeps a default run on the page's map
+  // (150 m at 0.25 m) as quick as the paper-scale grids; larger maps get coarser default cells.
+  std::int64_t cellBudget = 40'000;
   // A DEM pixel with a slope of this or more to a neighbour is impassable (SPEC §2).
   double impassableDeg = 15.0;
   EnergyModel energy;

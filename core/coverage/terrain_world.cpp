@@ -58,12 +58,12 @@ double resolveCoverageCell(const GridGeometry& map, double cell, std::int64_t ce
                                                " m leaves fewer than 2 × 2 cells on this map (" +
                                                num(map.widthMetres()) + " × " +
                                                num(map.heightMetres()) + " m)");
-  if (cellBudget > 0 && cellsOf(g) > cellBudget)
+  if (cellsOf(g) > kMaxCoverageCells)
     throwInvalidParameter("coverage_cell",
                           "a coverage cell of " + num(cell) + " m gives " + std::to_string(g.rows) +
-                              " × " + std::to_string(g.cols) + " cells, more than the budget of " +
-                              std::to_string(cellBudget) + " (cell_budget); " +
-                              num(defaultCoverageCell(map, cellBudget)) + " m fits");
+                              " × " + std::to_string(g.cols) + " cells, more than the " +
+                              std::to_string(kMaxCoverageCells) + " a coverage grid may hold; " +
+                              num(defaultCoverageCell(map, kMaxCoverageCells)) + " m fits");
   return cell;
 }
 

@@ -21,6 +21,11 @@
 
 namespace rover::coverage {
 
+// The most cells a DEM's coverage grid may hold, whatever the user asks: ~40 bytes a cell for the
+// grid and the planner's maps, and a paper-mode run may use its whole step budget of 20 moves a
+// cell (on a DEM whose obstacle interiors are never sensed), so a path of up to 20 million moves.
+constexpr std::int64_t kMaxCoverageCells = 1'000'000;
+
 // The coverage grid over a map of geometry `map` with cells of `cell` metres (no checks).
 GridGeometry coverageGrid(const GridGeometry& map, double cell);
 // The map's own cell as a coverage cell: the longer pixel side (HiRISE 0.9967 × 1 m -> 1 m), so
@@ -29,8 +34,9 @@ double nativeCoverageCell(const GridGeometry& map);
 // The default coverage cell: the native cell, or the smallest 3-significant-digit size whose
 // grid holds at most `cellBudget` cells.
 double defaultCoverageCell(const GridGeometry& map, std::int64_t cellBudget);
-// `cell` <= 0 means the default. Throws InvalidParameter("coverage_cell") when the grid would be
-// smaller than 2 × 2 cells or hold more than `cellBudget` cells (saying which size fits).
+// `cell` <= 0 means the default (within `cellBudget`). Throws InvalidParameter("coverage_cell")
+// when the grid would be smaller than 2 × 2 cells or hold more than kMaxCoverageCells (saying
+// which size fits).
 double resolveCoverageCell(const GridGeometry& map, double cell, std::int64_t cellBudget);
 
 World worldFromDem(const terrain::Dem& dem, double cell,

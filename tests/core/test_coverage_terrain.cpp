@@ -170,9 +170,10 @@ TEST_CASE("coverage cell defaults: the map's own cell, or the smallest that fits
   CHECK(static_cast<std::int64_t>(g.rows) * g.cols <= 400'000);
   CHECK(cell == doctest::Approx(kepler.widthMetres() / std::sqrt(400'000.0)).epsilon(0.01));
   CHECK(resolveCoverageCell(kepler, 0, 400'000) == cell);
-  // Before: the 1 m default asked for 38 351² cells and the map was refused.
+  // Before: the 1 m default asked for 38 351² cells and the map was refused; now only an explicit
+  // 1 m is, saying what fits.
   CHECK_THROWS_WITH_AS(resolveCoverageCell(kepler, 1.0, 400'000),
-                       doctest::Contains("more than the budget of 400000"), Error);
+                       doctest::Contains("more than the 1000000 a coverage grid may hold; 47.7 m fits"), Error);
   try {
     resolveCoverageCell(kepler, 50'000, 400'000);
     FAIL("a cell larger than the map was accepted");
