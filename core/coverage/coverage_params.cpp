@@ -124,7 +124,10 @@ ParamTable<P> buildTable() {
           &P::impassableDeg);
   addEnergy(t, realParam("rover_mass", 0.1, 1000.0, "kg", "Rover mass (CLOVER: 7 kg)."),
             &EnergyModel::massKg);
-  addEnergy(t, realParam("gravity", 0.1, 30.0, "m/s²", "Surface gravity (Moon 1.62, Mars 3.71, Earth 9.81); by default the map's body's, from its CRS."),
+  addEnergy(t,
+            realParam("gravity", 0.1, 30.0, "m/s²",
+                      "Surface gravity (Moon 1.62, Mars 3.71, Earth 9.81); by default the map's "
+                      "body's, from its CRS."),
             &EnergyModel::gravity);
   addEnergy(t, realParam("rolling_resistance", 0.0, 2.0, "", "Rolling resistance coefficient μ."),
             &EnergyModel::rollingResistance);

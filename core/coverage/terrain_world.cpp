@@ -20,7 +20,9 @@ double roundUp3(double v) {
   return std::ceil(v / q - 1e-6) * q;
 }
 
-std::int64_t cellsOf(const GridGeometry& g) { return static_cast<std::int64_t>(g.rows) * g.cols; }
+std::int64_t cellsOf(const GridGeometry& g) {
+  return static_cast<std::int64_t>(g.rows) * g.cols;
+}
 
 std::string num(double v) {
   char buf[32];
@@ -37,7 +39,9 @@ GridGeometry coverageGrid(const GridGeometry& map, double cell) {
   return {along(map.heightMetres()), along(map.widthMetres()), cell, cell};
 }
 
-double nativeCoverageCell(const GridGeometry& map) { return std::max(map.cellWidth, map.cellHeight); }
+double nativeCoverageCell(const GridGeometry& map) {
+  return std::max(map.cellWidth, map.cellHeight);
+}
 
 double defaultCoverageCell(const GridGeometry& map, std::int64_t cellBudget) {
   double cell = nativeCoverageCell(map);
@@ -67,7 +71,8 @@ double resolveCoverageCell(const GridGeometry& map, double cell, std::int64_t ce
   return cell;
 }
 
-World worldFromDem(const terrain::Dem& dem, double cell, const terrain::TraversabilityParams& params) {
+World worldFromDem(const terrain::Dem& dem, double cell,
+                   const terrain::TraversabilityParams& params) {
   const GridGeometry& m = dem.geometry();
   const GridGeometry g = coverageGrid(m, cell);
   if (g.rows < 1 || g.cols < 1) return World{Raster<std::uint8_t>(g, 0), Raster<double>(g, 0.0)};
@@ -117,10 +122,10 @@ World worldFromDem(const terrain::Dem& dem, double cell, const terrain::Traversa
     const auto s = terrain::surfaceAt(dem, centre.x(), centre.y());
     w.heights.at(i) = s ? s->height : dem.z.at(m.index(*under));
   }
-  // Means of pixels can differ by more than the pixels do (a diagonal move, two pixels in one cell):
-  // the coverage grid's own worst slope also makes an obstacle, so no move between free cells
-  // ever pitches at the impassable slope or more. One pass is enough: a slope between two cells
-  // that both stay free was below the threshold for each of them.
+  // Means of pixels can differ by more than the pixels do (a diagonal move, two pixels in one
+  // cell): the coverage grid's own worst slope also makes an obstacle, so no move between free
+  // cells ever pitches at the impassable slope or more. One pass is enough: a slope between two
+  // cells that both stay free was below the threshold for each of them.
   terrain::Dem coarse;
   coarse.z = Raster<float>(g, 0.0f);
   for (int i = 0; i < g.cellCount(); ++i)
@@ -149,7 +154,8 @@ World worldFromDem(const terrain::Dem& dem, double cell, const terrain::Traversa
 
 World worldFromDem(const terrain::Dem& dem, const terrain::TraversabilityParams& params) {
   const GridGeometry& m = dem.geometry();
-  if (!(m.cellWidth > 0) || std::fabs(m.cellWidth - m.cellHeight) > 1e-9 * m.cellWidth || !dem.rowCellWidth.empty())
+  if (!(m.cellWidth > 0) || std::fabs(m.cellWidth - m.cellHeight) > 1e-9 * m.cellWidth ||
+      !dem.rowCellWidth.empty())
     throw Error(ErrorCode::InvalidInput, "coverage_cell",
                 "the DEM's cells are not square: give a coverage cell size");
   return worldFromDem(dem, m.cellWidth, params);

@@ -8,20 +8,28 @@ namespace rover::terrain {
 
 const char* bodyName(Body b) {
   switch (b) {
-    case Body::Earth: return "earth";
-    case Body::Moon: return "moon";
-    case Body::Mars: return "mars";
-    case Body::Unknown: break;
+    case Body::Earth:
+      return "earth";
+    case Body::Moon:
+      return "moon";
+    case Body::Mars:
+      return "mars";
+    case Body::Unknown:
+      break;
   }
   return "unknown";
 }
 
 double bodyGravity(Body b) {
   switch (b) {
-    case Body::Earth: return 9.81;
-    case Body::Moon: return 1.62;
-    case Body::Mars: return 3.71;
-    case Body::Unknown: break;
+    case Body::Earth:
+      return 9.81;
+    case Body::Moon:
+      return 1.62;
+    case Body::Mars:
+      return 3.71;
+    case Body::Unknown:
+      break;
   }
   return 0.0;
 }
@@ -51,7 +59,8 @@ Body fromName(std::string s) {
 
 }  // namespace
 
-Body detectBody(const std::string& ellipsoidName, const std::string& datumName, double semiMajorAxis) {
+Body detectBody(const std::string& ellipsoidName, const std::string& datumName,
+                double semiMajorAxis) {
   if (Body b = fromAxis(semiMajorAxis); b != Body::Unknown) return b;
   if (Body b = fromName(ellipsoidName); b != Body::Unknown) return b;
   return fromName(datumName);

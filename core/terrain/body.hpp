@@ -16,6 +16,7 @@ double bodyGravity(Body b);
 // decides when it matches a body (Mars 3 396 190 m IAU 2000, also the older 3 393.4 / 3 397 km
 // spheres; Moon 1 737 400 m; Earth 6 378 137 m and the historical ellipsoids within 1 km); the
 // names decide otherwise ("Mars_2000", "Moon_2000_IAU_IAG", "WGS 84", "GRS 1980", ...).
-Body detectBody(const std::string& ellipsoidName, const std::string& datumName, double semiMajorAxis);
+Body detectBody(const std::string& ellipsoidName, const std::string& datumName,
+                double semiMajorAxis);
 
 }  // namespace rover::terrain

@@ -152,8 +152,8 @@ TEST_CASE("coverage grid: no move between free cells pitches at the impassable s
     std::vector<int> sizes;
     auto label = freeComponents(w, sizes);
     REQUIRE_FALSE(sizes.empty());
-    const int largest = static_cast<int>(std::max_element(sizes.begin(), sizes.end()) - sizes.begin());
-    const int start = static_cast<int>(std::find(label.begin(), label.end(), largest) - label.begin());
+    const auto largest = std::max_element(sizes.begin(), sizes.end()) - sizes.begin();
+    const auto start = static_cast<int>(std::find(label.begin(), label.end(), largest) - label.begin());
     auto res = runCoverage(w, {{start, 0}}, p);
     CHECK(res.metrics.moves > 0);
     CHECK(res.metrics.maxPitchDeg < 15.0 + 1e-3);
@@ -173,7 +173,8 @@ TEST_CASE("coverage cell defaults: the map's own cell, or the smallest that fits
   // Before: the 1 m default asked for 38 351² cells and the map was refused; now only an explicit
   // 1 m is, saying what fits.
   CHECK_THROWS_WITH_AS(resolveCoverageCell(kepler, 1.0, 400'000),
-                       doctest::Contains("more than the 1000000 a coverage grid may hold; 47.7 m fits"), Error);
+                       doctest::Contains("more than the 1000000 a coverage grid may hold; 47.7 m fits"),
+                       Error);
   try {
     resolveCoverageCell(kepler, 50'000, 400'000);
     FAIL("a cell larger than the map was accepted");

@@ -53,7 +53,8 @@ const RoverStart kFine{{10.5, 10.5}, 0.0};
 
 }  // namespace
 
-TEST_CASE("mission check: the same bad start is refused alike by coverage, team-search and hybrid") {
+TEST_CASE(
+    "mission check: the same bad start is refused alike by coverage, team-search and hybrid") {
   struct Case {
     const char* what;
     std::vector<RoverStart> rovers;
@@ -86,19 +87,23 @@ TEST_CASE("mission check: the same bad start is refused alike by coverage, team-
   CHECK(refusal("coverage", {kFine}).message == "accepted");
 }
 
-TEST_CASE("mission check: rovers too close — the safety distance for teams, one cell for coverage") {
+TEST_CASE(
+    "mission check: rovers too close — the safety distance for teams, one cell for coverage") {
   const std::vector<RoverStart> close{kFine, {{11.2, 10.5}, 0.0}};  // 0.7 m apart, two cells
   CHECK(refusal("team-search", close).field == "rovers[1]");
   CHECK(refusal("team-search", close).message ==
         "rovers[1]: start is 0.7 m from rovers[0], closer than the safety distance of 1 m");
   CHECK(refusal("coverage", close).message == "accepted");
   const std::vector<RoverStart> shared{kFine, {{10.9, 10.1}, 0.0}};
-  CHECK(refusal("coverage", shared).message == "rovers[1]: start is in the same coverage cell as rovers[0]");
+  CHECK(refusal("coverage", shared).message ==
+        "rovers[1]: start is in the same coverage cell as rovers[0]");
   CHECK(refusal("coverage", {}).field == "rovers");
   CHECK(refusal("team-search", {}).field == "rovers");
 }
 
-TEST_CASE("mission check: a coverage cell made an obstacle by its neighbour pixel is refused by coverage") {
+TEST_CASE(
+    "mission check: a coverage cell made an obstacle by its neighbour pixel is refused by "
+    "coverage") {
   // With 3 m coverage cells, the cell of pixels cols 21..23, rows 19..21 holds the impassable
   // pixel (20, 21), while the start's own pixel (20, 23) is passable: only the grid refuses it.
   PlanningProblem p;
@@ -106,10 +111,12 @@ TEST_CASE("mission check: a coverage cell made an obstacle by its neighbour pixe
   p.world = coverage::worldFromDem(*p.dem, 3.0);
   p.rovers = {{{23.5, 19.5}, 0.0}};
   PlannerRegistry reg = makeBuiltinRegistry();
-  CHECK_THROWS_WITH_AS(reg.get("coverage").validate(p, {}),
-                       "rovers[0]: start is in a coverage cell that holds impassable ground or nodata", Error);
+  CHECK_THROWS_WITH_AS(
+      reg.get("coverage").validate(p, {}),
+      "rovers[0]: start is in a coverage cell that holds impassable ground or nodata", Error);
   p.dem.reset();  // a grid without its map (a random world): the grid's own words
-  CHECK_THROWS_WITH_AS(reg.get("coverage").validate(p, {}), "rovers[0]: start is on an obstacle", Error);
+  CHECK_THROWS_WITH_AS(reg.get("coverage").validate(p, {}), "rovers[0]: start is on an obstacle",
+                       Error);
 }
 
 TEST_CASE("body: detected from the ellipsoid's axis or names; gravity per body") {

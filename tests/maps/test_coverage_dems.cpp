@@ -33,8 +33,8 @@ fs::path demsDir() {
 }
 
 struct TempFile {
-  fs::path path = fs::temp_directory_path() /
-                  ("roverplan-cov-" + std::to_string(::getpid()) + "-" + std::to_string(std::rand()) + ".tif");
+  fs::path path = fs::temp_directory_path() / ("roverplan-cov-" + std::to_string(::getpid()) + "-" +
+                                               std::to_string(std::rand()) + ".tif");
   ~TempFile() {
     std::error_code ec;
     fs::remove(path, ec);
@@ -61,7 +61,8 @@ void writeFlat(const std::string& path, int rows, int cols, const std::array<dou
 // The ground size of a coverage cell, measured independently of the loader: its edge midpoints
 // taken to the map's CRS (maps/georef), then by PROJ to an azimuthal equidistant projection centred
 // on the cell (distances from the centre are true there).
-std::pair<double, double> groundSize(const maps::LoadedDem& d, const GridGeometry& grid, CellIndex c) {
+std::pair<double, double> groundSize(const maps::LoadedDem& d, const GridGeometry& grid,
+                                     CellIndex c) {
   const GridGeometry& m = d.dem.geometry();
   const Eigen::Vector2d centre = cellToLocal(grid, c);
   const double h = grid.cellWidth / 2;
@@ -81,8 +82,10 @@ std::pair<double, double> groundSize(const maps::LoadedDem& d, const GridGeometr
   OSRSetAxisMappingStrategy(aeqd, OAMS_TRADITIONAL_GIS_ORDER);
   OGRCoordinateTransformationH t = OCTNewCoordinateTransformation(src, aeqd);
   double xs[4], ys[4], zs[4] = {0, 0, 0, 0};
-  const Eigen::Vector2d pts[4] = {{centre.x() - h, centre.y()}, {centre.x() + h, centre.y()},
-                                  {centre.x(), centre.y() - h}, {centre.x(), centre.y() + h}};
+  const Eigen::Vector2d pts[4] = {{centre.x() - h, centre.y()},
+                                  {centre.x() + h, centre.y()},
+                                  {centre.x(), centre.y() - h},
+                                  {centre.x(), centre.y() + h}};
   for (int i = 0; i < 4; ++i) {
     const Eigen::Vector2d P = maps::localToCrs(m, d.dem.z.geo, pts[i]);
     xs[i] = P.x();
@@ -103,11 +106,13 @@ void checkTrueSquares(const maps::LoadedDem& d, double cell) {
   REQUIRE(g.cols >= 2);
   CHECK(g.cellWidth == cell);
   CHECK(g.cellHeight == cell);
-  for (CellIndex c : {CellIndex{0, 0}, CellIndex{g.rows / 2, g.cols / 2}, CellIndex{g.rows - 1, g.cols - 1}}) {
+  for (CellIndex c :
+       {CellIndex{0, 0}, CellIndex{g.rows / 2, g.cols / 2}, CellIndex{g.rows - 1, g.cols - 1}}) {
     auto [we, sn] = groundSize(d, g, c);
     CAPTURE(c.row);
     CAPTURE(c.col);
-    MESSAGE("cell " << cell << " m is " << we << " m east-west and " << sn << " m north-south on the ground");
+    MESSAGE("cell " << cell << " m is " << we << " m east-west and " << sn
+                    << " m north-south on the ground");
     CHECK(std::fabs(we / cell - 1) < 0.005);
     CHECK(std::fabs(sn / cell - 1) < 0.005);
   }
@@ -115,7 +120,9 @@ void checkTrueSquares(const maps::LoadedDem& d, double cell) {
 
 }  // namespace
 
-TEST_CASE("coverage grid: an equirectangular raster at 60° latitude gives square cells of the true size") {
+TEST_CASE(
+    "coverage grid: an equirectangular raster at 60° latitude gives square cells of the true "
+    "size") {
   // Projected metres of an equidistant cylindrical CRS true at the equator: at 60° one pixel of
   // 1 projected metre is 0.5 m east-west on the ground.
   const double R = 3396190, y0 = R * 60.0 * kDeg;
@@ -128,7 +135,8 @@ TEST_CASE("coverage grid: an equirectangular raster at 60° latitude gives squar
   CHECK(coverage::worldFromDem(d.dem, 4.0).geometry().cols == 50);  // 200 m of ground
 }
 
-TEST_CASE("coverage grid: a geographic raster (degrees, WGS 84) gives square cells of the true size") {
+TEST_CASE(
+    "coverage grid: a geographic raster (degrees, WGS 84) gives square cells of the true size") {
   TempFile f;
   const double step = 1e-4;  // about 5.6 m east-west and 11.1 m north-south at 60° N
   writeFlat(f.path.string(), 100, 200, {10.0, step, 0, 60.0 + 100 * step / 2, 0, -step},
@@ -187,20 +195,25 @@ TEST_CASE("coverage with default parameters (frontier on) on every DEM in ../sha
     p.body = maps::bodyOfCrs(d.dem.z.geo.crsWkt);
     CHECK(p.body == s.body);
     const coverage::CoverageParams defaults;
-    const double cell = coverage::resolveCoverageCell(d.dem.geometry(), defaults.coverageCell, defaults.cellBudget);
+    const double cell =
+        coverage::resolveCoverageCell(d.dem.geometry(), defaults.coverageCell, defaults.cellBudget);
     p.world = coverage::worldFromDem(d.dem, cell, defaults.traversability());
     p.dem = std::make_shared<terrain::Dem>(std::move(d.dem));
     // Start on the middle cell of the largest free region that passes the mission check.
     std::vector<int> sizes;
     auto label = coverage::freeComponents(p.world, sizes);
-    const int largest = static_cast<int>(std::max_element(sizes.begin(), sizes.end()) - sizes.begin());
+    const int largest =
+        static_cast<int>(std::max_element(sizes.begin(), sizes.end()) - sizes.begin());
     std::vector<int> pool;
     for (int i = 0; i < static_cast<int>(label.size()); ++i)
       if (label[i] == largest) pool.push_back(i);
     const ParamSet params{{"frontier", true}};
     bool placed = false;
-    for (std::size_t k = 0; k < pool.size() && !placed; k += std::max<std::size_t>(1, pool.size() / 50)) {
-      p.rovers = {{cellToLocal(p.world.geometry(), p.world.geometry().cell(pool[(pool.size() / 2 + k) % pool.size()])), 0.0}};
+    for (std::size_t k = 0; k < pool.size() && !placed;
+         k += std::max<std::size_t>(1, pool.size() / 50)) {
+      p.rovers = {{cellToLocal(p.world.geometry(),
+                               p.world.geometry().cell(pool[(pool.size() / 2 + k) % pool.size()])),
+                   0.0}};
       try {
         planner.validate(p, params);
         placed = true;
@@ -209,14 +222,18 @@ TEST_CASE("coverage with default parameters (frontier on) on every DEM in ../sha
     }
     REQUIRE(placed);
     PlanResult r = planner.run(p, params, nullptr, nullptr);
-    const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    const double wall =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     const GridGeometry& g = p.world.geometry();
-    MESSAGE(std::string(s.file) << ": cell " << cell << " m, " << g.rows << " x " << g.cols << ", reachable "
-                   << (r.metric("free_cells") - r.metric("unreachable_cells")) << ", stop "
-                   << r.stopReason << ", coverage of reachable " << r.metric("coverage_reachable")
-                   << ", path length ratio " << r.metric("path_length_ratio") << ", energy "
-                   << r.metric("energy_j") << " J, max pitch " << r.metric("max_pitch_deg")
-                   << "°, g " << r.metric("gravity_m_s2") << ", " << wall << " s");
+    MESSAGE(std::string(s.file) << ": cell " << cell << " m, " << g.rows << " x " << g.cols
+                                << ", reachable "
+                                << (r.metric("free_cells") - r.metric("unreachable_cells"))
+                                << ", stop " << r.stopReason << ", coverage of reachable "
+                                << r.metric("coverage_reachable") << ", path length ratio "
+                                << r.metric("path_length_ratio") << ", energy "
+                                << r.metric("energy_j") << " J, max pitch "
+                                << r.metric("max_pitch_deg") << "°, g " << r.metric("gravity_m_s2")
+                                << ", " << wall << " s");
     CHECK(static_cast<std::int64_t>(g.rows) * g.cols <= defaults.cellBudget);
     CHECK((r.stopReason == "goal_reached" || r.stopReason == "nothing_left"));
     CHECK(r.metric("coverage_reachable") >= defaults.coverage - 1e-9);
