@@ -1,5 +1,7 @@
 #include "maps/georef.hpp"
 
+#include <ogr_srs_api.h>
+
 #include <array>
 #include <cmath>
 
@@ -40,6 +42,25 @@ Eigen::Vector2d crsToLocal(const GridGeometry& g, const GeoReference& geo,
   const double col = (gt[5] * dX - gt[2] * dY) / det;
   const double row = (-gt[4] * dX + gt[1] * dY) / det;
   return {col * g.cellWidth, (g.rows - row) * g.cellHeight};
+}
+
+terrain::Body bodyOfCrs(const std::string& crsWkt) {
+  if (crsWkt.empty()) return terrain::Body::Unknown;
+  OGRSpatialReferenceH srs = OSRNewSpatialReference(nullptr);
+  terrain::Body body = terrain::Body::Unknown;
+  std::string text = crsWkt;  // OSRImportFromWkt advances a char* through its argument
+  char* cursor = text.data();
+  if (OSRImportFromWkt(srs, &cursor) == OGRERR_NONE) {
+    OGRErr err = OGRERR_NONE;
+    const double a = OSRGetSemiMajor(srs, &err);
+    const char* ellipsoid = OSRGetAttrValue(srs, "SPHEROID", 0);
+    if (!ellipsoid) ellipsoid = OSRGetAttrValue(srs, "ELLIPSOID", 0);
+    const char* datum = OSRGetAttrValue(srs, "DATUM", 0);
+    body = terrain::detectBody(ellipsoid ? ellipsoid : "", datum ? datum : "",
+                               err == OGRERR_NONE ? a : 0.0);
+  }
+  OSRDestroySpatialReference(srs);
+  return body;
 }
 
 }  // namespace rover::maps

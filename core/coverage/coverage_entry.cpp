@@ -2,6 +2,9 @@
 
 #include "core/common/error.hpp"
 #include "core/grid/direction.hpp"
+#include "core/planning/mission_check.hpp"
+#include "core/coverage/terrain_world.hpp"
+#include "core/terrain/layers.hpp"
 
 namespace rover::coverage {
 
@@ -79,6 +82,14 @@ PlanResult toPlanResult(const CoverageResult& r, const GridGeometry& g) {
   return out;
 }
 
+ParamSet coverageMapDefaults(const GridGeometry& map, terrain::Body body) {
+  const CoverageParams defaults;
+  ParamSet out;
+  out["coverage_cell"] = defaultCoverageCell(map, defaults.cellBudget);
+  if (body != terrain::Body::Unknown) out["gravity"] = terrain::bodyGravity(body);
+  return out;
+}
+
 namespace {
 
 class CoveragePlanner final : public Planner {
@@ -91,26 +102,37 @@ class CoveragePlanner final : public Planner {
   }
   std::vector<ParamInfo> params() const override { return coverageParamTable().infos(); }
   void validate(const PlanningProblem& problem, const ParamSet& params) const override {
-    parseCoverageParams(params);
+    const CoverageParams p = parseCoverageParams(params);
     validateWorld(problem.world);
-    if (problem.rovers.empty() || problem.rovers.size() > 64)
-      throw Error(ErrorCode::InvalidInput, "rovers", "between 1 and 64 rovers are supported");
-    auto cells = startsToCells(problem.world.geometry(), problem.rovers);
-    for (std::size_t k = 0; k < cells.size(); ++k) {
-      const std::string field = "rovers[" + std::to_string(k) + "]";
-      if (problem.world.isObstacle(cells[k].cell))
-        throw Error(ErrorCode::InvalidInput, field, field + ": start is on an obstacle");
-      for (std::size_t j = 0; j < k; ++j)
-        if (cells[j].cell == cells[k].cell)
-          throw Error(ErrorCode::InvalidInput, field, field + ": two rovers start on one cell");
-    }
+    // The one start check of every planner (core/planning/mission_check.hpp): against the map
+    // at its own resolution when there is one, then the coverage grid.
+    terrain::Traversability trav;
+    if (problem.dem) trav = terrain::traversability(*problem.dem, p.traversability());
+    planning::MissionGround ground;
+    ground.dem = problem.dem.get();
+    ground.classes = problem.dem ? &trav.classes : nullptr;
+    ground.impassableDeg = p.impassableDeg;
+    ground.grid = &problem.world;
+    planning::StartRules rules;
+    rules.distinctCells = true;
+    planning::checkMissionStarts(ground, problem.rovers, rules);
   }
   PlanResult run(const PlanningProblem& problem, const ParamSet& params, EventSink* sink,
                  const CancelToken* cancel) const override {
     CoverageParams p = parseCoverageParams(params);
+    // Body-aware gravity: the map's body unless the user gave one (issue 11).
+    const bool bodyGravity = !params.count("gravity") && problem.body != terrain::Body::Unknown;
+    if (bodyGravity) p.energy.gravity = terrain::bodyGravity(problem.body);
     auto cells = startsToCells(problem.world.geometry(), problem.rovers);
-    return toPlanResult(runCoverage(problem.world, cells, p, sink, cancel),
-                        problem.world.geometry());
+    PlanResult out = toPlanResult(runCoverage(problem.world, cells, p, sink, cancel),
+                                  problem.world.geometry());
+    out.metrics.push_back({"gravity_m_s2", p.energy.gravity, "m/s²"});
+    out.metrics.push_back({"coverage_cell_m", problem.world.geometry().cellWidth, "m"});
+    out.assumptions.push_back({"body", terrain::bodyName(problem.body)});
+    out.assumptions.push_back({"gravity", params.count("gravity") ? "given"
+                                          : bodyGravity          ? "the map's body"
+                                                                 : "default (Moon)"});
+    return out;
   }
 };
 

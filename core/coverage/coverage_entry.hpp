@@ -14,6 +14,11 @@ std::unique_ptr<Planner> makeCoveragePlanner();
 std::vector<StartCell> startsToCells(const GridGeometry& g, const std::vector<RoverStart>& rovers);
 std::vector<RoverStart> cellsToStarts(const GridGeometry& g, const std::vector<StartCell>& starts);
 
+// The coverage parameters whose defaults depend on the map (issue 11): coverage_cell (the map's
+// own cell, or the smallest that fits the default cell budget) and, when the map's body is known,
+// gravity. The server shows them per map; the planner resolves the same values when not given.
+ParamSet coverageMapDefaults(const GridGeometry& map, terrain::Body body);
+
 // The planner-neutral view of a coverage result (metric keys as in the CLI's JSON).
 PlanResult toPlanResult(const CoverageResult& r, const GridGeometry& g);
 

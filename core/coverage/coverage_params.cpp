@@ -1,5 +1,6 @@
 #include "core/coverage/coverage_params.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 namespace rover::coverage {
@@ -8,6 +9,14 @@ MotionCostTable CoverageParams::table() const {
   if (pattern == "boustrophedon") return boustrophedonTable();
   if (pattern == "custom") return tableFromList(costTable, "cost_table");
   return spiralTable();
+}
+
+terrain::TraversabilityParams CoverageParams::traversability() const {
+  terrain::TraversabilityParams t;
+  t.impassableDeg = impassableDeg;
+  // High risk does not change a coverage cell; kept below the impassable slope as the layer needs.
+  t.highRiskDeg = std::min(t.highRiskDeg, impassableDeg * 2.0 / 3.0);
+  return t;
 }
 
 namespace {
@@ -97,11 +106,28 @@ ParamTable<P> buildTable() {
       intParam("max_steps", 0, 1e9, "steps", "Step budget; 0 = 20 × number of cells."),
       [](const P& p) -> ParamValue { return p.maxSteps; },
       [](P& p, const ParamInfo& i, const ParamValue& v) { p.maxSteps = paramAsInt(i, v); });
-  addReal(t, realParam("coverage_cell", 0.0, 1e5, "m", "Coverage grid cell on a DEM (the map is resampled to it; 0 = the map's own cells)."),
+  addReal(t,
+          realParam("coverage_cell", 0.0, 1e7, "m",
+                    "Coverage grid cell on a DEM: square cells laid in the map's local frame; 0 = "
+                    "from the map (its own cell, or the smallest size that fits cell_budget)."),
           &P::coverageCell);
+  t.add(
+      intParam("cell_budget", 4, 1e6, "cells",
+               "On a DEM, the default coverage_cell is the map's own cell or the smallest that "
+               "keeps the grid within this many cells."),
+      [](const P& p) -> ParamValue { return p.cellBudget; },
+      [](P& p, const ParamInfo& i, const ParamValue& v) { p.cellBudget = paramAsInt(i, v); });
+  addReal(t,
+          realParam("impassable_deg", 0.1, 89.9, "deg",
+                    "On a DEM: a pixel with a slope of this or more to a neighbour is impassable, "
+                    "and its coverage cell an obstacle (SPEC §2)."),
+          &P::impassableDeg);
   addEnergy(t, realParam("rover_mass", 0.1, 1000.0, "kg", "Rover mass (CLOVER: 7 kg)."),
             &EnergyModel::massKg);
-  addEnergy(t, realParam("gravity", 0.1, 30.0, "m/s²", "Surface gravity (Moon 1.62, Mars 3.71)."),
+  addEnergy(t,
+            realParam("gravity", 0.1, 30.0, "m/s²",
+                      "Surface gravity (Moon 1.62, Mars 3.71, Earth 9.81); by default the map's "
+                      "body's, from its CRS."),
             &EnergyModel::gravity);
   addEnergy(t, realParam("rolling_resistance", 0.0, 2.0, "", "Rolling resistance coefficient μ."),
             &EnergyModel::rollingResistance);

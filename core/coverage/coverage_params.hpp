@@ -6,6 +6,7 @@
 
 #include "core/common/params.hpp"
 #include "core/coverage/cost_table.hpp"
+#include "core/terrain/layers.hpp"
 
 namespace rover::coverage {
 
@@ -14,7 +15,9 @@ enum class TeamMode { Overlap, Voronoi };  // paper 002 §2.3
 // Paper 000 eq. 5 and its defaults for the CLOVER rover on the Moon.
 struct EnergyModel {
   double massKg = 7.0;
-  double gravity = 1.62;            // m/s², Moon
+  // m/s², the Moon (paper 000's CLOVER). On a map whose CRS names its body, the planner takes
+  // that body's gravity instead unless the user gave one (issue 11).
+  double gravity = 1.62;
   double rollingResistance = 0.15;  // μ
   double efficiency = 0.7;          // η, drive train
   double turnJoulesPerRad = 2.0;    // spot turn
@@ -32,12 +35,21 @@ struct CoverageParams {
   double beta = 0.0;          // weight of |Δh| (paper 000 eq. 3)
   double mcVisited = 1.1;     // penalty per previous visit (paper 000: >= 1.1)
   std::int64_t maxSteps = 0;  // 0 = 20·n
-  // Coverage grid cell on a DEM, metres (0 = the map's own cells). The planner itself runs on
-  // whatever grid it is given; the server and CLI resample the DEM to this before planning.
-  double coverageCell = 1.0;
+  // Coverage grid cell on a DEM, metres; 0 = from the map: its own cell, or the smallest size
+  // whose grid fits cellBudget (core/coverage/terrain_world.hpp). The planner itself runs on
+  // whatever grid it is given; the server and CLI build it from the DEM with worldFromDem.
+  double coverageCell = 0.0;
+  // The default coverage cell keeps a DEM's grid within this many cells (an explicit coverage_cell
+  // may give up to kMaxCoverageCells): 40 000 = 200 × 200 keeps a default run on the page's map
+  // (150 m at 0.25 m) as quick as the paper-scale grids; larger maps get coarser default cells.
+  std::int64_t cellBudget = 40'000;
+  // A DEM pixel with a slope of this or more to a neighbour is impassable (SPEC §2).
+  double impassableDeg = 15.0;
   EnergyModel energy;
 
   MotionCostTable table() const;
+  // The traversability thresholds of impassableDeg (only the impassable class matters here).
+  terrain::TraversabilityParams traversability() const;
   std::int64_t stepBudget(int cellCount) const {
     return maxSteps > 0 ? maxSteps : 20LL * cellCount;
   }

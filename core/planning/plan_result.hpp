@@ -3,6 +3,7 @@
 // named metrics, one track per rover in the local frame, and named curves.
 #include <Eigen/Core>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace rover {
@@ -54,6 +55,8 @@ struct PlanResult {
   std::vector<Series> series;
   std::vector<Polyline> overlays;
   std::vector<Incident> incidents;
+  // What the planner took for granted that the user did not say, e.g. {"body", "mars"}.
+  std::vector<std::pair<std::string, std::string>> assumptions;
 
   // The value of a metric; throws NotFound if the planner did not report it.
   double metric(const std::string& key) const;

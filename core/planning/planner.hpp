@@ -10,6 +10,7 @@
 #include "core/common/cancel.hpp"
 #include "core/common/params.hpp"
 #include "core/coverage/world.hpp"
+#include "core/terrain/body.hpp"
 #include "core/terrain/dem.hpp"
 #include "core/planning/events.hpp"
 #include "core/planning/plan_result.hpp"
@@ -28,6 +29,7 @@ struct PlanningProblem {
   std::vector<RoverStart> rovers;
   std::shared_ptr<const terrain::Dem> dem;  // the map at its planning resolution
   std::shared_ptr<const Raster<float>> pdm;  // PDM masses on the DEM's grid; null = none given
+  terrain::Body body = terrain::Body::Unknown;  // the map's body, from its CRS (maps/georef.hpp)
 };
 
 class Planner {

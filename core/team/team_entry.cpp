@@ -5,6 +5,7 @@
 #include <numbers>
 
 #include "core/common/error.hpp"
+#include "core/planning/mission_check.hpp"
 
 namespace rover::team {
 
@@ -400,21 +401,13 @@ class TeamPlanner final : public Planner {
     if (p.mission.footprint < std::max(g.cellWidth, g.cellHeight))
       throwInvalidParameter("footprint_m", "must be at least the map cell size");
     const terrain::Traversability trav = terrain::traversability(*problem.dem, p.mission.traversability);
-    for (std::size_t k = 0; k < problem.rovers.size(); ++k) {
-      const std::string field = "rovers[" + std::to_string(k) + "]";
-      const RoverStart& s = problem.rovers[k];
-      if (!s.position.allFinite() || !std::isfinite(s.heading))
-        throw Error(ErrorCode::InvalidInput, field, field + ": start must be finite");
-      auto cell = localToCell(g, s.position);
-      if (!cell || !terrain::surfaceAt(*problem.dem, s.position.x(), s.position.y()))
-        throw Error(ErrorCode::InvalidInput, field, field + ": start is outside the map or next to nodata");
-      if (trav.classes(cell->row, cell->col) == static_cast<std::uint8_t>(terrain::TerrainClass::Impassable))
-        throw Error(ErrorCode::InvalidInput, field, field + ": start is on impassable ground");
-      for (std::size_t j = 0; j < k; ++j)
-        if ((problem.rovers[j].position - s.position).norm() < p.mission.coordination.safetyDistance)
-          throw Error(ErrorCode::InvalidInput, field,
-                      field + ": starts closer than the safety distance to rovers[" + std::to_string(j) + "]");
-    }
+    planning::MissionGround ground;  // the one start check of every planner
+    ground.dem = problem.dem.get();
+    ground.classes = &trav.classes;
+    ground.impassableDeg = p.mission.traversability.impassableDeg;
+    planning::StartRules rules;
+    rules.safetyDistance = p.mission.coordination.safetyDistance;
+    planning::checkMissionStarts(ground, problem.rovers, rules);
   }
 
   GridGeometry eventGrid(const PlanningProblem& problem, const ParamSet& params) const override {

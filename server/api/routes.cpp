@@ -8,7 +8,9 @@
 
 #include "core/common/error.hpp"
 #include "core/coverage/coverage_params.hpp"
+#include "core/coverage/coverage_entry.hpp"
 #include "core/coverage/terrain_world.hpp"
+#include "maps/georef.hpp"
 #include "server/api/multipart.hpp"
 #include "server/json/json_edge.hpp"
 #include "server/json/mission_request.hpp"
@@ -193,19 +195,23 @@ missions::MissionJob buildMission(ApiContext& ctx, const json& body) {
   // What the planner plans on: the coverage planner a grid world (the map resampled to its
   // cell); the team planners the map at its own resolution and the PDM.
   if (job.record.planner == "coverage") {
-    double cell = 1.0;
+    // Square coverage cells laid on the map at its own resolution (core/coverage/terrain_world).
+    auto dem = ctx.maps.demAtCell(job.record.mapId, 0);
     try {
-      cell = coverage::parseCoverageParams(job.params).coverageCell;
+      const coverage::CoverageParams cp = coverage::parseCoverageParams(job.params);
+      const double cell = coverage::resolveCoverageCell(dem->geometry(), cp.coverageCell, cp.cellBudget);
+      job.problem.world = coverage::worldFromDem(*dem, cell, cp.traversability());
     } catch (const Error& e) {
       throw fromCore(e, "params.");
     }
-    auto dem = ctx.maps.demAtCell(job.record.mapId, cell);
-    job.problem.world = coverage::worldFromDem(*dem);
+    job.problem.dem = dem;  // the start check reads the map itself
+    job.problem.body = maps::bodyOfCrs(dem->z.geo.crsWkt);
     job.geo = dem->z.geo;
     job.mapGrid = dem->geometry();
   } else {
     auto dem = ctx.maps.demAtCell(job.record.mapId, 0);
     job.problem.dem = dem;
+    job.problem.body = maps::bodyOfCrs(dem->z.geo.crsWkt);
     if (!job.record.pdmId.empty())
       job.problem.pdm = std::make_shared<Raster<float>>(ctx.maps.pdmMass(job.record.pdmId));
     job.geo = dem->z.geo;
@@ -254,14 +260,33 @@ void addApiRoutes(http::Router& router, ApiContext& ctx) {
     return Response::json(200, openApiDocument(router, ctx.version));
   }, doc("This document."));
 
-  router.add("GET", "/api/planners", guarded([&ctx](const Request&) {
+  router.add("GET", "/api/planners", guarded([&ctx](const Request& req) {
+    // ?map=ID: the defaults that come from that map (coverage cell, the body's gravity) filled in.
+    ParamSet mapDefaults;
+    json mapInfo;
+    if (const std::string id = queryString(req, "map"); !id.empty()) {
+      if (!ctx.db.getMap(id)) throw ApiError(404, "not_found", "no map '" + id + "'", "map");
+      auto map = ctx.maps.get(id);
+      const terrain::Body body = maps::bodyOfCrs(map->dem.z.geo.crsWkt);
+      mapDefaults = coverage::coverageMapDefaults(map->dem.geometry(), body);
+      mapInfo = {{"map", id}, {"body", terrain::bodyName(body)}};
+    }
     json out = json::array();
     for (const auto& name : ctx.planners.names()) {
       const Planner& p = ctx.planners.get(name);
-      out.push_back({{"name", name}, {"summary", p.summary()}, {"params", rj::toJson(p.params())}});
+      json params = rj::toJson(p.params());
+      json defaults = mapInfo;
+      if (name == "coverage")
+        for (auto& info : params)
+          if (auto d = mapDefaults.find(info["key"].get<std::string>()); d != mapDefaults.end())
+            info["default"] = defaults[d->first] = rj::toJson(d->second);
+      json entry{{"name", name}, {"summary", p.summary()}, {"params", params}};
+      if (!mapInfo.is_null()) entry["map_defaults"] = defaults;
+      out.push_back(std::move(entry));
     }
     return Response::json(200, out);
-  }), doc("Registered planners with every parameter, its default, unit and range."));
+  }), doc("Registered planners with every parameter, its default, unit and range; ?map=ID fills in "
+         "the defaults that come from the map (coverage_cell, gravity) and its body."));
 
   // --- maps ---
   router.add("GET", "/api/maps", guarded([&ctx](const Request& req) {

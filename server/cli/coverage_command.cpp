@@ -12,6 +12,7 @@
 
 #include "core/coverage/terrain_world.hpp"
 #include "maps/geojson.hpp"
+#include "maps/georef.hpp"
 #include "server/cli/coverage_options.hpp"
 #include "server/cli/dem_options.hpp"
 #include "server/json/plan_json.hpp"
@@ -19,6 +20,23 @@
 namespace rover::cli {
 
 namespace {
+
+// Random distinct starts on free cells of the largest free region that also pass the mission
+// check (a free coverage cell can still sit next to nodata); a few seeds are tried in turn.
+std::vector<RoverStart> randomValidStarts(const Planner& planner, const PlanningProblem& problem,
+                                          const ParamSet& params, int rovers, std::uint64_t seed) {
+  PlanningProblem trial = problem;
+  for (std::uint64_t k = 0;; ++k) {
+    trial.rovers = coverage::cellsToStarts(problem.world.geometry(),
+                                           coverage::randomStarts(problem.world, rovers, seed + k));
+    try {
+      planner.validate(trial, params);
+      return trial.rovers;
+    } catch (const Error& e) {
+      if (k >= 20 || e.field().rfind("rovers", 0) != 0) return trial.rovers;  // validate says why
+    }
+  }
+}
 
 void printSummary(std::ostream& out, const coverage::World& world, const coverage::WorldParams& wp,
                   const coverage::CoverageParams& p, int rovers, const PlanResult& r) {
@@ -44,6 +62,13 @@ void printSummary(std::ostream& out, const coverage::World& world, const coverag
   out << std::setprecision(1) << "distance   " << m("distance_m") << " m   energy " << m("energy_j")
       << " J   max pitch " << std::setprecision(2) << m("max_pitch_deg") << " deg   revisits "
       << static_cast<long>(m("revisits")) << "\n";
+  std::string body = "unknown", gravity;
+  for (const auto& [k, v] : r.assumptions) {
+    if (k == "body") body = v;
+    if (k == "gravity") gravity = v;
+  }
+  out << "body       " << body << ", gravity " << std::setprecision(2) << m("gravity_m_s2")
+      << " m/s² (" << gravity << ")\n";
 }
 
 }  // namespace
@@ -54,9 +79,8 @@ int coverageCommand(const std::vector<std::string>& argv, std::ostream& out) {
                              "and pitch.");
   addWorldOptions(args);
   args.option("dem", "FILE", "", "Plan on this DEM instead of a random world.");
-  addDemOptions(args, "coverage-cell", "1.0");
-  args.option("high-risk", "DEG", "10", "With --dem: slope from which a cell is high risk.");
-  args.option("impassable", "DEG", "15", "With --dem: slope from which a cell is an obstacle.");
+  // --dem-cell resamples the DEM itself (GDAL); --coverage-cell is the planner's grid on it.
+  addDemOptions(args, "dem-cell", "native");
   args.option("start", "X,Y,DEG[;X,Y,DEG...]", "random",
               "Rover starts in the local frame (metres from the lower-left corner) and headings "
               "(degrees counter-clockwise from east); overrides --rovers.");
@@ -78,24 +102,20 @@ int coverageCommand(const std::vector<std::string>& argv, std::ostream& out) {
   coverage::CoverageParams typed;
   PlanningProblem problem;
   std::optional<maps::LoadedDem> dem;
-  if (args.has("dem")) {
-    terrain::TraversabilityParams tp;
-    tp.highRiskDeg = args.real("high-risk", tp.highRiskDeg, 0.01, 89.0);
-    tp.impassableDeg = args.real("impassable", tp.impassableDeg, 0.01, 89.9);
-    dem = loadDemOrFail(args.str("dem", ""), readDemOptions(args, "coverage-cell", 1.0));
-    try {
-      problem.world = coverage::worldFromDem(dem->dem, tp);
-    } catch (const Error& e) {
-      throwAsUsage(e);
-    }
-  }
+  if (args.has("dem")) dem = loadDemOrFail(args.str("dem", ""), readDemOptions(args, "dem-cell", 0));
   try {
     typed = coverage::parseCoverageParams(params);
-    if (!dem) problem.world = coverage::generateWorld(wp);
-    problem.rovers = !starts.empty()
-                         ? starts
-                         : coverage::cellsToStarts(problem.world.geometry(),
-                                                   coverage::randomStarts(problem.world, rovers, wp.seed));
+    if (dem) {
+      // Square cells of coverage_cell metres in the map's local frame, whatever its pixels.
+      const double cell = coverage::resolveCoverageCell(dem->dem.geometry(), typed.coverageCell,
+                                                        typed.cellBudget);
+      problem.world = coverage::worldFromDem(dem->dem, cell, typed.traversability());
+      problem.dem = std::make_shared<terrain::Dem>(dem->dem);
+      problem.body = maps::bodyOfCrs(dem->dem.z.geo.crsWkt);
+    } else {
+      problem.world = coverage::generateWorld(wp);
+    }
+    problem.rovers = !starts.empty() ? starts : randomValidStarts(planner, problem, params, rovers, wp.seed);
     planner.validate(problem, params);
   } catch (const Error& e) {
     if (e.field().rfind("rovers", 0) == 0 && !starts.empty())
@@ -108,7 +128,8 @@ int coverageCommand(const std::vector<std::string>& argv, std::ostream& out) {
     GeoReference geo = dem ? dem->dem.z.geo : GeoReference{};
     std::string text;
     try {
-      text = maps::tracksToGeoJson(result.tracks, problem.world.geometry(), geo);
+      // Tracks are in the map's local frame: convert through the map's own grid.
+      text = maps::tracksToGeoJson(result.tracks, dem ? dem->dem.geometry() : problem.world.geometry(), geo);
     } catch (const Error& e) {
       throw UsageError(e.what());
     }
@@ -127,6 +148,9 @@ int coverageCommand(const std::vector<std::string>& argv, std::ostream& out) {
     if (dem) {
       j["world"]["dem"] = dem->info.path;
       j["world"]["crs"] = dem->info.crsName;
+      j["world"]["body"] = terrain::bodyName(problem.body);
+      j["world"]["dem_rows"] = dem->dem.geometry().rows;
+      j["world"]["dem_cols"] = dem->dem.geometry().cols;
     } else {
       j["world"]["obstacle_fraction"] = wp.obstacleFraction;
       j["world"]["sealed_allowed"] = wp.allowSealed;

@@ -71,8 +71,7 @@ coverage::WorldParams readWorldOptions(const ArgParser& a) {
 }
 
 void addCoverageParamOptions(ArgParser& a) {
-  // --coverage-cell comes with the DEM options.
-  addParamOptions(a, coverage::coverageParamTable().infos(), {"coverage_cell"});
+  addParamOptions(a, coverage::coverageParamTable().infos());
 }
 
 void addParamOptions(ArgParser& a, const std::vector<ParamInfo>& infos,
@@ -128,7 +127,7 @@ ParamSet readParamOptions(const ArgParser& a, const std::vector<ParamInfo>& info
 }
 
 ParamSet readCoverageParamOptions(const ArgParser& a) {
-  ParamSet set = readParamOptions(a, coverage::coverageParamTable().infos(), {"coverage_cell"});
+  ParamSet set = readParamOptions(a, coverage::coverageParamTable().infos());
   // Paper 000 eq. 3 has α + β = 1: giving one implies the other.
   // Only a weight that is itself in range implies the other, so a bad one is reported by name.
   auto implies = [&](const char* given, const char* other) {

@@ -68,6 +68,11 @@ json toJson(const PlanResult& r) {
     }
     j["overlays"] = overlays;
   }
+  if (!r.assumptions.empty()) {
+    json a = json::object();
+    for (const auto& [k, v] : r.assumptions) a[k] = v;
+    j["assumptions"] = a;
+  }
   json incidents = json::array();
   for (const auto& i : r.incidents) {
     json x{{"kind", i.kind},       {"rover", i.rover}, {"time_s", i.time},

@@ -5,6 +5,9 @@
 
 #include "core/coverage/coverage_planner.hpp"
 #include "core/coverage/terrain_world.hpp"
+#include "core/common/error.hpp"
+
+#include <algorithm>
 
 using namespace rover;
 using namespace rover::coverage;
@@ -76,4 +79,107 @@ TEST_CASE("impassable and nodata DEM cells become obstacles; heights are kept") 
   CHECK(w.isObstacle(w.geometry().index(3, 3)));
   CHECK_FALSE(w.isObstacle(w.geometry().index(2, 2)));
   CHECK(w.hasHeights());
+}
+
+// --- the coverage grid from any DEM (issue 11) ---
+
+namespace {
+
+terrain::Dem rampDem(int rows, int cols, double dx, double dy, double slope) {
+  terrain::Dem d;
+  d.z = Raster<float>(GridGeometry{rows, cols, dx, dy}, 0.0f);
+  for (int r = 0; r < rows; ++r)
+    for (int c = 0; c < cols; ++c) d.z(r, c) = static_cast<float>(slope * (c + 0.5) * dx);
+  return d;
+}
+
+}  // namespace
+
+TEST_CASE("coverage grid: square cells in the local frame on HiRISE-shaped pixels (0.9967 × 1 m)") {
+  terrain::Dem d = rampDem(337, 348, 0.9967, 1.0, 0.01);
+  CHECK(nativeCoverageCell(d.geometry()) == 1.0);
+  World w = worldFromDem(d, 1.0);
+  CHECK_NOTHROW(validateWorld(w));  // before: "coverage cells must be square and positive"
+  CHECK(w.geometry().cellWidth == 1.0);
+  CHECK(w.geometry().cellHeight == 1.0);
+  CHECK(w.geometry().rows == 337);
+  CHECK(w.geometry().cols == 346);  // 348 × 0.9967 = 346.85 m: the last 0.85 m strip is left out
+  CHECK(w.obstacleCount() == 0);
+  // Heights: the mean of the pixels whose centres fall in the cell, so the ramp is kept.
+  for (int c : {0, 100, 345}) {
+    const double x = cellToLocal(w.geometry(), {10, c}).x();
+    CHECK(w.heights(10, c) == doctest::Approx(0.01 * x).epsilon(0.01));
+  }
+}
+
+TEST_CASE("coverage grid: coarser cells average their pixels; one impassable pixel blocks the cell") {
+  terrain::Dem d = rampDem(40, 40, 1.0, 1.0, 0.0);
+  d.z(5, 6) = 2.0f;  // 63° to its neighbours
+  d.z(30, 30) = NAN;
+  World w = worldFromDem(d, 4.0);
+  REQUIRE(w.geometry().rows == 10);
+  REQUIRE(w.geometry().cols == 10);
+  CHECK(w.isObstacle(w.geometry().index(1, 1)));  // pixels 4..7: holds (5, 6) and its neighbours
+  CHECK(w.isObstacle(w.geometry().index(7, 7)));  // nodata
+  CHECK_FALSE(w.isObstacle(w.geometry().index(5, 5)));
+  terrain::Dem ramp = rampDem(40, 40, 1.0, 1.0, 0.1);
+  World wr = worldFromDem(ramp, 4.0);
+  CHECK(wr.heights(3, 2) == doctest::Approx(0.1 * 10.0));  // pixel centres 8.5..11.5 m east
+}
+
+TEST_CASE("coverage grid: finer cells than the pixels take the bilinear surface at their centre") {
+  terrain::Dem d = rampDem(20, 20, 1.0, 1.0, 0.1);
+  World w = worldFromDem(d, 0.5);
+  REQUIRE(w.geometry().cols == 40);
+  for (int c = 2; c < 38; ++c)
+    CHECK(w.heights(7, c) == doctest::Approx(0.1 * cellToLocal(w.geometry(), {7, c}).x()));
+}
+
+TEST_CASE("coverage grid: no move between free cells pitches at the impassable slope") {
+  // Rough ground: seeded bumps steep enough that averaging alone would let some moves past 15°.
+  terrain::Dem d = rampDem(90, 90, 1.0, 1.0, 0.0);
+  std::uint64_t s = 12345;
+  for (int r = 0; r < 90; ++r)
+    for (int c = 0; c < 90; ++c) {
+      s = s * 6364136223846793005ULL + 1442695040888963407ULL;
+      d.z(r, c) = static_cast<float>(0.4 * static_cast<double>(s >> 40) / (1 << 24));
+    }
+  for (double cell : {0.7, 1.0, 1.5}) {
+    CAPTURE(cell);
+    World w = worldFromDem(d, cell);
+    CoverageParams p;
+    p.frontier = true;
+    std::vector<int> sizes;
+    auto label = freeComponents(w, sizes);
+    REQUIRE_FALSE(sizes.empty());
+    const auto largest = std::max_element(sizes.begin(), sizes.end()) - sizes.begin();
+    const auto start = static_cast<int>(std::find(label.begin(), label.end(), largest) - label.begin());
+    auto res = runCoverage(w, {{start, 0}}, p);
+    CHECK(res.metrics.moves > 0);
+    CHECK(res.metrics.maxPitchDeg < 15.0 + 1e-3);
+  }
+}
+
+TEST_CASE("coverage cell defaults: the map's own cell, or the smallest that fits the budget") {
+  const GridGeometry hirise{337, 348, 0.9967, 1.0};
+  CHECK(defaultCoverageCell(hirise, 400'000) == 1.0);
+  const GridGeometry kepler{804, 804, 47.7, 47.7};  // 38 351 m a side
+  CHECK(defaultCoverageCell(kepler, 1'000'000) == 47.7);
+  const double cell = defaultCoverageCell(kepler, 400'000);
+  const GridGeometry g = coverageGrid(kepler, cell);
+  CHECK(static_cast<std::int64_t>(g.rows) * g.cols <= 400'000);
+  CHECK(cell == doctest::Approx(kepler.widthMetres() / std::sqrt(400'000.0)).epsilon(0.01));
+  CHECK(resolveCoverageCell(kepler, 0, 400'000) == cell);
+  // Before: the 1 m default asked for 38 351² cells and the map was refused; now only an explicit
+  // 1 m is, saying what fits.
+  CHECK_THROWS_WITH_AS(resolveCoverageCell(kepler, 1.0, 400'000),
+                       doctest::Contains("more than the 1000000 a coverage grid may hold; 47.7 m fits"),
+                       Error);
+  try {
+    resolveCoverageCell(kepler, 50'000, 400'000);
+    FAIL("a cell larger than the map was accepted");
+  } catch (const Error& e) {
+    CHECK(e.field() == "coverage_cell");
+    CHECK(std::string(e.what()).find("fewer than 2 × 2 cells") != std::string::npos);
+  }
 }

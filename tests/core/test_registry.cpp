@@ -33,7 +33,8 @@ TEST_CASE("the coverage planner validates the whole problem before running") {
   prob.rovers = {{{0.5, 0.5}, 0.0}, {{1.5, 1.5}, 0.0}};
   CHECK_THROWS_WITH_AS(planner.validate(prob, {}), "rovers[1]: start is on an obstacle", Error);
   prob.rovers[1].position = {9.0, 0.5};
-  CHECK_THROWS_WITH_AS(planner.validate(prob, {}), "rovers[1]: start is outside the map", Error);
+  CHECK_THROWS_WITH_AS(planner.validate(prob, {}),
+                       "rovers[1]: start (9, 0.5) m is outside the map (4 × 3 m)", Error);
   prob.rovers[1].position = {3.5, 2.5};
   CHECK_NOTHROW(planner.validate(prob, {}));
   CHECK_THROWS_AS(planner.validate(prob, {{"speed", 1.0}}), Error);

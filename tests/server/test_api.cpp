@@ -482,3 +482,77 @@ TEST_CASE("api: a team-search mission with a PDM streams the route and paths, an
   auto late = test::readAllFrames(s.port(), "/api/missions/" + id + "/stream");
   CHECK(json::parse(late[0].data)["route"].size() == 5);
 }
+
+namespace {
+
+// A Mars DEM in an equirectangular CRS true at the equator, placed at 30° N: its 1 m projected
+// pixels are 0.866 × 1 m on the ground, so its cells are not square (issue 11). Flat, with one
+// 1.04 m spike (46° to its neighbours) at row 20, col 20.
+std::string marsEquirectangularBytes(const TempDir& tmp) {
+  Raster<float> z(GridGeometry{40, 60, 1.0, 1.0}, 0.0f);
+  z(20, 20) = 1.04f;
+  z.geo.valid = true;
+  const double y0 = 3396190.0 * 30.0 * std::numbers::pi / 180.0;
+  z.geo.geotransform = {0, 1, 0, y0 + 40, 0, -1};
+  z.geo.crsWkt =
+      "PROJCS[\"Mars equirectangular\",GEOGCS[\"Mars 2000\",DATUM[\"D_Mars_2000\",SPHEROID["
+      "\"Mars_2000_IAU_IAG\",3396190,0]],PRIMEM[\"Reference_Meridian\",0],UNIT[\"degree\","
+      "0.0174532925199433]],PROJECTION[\"Equirectangular\"],PARAMETER[\"standard_parallel_1\",0],"
+      "PARAMETER[\"central_meridian\",0],PARAMETER[\"false_easting\",0],PARAMETER["
+      "\"false_northing\",0],UNIT[\"metre\",1]]";
+  const std::string path = tmp.str("mars.tif");
+  maps::writeGeoTiff(path, z);
+  return readBytes(path);
+}
+
+}  // namespace
+
+TEST_CASE("api: coverage on an uploaded DEM with non-square pixels, per-map defaults, one start check") {
+  TempDir tmp;
+  TestServer s(tmp.str("data"));
+  auto up = request(s.port(), "POST", "/api/maps?name=mars&filename=mars.tif", marsEquirectangularBytes(tmp), "image/tiff");
+  REQUIRE(up.status == 201);
+  const std::string map = up.json()["id"];
+  CHECK(up.json()["cell_size_m"].get<double>() == doctest::Approx(0.866).epsilon(0.001));
+  // The defaults that come from the map: its own cell (the longer side) and Mars gravity.
+  json planners = s.get("/api/planners?map=" + map).json();
+  json coverage;
+  for (const auto& p : planners)
+    if (p["name"] == "coverage") coverage = p;
+  REQUIRE(coverage.is_object());
+  CHECK(coverage["map_defaults"]["body"] == "mars");
+  CHECK(coverage["map_defaults"]["coverage_cell"] == 1.0);
+  CHECK(coverage["map_defaults"]["gravity"] == 3.71);
+  for (const auto& info : coverage["params"]) {
+    if (info["key"] == "coverage_cell") CHECK(info["default"] == 1.0);
+    if (info["key"] == "gravity") CHECK(info["default"] == 3.71);
+  }
+  checkError(s.get("/api/planners?map=nope"), 404, "map");
+
+  // Default parameters run (before: 400 "coverage cells must be square and positive").
+  json body = coverageMission(map, 5.5, 5.5);
+  body["params"] = json::object();
+  auto r = s.postJson("/api/missions", body);
+  REQUIRE(r.status == 202);
+  json m = s.waitFinished(r.json()["id"]);
+  REQUIRE(m["status"] == "succeeded");
+  CHECK(m["metrics"]["gravity_m_s2"] == 3.71);
+  CHECK(m["metrics"]["coverage_cell_m"] == 1.0);
+  CHECK(m["metrics"]["energy_j"].get<double>() > 0);
+  CHECK(s.get("/api/missions/" + r.json()["id"].get<std::string>() + "/result.json").json()["assumptions"]["body"] == "mars");
+  json tooFine = body;
+  tooFine["params"] = {{"coverage_cell", 0.001}};
+  checkError(s.postJson("/api/missions", tooFine), 400, "params.coverage_cell");
+
+  // The spike's cell (local x = 20·0.866 + 0.433, y = 19.5) is refused alike by every planner.
+  std::string code;
+  for (const char* planner : {"coverage", "team-search", "hybrid"}) {
+    CAPTURE(planner);
+    json bad{{"map", map}, {"planner", planner}, {"rovers", {{{"x", 17.75}, {"y", 19.5}, {"heading", 0}}}}};
+    auto e = s.postJson("/api/missions", bad);
+    checkError(e, 400, "rovers[0]");
+    CHECK(e.json()["error"]["message"] == "rovers[0]: start is on impassable ground (a slope of 15° or more)");
+    if (code.empty()) code = e.json()["error"]["code"];
+    CHECK(e.json()["error"]["code"] == code);
+  }
+}

@@ -87,6 +87,8 @@ export async function getAllPages(path, maxPages = 100) {
 export const api = {
   health: () => getJson('/api/health'),
   planners: () => getJson('/api/planners'),
+  // The planners with the defaults that come from one map (coverage cell, its body's gravity).
+  plannersForMap: (mapId) => getJson(`/api/planners?map=${encodeURIComponent(mapId)}`),
   maps: () => getAllPages('/api/maps'),
   map: (id) => getJson(`/api/maps/${id}`),
   deleteMap: (id) => sendJson('DELETE', `/api/maps/${id}`),

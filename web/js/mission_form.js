@@ -39,6 +39,7 @@ export class MissionForm {
       this.next = 0;
       this.renderRovers();
       this.renderPdms();
+      this.loadMapDefaults();
     });
     state.on('pdms', () => this.renderPdms());
     state.on('pdm-selected', () => this.renderPdms());
@@ -53,6 +54,42 @@ export class MissionForm {
     this.renderParams();
   }
 
+  // The defaults that come from the selected map (GET /api/planners?map=ID): the coverage cell
+  // (the map's own, or the smallest that fits the cell budget) and the body whose gravity the
+  // energy model assumes. The form then shows them as the defaults, so they are not sent.
+  async loadMapDefaults() {
+    const map = state.map;
+    if (!map) return;
+    try {
+      const planners = await api.plannersForMap(map.id);
+      if (state.map !== map) return;  // another map was chosen meanwhile
+      state.planners = planners;
+      this.setPlanners(planners);
+    } catch (err) {
+      $('m-planner-summary').textContent = `map defaults unavailable: ${err.message}`;
+    }
+  }
+
+  // One line under the planner summary: what this map sets by default.
+  renderMapDefaults(p) {
+    let box = $('m-map-defaults');
+    if (!box) {
+      box = el('div', { id: 'm-map-defaults', class: 'doc' });
+      $('m-params').before(box);
+    }
+    const d = p && p.map_defaults;
+    if (!d) return box.replaceChildren();
+    const parts = [`body ${d.body === 'unknown' ? 'unknown (the CRS names none)' : d.body}`];
+    if (d.gravity !== undefined) parts.push(`gravity ${fmt(d.gravity)} m/s²`);
+    else if (p.name === 'coverage') parts.push('gravity: the parameter default');
+    if (d.coverage_cell !== undefined) {
+      const m = state.map;
+      const grid = m ? ` (${Math.floor(m.height_m / d.coverage_cell + 1e-6)} × ${Math.floor(m.width_m / d.coverage_cell + 1e-6)} cells)` : '';
+      parts.push(`coverage cell ${fmt(d.coverage_cell)} m${grid}`);
+    }
+    box.textContent = `This map's defaults: ${parts.join(', ')}.`;
+  }
+
   get planner() {
     return state.planners.find((p) => p.name === $('m-planner').value) || null;
   }
@@ -62,8 +99,12 @@ export class MissionForm {
     const p = this.planner;
     $('m-planner-summary').textContent = p ? p.summary : 'The server lists no planner.';
     const box = $('m-params');
-    if (!p) return box.replaceChildren();
+    if (!p) {
+      this.renderMapDefaults(null);
+      return box.replaceChildren();
+    }
     box.replaceChildren(...p.params.map((info) => this.paramRow(info)));
+    this.renderMapDefaults(p);
     this.updateDependent();
   }
 
