@@ -82,11 +82,23 @@ PlanResult toPlanResult(const CoverageResult& r, const GridGeometry& g) {
   return out;
 }
 
+// On a DEM the frontier mode is the default (issue 11). Real terrain holds large impassable and
+// nodata areas whose inside the myopic rover never senses, so paper 002's stop rule
+// (visited >= coverage·(n − O known)) is never met there: the rover covers every reachable cell and
+// then wanders until the 20·n step budget (path length ratio 20 on every shipped DEM). Frontier mode
+// stops when no reachable unexplored cell is left (SPEC §1, ours). The paper's rule stays one
+// parameter away (frontier: false); synthetic worlds keep it as their default.
+static bool frontierByDefault(const PlanningProblem& problem, const ParamSet& params) {
+  if (auto it = params.find("frontier"); it != params.end()) return std::get<bool>(it->second);
+  return problem.dem != nullptr;
+}
+
 ParamSet coverageMapDefaults(const GridGeometry& map, terrain::Body body) {
   const CoverageParams defaults;
   ParamSet out;
   out["coverage_cell"] = defaultCoverageCell(map, defaults.cellBudget);
   if (body != terrain::Body::Unknown) out["gravity"] = terrain::bodyGravity(body);
+  out["frontier"] = true;  // see frontierByDefault
   return out;
 }
 
@@ -123,6 +135,7 @@ class CoveragePlanner final : public Planner {
     // Body-aware gravity: the map's body unless the user gave one (issue 11).
     const bool bodyGravity = !params.count("gravity") && problem.body != terrain::Body::Unknown;
     if (bodyGravity) p.energy.gravity = terrain::bodyGravity(problem.body);
+    p.frontier = frontierByDefault(problem, params);
     auto cells = startsToCells(problem.world.geometry(), problem.rovers);
     PlanResult out = toPlanResult(runCoverage(problem.world, cells, p, sink, cancel),
                                   problem.world.geometry());
@@ -132,6 +145,9 @@ class CoveragePlanner final : public Planner {
     out.assumptions.push_back({"gravity", params.count("gravity") ? "given"
                                           : bodyGravity          ? "the map's body"
                                                                  : "default (Moon)"});
+    out.assumptions.push_back({"stop_rule", p.frontier ? (params.count("frontier") ? "frontier (given)"
+                                                                                 : "frontier (the default on a DEM)")
+                                                       : "paper 002 (coverage of n − known obstacles)"});
     return out;
   }
 };

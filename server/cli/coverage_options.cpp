@@ -83,7 +83,10 @@ void addParamOptions(ArgParser& a, const std::vector<ParamInfo>& infos,
     const std::string name = optionForParam(info.key);
     switch (info.type) {
       case ParamType::Bool:
+        // A pair, because a planner may turn a flag on by default for some problems (coverage's
+        // frontier mode on a DEM): --NAME sets it, --no-NAME clears it.
         a.flag(name, help);
+        a.flag("no-" + name, "Turn --" + name + " off.");
         break;
       case ParamType::Choice: {
         a.option(name, join(info.choices, "|"), paramToString(info.defaultValue), help);
@@ -104,7 +107,13 @@ ParamSet readParamOptions(const ArgParser& a, const std::vector<ParamInfo>& info
   ParamSet set;
   for (const ParamInfo& info : infos) {
     const std::string name = optionForParam(info.key);
-    if (!a.has(name) || std::find(skip.begin(), skip.end(), info.key) != skip.end()) continue;
+    if (std::find(skip.begin(), skip.end(), info.key) != skip.end()) continue;
+    if (info.type == ParamType::Bool && a.has("no-" + name)) {
+      if (a.has(name)) throw UsageError("--" + name + " and --no-" + name + " contradict each other");
+      set[info.key] = false;
+      continue;
+    }
+    if (!a.has(name)) continue;
     switch (info.type) {
       case ParamType::Bool:
         set[info.key] = true;

@@ -338,7 +338,8 @@ TEST_CASE("hostile upload: a coverage cell the map cannot hold is refused withou
   auto r = request(s.port(), "POST", "/api/missions", mission.dump(), "application/json");
   CHECK(r.status == 400);
   const std::string msg = r.json()["error"].value("message", "");
-  CHECK_MESSAGE(msg.find("the map") != std::string::npos, msg);
+  CHECK(r.json()["error"]["field"] == "params.coverage_cell");
+  CHECK_MESSAGE(msg.find("fits") != std::string::npos, msg);  // says which cell size would run
   CHECK_MESSAGE(msg.find(data) == std::string::npos, msg);
   CHECK_MESSAGE(msg.find("dem.tif") == std::string::npos, msg);
 }
