@@ -191,26 +191,49 @@ missions::MissionJob buildMission(ApiContext& ctx, const json& body) {
     job.pace = body["pace"].get<double>();
   }
   // What the planner plans on: the coverage planner a grid world (the map resampled to its
-  // cell); the team planners the map at its own resolution and the PDM.
+  // cell); the team planners the map at its own resolution and the PDM. Its memory is estimated
+  // and checked against the mission budget first (413 / 429 before anything big is built). Then
+  // it is built once to validate and dropped: a queued mission holds only its request, and a
+  // worker builds the world again when it starts the mission (MissionJob::build).
+  const GridGeometry mapGeometry = ctx.maps.get(job.record.mapId)->dem.geometry();
+  const int roverCount = static_cast<int>(job.problem.rovers.size());
+  double cell = 0;
   if (job.record.planner == "coverage") {
-    double cell = 1.0;
+    coverage::CoverageParams cp;
     try {
-      cell = coverage::parseCoverageParams(job.params).coverageCell;
+      cp = coverage::parseCoverageParams(job.params);
     } catch (const Error& e) {
       throw fromCore(e, "params.");
     }
-    auto dem = ctx.maps.demAtCell(job.record.mapId, cell);
-    job.problem.world = coverage::worldFromDem(*dem);
-    job.geo = dem->z.geo;
-    job.mapGrid = dem->geometry();
+    cell = cp.coverageCell;
+    const bool ownCells = cell <= 0 || std::fabs(cell - mapGeometry.cellWidth) < 1e-9;
+    const double c = ownCells ? mapGeometry.cellWidth : cell;
+    // The resampled grid's size (doubles, so 1e-300 m cannot overflow them).
+    auto along = [c](double extent) { return std::ceil(extent / c - 1e-9); };
+    const double cells = ownCells ? mapGeometry.cellCount()
+                                  : std::min(along(mapGeometry.heightMetres()) * along(mapGeometry.widthMetres()), 9e15);
+    job.memory = missions::coverageMissionMemory(static_cast<std::int64_t>(cells), c, roverCount,
+                                                 cp.mode == coverage::TeamMode::Voronoi, cp.coverage);
   } else {
-    auto dem = ctx.maps.demAtCell(job.record.mapId, 0);
-    job.problem.dem = dem;
-    if (!job.record.pdmId.empty())
-      job.problem.pdm = std::make_shared<Raster<float>>(ctx.maps.pdmMass(job.record.pdmId));
-    job.geo = dem->z.geo;
-    job.mapGrid = dem->geometry();
+    job.memory = missions::teamMissionMemory(mapGeometry.cellCount(), roverCount, !job.record.pdmId.empty());
   }
+  ctx.missions.admit(job.memory);
+  job.build = [&maps = ctx.maps, coverageWorld = job.record.planner == "coverage", cell](missions::MissionJob& j) {
+    if (coverageWorld) {
+      auto dem = maps.demAtCell(j.record.mapId, cell);
+      j.problem.world = coverage::worldFromDem(*dem);
+      j.geo = dem->z.geo;
+      j.mapGrid = dem->geometry();
+    } else {
+      auto dem = maps.demAtCell(j.record.mapId, 0);
+      j.problem.dem = dem;
+      if (!j.record.pdmId.empty())
+        j.problem.pdm = std::make_shared<Raster<float>>(maps.pdmMass(j.record.pdmId));
+      j.geo = dem->z.geo;
+      j.mapGrid = dem->geometry();
+    }
+  };
+  job.build(job);
   try {
     planner->validate(job.problem, job.params);
     job.eventGrid = planner->eventGrid(job.problem, job.params);
@@ -218,6 +241,9 @@ missions::MissionJob buildMission(ApiContext& ctx, const json& body) {
     bool roverField = e.field().rfind("rovers", 0) == 0 || e.field() == "map" || e.field() == "pdm";
     throw fromCore(e, roverField || e.field().empty() ? "" : "params.");
   }
+  job.problem.world = {};
+  job.problem.dem.reset();
+  job.problem.pdm.reset();
   json spec = body;
   spec.erase("map");
   spec.erase("pdm");
