@@ -193,30 +193,51 @@ missions::MissionJob buildMission(ApiContext& ctx, const json& body) {
       throw ApiError(400, "not_found", "no PDM '" + job.record.pdmId + "' on this map", "pdm");
   }
   // What the planner plans on: the coverage planner a grid world (the map resampled to its
-  // cell); the team planners the map at its own resolution and the PDM.
+  // cell); the team planners the map at its own resolution and the PDM. Its memory is estimated
+  // and checked against the mission budget first (413 / 429 before anything big is built). Then
+  // it is built once to validate and dropped: a queued mission holds only its request, and a
+  // worker builds the world again when it starts the mission (MissionJob::build).
+  const GridGeometry mapGeometry = ctx.maps.get(job.record.mapId)->dem.geometry();
+  const int roverCount = static_cast<int>(job.problem.rovers.size());
+  double cell = 0;
+  terrain::TraversabilityParams traversal;
   if (job.record.planner == "coverage") {
-    // Square coverage cells laid on the map at its own resolution (core/coverage/terrain_world).
-    auto dem = ctx.maps.demAtCell(job.record.mapId, 0);
+    coverage::CoverageParams cp;
     try {
-      const coverage::CoverageParams cp = coverage::parseCoverageParams(job.params);
-      const double cell = coverage::resolveCoverageCell(dem->geometry(), cp.coverageCell, cp.cellBudget);
-      job.problem.world = coverage::worldFromDem(*dem, cell, cp.traversability());
+      cp = coverage::parseCoverageParams(job.params);
+      // Square cells laid on the map at its own resolution (core/coverage/terrain_world); the
+      // cell comes from the map when not given and is refused past the grid's cell limit.
+      cell = coverage::resolveCoverageCell(mapGeometry, cp.coverageCell, cp.cellBudget);
     } catch (const Error& e) {
       throw fromCore(e, "params.");
     }
-    job.problem.dem = dem;  // the start check reads the map itself
-    job.problem.body = maps::bodyOfCrs(dem->z.geo.crsWkt);
-    job.geo = dem->z.geo;
-    job.mapGrid = dem->geometry();
+    traversal = cp.traversability();
+    const double cells = std::ceil(mapGeometry.heightMetres() / cell - 1e-9) *
+                         std::ceil(mapGeometry.widthMetres() / cell - 1e-9);
+    job.memory = missions::coverageMissionMemory(static_cast<std::int64_t>(cells), cell, roverCount,
+                                                 cp.mode == coverage::TeamMode::Voronoi, cp.coverage);
   } else {
-    auto dem = ctx.maps.demAtCell(job.record.mapId, 0);
-    job.problem.dem = dem;
-    job.problem.body = maps::bodyOfCrs(dem->z.geo.crsWkt);
-    if (!job.record.pdmId.empty())
-      job.problem.pdm = std::make_shared<Raster<float>>(ctx.maps.pdmMass(job.record.pdmId));
-    job.geo = dem->z.geo;
-    job.mapGrid = dem->geometry();
+    job.memory = missions::teamMissionMemory(mapGeometry.cellCount(), roverCount, !job.record.pdmId.empty());
   }
+  ctx.missions.admit(job.memory);
+  job.build = [&maps = ctx.maps, coverageWorld = job.record.planner == "coverage", cell,
+               traversal](missions::MissionJob& j) {
+    auto dem = maps.demAtCell(j.record.mapId, 0);
+    j.problem.body = maps::bodyOfCrs(dem->z.geo.crsWkt);
+    if (coverageWorld) {
+      j.problem.world = coverage::worldFromDem(*dem, cell, traversal);
+      j.problem.dem = dem;  // the start check reads the map itself
+      j.geo = dem->z.geo;
+      j.mapGrid = dem->geometry();
+    } else {
+      j.problem.dem = dem;
+      if (!j.record.pdmId.empty())
+        j.problem.pdm = std::make_shared<Raster<float>>(maps.pdmMass(j.record.pdmId));
+      j.geo = dem->z.geo;
+      j.mapGrid = dem->geometry();
+    }
+  };
+  job.build(job);
   try {
     planner->validate(job.problem, job.params);
     job.eventGrid = planner->eventGrid(job.problem, job.params);
@@ -225,6 +246,9 @@ missions::MissionJob buildMission(ApiContext& ctx, const json& body) {
     throw fromCore(e, roverField || e.field().empty() ? "" : "params.");
   }
   job.record.spec = std::move(request.spec);
+  job.problem.world = {};
+  job.problem.dem.reset();
+  job.problem.pdm.reset();
   return job;
 }
 

@@ -23,6 +23,9 @@ int serveCommand(const std::vector<std::string>& argv, std::ostream& out) {
   a.option("token", "T", "", "Require 'Authorization: Bearer T' on every /api route except health.");
   a.option("workers", "N", "cores", "Missions run in parallel.");
   a.option("queue", "N", "64", "Missions that may wait; more are refused with 429.");
+  a.option("mission-memory-mb", "M", "half the RAM",
+           "Memory the running + queued missions may take together (their estimates): one larger "
+           "is refused with 413, more with 429.");
   a.option("max-upload-mb", "M", "512", "Largest accepted upload.");
   a.option("cors", "ORIGIN", "", "Allow cross-origin requests from ORIGIN (off by default).");
   a.flag("quiet", "Do not log one line per request.");
@@ -41,6 +44,9 @@ int serveCommand(const std::vector<std::string>& argv, std::ostream& out) {
   config.logRequests = !a.isSet("quiet");
   const unsigned workers = static_cast<unsigned>(a.integer("workers", hardwareThreads(), 1, 256));
   const std::size_t queue = static_cast<std::size_t>(a.integer("queue", 64, 0, 100000));
+  const std::uint64_t defaultBudgetMb = missions::defaultMissionMemoryBudget() >> 20;
+  const std::uint64_t missionMemory =
+      static_cast<std::uint64_t>(a.integer("mission-memory-mb", static_cast<long long>(defaultBudgetMb), 1, 1ll << 30)) << 20;
 
   // Block the stop signals before any thread starts, so only sigwait below receives them.
   sigset_t stopSignals;
@@ -53,12 +59,24 @@ int serveCommand(const std::vector<std::string>& argv, std::ostream& out) {
   dir.cleanTmp();  // uploads in flight when the server last died: never visible
   config.uploadDir = dir.tmpDir();
   store::Database db(dir.databasePath());
-  int interrupted = db.markUnfinishedInterrupted();
+  // A full disk does not stop the start: reads work, writes answer 507 until space frees.
+  std::string fullDisk;
+  int interrupted = 0;
+  try {
+    interrupted = db.markUnfinishedInterrupted();
+  } catch (const store::StorageFull& e) {
+    fullDisk = e.what();  // they are marked at the next start with room
+  }
   api::MapCatalog maps(db, dir);
   const int orphans = maps.sweepOrphans();
-  maps.ensureDefaultMap();
+  try {
+    maps.ensureDefaultMap();
+  } catch (const store::StorageFull& e) {
+    fullDisk = e.what();
+  }
+  if (dir.startedFull() && fullDisk.empty()) fullDisk = "the data directory's disk is full";
   PlannerRegistry planners = makeBuiltinRegistry();
-  missions::MissionManager manager(db, dir, planners, workers, queue);
+  missions::MissionManager manager(db, dir, planners, workers, queue, missionMemory);
   http::Router router;
   api::ApiContext ctx{db, dir, maps, manager, planners};
   api::addApiRoutes(router, ctx);
@@ -70,8 +88,10 @@ int serveCommand(const std::vector<std::string>& argv, std::ostream& out) {
   }
   std::string shownHost = config.host == "0.0.0.0" ? "127.0.0.1" : config.host;
   out << "roverplan serving on http://" << shownHost << ":" << server.port() << "/  (data: "
-      << std::filesystem::absolute(dir.root()).string() << ", " << workers << " workers"
+      << std::filesystem::absolute(dir.root()).string() << ", " << workers << " workers, "
+      << missions::formatBytes(missionMemory) << " mission memory"
       << (config.token.empty() ? "" : ", token required") << ")" << std::endl;
+  if (!fullDisk.empty()) out << "warning: " << fullDisk << std::endl;
   if (orphans > 0) out << "removed " << orphans << " half-stored map/PDM folder(s) left by a crash" << std::endl;
   if (interrupted > 0) out << interrupted << " mission(s) were running at the last stop: marked interrupted" << std::endl;
 

@@ -207,7 +207,9 @@ Response invokeHandler(const Route& route, const Request& req) noexcept {
     try {
       return route.handler(req);
     } catch (const ApiError& e) {
-      return Response::error(e.status(), e.code(), e.what(), e.field());
+      Response r = Response::error(e.status(), e.code(), e.what(), e.field());
+      r.headers = e.headers();
+      return r;
     } catch (const std::exception& e) {
       return Response::error(500, "internal", e.what());
     } catch (...) {

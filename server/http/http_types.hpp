@@ -52,11 +52,18 @@ class ApiError : public std::runtime_error {
   int status() const { return status_; }
   const std::string& code() const { return code_; }
   const std::string& field() const { return field_; }
+  // Extra response headers, e.g. Retry-After on a 429.
+  ApiError& withHeader(std::string name, std::string value) {
+    headers_.emplace_back(std::move(name), std::move(value));
+    return *this;
+  }
+  const std::vector<std::pair<std::string, std::string>>& headers() const { return headers_; }
 
  private:
   int status_;
   std::string code_;
   std::string field_;
+  std::vector<std::pair<std::string, std::string>> headers_;
 };
 
 using Handler = std::function<Response(const Request&)>;
@@ -65,9 +72,18 @@ using Handler = std::function<Response(const Request&)>;
 // write (one write in flight); the source says "nothing now" and later calls wake() on the
 // connection. So a slow client costs a cursor, never a queue, and intermediate state coalesces.
 struct WsFrame {
+  WsFrame() = default;
+  WsFrame(bool isBinary, std::string bytes, bool isLast = false)
+      : binary(isBinary), data(std::move(bytes)), last(isLast) {}
+  // One immutable buffer shared by many clients (e.g. a snapshot): no copy per client.
+  WsFrame(bool isBinary, std::shared_ptr<const std::string> bytes, bool isLast = false)
+      : binary(isBinary), last(isLast), shared(std::move(bytes)) {}
+
   bool binary = false;
   std::string data;
   bool last = false;  // close the socket (normal closure) after this frame
+  std::shared_ptr<const std::string> shared;  // when set, sent instead of `data`
+  const std::string& bytes() const { return shared ? *shared : data; }
 };
 
 class WsConnection {

@@ -135,7 +135,7 @@ void WebsocketSession::pull() {
   frame_ = std::move(*frame);
   writing_ = true;
   ws_.binary(frame_.binary);
-  ws_.async_write(net::buffer(frame_.data),
+  ws_.async_write(net::buffer(frame_.bytes()),
                   beast::bind_front_handler(&WebsocketSession::onWrite, shared_from_this()));
 }
 
@@ -145,6 +145,7 @@ void WebsocketSession::onWrite(beast::error_code ec, std::size_t bytes) {
   ++frames_;
   bytes_ += bytes;
   frame_.data = std::string();  // release the frame's memory while parked
+  frame_.shared.reset();
   if (frame_.last) return closeWith(websocket::close_code::normal);
   std::chrono::milliseconds interval{0};
   try {

@@ -22,31 +22,103 @@ std::string readFile(const fs::path& p) {
 }
 }  // namespace
 
+// Seconds a client refused for a full queue or budget is told to wait (Retry-After): missions
+// take from seconds to minutes, so a short retry is cheap and a long one would idle the workers.
+constexpr int kRetryAfterSeconds = 10;
+
 MissionManager::MissionManager(store::Database& db, store::DataDir& dir,
                                const PlannerRegistry& registry, unsigned workers,
-                               std::size_t queueCapacity)
-    : db_(db), dir_(dir), registry_(registry), capacity_(queueCapacity) {
+                               std::size_t queueCapacity, std::uint64_t memoryBudget)
+    : db_(db), dir_(dir), registry_(registry), capacity_(queueCapacity), budget_(memoryBudget) {
   for (unsigned i = 0; i < std::max(1u, workers); ++i) workers_.emplace_back([this] { work(); });
 }
 
 MissionManager::~MissionManager() { stop(); }
 
-void MissionManager::submit(MissionJob job) {
-  std::unique_lock lock(mutex_);
+void MissionManager::admit(const MemoryEstimate& estimate) const {
+  std::lock_guard lock(mutex_);
+  admitLocked(estimate);
+}
+
+void MissionManager::admitLocked(const MemoryEstimate& e) const {
   if (stopping_) throw http::ApiError(503, "unavailable", "the server is shutting down");
+  if (e.bytes > budget_)
+    throw http::ApiError(413, "mission_too_large",
+                         "the mission needs about " + formatBytes(e.bytes) + " (" + e.what +
+                             "), more than the server's mission memory budget of " + formatBytes(budget_) +
+                             (e.field == "params.coverage_cell" ? ": use a larger coverage_cell" : ": use a smaller map"),
+                         e.field);
   if (queue_.size() >= capacity_)
     throw http::ApiError(429, "queue_full",
-                         "the mission queue is full (" + std::to_string(capacity_) + " waiting); try again later");
+                         "the mission queue is full (" + std::to_string(capacity_) + " waiting); try again later")
+        .withHeader("Retry-After", std::to_string(kRetryAfterSeconds));
+  if (reserved_ + e.bytes > budget_)
+    throw http::ApiError(429, "memory_busy",
+                         "the running and queued missions hold " + formatBytes(reserved_) + " of the " +
+                             formatBytes(budget_) + " mission memory budget and this one needs about " +
+                             formatBytes(e.bytes) + " (" + e.what + "); try again when one finishes")
+        .withHeader("Retry-After", std::to_string(kRetryAfterSeconds));
+}
+
+void MissionManager::submit(MissionJob job) {
+  retryUnsaved();
+  std::unique_lock lock(mutex_);
+  admitLocked(job.memory);
   job.record.status = "queued";
-  db_.insertMission(job.record);
+  db_.insertMission(job.record);  // StorageFull (507) on a full disk: nothing queued
   const GridGeometry& g = job.eventGrid;
   Active a;
   a.stream = std::make_shared<MissionStream>(job.record.id, g, static_cast<int>(job.problem.rovers.size()), job.pace);
   a.cancel = std::make_shared<CancelToken>();
+  a.memoryBytes = job.memory.bytes;
+  reserved_ += a.memoryBytes;
   active_[job.record.id] = a;
   queue_.push_back(std::move(job));
   lock.unlock();
   cv_.notify_one();
+}
+
+std::uint64_t MissionManager::memoryReserved() const {
+  std::lock_guard lock(mutex_);
+  return reserved_;
+}
+
+void MissionManager::recordStatus(const std::string& id, const std::string& status,
+                                  const std::string& message, const nlohmann::json& metrics) {
+  try {
+    db_.updateMission(id, status, message, metrics);
+    return;
+  } catch (const std::exception&) {
+    // A full (or failing) disk: the stream holds the status for clients; the row is retried.
+  }
+  if (status == "running") return;  // superseded by the final status anyway
+  std::lock_guard lock(unsavedMutex_);
+  unsaved_[id] = {status, message, metrics};
+}
+
+void MissionManager::retryUnsaved() {
+  std::map<std::string, Unsaved> pending;
+  {
+    std::lock_guard lock(unsavedMutex_);
+    pending.swap(unsaved_);
+  }
+  for (auto& [id, u] : pending) {
+    try {
+      db_.updateMission(id, u.status, u.message, u.metrics);
+    } catch (const std::exception&) {
+      std::lock_guard lock(unsavedMutex_);
+      unsaved_.emplace(id, std::move(u));  // a newer status, if any, wins
+    }
+  }
+}
+
+void MissionManager::rememberFinished(const std::string& id, std::shared_ptr<MissionStream> stream) {
+  finished_[id] = std::move(stream);
+  finishedOrder_.push_back(id);
+  while (finishedOrder_.size() > 32) {
+    finished_.erase(finishedOrder_.front());
+    finishedOrder_.pop_front();
+  }
 }
 
 bool MissionManager::cancel(const std::string& id) {
@@ -63,13 +135,13 @@ bool MissionManager::cancel(const std::string& id) {
         break;
       }
     auto stream = it->second.stream;
+    reserved_ -= it->second.memoryBytes;
     active_.erase(it);
     lock.unlock();
-    db_.updateMission(id, "cancelled", "cancelled before it started");
+    recordStatus(id, "cancelled", "cancelled before it started");
     stream->finish("cancelled", "cancelled before it started", nullptr);
     std::lock_guard relock(mutex_);
-    finished_[id] = stream;
-    finishedOrder_.push_back(id);
+    rememberFinished(id, stream);
   }
   return true;
 }
@@ -92,12 +164,7 @@ std::shared_ptr<MissionStream> MissionManager::stream(const std::string& id) {
   if (fs::exists(dir / "overlays.json"))
     s->restoreOverlays(nlohmann::json::parse(readFile(dir / "overlays.json"), nullptr, false));
   std::lock_guard lock(mutex_);
-  finished_[id] = s;
-  finishedOrder_.push_back(id);
-  while (finishedOrder_.size() > 32) {
-    finished_.erase(finishedOrder_.front());
-    finishedOrder_.pop_front();
-  }
+  rememberFinished(id, s);
   return s;
 }
 
@@ -129,15 +196,30 @@ void MissionManager::work() {
 }
 
 void MissionManager::runJob(MissionJob& job, Active a) {
-  const std::string& id = job.record.id;
-  db_.updateMission(id, "running", "");
+  const std::string id = job.record.id;
+  retryUnsaved();
+  recordStatus(id, "running", "");
   a.stream->setStatus("running");
   std::string status = "succeeded", message;
   nlohmann::json metrics = nullptr;
   try {
     const Planner& planner = registry_.get(job.record.planner);
+    if (job.build) {
+      // The world is built now, not while the mission waited in the queue (it may be gigabytes).
+      try {
+        job.build(job);
+      } catch (const std::exception& e) {
+        throw std::runtime_error(std::string("cannot build what the planner plans on: ") + e.what());
+      }
+      job.build = nullptr;
+    }
     PlanResult result = planner.run(job.problem, job.params, a.stream.get(), a.cancel.get());
-    metrics = json::toJson(result)["metrics"];
+    job.problem.world = {};  // the result is saved below; the world is no longer needed
+    job.problem.dem.reset();
+    job.problem.pdm.reset();
+    // Built once: on a fine grid the result's JSON is the biggest thing a mission holds.
+    nlohmann::json resultJson = json::toJson(result);
+    metrics = resultJson["metrics"];
     if (result.cancelled || a.cancel->cancelled()) {
       bool shuttingDown;
       {
@@ -147,32 +229,43 @@ void MissionManager::runJob(MissionJob& job, Active a) {
       status = shuttingDown ? "interrupted" : "cancelled";
       message = shuttingDown ? "the server stopped while the mission was running" : "cancelled by request";
     }
-    saveResult(job, result, *a.stream);
+    saveResult(job, result, std::move(resultJson), *a.stream);
+  } catch (const store::StorageFull& e) {
+    status = "failed";
+    message = std::string("insufficient storage: ") + e.what();
   } catch (const std::exception& e) {
     status = "failed";
     message = e.what();
   }
-  db_.updateMission(id, status, message, metrics);
+  recordStatus(id, status, message, metrics);
   a.stream->finish(status, message, metrics);
   std::lock_guard lock(mutex_);
+  reserved_ -= a.memoryBytes;
   active_.erase(id);
-  finished_[id] = a.stream;
-  finishedOrder_.push_back(id);
-  while (finishedOrder_.size() > 32) {
-    finished_.erase(finishedOrder_.front());
-    finishedOrder_.pop_front();
-  }
+  rememberFinished(id, a.stream);
 }
 
 void MissionManager::saveResult(const MissionJob& job, const PlanResult& result,
-                                const MissionStream& stream) {
+                                nlohmann::json resultJson, const MissionStream& stream) {
   const std::string staging = dir_.stagingDir();
+  try {
+    writeResultFiles(job, result, std::move(resultJson), stream, staging);
+    dir_.commitDir(staging, dir_.missionDir(job.record.id));
+  } catch (...) {
+    store::DataDir::removeTree(staging);  // a full disk must not also keep the half-written files
+    throw;
+  }
+}
+
+void MissionManager::writeResultFiles(const MissionJob& job, const PlanResult& result,
+                                      nlohmann::json j, const MissionStream& stream,
+                                      const std::string& staging) {
   const fs::path s(staging);
-  nlohmann::json j = json::toJson(result);
   j["mission"] = job.record.id;
   j["map"] = job.record.mapId;
   j["spec"] = job.record.spec;
   store::DataDir::writeFileAtomic((s / "result.json").string(), j.dump());
+  j = nullptr;  // free the tree before the other files are formatted
   store::DataDir::writeFileAtomic(
       (s / "result.geojson").string(),
       maps::tracksToGeoJson(result.tracks, job.mapGrid, job.geo));
@@ -185,7 +278,6 @@ void MissionManager::saveResult(const MissionJob& job, const PlanResult& result,
   store::DataDir::writeFileAtomic((s / "grid.bin").string(), stream.fullGridFrame());
   store::DataDir::writeFileAtomic((s / "trails.json").string(), stream.trailsJson().dump());
   store::DataDir::writeFileAtomic((s / "overlays.json").string(), stream.overlaysJson().dump());
-  dir_.commitDir(staging, dir_.missionDir(job.record.id));
 }
 
 void MissionManager::stop() {
@@ -206,9 +298,10 @@ void MissionManager::stop() {
     if (t.joinable()) t.join();
   workers_.clear();
   for (auto& [id, s] : queuedStreams) {
-    db_.updateMission(id, "interrupted", "the server stopped before the mission started");
+    recordStatus(id, "interrupted", "the server stopped before the mission started");
     s->finish("interrupted", "the server stopped before the mission started", nullptr);
   }
+  retryUnsaved();  // whatever is still refused is marked interrupted at the next start
 }
 
 }  // namespace rover::missions

@@ -2,7 +2,16 @@
 // Runs missions on a pool of workers (issue: server, "Mission manager"): a bounded queue (full ->
 // 429), cancellation through the planner's token, a failing planner marks only its mission failed.
 // Results are written atomically into the mission's folder before its row says "succeeded".
+//
+// Memory is bounded and stated (issue 14): a queued mission holds its request, not its world — the
+// world / DEM / PDM are built by `MissionJob::build` when a worker starts it — and every mission's
+// estimated memory (mission_memory.hpp) is counted against a budget while it is queued or running:
+// one mission over the budget is refused with 413, a full budget with 429 + Retry-After.
+// A full disk never stops the server: writes answer 507, a worker that cannot store its result
+// marks the mission failed (or keeps the status in memory and retries the row later).
 #include <condition_variable>
+#include <cstdint>
+#include <functional>
 #include <deque>
 #include <map>
 #include <memory>
@@ -13,6 +22,7 @@
 
 #include "core/common/cancel.hpp"
 #include "core/planning/planner.hpp"
+#include "server/missions/mission_memory.hpp"
 #include "server/missions/mission_stream.hpp"
 #include "server/store/data_dir.hpp"
 #include "server/store/database.hpp"
@@ -21,21 +31,34 @@ namespace rover::missions {
 
 struct MissionJob {
   store::MissionRecord record;  // id, map, planner, spec (as accepted)
-  PlanningProblem problem;      // validated
+  // Validated. While queued it holds the rovers only: world, dem and pdm are filled in by `build`
+  // when a worker starts the mission, and dropped when it ends.
+  PlanningProblem problem;
   ParamSet params;
   GeoReference geo;             // the map's georeferencing, for the GeoJSON result
   GridGeometry mapGrid;         // the grid positions are relative to (for the GeoJSON result)
   GridGeometry eventGrid;       // the planner's cellsChanged grid (Planner::eventGrid)
   double pace = 0;              // steps per second, 0 = full speed
+  MemoryEstimate memory;        // estimated peak while it runs (counted against the budget)
+  // Builds what the planner plans on into `problem` (throws, e.g. when the map was deleted while
+  // the mission waited: the mission is then marked failed with the reason). Null: already built.
+  std::function<void(MissionJob&)> build;
 };
 
 class MissionManager {
  public:
+  // `memoryBudget`: bytes that running + queued missions may hold together (their estimates).
   MissionManager(store::Database& db, store::DataDir& dir, const PlannerRegistry& registry,
-                 unsigned workers, std::size_t queueCapacity);
+                 unsigned workers, std::size_t queueCapacity,
+                 std::uint64_t memoryBudget = defaultMissionMemoryBudget());
   ~MissionManager();  // stop()
 
-  // Queues a validated mission (row inserted as "queued"); throws http::ApiError 429 when full.
+  // Throws http::ApiError 413 mission_too_large when one mission's estimate exceeds the budget,
+  // 429 (Retry-After) when the queue is full or the running + queued missions leave too little of
+  // the budget. Cheap: callers check before they build anything big; submit() checks again.
+  void admit(const MemoryEstimate& estimate) const;
+  // Queues a validated mission (row inserted as "queued"); throws like admit(), and 507 when the
+  // row cannot be written (full disk).
   void submit(MissionJob job);
   // Cancels a queued or running mission; false if it is not (or no longer) active.
   bool cancel(const std::string& id);
@@ -43,6 +66,8 @@ class MissionManager {
   std::shared_ptr<MissionStream> stream(const std::string& id);
   std::size_t running() const;
   std::size_t queued() const;
+  std::uint64_t memoryBudget() const { return budget_; }
+  std::uint64_t memoryReserved() const;  // estimates of the running + queued missions
   // Cancels everything, marks running/queued missions interrupted, joins the workers.
   void stop();
 
@@ -51,16 +76,29 @@ class MissionManager {
     std::shared_ptr<MissionStream> stream;
     std::shared_ptr<CancelToken> cancel;
     bool running = false;
+    std::uint64_t memoryBytes = 0;
   };
+  void admitLocked(const MemoryEstimate& estimate) const;  // caller holds mutex_
   void work();
   void runJob(MissionJob& job, Active active);
-  void saveResult(const MissionJob& job, const PlanResult& result, const MissionStream& stream);
+  void saveResult(const MissionJob& job, const PlanResult& result, nlohmann::json resultJson,
+                  const MissionStream& stream);
+  static void writeResultFiles(const MissionJob& job, const PlanResult& result, nlohmann::json j,
+                               const MissionStream& stream, const std::string& staging);
+  void rememberFinished(const std::string& id, std::shared_ptr<MissionStream> stream);  // holds mutex_
+  // Writes a mission's status row; on a storage failure keeps it in `unsaved_` (retried by the
+  // next write) instead of throwing, so a full disk never takes a worker (or the process) down.
+  void recordStatus(const std::string& id, const std::string& status, const std::string& message,
+                    const nlohmann::json& metrics = nullptr);
+  void retryUnsaved();
 
   store::Database& db_;
   store::DataDir& dir_;
   const PlannerRegistry& registry_;
   const std::size_t capacity_;
+  const std::uint64_t budget_;
   mutable std::mutex mutex_;
+  std::uint64_t reserved_ = 0;  // sum of Active::memoryBytes
   std::condition_variable cv_;
   std::deque<MissionJob> queue_;
   std::map<std::string, Active> active_;
@@ -68,6 +106,12 @@ class MissionManager {
   std::deque<std::string> finishedOrder_;
   bool stopping_ = false;
   std::vector<std::thread> workers_;
+  struct Unsaved {
+    std::string status, message;
+    nlohmann::json metrics;
+  };
+  std::mutex unsavedMutex_;
+  std::map<std::string, Unsaved> unsaved_;  // final statuses the database refused (full disk)
 };
 
 }  // namespace rover::missions

@@ -35,40 +35,27 @@ class MissionStream::Subscription : public http::WsSource {
 
   std::optional<http::WsFrame> next() override {
     MissionStream& s = *stream_;
-    std::lock_guard lock(s.mutex_);
-    const std::uint64_t gridVersion = s.logBase_ + s.changeLog_.size();
     if (!snapshotSent_) {
+      // Built (or reused) outside the stream's lock; the cursors are those of the shared state.
+      std::shared_ptr<const Snapshot> snap = s.snapshot();
       snapshotSent_ = true;
-      nlohmann::json rovers = nlohmann::json::array();
-      trailSent_.assign(s.trails_.size(), 0);
-      for (std::size_t k = 0; k < s.trails_.size(); ++k) {
-        nlohmann::json trail = nlohmann::json::array();
-        for (const auto& p : s.trails_[k]) trail.push_back({p.x, p.y});
-        nlohmann::json r{{"rover", k}, {"trail", trail}, {"pose", nullptr}};
-        if (!s.trails_[k].empty()) {
-          const Pose& p = s.trails_[k].back();
-          r["pose"] = poseJson(p.x, p.y, p.headingDeg);
-        }
-        rovers.push_back(r);
-        trailSent_[k] = s.trails_[k].size();
-      }
-      nlohmann::json grid = nullptr;
-      if (s.grid_.cellCount() > 0)
-        grid = {{"rows", s.grid_.rows}, {"cols", s.grid_.cols}, {"cell_size_m", s.grid_.cellWidth}};
-      nlohmann::json j{{"type", "snapshot"}, {"mission", s.id_},   {"status", s.status_},
-                       {"grid", grid},       {"rovers", rovers},   {"step", s.step_},
-                       {"progress", s.progress_}, {"metrics", s.metrics_}};
-      if (!s.route_.empty() || !s.paths_.empty()) {
-        j["route"] = s.route_;
-        j["paths"] = s.paths_;
-      }
-      routeSeen_ = s.routeVersion_;
-      pathSent_.assign(s.paths_.size(), 0);
-      for (std::size_t k = 0; k < s.paths_.size(); ++k) pathSent_[k] = s.paths_[k].size();
-      progressSeen_ = s.progressVersion_;
-      statusSeen_ = s.statusVersion_;
-      return http::WsFrame{false, j.dump(), false};
+      trailSent_ = snap->trailLengths;
+      pathSent_ = snap->pathLengths;
+      routeSeen_ = snap->routeVersion;
+      progressSeen_ = snap->progressVersion;
+      statusSeen_ = snap->statusVersion;
+      pendingGrid_ = snap->grid;
+      if (pendingGrid_) gridSeen_ = snap->gridVersion;
+      return http::WsFrame{false, snap->json, false};
     }
+    if (pendingGrid_) {
+      // The snapshot's full grid, shared: the first grid frame, then diffs from its version.
+      gridSent_ = true;
+      lastKind_ = 0;
+      return http::WsFrame{true, std::move(pendingGrid_), false};
+    }
+    std::lock_guard lock(s.mutex_);
+    const std::uint64_t gridVersion = s.gridVersionLocked();
     // Grid diffs, poses, progress and overlays take turns, so a planner that changes cells every
     // step cannot starve the trails and the progress bar.
     for (int tries = 0; tries < 4; ++tries) {
@@ -94,18 +81,16 @@ class MissionStream::Subscription : public http::WsSource {
         }
       }
       if (kind == 0 && s.grid_.cellCount() > 0 && (!gridSent_ || gridSeen_ != gridVersion)) {
-        std::string frame;
-        // A full grid for a new client, or when it fell behind the compacted log, or when the
-        // diff would be bigger than the grid.
-        if (!gridSent_ || gridSeen_ < s.logBase_ ||
-            gridVersion - gridSeen_ > static_cast<std::uint64_t>(s.grid_.cellCount()) / 2)
-          frame = s.fullGridFrameLocked();
-        else
-          frame = s.gridDiffFrame(gridSeen_);
+        // A full grid (shared with every client at this version) for a new client, or when it
+        // fell behind the compacted log, or when the diff would be bigger than the grid.
+        const bool full = !gridSent_ || gridSeen_ < s.logBase_ ||
+                          gridVersion - gridSeen_ > static_cast<std::uint64_t>(s.grid_.cellCount()) / 2;
         gridSent_ = true;
+        const std::uint64_t since = gridSeen_;
         gridSeen_ = gridVersion;
         lastKind_ = 0;
-        return http::WsFrame{true, std::move(frame), false};
+        if (full) return http::WsFrame{true, s.sharedFullGridLocked(), false};
+        return http::WsFrame{true, s.gridDiffFrame(since), false};
       }
       if (kind == 1) {
         if (trailSent_.size() < s.trails_.size()) trailSent_.resize(s.trails_.size(), 0);
@@ -152,6 +137,7 @@ class MissionStream::Subscription : public http::WsSource {
   std::uint64_t gridSeen_ = 0, progressSeen_ = 0, statusSeen_ = 0;
   std::vector<std::size_t> trailSent_, pathSent_;
   std::uint64_t routeSeen_ = 0;
+  std::shared_ptr<const std::string> pendingGrid_;  // the snapshot's grid, sent right after it
   int lastKind_ = 3;  // 0 grid, 1 poses, 2 progress, 3 overlays: the kind sent last, for taking turns
 };
 
@@ -160,13 +146,86 @@ MissionStream::MissionStream(std::string missionId, const GridGeometry& grid, in
     : id_(std::move(missionId)),
       grid_(grid),
       pace_(paceStepsPerSecond),
-      state_(grid.cellCount(), 0),
-      visits_(grid.cellCount(), 0),
       trails_(std::max(0, rovers)) {}
+
+void MissionStream::allocateGridLocked() {
+  if (!state_.empty() || grid_.cellCount() <= 0) return;
+  state_.assign(grid_.cellCount(), 0);
+  visits_.assign(grid_.cellCount(), 0);
+}
+
+std::shared_ptr<const std::string> MissionStream::sharedFullGridLocked() {
+  const std::uint64_t v = gridVersionLocked();
+  if (!fullGrid_ || fullGridVersion_ != v) {
+    fullGrid_ = std::make_shared<const std::string>(fullGridFrameLocked());
+    fullGridVersion_ = v;
+  }
+  return fullGrid_;
+}
+
+std::shared_ptr<const MissionStream::Snapshot> MissionStream::snapshot() {
+  std::lock_guard build(snapshotBuildMutex_);
+  auto snap = std::make_shared<Snapshot>();
+  // Under the stream's lock only copies of the compact state (12 bytes a trail point) and the
+  // shared grid frame; the JSON, several times bigger, is formatted after the lock is released.
+  std::vector<std::vector<Pose>> trails;
+  nlohmann::json j;
+  {
+    std::lock_guard lock(mutex_);
+    if (snapshot_ && snapshot_->version == stateVersion_) return snapshot_;
+    snap->version = stateVersion_;
+    snap->gridVersion = gridVersionLocked();
+    snap->routeVersion = routeVersion_;
+    snap->progressVersion = progressVersion_;
+    snap->statusVersion = statusVersion_;
+    for (const auto& t : trails_) snap->trailLengths.push_back(t.size());
+    for (const auto& p : paths_) snap->pathLengths.push_back(p.size());
+    trails = trails_;
+    if (grid_.cellCount() > 0) snap->grid = sharedFullGridLocked();
+    nlohmann::json grid = nullptr;
+    if (grid_.cellCount() > 0)
+      grid = {{"rows", grid_.rows}, {"cols", grid_.cols}, {"cell_size_m", grid_.cellWidth}};
+    j = {{"type", "snapshot"}, {"mission", id_},     {"status", status_},  {"grid", grid},
+         {"rovers", nullptr},  {"step", step_},      {"progress", progress_}, {"metrics", metrics_}};
+    if (!route_.empty() || !paths_.empty()) {
+      j["route"] = route_;
+      j["paths"] = paths_;
+    }
+  }
+  // The rovers' trails are formatted one rover at a time into the text (not one JSON tree of
+  // every point) and spliced where the placeholder is; the keys keep nlohmann's sorted order.
+  std::string rovers = "[";
+  for (std::size_t k = 0; k < trails.size(); ++k) {
+    nlohmann::json trail = nlohmann::json::array();
+    for (const auto& p : trails[k]) trail.push_back({p.x, p.y});
+    nlohmann::json r{{"rover", k}, {"trail", std::move(trail)}, {"pose", nullptr}};
+    if (!trails[k].empty()) {
+      const Pose& p = trails[k].back();
+      r["pose"] = poseJson(p.x, p.y, p.headingDeg);
+    }
+    if (k > 0) rovers += ',';
+    rovers += r.dump();
+    std::vector<Pose>().swap(trails[k]);
+  }
+  rovers += ']';
+  std::string text = j.dump();
+  const std::string placeholder = "\"rovers\":null";
+  // The last occurrence: keys are sorted and only "status", "step" and "type" (no such text)
+  // follow the top-level "rovers"; a NaN metric named "rovers" would come earlier.
+  const auto at = text.rfind(placeholder);
+  text.replace(at, placeholder.size(), "\"rovers\":" + rovers);
+  snap->json = std::make_shared<const std::string>(std::move(text));
+  ++snapshotBuilds_;
+  std::lock_guard lock(mutex_);
+  snapshot_ = snap;
+  return snap;
+}
 
 void MissionStream::cellsChanged(std::span<const CellUpdate> cells) {
   {
     std::lock_guard lock(mutex_);
+    allocateGridLocked();
+    ++stateVersion_;
     for (const CellUpdate& c : cells) {
       if (c.index < 0 || c.index >= grid_.cellCount()) continue;
       state_[c.index] = c.state;
@@ -186,6 +245,7 @@ void MissionStream::roverPoses(std::int64_t step, std::span<const RoverPose> pos
   {
     std::lock_guard lock(mutex_);
     step_ = step;
+    ++stateVersion_;
     for (const RoverPose& p : poses) {
       if (p.rover < 0) continue;
       if (static_cast<std::size_t>(p.rover) >= trails_.size()) trails_.resize(p.rover + 1);
@@ -197,7 +257,7 @@ void MissionStream::roverPoses(std::int64_t step, std::span<const RoverPose> pos
     }
   }
   wakeAll(false);
-  if (pace_ > 0 && !cancelRequested_) {
+  if (pace_ > 0 && !cancelRequested_.load(std::memory_order_relaxed)) {
     // Hold the planner to `pace_` steps a second so a person can watch; short sleeps keep
     // cancellation prompt (the planner checks its token every step).
     auto now = std::chrono::steady_clock::now();
@@ -213,6 +273,7 @@ void MissionStream::progress(const Progress& p) {
     std::lock_guard lock(mutex_);
     progress_ = {{"step", p.step}, {"fraction", p.fraction}, {"coverage", p.coverage}, {"moves", p.moves}};
     ++progressVersion_;
+    ++stateVersion_;
   }
   wakeAll(false);
 }
@@ -220,6 +281,7 @@ void MissionStream::progress(const Progress& p) {
 void MissionStream::overlay(std::string_view kind, int rover, std::span<const Point2> points) {
   {
     std::lock_guard lock(mutex_);
+    ++stateVersion_;
     if (kind == "route") {
       route_.clear();
       for (const auto& p : points) route_.push_back({static_cast<float>(p.x), static_cast<float>(p.y)});
@@ -238,6 +300,7 @@ void MissionStream::metrics(std::span<const Metric> metrics) {
     liveMetrics_ = nlohmann::json::object();
     for (const auto& m : metrics) liveMetrics_[m.key] = m.value;
     ++progressVersion_;
+    ++stateVersion_;
   }
   wakeAll(false);
 }
@@ -250,6 +313,7 @@ nlohmann::json MissionStream::overlaysJson() const {
 void MissionStream::restoreOverlays(const nlohmann::json& o) {
   std::lock_guard lock(mutex_);
   if (!o.is_object()) return;
+  ++stateVersion_;
   try {
     route_ = o.value("route", std::vector<std::array<float, 2>>{});
     paths_ = o.value("paths", std::vector<std::vector<std::array<float, 2>>>{});
@@ -265,6 +329,7 @@ void MissionStream::setStatus(const std::string& status) {
     std::lock_guard lock(mutex_);
     status_ = status;
     ++statusVersion_;
+    ++stateVersion_;
   }
   wakeAll(true);
 }
@@ -278,6 +343,7 @@ void MissionStream::finish(const std::string& status, const std::string& message
     metrics_ = metrics;
     finished_ = true;
     ++statusVersion_;
+    ++stateVersion_;
   }
   wakeAll(true);
 }
@@ -306,6 +372,10 @@ std::string MissionStream::fullGridFrameLocked() const {
   putU32(out, grid_.rows);
   putU32(out, grid_.cols);
   putU32(out, n);
+  if (state_.empty()) {
+    out.append(5ull * n, '\0');  // nothing reported yet (queued): every cell unknown, unvisited
+    return out;
+  }
   out.append(reinterpret_cast<const char*>(state_.data()), n);
   for (std::uint32_t v : visits_) putU32(out, v);
   return out;
@@ -358,6 +428,7 @@ std::shared_ptr<MissionStream> MissionStream::fromStored(const std::string& miss
     if (gridFrame.size() != 16 + 5ull * g.rows * g.cols) g = GridGeometry{};
   }
   auto s = std::make_shared<MissionStream>(missionId, g, static_cast<int>(trails.size()));
+  s->allocateGridLocked();  // not shared yet: no lock needed
   for (int i = 0; i < g.cellCount(); ++i) {
     s->state_[i] = static_cast<std::uint8_t>(gridFrame[16 + i]);
     s->visits_[i] = getU32(gridFrame, 16 + g.cellCount() + 4ull * i);

@@ -18,7 +18,13 @@
 // Binary frames, little-endian: u32 type, u32 rows, u32 cols, u32 count, then
 //   type 1: count × (u32 cell index, u8 state, u8×3 zero, u32 visits)
 //   type 2: rows·cols × u8 state, then rows·cols × u32 visits
+//
+// Memory (issue 14): the snapshot and the full grid frame are built once per state of the stream
+// and shared, immutable, by every subscriber that joins at that state (a finished mission: one
+// copy for all); the snapshot's JSON is formatted outside the lock the planner's events take.
+// A queued mission's grid is allocated when the planner first reports cells.
 #include <array>
+#include <atomic>
 #include <chrono>
 #include <cstdint>
 #include <memory>
@@ -53,7 +59,8 @@ class MissionStream : public EventSink, public std::enable_shared_from_this<Miss
   // The final frame's content; wakes every subscriber.
   void finish(const std::string& status, const std::string& message, const nlohmann::json& metrics);
   bool finished() const;
-  void setCancelled() { cancelRequested_ = true; }
+  // Called by the manager's thread, read by the planner's (pacing): atomic.
+  void setCancelled() { cancelRequested_.store(true, std::memory_order_relaxed); }
 
   // Status, progress and (when finished) metrics, for GET /api/missions/{id}.
   nlohmann::json summary() const;
@@ -73,20 +80,35 @@ class MissionStream : public EventSink, public std::enable_shared_from_this<Miss
 
   std::shared_ptr<http::WsSource> subscribe(std::shared_ptr<http::WsConnection> connection);
   std::size_t subscriberCount() const;
+  // How many snapshots (JSON + full grid) were built so far: one per state that clients joined at.
+  std::uint64_t snapshotBuilds() const { return snapshotBuilds_.load(); }
 
  private:
   class Subscription;
   struct Pose {
     float x, y, headingDeg;
   };
+  // What a joining client gets first, shared by all that join at the same state, with the
+  // cursors it stands for.
+  struct Snapshot {
+    std::uint64_t version = 0;  // stateVersion_ it was built at
+    std::shared_ptr<const std::string> json, grid;  // grid null when the planner has none
+    std::uint64_t gridVersion = 0, routeVersion = 0, progressVersion = 0, statusVersion = 0;
+    std::vector<std::size_t> trailLengths, pathLengths;
+  };
+  std::shared_ptr<const Snapshot> snapshot();
   void wakeAll(bool force);
   std::string gridDiffFrame(std::uint64_t since) const;  // caller holds mutex_
   std::string fullGridFrameLocked() const;                 // caller holds mutex_
+  // The full grid frame of the current grid version, built once and shared (caller holds mutex_).
+  std::shared_ptr<const std::string> sharedFullGridLocked();
+  std::uint64_t gridVersionLocked() const { return logBase_ + changeLog_.size(); }
+  void allocateGridLocked();  // state_/visits_ on first use
 
   const std::string id_;
   const GridGeometry grid_;
   const double pace_;
-  bool cancelRequested_ = false;
+  std::atomic<bool> cancelRequested_{false};
   std::chrono::steady_clock::time_point paceStart_{};
   std::int64_t paceFirstStep_ = -1;
 
@@ -110,6 +132,12 @@ class MissionStream : public EventSink, public std::enable_shared_from_this<Miss
   nlohmann::json liveMetrics_ = nullptr;  // from the planner's metrics event, before the end
   std::vector<std::weak_ptr<http::WsConnection>> subscribers_;
   std::chrono::steady_clock::time_point lastWake_{};
+  std::uint64_t stateVersion_ = 0;  // bumped by every change a snapshot shows
+  std::shared_ptr<const Snapshot> snapshot_;
+  std::shared_ptr<const std::string> fullGrid_;  // of fullGridVersion_
+  std::uint64_t fullGridVersion_ = ~0ull;
+  std::mutex snapshotBuildMutex_;  // one builder at a time; the others then share its snapshot
+  std::atomic<std::uint64_t> snapshotBuilds_{0};
 };
 
 }  // namespace rover::missions

@@ -23,6 +23,13 @@ namespace {
 
 std::string errnoText(int err) { return std::error_code(err, std::generic_category()).message(); }
 
+// Throws StorageFull for a full disk, else std::runtime_error with `detail` (may name paths: it
+// is logged, and the HTTP edge answers 500 without it being a user's fault).
+[[noreturn]] void throwWriteError(int err, const std::string& what, const std::string& detail) {
+  if (isStorageFullErrno(err)) throw StorageFull("cannot store " + what);
+  throw std::runtime_error(detail + ": " + errnoText(err));
+}
+
 // Opens `path` read-only and fsyncs it. Returns 0 or the errno of the failure.
 int fsyncPath(const fs::path& path, bool directory) {
   int flags = O_RDONLY | O_CLOEXEC;
@@ -49,7 +56,7 @@ void fsyncTree(const fs::path& dir) {
     std::error_code sec;
     if (entry.is_regular_file(sec)) {
       if (const int err = fsyncPath(entry.path(), false); err != 0)
-        throw std::runtime_error("cannot flush '" + entry.path().string() + "': " + errnoText(err));
+        throwWriteError(err, entry.path().filename().string(), "cannot flush '" + entry.path().string() + "'");
     } else if (entry.is_directory(sec)) {
       fsyncDirBestEffort(entry.path());
     }
@@ -59,6 +66,8 @@ void fsyncTree(const fs::path& dir) {
 }
 
 }  // namespace
+
+bool isStorageFullErrno(int err) { return err == ENOSPC || err == EDQUOT || err == EFBIG; }
 
 DataDir::DataDir(std::string root) : root_(std::move(root)) {
   if (root_.empty()) throw std::runtime_error("data directory: empty path");
@@ -77,6 +86,10 @@ DataDir::DataDir(std::string root) : root_(std::move(root)) {
   for (const fs::path& dir : {r, r / "tmp"}) {
     const fs::path probe = dir / (".write-probe-" + newId());
     const int fd = ::open(probe.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0600);
+    if (fd < 0 && isStorageFullErrno(errno)) {
+      startedFull_ = true;  // writable, only full: start, and let each write answer 507
+      continue;
+    }
     if (fd < 0) {
       throw std::runtime_error("data directory '" + root_ + "' is not writable: cannot create '" +
                                probe.string() + "': " + errnoText(errno));
@@ -85,6 +98,10 @@ DataDir::DataDir(std::string root) : root_(std::move(root)) {
     const int writeErr = errno;
     ::close(fd);
     ::unlink(probe.c_str());
+    if (!wrote && isStorageFullErrno(writeErr)) {
+      startedFull_ = true;
+      continue;
+    }
     if (!wrote)
       throw std::runtime_error("data directory '" + root_ + "' is not writable: cannot write '" +
                                probe.string() + "': " + errnoText(writeErr));
@@ -119,6 +136,7 @@ std::string DataDir::stagingDir() const {
   for (int attempt = 0; attempt < 16; ++attempt) {
     const fs::path dir = tmp / newId();
     if (fs::create_directory(dir, ec)) return dir.string();
+    if (ec && isStorageFullErrno(ec.value())) throw StorageFull("cannot create a staging folder");
     if (ec)
       throw std::runtime_error("cannot create staging folder '" + dir.string() +
                                "': " + ec.message());
@@ -144,6 +162,7 @@ void DataDir::commitDir(const std::string& staged, const std::string& finalDir) 
   }
   fsyncTree(staged);
   fs::rename(staged, target, ec);
+  if (ec && isStorageFullErrno(ec.value())) throw StorageFull("cannot commit " + target.filename().string());
   if (ec)
     throw std::runtime_error("commit: cannot move '" + staged + "' to '" + finalDir +
                              "': " + ec.message());
@@ -163,11 +182,11 @@ void DataDir::writeFileAtomic(const std::string& path, const std::string& bytes)
 
   const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
   if (fd < 0)
-    throw std::runtime_error("cannot write '" + path + "': cannot create temporary file '" +
-                             tmp.string() + "': " + errnoText(errno));
+    throwWriteError(errno, target.filename().string(),
+                    "cannot write '" + path + "': cannot create temporary file '" + tmp.string() + "'");
   auto failWith = [&](const char* what, int err) {
     ::unlink(tmp.c_str());
-    throw std::runtime_error("cannot write '" + path + "': " + what + ": " + errnoText(err));
+    throwWriteError(err, target.filename().string(), "cannot write '" + path + "': " + what);
   };
 
   const char* p = bytes.data();

@@ -8,12 +8,29 @@
 //   DATA/tmp/             uploads in flight and folders being built; emptied at start-up
 #include <string>
 
+#include "server/http/http_types.hpp"
+
 namespace rover::store {
+
+// A write failed because the disk (or the file size limit) is full: answered 507
+// insufficient_storage, with a message that names what could not be stored but no server path.
+class StorageFull : public http::ApiError {
+ public:
+  explicit StorageFull(const std::string& what)
+      : http::ApiError(507, "insufficient_storage",
+                       "the server's disk is full: " + what + "; free space or try again later") {}
+};
+
+// True for the errno values of a full disk or an exceeded size limit (ENOSPC, EDQUOT, EFBIG).
+bool isStorageFullErrno(int err);
 
 class DataDir {
  public:
-  // Creates the layout if missing; throws std::runtime_error if the folder is not writable.
+  // Creates the layout if missing; throws std::runtime_error if the folder is not writable. A
+  // folder on a full disk is accepted (startedFull() says so): reads work and writes answer 507 until
+  // space frees, so a restart with a full disk still starts.
   explicit DataDir(std::string root);
+  bool startedFull() const { return startedFull_; }
   const std::string& root() const { return root_; }
   std::string databasePath() const;
   std::string mapDir(const std::string& id) const;
@@ -27,7 +44,8 @@ class DataDir {
   std::string stagingDir() const;
   // Atomically moves a staged folder to its final place (rename); throws if the target exists.
   void commitDir(const std::string& staged, const std::string& finalDir) const;
-  // Writes bytes to `path` atomically (temp file in the same folder, fsync, rename).
+  // Writes bytes to `path` atomically (temp file in the same folder, fsync, rename). A full disk
+  // throws StorageFull (and leaves nothing behind).
   static void writeFileAtomic(const std::string& path, const std::string& bytes);
   // Removes a folder and everything in it (no error if absent).
   static void removeTree(const std::string& path);
@@ -36,6 +54,7 @@ class DataDir {
 
  private:
   std::string root_;
+  bool startedFull_ = false;
 };
 
 }  // namespace rover::store

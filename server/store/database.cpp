@@ -1,12 +1,16 @@
 #include "server/store/database.hpp"
 
+#include <fcntl.h>
 #include <sqlite3.h>
+#include <unistd.h>
 
 #include <chrono>
 #include <cstdio>
 #include <ctime>
 #include <stdexcept>
 #include <utility>
+
+#include "server/store/data_dir.hpp"
 
 // Durability choice: journal_mode=WAL with synchronous=NORMAL. Every write below is a single
 // statement, i.e. one implicit transaction. In WAL mode a transaction is committed once its frames
@@ -24,7 +28,16 @@ namespace {
 
 constexpr int kSchemaVersion = 1;
 
+// A full disk (SQLITE_FULL), a failed write (SQLITE_IOERR_*) or a file over RLIMIT_FSIZE are
+// the disk's fault, not a bug: StorageFull, answered 507.
+bool storageFailure(int rc) {
+  const int primary = rc & 0xff;
+  return primary == SQLITE_FULL || primary == SQLITE_IOERR;
+}
+
 [[noreturn]] void fail(sqlite3* db, const std::string& what) {
+  if (db != nullptr && storageFailure(sqlite3_extended_errcode(db)))
+    throw StorageFull("the database cannot be written");
   throw std::runtime_error("database: " + what + ": " +
                            (db != nullptr ? sqlite3_errmsg(db) : "out of memory"));
 }
@@ -86,7 +99,11 @@ class Stmt {
 
 void exec(sqlite3* db, const char* sql) {
   char* err = nullptr;
-  if (sqlite3_exec(db, sql, nullptr, nullptr, &err) != SQLITE_OK) {
+  if (const int rc = sqlite3_exec(db, sql, nullptr, nullptr, &err); rc != SQLITE_OK) {
+    if (storageFailure(sqlite3_extended_errcode(db)) || storageFailure(rc)) {
+      sqlite3_free(err);
+      throw StorageFull("the database cannot be written");
+    }
     std::string msg = err != nullptr ? err : sqlite3_errmsg(db);
     sqlite3_free(err);
     throw std::runtime_error("database: " + std::string(sql).substr(0, 60) + ": " + msg);
@@ -180,6 +197,59 @@ MissionRecord readMission(const Stmt& s) {
 }  // namespace
 
 Database::Database(const std::string& path) {
+  if (!path.empty() && path != ":memory:" && path.rfind("file:", 0) != 0) {
+    statusReserve_ = {path + ".reserve-status", kStatusReserveBytes};
+    deleteReserve_ = {path + ".reserve-delete", kDeleteReserveBytes};
+  }
+  try {
+    open(path, false);
+  } catch (const StorageFull&) {
+    // A restart with a full disk: no room for the WAL index (-shm). Exclusive locking keeps it in
+    // the process's memory, so reads work and the reserves stay for deletes; failing that, the
+    // reserves give SQLite the room.
+    try {
+      open(path, true);
+    } catch (const StorageFull&) {
+      if (!release(deleteReserve_) && !release(statusReserve_)) throw;
+      open(path, false);
+    }
+  }
+  ensureReserves();
+}
+
+bool Database::release(Reserve& r) {
+  if (r.path.empty()) return false;
+  r.held = false;
+  return ::unlink(r.path.c_str()) == 0;
+}
+
+void Database::ensureReserves() {
+  for (Reserve* r : {&deleteReserve_, &statusReserve_}) {
+    if (r->held || r->path.empty()) continue;
+    const int fd = ::open(r->path.c_str(), O_WRONLY | O_CREAT | O_CLOEXEC, 0600);
+    if (fd < 0) return;
+    // Allocated blocks, not a sparse file: the point is that the space is really taken.
+    const bool ok = ::posix_fallocate(fd, 0, r->bytes) == 0;
+    ::close(fd);
+    if (!ok) {
+      ::unlink(r->path.c_str());
+      return;
+    }
+    r->held = true;
+  }
+}
+
+template <class F>
+auto Database::withReserve(Reserve& r, F&& write) -> decltype(write()) {
+  try {
+    return write();
+  } catch (const StorageFull&) {
+    if (!release(r)) throw;
+    return write();
+  }
+}
+
+void Database::open(const std::string& path, bool exclusive) {
   const int flags = SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE | SQLITE_OPEN_FULLMUTEX;
   if (sqlite3_open_v2(path.c_str(), &db_, flags, nullptr) != SQLITE_OK) {
     std::string msg = db_ != nullptr ? sqlite3_errmsg(db_) : "out of memory";
@@ -190,6 +260,7 @@ Database::Database(const std::string& path) {
   try {
     sqlite3_extended_result_codes(db_, 1);
     exec(db_, "PRAGMA busy_timeout=5000");
+    if (exclusive) exec(db_, "PRAGMA locking_mode=EXCLUSIVE");
     {
       Stmt s(db_, "PRAGMA journal_mode=WAL");
       const std::string mode = s.step() ? s.text(0) : std::string();
@@ -242,6 +313,7 @@ Database::~Database() {
 void Database::insertMap(const MapRecord& m) {
   const std::string meta = dumpJson(m.meta, "map meta");
   std::lock_guard lock(mutex_);
+  ensureReserves();
   Stmt s(db_, "INSERT INTO maps(id, name, created_at, meta) VALUES (?1, ?2, ?3, ?4)");
   s.bind(1, m.id).bind(2, m.name).bind(3, m.createdAt).bind(4, meta).run();
 }
@@ -272,9 +344,12 @@ long long Database::countMaps() {
 bool Database::deleteMap(const std::string& id) {
   std::lock_guard lock(mutex_);
   // The PDMs go with it through ON DELETE CASCADE, in the same statement (one transaction).
-  Stmt s(db_, "DELETE FROM maps WHERE id = ?1");
-  s.bind(1, id).run();
-  return sqlite3_changes(db_) > 0;
+  ensureReserves();
+  return withReserve(deleteReserve_, [&] {
+    Stmt s(db_, "DELETE FROM maps WHERE id = ?1");
+    s.bind(1, id).run();
+    return sqlite3_changes(db_) > 0;
+  });
 }
 
 // ---- PDMs -------------------------------------------------------------------------------------
@@ -282,6 +357,7 @@ bool Database::deleteMap(const std::string& id) {
 void Database::insertPdm(const PdmRecord& p) {
   const std::string meta = dumpJson(p.meta, "PDM meta");
   std::lock_guard lock(mutex_);
+  ensureReserves();
   Stmt s(db_, "INSERT INTO pdms(id, map_id, name, created_at, meta) VALUES (?1, ?2, ?3, ?4, ?5)");
   s.bind(1, p.id).bind(2, p.mapId).bind(3, p.name).bind(4, p.createdAt).bind(5, meta).run();
 }
@@ -314,9 +390,12 @@ long long Database::countPdms(const std::string& mapId) {
 
 bool Database::deletePdm(const std::string& id) {
   std::lock_guard lock(mutex_);
-  Stmt s(db_, "DELETE FROM pdms WHERE id = ?1");
-  s.bind(1, id).run();
-  return sqlite3_changes(db_) > 0;
+  ensureReserves();
+  return withReserve(deleteReserve_, [&] {
+    Stmt s(db_, "DELETE FROM pdms WHERE id = ?1");
+    s.bind(1, id).run();
+    return sqlite3_changes(db_) > 0;
+  });
 }
 
 // ---- missions ---------------------------------------------------------------------------------
@@ -325,6 +404,7 @@ void Database::insertMission(const MissionRecord& m) {
   const std::string spec = dumpJson(m.spec, "mission spec");
   const std::string metrics = m.metrics.is_null() ? std::string() : dumpJson(m.metrics, "metrics");
   std::lock_guard lock(mutex_);
+  ensureReserves();
   Stmt s(db_,
          "INSERT INTO missions(id, map_id, pdm_id, planner, spec, status, message, created_at, "
          "started_at, finished_at, metrics) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11)");
@@ -364,34 +444,42 @@ void Database::updateMission(const std::string& id, const std::string& status,
   const std::string metricsText = metrics.is_null() ? std::string() : dumpJson(metrics, "metrics");
   const std::string now = nowIso();
   std::lock_guard lock(mutex_);
-  // In SET expressions `status` is the value before the update, so the timestamps are set only on
-  // the transition into running / into a final status (a repeated update keeps the first time).
-  Stmt s(db_,
-         "UPDATE missions SET "
-         "  started_at = CASE WHEN ?2 = 'running' AND status <> 'running' THEN ?4 "
-         "                    ELSE started_at END, "
-         "  finished_at = CASE WHEN ?5 = 1 AND status NOT IN "
-         "                       ('succeeded', 'failed', 'cancelled', 'interrupted') THEN ?4 "
-         "                     ELSE finished_at END, "
-         "  metrics = COALESCE(?6, metrics), "
-         "  status = ?2, message = ?3 "
-         "WHERE id = ?1");
-  s.bind(1, id).bind(2, status).bind(3, message).bind(4, now);
-  s.bindInt(5, isFinal(status) ? 1 : 0);
-  s.bindOrNull(6, metricsText);
-  s.run();
-  if (sqlite3_changes(db_) == 0) throw std::runtime_error("database: no mission '" + id + "'");
+  // A final status may use the reserve: a mission that ran must not stay "running" on a full disk.
+  auto update = [&] {
+    // In SET expressions `status` is the value before the update, so the timestamps are set only on
+    // the transition into running / into a final status (a repeated update keeps the first time).
+    Stmt s(db_,
+           "UPDATE missions SET "
+           "  started_at = CASE WHEN ?2 = 'running' AND status <> 'running' THEN ?4 "
+           "                    ELSE started_at END, "
+           "  finished_at = CASE WHEN ?5 = 1 AND status NOT IN "
+           "                       ('succeeded', 'failed', 'cancelled', 'interrupted') THEN ?4 "
+           "                     ELSE finished_at END, "
+           "  metrics = COALESCE(?6, metrics), "
+           "  status = ?2, message = ?3 "
+           "WHERE id = ?1");
+    s.bind(1, id).bind(2, status).bind(3, message).bind(4, now);
+    s.bindInt(5, isFinal(status) ? 1 : 0);
+    s.bindOrNull(6, metricsText);
+    s.run();
+    return sqlite3_changes(db_);
+  };
+  ensureReserves();
+  const int changed = isFinal(status) ? withReserve(statusReserve_, update) : update();
+  if (changed == 0) throw std::runtime_error("database: no mission '" + id + "'");
 }
 
 int Database::markUnfinishedInterrupted() {
   const std::string now = nowIso();
   std::lock_guard lock(mutex_);
-  Stmt s(db_,
-         "UPDATE missions SET status = 'interrupted', "
-         "  message = ?1 || status, finished_at = ?2 "
-         "WHERE status IN ('queued', 'running')");
-  s.bind(1, std::string("server restarted while the mission was ")).bind(2, now).run();
-  return sqlite3_changes(db_);
+  return withReserve(statusReserve_, [&] {
+    Stmt s(db_,
+           "UPDATE missions SET status = 'interrupted', "
+           "  message = ?1 || status, finished_at = ?2 "
+           "WHERE status IN ('queued', 'running')");
+    s.bind(1, std::string("server restarted while the mission was ")).bind(2, now).run();
+    return sqlite3_changes(db_);
+  });
 }
 
 std::string nowIso() {

@@ -41,8 +41,16 @@ struct MissionRecord {
   nlohmann::json metrics;  // final metrics (object), null until finished
 };
 
+// A full disk: every write throws StorageFull (data_dir.hpp, answered 507) and leaves the old row.
+// So that final mission statuses and deletes (which free space) still commit when the disk is
+// full, the database keeps two reserves of disk in files beside it (PATH.reserve-status,
+// PATH.reserve-delete): such a write that finds the disk full gives its reserve back and retries
+// once; every later write takes the reserves again when there is room. A start on a full disk
+// (no room for SQLite's WAL index) opens in exclusive locking mode, which keeps the index in memory.
 class Database {
  public:
+  static constexpr long kStatusReserveBytes = 256 << 10, kDeleteReserveBytes = 1 << 20;
+
   // Opens or creates the database file and its schema; throws std::runtime_error on failure.
   explicit Database(const std::string& path);
   ~Database();
@@ -74,8 +82,21 @@ class Database {
   int markUnfinishedInterrupted();
 
  private:
+  struct Reserve {
+    std::string path;  // empty for an in-memory database
+    long bytes = 0;
+    bool held = false;
+  };
+  void open(const std::string& path, bool exclusive);
+  // Runs `write` (caller holds mutex_); on StorageFull releases `r` and runs it again.
+  template <class F>
+  auto withReserve(Reserve& r, F&& write) -> decltype(write());
+  static bool release(Reserve& r);  // true if its file was there to remove
+  void ensureReserves();            // best effort: (re)creates them when there is room
+
   sqlite3* db_ = nullptr;
   std::mutex mutex_;
+  Reserve statusReserve_, deleteReserve_;
 };
 
 // Current time as ISO 8601 UTC with milliseconds, e.g. 2026-11-23T08:00:00.123Z.

@@ -1,0 +1,233 @@
+// Issue 14, missions and storage: memory bounded and stated (a per-mission estimate counted against
+// a budget: 413 / 429 with the reason), queued missions that hold no world, and one snapshot shared
+// by every WebSocket subscriber. Over loopback with an in-process server; loops bounded.
+#include <doctest/doctest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <thread>
+
+#include "core/planning/planner.hpp"
+#include "maps/dem_io.hpp"
+#include "server/api/map_catalog.hpp"
+#include "server/api/routes.hpp"
+#include "server/http/http_server.hpp"
+#include "server/missions/mission_manager.hpp"
+#include "server/missions/mission_memory.hpp"
+#include "test_client.hpp"
+
+using namespace rover;
+using rover::test::request;
+using nlohmann::json;
+namespace fs = std::filesystem;
+
+namespace {
+
+// The default map: 600 × 600 cells of 0.25 m (150 m square).
+constexpr std::int64_t kDefaultMapCells = 600 * 600;
+
+struct Dir {
+  fs::path path = fs::temp_directory_path() /
+                  ("roverplan-hostile-missions-" + std::to_string(::getpid()) + "-" + std::to_string(std::rand()));
+  ~Dir() {
+    std::error_code ec;
+    fs::remove_all(path, ec);
+  }
+};
+
+struct Server {
+  store::DataDir dir;
+  store::Database db;
+  api::MapCatalog maps;
+  PlannerRegistry planners = makeBuiltinRegistry();
+  missions::MissionManager manager;
+  http::Router router;
+  api::ApiContext ctx;
+  std::unique_ptr<http::HttpServer> server;
+
+  Server(const fs::path& data, std::uint64_t budget, std::size_t queue = 8)
+      : dir(data.string()),
+        db((dir.cleanTmp(), dir.databasePath())),
+        maps(db, dir),
+        manager(db, dir, planners, 1, queue, budget),
+        ctx{db, dir, maps, manager, planners} {
+    maps.ensureDefaultMap();
+    api::addApiRoutes(router, ctx);
+    http::ServerConfig c;
+    c.port = 0;
+    c.uploadDir = dir.tmpDir();
+    c.logRequests = false;
+    server = std::make_unique<http::HttpServer>(c, router);
+    server->start();
+  }
+  ~Server() {
+    server->stop();
+    manager.stop();
+  }
+  unsigned short port() const { return server->port(); }
+  test::HttpResult get(const std::string& t) { return request(port(), "GET", t); }
+  test::HttpResult post(const json& j) { return request(port(), "POST", "/api/missions", j.dump(), "application/json"); }
+  std::string map() { return get("/api/maps").json()[0]["id"]; }
+  std::string status(const std::string& id) { return get("/api/missions/" + id).json()["status"]; }
+  json waitFinished(const std::string& id) {
+    json m;
+    for (int i = 0; i < 1500; ++i) {  // 30 s at most
+      m = get("/api/missions/" + id).json();
+      if (m["status"] != "queued" && m["status"] != "running") break;
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+    return m;
+  }
+};
+
+json coverageMission(const std::string& map, double cell, double pace = 0, double goal = 0.05) {
+  json j{{"map", map}, {"planner", "coverage"}, {"rovers", {{{"x", 20.5}, {"y", 20.5}, {"heading", 0}}}},
+         {"params", {{"coverage_cell", cell}, {"coverage", goal}}}};
+  if (pace > 0) j["pace"] = pace;
+  return j;
+}
+
+void checkError(const test::HttpResult& r, int status, const std::string& code, const std::string& field) {
+  CHECK(r.status == status);
+  const json j = r.json();
+  REQUIRE(j.contains("error"));
+  CHECK(j["error"]["code"] == code);
+  CHECK(j["error"].value("field", std::string()) == field);
+}
+
+}  // namespace
+
+TEST_CASE("hostile missions: one mission over the memory budget is refused with 413, naming coverage_cell") {
+  Dir d;
+  // The budget fits a mission on the map's own 0.25 m cells, not one on 2.5 cm cells (100 times
+  // the cells): that one must be refused before its 36 million cell world is built.
+  const auto native = missions::coverageMissionMemory(kDefaultMapCells, 0.25, 1, false, 0.05);
+  Server s(d.path / "data", native.bytes * 3);
+  const std::string map = s.map();
+  auto r = s.post(coverageMission(map, 0.025));
+  checkError(r, 413, "mission_too_large", "params.coverage_cell");
+  const std::string message = r.json()["error"]["message"];
+  MESSAGE(message);
+  // The reason states the estimate and the budget.
+  CHECK(message.find(missions::formatBytes(s.manager.memoryBudget())) != std::string::npos);
+  CHECK(message.find("36000000 coverage cells") != std::string::npos);
+  CHECK(s.manager.memoryReserved() == 0);
+  CHECK(s.manager.queued() == 0);
+  // The same mission on the map's cells is accepted and runs.
+  auto ok = s.post(coverageMission(map, 0));
+  REQUIRE(ok.status == 202);
+  CHECK(s.waitFinished(ok.json()["id"])["status"] == "succeeded");
+  CHECK(s.manager.memoryReserved() == 0);  // released when it finished
+}
+
+TEST_CASE("hostile missions: running + queued missions over the budget get 429 with Retry-After; cancel frees it") {
+  Dir d;
+  const auto one = missions::coverageMissionMemory(kDefaultMapCells, 0.25, 1, false, 1.0);
+  Server s(d.path / "data", one.bytes * 2 + one.bytes / 2);  // room for two
+  const std::string map = s.map();
+  const auto slow = coverageMission(map, 0, 5, 1.0);  // 5 steps a second: runs until cancelled
+  const std::string first = s.post(slow).json()["id"];
+  const std::string second = s.post(slow).json()["id"];
+  CHECK(s.manager.memoryReserved() == 2 * one.bytes);
+  auto refused = s.post(slow);
+  checkError(refused, 429, "memory_busy", "");
+  CHECK(refused.headers.count("Retry-After") == 1);
+  const std::string why = refused.json()["error"]["message"];
+  MESSAGE(why);
+  CHECK(why.find("mission memory budget") != std::string::npos);
+  CHECK(s.manager.running() + s.manager.queued() == 2);
+  // Cancelling the queued one gives its share back: the next is accepted.
+  CHECK(request(s.port(), "DELETE", "/api/missions/" + second).status == 202);
+  CHECK(s.waitFinished(second)["status"] == "cancelled");
+  CHECK(s.manager.memoryReserved() == one.bytes);
+  const std::string third = s.post(slow).json()["id"];
+  for (const auto& id : {first, third}) CHECK(request(s.port(), "DELETE", "/api/missions/" + id).status == 202);
+  for (const auto& id : {first, third}) CHECK(s.waitFinished(id)["status"] == "cancelled");
+  CHECK(s.manager.memoryReserved() == 0);
+}
+
+TEST_CASE("hostile missions: the queue stays bounded in count too, with Retry-After") {
+  Dir d;
+  Server s(d.path / "data", 64ull << 30, 1);
+  const std::string map = s.map();
+  const auto slow = coverageMission(map, 0, 5, 1.0);
+  const std::string running = s.post(slow).json()["id"];
+  for (int i = 0; i < 200 && s.status(running) == "queued"; ++i) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  const std::string waiting = s.post(slow).json()["id"];
+  auto full = s.post(slow);
+  checkError(full, 429, "queue_full", "");
+  CHECK(full.headers.count("Retry-After") == 1);
+  for (const auto& id : {waiting, running}) CHECK(request(s.port(), "DELETE", "/api/missions/" + id).status == 202);
+  for (const auto& id : {waiting, running}) CHECK(s.waitFinished(id)["status"] == "cancelled");
+}
+
+TEST_CASE("hostile missions: a queued mission holds its request, not its world (built when it starts)") {
+  Dir d;
+  Server s(d.path / "data", 64ull << 30);
+  const std::string map = s.map();
+  // A second map to delete while a mission on it waits behind a slow one.
+  Raster<float> z(GridGeometry{60, 60, 0.5, 0.5}, 0.0f);
+  for (int r = 0; r < 60; ++r)
+    for (int c = 0; c < 60; ++c) z(r, c) = 0.01f * static_cast<float>(c + r);
+  const std::string path = (d.path / "flat.tif").string();
+  maps::writeGeoTiff(path, z);
+  std::ifstream in(path, std::ios::binary);
+  const std::string bytes((std::istreambuf_iterator<char>(in)), {});
+  auto up = request(s.port(), "POST", "/api/maps?filename=flat.tif&name=flat", bytes, "image/tiff");
+  REQUIRE(up.status == 201);
+  const std::string other = up.json()["id"];
+
+  const std::string running = s.post(coverageMission(map, 0, 5, 1.0)).json()["id"];
+  json waitingBody = coverageMission(other, 0);
+  waitingBody["rovers"] = {{{"x", 5.2}, {"y", 5.2}, {"heading", 0}}};
+  auto queued = s.post(waitingBody);
+  REQUIRE(queued.status == 202);
+  const std::string waiting = queued.json()["id"];
+  // Its world does not exist yet: deleting the map under it makes the mission fail when a
+  // worker starts it, with the reason, instead of running on a world it kept.
+  REQUIRE(request(s.port(), "DELETE", "/api/maps/" + other).status == 200);
+  CHECK(request(s.port(), "DELETE", "/api/missions/" + running).status == 202);
+  json m = s.waitFinished(waiting);
+  CHECK(m["status"] == "failed");
+  CHECK(std::string(m["message"]).find("cannot build what the planner plans on") != std::string::npos);
+  CHECK(s.manager.memoryReserved() == 0);
+}
+
+TEST_CASE("hostile missions: every WebSocket subscriber gets the same snapshot bytes, built once") {
+  Dir d;
+  Server s(d.path / "data", 64ull << 30);
+  json body{{"map", s.map()}, {"planner", "coverage"}, {"params", {{"coverage", 0.3}}}, {"rovers", json::array()}};
+  for (int k = 0; k < 4; ++k) body["rovers"].push_back({{"x", 20.5 + 30 * k}, {"y", 20.5}, {"heading", 0}});
+  auto r = s.post(body);
+  REQUIRE(r.status == 202);
+  const std::string id = r.json()["id"];
+  REQUIRE(s.waitFinished(id)["status"] == "succeeded");
+  auto stream = s.manager.stream(id);
+  REQUIRE(stream);
+  const std::uint64_t before = stream->snapshotBuilds();
+
+  constexpr int kClients = 6;
+  std::vector<std::vector<test::WsFrameSeen>> seen(kClients);
+  std::vector<std::thread> clients;
+  for (int k = 0; k < kClients; ++k)
+    clients.emplace_back([&, k] { seen[k] = test::readAllFrames(s.port(), "/api/missions/" + id + "/stream"); });
+  for (auto& t : clients) t.join();
+  for (int k = 0; k < kClients; ++k) {
+    REQUIRE(seen[k].size() == 3);  // snapshot, full grid, done
+    CHECK(seen[k][0].data == seen[0][0].data);
+    CHECK(seen[k][1].data == seen[0][1].data);
+  }
+  const json snap = json::parse(seen[0][0].data);
+  CHECK(snap["type"] == "snapshot");
+  CHECK(snap["rovers"].size() == 4);
+  CHECK(snap["rovers"][0]["trail"].size() > 1);
+  CHECK(snap["status"] == "succeeded");
+  CHECK(seen[0][1].binary);
+  CHECK(stream->snapshotBuilds() == before + 1);  // one state, one snapshot for all six clients
+
+  // A later client at the same state reuses it too.
+  auto a = test::readAllFrames(s.port(), "/api/missions/" + id + "/stream");
+  CHECK(stream->snapshotBuilds() == before + 1);
+  REQUIRE(a.size() == 3);
+  CHECK(a[0].data == seen[0][0].data);
+}
