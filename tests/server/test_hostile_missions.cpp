@@ -99,18 +99,19 @@ void checkError(const test::HttpResult& r, int status, const std::string& code, 
 
 TEST_CASE("hostile missions: one mission over the memory budget is refused with 413, naming coverage_cell") {
   Dir d;
-  // The budget fits a mission on the map's own 0.25 m cells, not one on 2.5 cm cells (100 times
-  // the cells): that one must be refused before its 36 million cell world is built.
+  // The budget fits two missions on the map's own 0.25 m cells, not one on 0.16 m cells (2.4 times
+  // the cells, still under the coverage grid's own cell limit): that one must be refused before its
+  // world is built.
   const auto native = missions::coverageMissionMemory(kDefaultMapCells, 0.25, 1, false, 0.05);
-  Server s(d.path / "data", native.bytes * 3);
+  Server s(d.path / "data", native.bytes * 2);
   const std::string map = s.map();
-  auto r = s.post(coverageMission(map, 0.025));
+  auto r = s.post(coverageMission(map, 0.16));
   checkError(r, 413, "mission_too_large", "params.coverage_cell");
   const std::string message = r.json()["error"]["message"];
   MESSAGE(message);
   // The reason states the estimate and the budget.
   CHECK(message.find(missions::formatBytes(s.manager.memoryBudget())) != std::string::npos);
-  CHECK(message.find("36000000 coverage cells") != std::string::npos);
+  CHECK(message.find("879844 coverage cells") != std::string::npos);
   CHECK(s.manager.memoryReserved() == 0);
   CHECK(s.manager.queued() == 0);
   // The same mission on the map's cells is accepted and runs.
@@ -125,7 +126,7 @@ TEST_CASE("hostile missions: running + queued missions over the budget get 429 w
   const auto one = missions::coverageMissionMemory(kDefaultMapCells, 0.25, 1, false, 1.0);
   Server s(d.path / "data", one.bytes * 2 + one.bytes / 2);  // room for two
   const std::string map = s.map();
-  const auto slow = coverageMission(map, 0, 5, 1.0);  // 5 steps a second: runs until cancelled
+  const auto slow = coverageMission(map, 0.25, 5, 1.0);  // 5 steps a second: runs until cancelled
   const std::string first = s.post(slow).json()["id"];
   const std::string second = s.post(slow).json()["id"];
   CHECK(s.manager.memoryReserved() == 2 * one.bytes);
