@@ -235,8 +235,8 @@ bool bodyless(int status) {
 
 namespace {
 
-// Bytes asked of one read; a chunk header or the trailer section may hold at most
-// maxHeaderBytes unparsed on top of that (see parse()).
+// Bytes asked of one read. Unparsed bytes stay bounded: the header by header_limit, a chunk
+// header line or the trailer section by maxHeaderBytes (see parse()).
 constexpr std::size_t kReadSize = 64 * 1024;
 
 bool isHttpError(const beast::error_code& ec) {
@@ -338,22 +338,32 @@ void HttpSession::readHeader() {
 }
 
 void HttpSession::parse() {
+  const std::size_t elementLimit = state_->config.maxHeaderBytes;
   beast::error_code ec;
   bool complete = false;
+  bool elementTooLarge = false;
   try {
     // What bhttp::async_read does, inline, so that a parser exception (Beast throws
     // std::length_error for a field over 64 KiB, e.g. in a chunk trailer) is caught here.
     while (buffer_.size() > 0) {
+      net::const_buffer data = buffer_.data();
+      // A chunked body gets at most elementLimit bytes per put(): a chunk header line or the
+      // trailer section that does not fit (Beast bounds neither) is then seen as such below.
+      const bool chunked = stage_ == Stage::Body &&
+                           (fileParser_ ? fileParser_->chunked() : stringParser_->chunked());
+      if (chunked && data.size() > elementLimit) data = net::const_buffer(data.data(), elementLimit);
       std::size_t used = 0;
       if (fileParser_)
-        used = fileParser_->put(buffer_.data(), ec);
+        used = fileParser_->put(data, ec);
       else if (stringParser_)
-        used = stringParser_->put(buffer_.data(), ec);
+        used = stringParser_->put(data, ec);
       else
-        used = headerParser_->put(buffer_.data(), ec);
+        used = headerParser_->put(data, ec);
       buffer_.consume(used);
       if (ec == bhttp::error::need_more) {
         ec = {};
+        if (used > 0 && buffer_.size() > 0) continue;  // a new element starts: offer it the rest
+        elementTooLarge = chunked && data.size() >= elementLimit;
         break;
       }
       if (ec) break;
@@ -370,13 +380,11 @@ void HttpSession::parse() {
   }
   if (ec) return onParseError(ec);
   if (complete) return stage_ == Stage::Header ? onHeader() : onBody();
-  // Unparsed bytes the parser cannot use yet: the header (bounded by header_limit) or, in a
-  // chunked body, a chunk header line or the trailer section; bounded the same.
-  if (stage_ == Stage::Body && buffer_.size() > state_->config.maxHeaderBytes) {
+  if (elementTooLarge) {
     removeTempFile();
     return sendError(431, "chunk_header_too_large",
-                     "a chunk header or the trailer section exceeds " +
-                         std::to_string(state_->config.maxHeaderBytes) + " bytes",
+                     "a chunk header or the trailer section exceeds " + std::to_string(elementLimit) +
+                         " bytes",
                      "body", true);
   }
   stream_.async_read_some(buffer_.prepare(kReadSize), guarded(&HttpSession::onRead));
