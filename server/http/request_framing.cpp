@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cctype>
 #include <limits>
+#include <map>
 #include <string_view>
 
 namespace rover::http {
@@ -24,6 +25,35 @@ bool iequals(std::string_view a, std::string_view b) {
          });
 }
 
+int hexValue(char c) {
+  if (c >= '0' && c <= '9') return c - '0';
+  if (c >= 'a' && c <= 'f') return c - 'a' + 10;
+  if (c >= 'A' && c <= 'F') return c - 'A' + 10;
+  return -1;
+}
+
+// %XX decoding; '+' is a space in query strings only. False on a malformed escape.
+bool percentDecode(std::string_view in, bool plusIsSpace, std::string& out) {
+  out.clear();
+  out.reserve(in.size());
+  for (std::size_t i = 0; i < in.size(); ++i) {
+    const char c = in[i];
+    if (c == '%') {
+      if (i + 2 >= in.size()) return false;
+      const int hi = hexValue(in[i + 1]);
+      const int lo = hexValue(in[i + 2]);
+      if (hi < 0 || lo < 0) return false;
+      out.push_back(static_cast<char>(hi * 16 + lo));
+      i += 2;
+    } else if (c == '+' && plusIsSpace) {
+      out.push_back(' ');
+    } else {
+      out.push_back(c);
+    }
+  }
+  return true;
+}
+
 FramingError refuse(std::string message, std::string field) {
   return FramingError{400, "bad_framing", std::move(message), std::move(field)};
 }
@@ -37,6 +67,40 @@ void configureHeaderParser(bhttp::request_parser<bhttp::empty_body>& p,
   // limit"; the route's own limit replaces this once the header is known.
   p.body_limit(std::numeric_limits<std::uint64_t>::max());
   p.eager(false);  // stop after the header: the body type depends on the route
+}
+
+bool parseTarget(std::string_view target, std::string& path,
+                 std::map<std::string, std::string>& query) {
+  if (target.empty() || target.front() != '/') return false;
+  const std::size_t hash = target.find('#');
+  if (hash != std::string_view::npos) target = target.substr(0, hash);
+  const std::size_t q = target.find('?');
+  const std::string_view rawPath = target.substr(0, q);
+  if (!percentDecode(rawPath, false, path)) return false;
+  if (path.find('\0') != std::string::npos) return false;
+  std::size_t start = 0;
+  while (start <= path.size()) {
+    std::size_t slash = path.find('/', start);
+    if (slash == std::string::npos) slash = path.size();
+    if (path.compare(start, slash - start, "..") == 0) return false;
+    start = slash + 1;
+  }
+  if (q == std::string_view::npos) return true;
+  std::string_view rest = target.substr(q + 1);
+  while (!rest.empty()) {
+    std::size_t amp = rest.find('&');
+    std::string_view pair = rest.substr(0, amp);
+    rest = amp == std::string_view::npos ? std::string_view() : rest.substr(amp + 1);
+    if (pair.empty()) continue;
+    const std::size_t eq = pair.find('=');
+    std::string key, value;
+    if (!percentDecode(pair.substr(0, eq), true, key)) return false;
+    if (eq != std::string_view::npos && !percentDecode(pair.substr(eq + 1), true, value))
+      return false;
+    if (key.find('\0') != std::string::npos || value.find('\0') != std::string::npos) return false;
+    query[key] = value;
+  }
+  return true;
 }
 
 std::optional<FramingError> checkFraming(const bhttp::request_header<>& header) {

@@ -3,8 +3,10 @@
 // functions, shared by HttpSession and the fuzz harness (tests/fuzz/fuzz_http_request.cpp), so the
 // harness exercises exactly the parser configuration and the checks the server runs.
 #include <cstdint>
+#include <map>
 #include <optional>
 #include <string>
+#include <string_view>
 
 #include <boost/beast/http/empty_body.hpp>
 #include <boost/beast/http/parser.hpp>
@@ -34,5 +36,10 @@ void configureHeaderParser(boost::beast::http::request_parser<boost::beast::http
 //  - Content-Length must be one field with one value (duplicates, even equal ones, are refused).
 std::optional<FramingError> checkFraming(
     const boost::beast::http::request_header<>& header);
+
+// Splits an origin-form request target into a percent-decoded path and query ('+' is a space in
+// the query only). False (-> 400) on a malformed target or escape, a NUL byte, or a ".." segment.
+bool parseTarget(std::string_view target, std::string& path,
+                 std::map<std::string, std::string>& query);
 
 }  // namespace rover::http
