@@ -1,6 +1,8 @@
 #include "server/api/multipart.hpp"
 
 #include <algorithm>
+#include <cctype>
+#include <filesystem>
 #include <fstream>
 
 #include "server/http/http_types.hpp"
@@ -11,6 +13,10 @@ namespace {
 
 [[noreturn]] void bad(const std::string& why) {
   throw http::ApiError(400, "bad_multipart", "malformed multipart body: " + why, "body");
+}
+
+[[noreturn]] void cannotStore() {
+  throw http::ApiError(507, "insufficient_storage", "cannot store an uploaded part (disk full?)", "body");
 }
 
 std::string paramOf(const std::string& header, const std::string& key) {
@@ -28,6 +34,19 @@ std::string paramOf(const std::string& header, const std::string& key) {
   return header.substr(pos, end == std::string::npos ? std::string::npos : end - pos);
 }
 
+// Removes the part files written so far unless the split succeeded.
+struct WrittenParts {
+  std::vector<std::string> paths;
+  bool keep = false;
+  ~WrittenParts() {
+    if (keep) return;
+    for (const auto& p : paths) {
+      std::error_code ec;
+      std::filesystem::remove(p, ec);
+    }
+  }
+};
+
 }  // namespace
 
 std::string multipartBoundary(const std::string& contentType) {
@@ -40,7 +59,7 @@ std::string multipartBoundary(const std::string& contentType) {
 }
 
 std::vector<MultipartPart> splitMultipart(const std::string& bodyFile, const std::string& boundary,
-                                          const std::string& outDir) {
+                                          const std::string& outDir, const MultipartLimits& limits) {
   if (boundary.empty() || boundary.size() > 200) bad("missing or overlong boundary");
   std::ifstream in(bodyFile, std::ios::binary);
   if (!in) bad("cannot read the body");
@@ -48,38 +67,51 @@ std::vector<MultipartPart> splitMultipart(const std::string& bodyFile, const std
   // Prepend CRLF so the first boundary looks like every other one.
   std::string buf = "\r\n";
   std::vector<MultipartPart> parts;
+  WrittenParts written;
   std::ofstream out;
   enum { Preamble, Headers, Body, Done } state = Preamble;
-  std::string headers;
   std::vector<char> chunk(1 << 20);
   bool eof = false;
-  while (state != Done) {
-    if (!eof && buf.size() < (1u << 20)) {
-      in.read(chunk.data(), static_cast<std::streamsize>(chunk.size()));
-      buf.append(chunk.data(), static_cast<std::size_t>(in.gcount()));
-      eof = !in;
+  auto readMore = [&] {
+    in.read(chunk.data(), static_cast<std::streamsize>(chunk.size()));
+    buf.append(chunk.data(), static_cast<std::size_t>(in.gcount()));
+    eof = !in;
+  };
+  // Body bytes of the current part: to its file, or to its in-memory value (bounded).
+  auto emit = [&](const char* data, std::size_t n) {
+    MultipartPart& p = parts.back();
+    if (!p.filename.empty()) {
+      out.write(data, static_cast<std::streamsize>(n));
+      return;
     }
+    if (p.value.size() + n > limits.maxFieldBytes)
+      throw http::ApiError(413, "field_too_large",
+                           "form field '" + p.name + "' exceeds " +
+                               std::to_string(limits.maxFieldBytes) + " bytes",
+                           p.name.empty() ? "body" : p.name);
+    p.value.append(data, n);
+  };
+  while (state != Done) {
+    if (!eof && buf.size() < (1u << 20)) readMore();
     if (state == Preamble || state == Body) {
       auto pos = buf.find(delim);
       if (pos == std::string::npos) {
         if (eof) bad("no closing boundary");
-        // Keep the tail that could start a delimiter; write the rest of a body part.
+        // Keep the tail that could start a delimiter; pass on the rest of a body part.
         std::size_t keep = std::min(buf.size(), delim.size());
-        if (state == Body) out.write(buf.data(), static_cast<std::streamsize>(buf.size() - keep));
+        if (state == Body) emit(buf.data(), buf.size() - keep);
         buf.erase(0, buf.size() - keep);
         continue;
       }
       if (state == Body) {
-        out.write(buf.data(), static_cast<std::streamsize>(pos));
-        out.close();
-        if (!out) bad("cannot write a part");
+        emit(buf.data(), pos);
+        if (out.is_open()) {
+          out.close();
+          if (!out) cannotStore();
+        }
       }
       buf.erase(0, pos + delim.size());
-      while (buf.size() < 2 && !eof) {
-        in.read(chunk.data(), static_cast<std::streamsize>(chunk.size()));
-        buf.append(chunk.data(), static_cast<std::size_t>(in.gcount()));
-        eof = !in;
-      }
+      while (buf.size() < 2 && !eof) readMore();
       if (buf.rfind("--", 0) == 0) {
         state = Done;
         break;
@@ -87,15 +119,15 @@ std::vector<MultipartPart> splitMultipart(const std::string& bodyFile, const std
       if (buf.rfind("\r\n", 0) != 0) bad("boundary not followed by CRLF");
       buf.erase(0, 2);
       state = Headers;
-      headers.clear();
     }
     if (state == Headers) {
       auto end = buf.find("\r\n\r\n");
-      if (end == std::string::npos) {
-        if (eof || buf.size() > 16384) bad("part headers too long or cut off");
+      if (end == std::string::npos || end > limits.maxHeaderBytes) {
+        if (eof || buf.size() > limits.maxHeaderBytes)
+          bad("part headers over " + std::to_string(limits.maxHeaderBytes) + " bytes or cut off");
         continue;
       }
-      headers = buf.substr(0, end);
+      const std::string headers = buf.substr(0, end);
       buf.erase(0, end + 4);
       std::string disposition;
       std::size_t start = 0;
@@ -108,17 +140,21 @@ std::vector<MultipartPart> splitMultipart(const std::string& bodyFile, const std
         if (lineEnd == std::string::npos) break;
         start = lineEnd + 2;
       }
-      if (parts.size() >= 16) bad("more than 16 parts");
+      if (parts.size() >= limits.maxParts) bad("more than " + std::to_string(limits.maxParts) + " parts");
       MultipartPart p;
       p.name = paramOf(disposition, "name");
       p.filename = paramOf(disposition, "filename");
-      p.path = outDir + "/part" + std::to_string(parts.size());
-      out.open(p.path, std::ios::binary | std::ios::trunc);
-      if (!out) bad("cannot write a part");
-      parts.push_back(p);
+      if (!p.filename.empty()) {
+        p.path = outDir + "/part" + std::to_string(parts.size());
+        written.paths.push_back(p.path);
+        out.open(p.path, std::ios::binary | std::ios::trunc);
+        if (!out) cannotStore();
+      }
+      parts.push_back(std::move(p));
       state = Body;
     }
   }
+  written.keep = true;
   return parts;
 }
 

@@ -142,29 +142,43 @@ std::string queryString(const Request& req, const std::string& key) {
   return it == req.query.end() ? "" : it->second;
 }
 
-// Moves the request body (or its multipart file parts) into upload files for import.
+// Removes the paths it holds when it goes out of scope, unless released: every error path of
+// an upload leaves nothing behind in data/tmp.
+struct RemoveOnExit {
+  std::vector<std::string> paths;
+  ~RemoveOnExit() {
+    for (const auto& p : paths) store::DataDir::removeTree(p);
+  }
+  void release() { paths.clear(); }
+};
+
+// Moves the request body (or its multipart file parts) into upload files for import. Plain
+// multipart fields are at most 64 KiB each (413 naming the field). On a throw nothing it made
+// is left; on success the caller owns the returned files.
 std::vector<UploadedFile> uploadedFiles(const Request& req, store::DataDir& dir, std::string& name,
                                         std::string& cell) {
   if (req.bodyFile.empty() || req.bodySize == 0)
     throw ApiError(400, "invalid_input", "the request has no body: send the DEM file", "file");
   std::vector<UploadedFile> files;
+  RemoveOnExit made;  // the staging folder of the parts, and the files moved out of it
   const std::string boundary = multipartBoundary(req.header("content-type"));
   if (!boundary.empty()) {
     const std::string parts = dir.stagingDir();
+    made.paths.push_back(parts);
     for (const auto& p : splitMultipart(req.bodyFile, boundary, parts)) {
       if (p.filename.empty()) {
-        std::ifstream in(p.path);
-        std::string value((std::istreambuf_iterator<char>(in)), {});
-        if (p.name == "name" && name.empty()) name = value;
-        if (p.name == "cell" && cell.empty()) cell = value;
+        if (p.name == "name" && name.empty()) name = p.value;
+        if (p.name == "cell" && cell.empty()) cell = p.value;
         continue;
       }
       const std::string moved = (fs::path(dir.tmpDir()) / store::DataDir::newId()).string();
       fs::rename(p.path, moved);
+      made.paths.push_back(moved);
       files.push_back({moved, p.filename});
     }
-    store::DataDir::removeTree(parts);
     if (files.empty()) throw ApiError(400, "invalid_input", "the multipart body holds no file part", "file");
+    store::DataDir::removeTree(parts);
+    made.release();
   } else {
     const std::string moved = (fs::path(dir.tmpDir()) / store::DataDir::newId()).string();
     fs::rename(req.bodyFile, moved);
@@ -252,9 +266,14 @@ missions::MissionJob buildMission(ApiContext& ctx, const json& body) {
   return job;
 }
 
-http::RouteOptions doc(const std::string& summary) {
+// `blocking`: the handler is slow (GDAL, rendering, PDM discretisation, whole-DEM validation)
+// and runs on the server's work pool, so the io threads keep answering (see RouteOptions).
+constexpr bool onPool = true;
+
+http::RouteOptions doc(const std::string& summary, bool blocking = false) {
   http::RouteOptions o;
   o.summary = summary;
+  o.blocking = blocking;
   return o;
 }
 
@@ -310,7 +329,7 @@ void addApiRoutes(http::Router& router, ApiContext& ctx) {
     }
     return Response::json(200, out);
   }), doc("Registered planners with every parameter, its default, unit and range; ?map=ID fills in "
-         "the defaults that come from the map (coverage_cell, gravity) and its body."));
+         "the defaults that come from the map (coverage_cell, gravity) and its body.", onPool));
 
   // --- maps ---
   router.add("GET", "/api/maps", guarded([&ctx](const Request& req) {
@@ -322,6 +341,7 @@ void addApiRoutes(http::Router& router, ApiContext& ctx) {
 
   http::RouteOptions upload;
   upload.streamBody = true;
+  upload.blocking = onPool;
   upload.summary = "Upload a DEM (raw body with ?filename=, or multipart/form-data with file parts; "
                    "PDS3 .IMG+.LBL pairs as two parts or a zip), ?name=&cell=.";
   router.add("POST", "/api/maps", guarded([&ctx](const Request& req) {
@@ -373,7 +393,7 @@ void addApiRoutes(http::Router& router, ApiContext& ctx) {
     InvalidateMapAfter after{ctx, req.params.at("id")};
     ctx.maps.remove(req.params.at("id"));
     return Response::json(200, {{"deleted", req.params.at("id")}});
-  }), doc("Delete a map and its PDMs (missions keep their records and results)."));
+  }), doc("Delete a map and its PDMs (missions keep their records and results).", onPool));
 
   router.add("GET", "/api/maps/{id}/layers/{file}", guarded([&ctx](const Request& req) {
     const std::string file = req.params.at("file");
@@ -394,7 +414,7 @@ void addApiRoutes(http::Router& router, ApiContext& ctx) {
     r.headers.emplace_back("Cache-Control", "max-age=3600");
     return r;
   }), doc("A layer (elevation|hillshade|slope|traversability|pdm) as .png (?max= overview), "
-                   ".tif (GeoTIFF) or .f32 (raw little-endian float32, size in X-Rows/X-Cols); ?pdm=ID for pdm."));
+                   ".tif (GeoTIFF) or .f32 (raw little-endian float32, size in X-Rows/X-Cols); ?pdm=ID for pdm.", onPool));
 
   // --- PDMs ---
   router.add("GET", "/api/maps/{id}/pdms", guarded([&ctx](const Request& req) {
@@ -408,6 +428,7 @@ void addApiRoutes(http::Router& router, ApiContext& ctx) {
 
   http::RouteOptions pdmUpload;
   pdmUpload.streamBody = true;
+  pdmUpload.blocking = onPool;
   pdmUpload.summary = "Create a PDM: JSON {name, components:[{x,y,sigma_x,sigma_y,rotation_deg,weight}]} "
                       "or {name, random: G, seed: S}, or a raster body (any GDAL format) of weights.";
   router.add("POST", "/api/maps/{id}/pdms", guarded([&ctx](const Request& req) {
@@ -492,7 +513,7 @@ void addApiRoutes(http::Router& router, ApiContext& ctx) {
     ctx.missions.submit(std::move(job));
     return Response::json(202, missionJson(*ctx.db.getMission(id)));
   }), doc("Launch a mission {map, pdm?, planner, rovers:[{x,y,heading}], params:{...}, pace?}; "
-                   "validated fully, then queued (202)."));
+                   "validated fully, then queued (202).", onPool));
 
   router.add("GET", "/api/missions", guarded([&ctx](const Request& req) {
     const Page page = pageOf(req);

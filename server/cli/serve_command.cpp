@@ -27,6 +27,12 @@ int serveCommand(const std::vector<std::string>& argv, std::ostream& out) {
            "Memory the running + queued missions may take together (their estimates): one larger "
            "is refused with 413, more with 429.");
   a.option("max-upload-mb", "M", "512", "Largest accepted upload.");
+  a.option("work-threads", "N", "2",
+           "Threads for slow requests (DEM imports, layer renders, PDMs, mission validation), "
+           "apart from the 2 HTTP threads.");
+  a.option("work-queue", "N", "32", "Slow requests that may wait for a work thread; more get 503.");
+  a.option("min-upload-kibps", "K", "16",
+           "Slowest accepted request body: K KiB/s averaged over any 10 s (slower: 408).");
   a.option("cors", "ORIGIN", "", "Allow cross-origin requests from ORIGIN (off by default).");
   a.flag("quiet", "Do not log one line per request.");
   if (!a.parse(argv)) {
@@ -42,6 +48,9 @@ int serveCommand(const std::vector<std::string>& argv, std::ostream& out) {
   config.corsOrigin = a.str("cors", "");
   config.maxUploadBytes = static_cast<std::uint64_t>(a.integer("max-upload-mb", 512, 1, 1 << 20)) << 20;
   config.logRequests = !a.isSet("quiet");
+  config.workThreads = static_cast<unsigned>(a.integer("work-threads", 2, 1, 256));
+  config.workQueue = static_cast<std::size_t>(a.integer("work-queue", 32, 0, 100000));
+  config.minBodyRate = static_cast<std::uint64_t>(a.integer("min-upload-kibps", 16, 0, 1 << 20)) << 10;
   const unsigned workers = static_cast<unsigned>(a.integer("workers", hardwareThreads(), 1, 256));
   const std::size_t queue = static_cast<std::size_t>(a.integer("queue", 64, 0, 100000));
   const std::uint64_t defaultBudgetMb = missions::defaultMissionMemoryBudget() >> 20;

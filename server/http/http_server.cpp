@@ -15,9 +15,11 @@ namespace rover::http {
 struct HttpServer::Impl {
   Impl(ServerConfig c, const Router& router)
       : ioc(static_cast<int>(std::max(1u, c.threads))),
-        state(std::make_shared<ServerState>(std::move(c), router)) {}
+        pool(c.workThreads, c.workQueue),
+        state(std::make_shared<ServerState>(std::move(c), router, pool)) {}
 
   net::io_context ioc;  // first member: destroyed last, after everything holding its objects
+  WorkPool pool;        // stopped (joined) before the io_context goes
   std::shared_ptr<ServerState> state;
   std::shared_ptr<Listener> listener;
   std::vector<std::thread> threads;
@@ -87,7 +89,10 @@ void HttpServer::stop() {
   std::lock_guard lock(impl_->mutex);
   if (impl_->stopped) return;
   impl_->stopped = true;
-  if (!impl_->started) return;
+  if (!impl_->started) {
+    impl_->pool.stop();
+    return;
+  }
 
   impl_->state->beginStop();  // no new sessions; wake() becomes a no-op
   impl_->listener->stop();
@@ -99,6 +104,9 @@ void HttpServer::stop() {
   for (auto& t : impl_->threads)
     if (t.joinable()) t.join();
   impl_->threads.clear();
+  // Running slow handlers finish (their responses are posted to the stopped io_context and
+  // dropped with it); queued ones are dropped unrun.
+  impl_->pool.stop();
   impl_->listener.reset();
 }
 

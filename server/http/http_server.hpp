@@ -4,6 +4,7 @@
 #include <atomic>
 #include <chrono>
 #include <cstdint>
+#include <cstddef>
 #include <memory>
 #include <string>
 
@@ -21,8 +22,18 @@ struct ServerConfig {
   std::string uploadDir;                        // where streamed bodies are written
   std::uint64_t maxUploadBytes = 512ull << 20;  // streamed routes
   std::uint64_t maxBodyBytes = 4ull << 20;      // in-memory routes
-  std::uint32_t maxHeaderBytes = 16 * 1024;
-  std::chrono::seconds readTimeout{30};
+  std::uint32_t maxHeaderBytes = 16 * 1024;    // request line + header fields; also a chunk
+                                               // header line and the trailer section
+  std::chrono::seconds readTimeout{30};        // the whole request header; an idle keep-alive
+  // A body is cut (408) when it averages under minBodyRate bytes/s over any rateWindow: a steady
+  // slow upload of any size passes, a stalled one does not. A body smaller than
+  // minBodyRate·rateWindow must arrive within one window.
+  std::uint64_t minBodyRate = 16 * 1024;
+  std::chrono::seconds rateWindow{10};
+  // The pool for RouteOptions::blocking handlers, and how many such requests may wait for it
+  // (more are answered 503 with Retry-After).
+  unsigned workThreads = 2;
+  std::size_t workQueue = 32;
   bool logRequests = true;  // one line per request on stderr
 };
 

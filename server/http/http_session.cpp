@@ -14,6 +14,7 @@
 #include <boost/asio/post.hpp>
 #include <boost/beast/websocket/rfc6455.hpp>
 
+#include "server/http/request_framing.hpp"
 #include "server/http/websocket_session.hpp"
 
 namespace rover::http {
@@ -22,8 +23,8 @@ namespace fs = std::filesystem;
 
 // ---------------------------------------------------------------- ServerState
 
-ServerState::ServerState(ServerConfig c, const Router& r)
-    : config(std::move(c)), router(r), statics(config.webRoot) {
+ServerState::ServerState(ServerConfig c, const Router& r, WorkPool& p)
+    : config(std::move(c)), router(r), statics(config.webRoot), pool(p) {
   std::random_device rd;
   tempSalt_ = (static_cast<std::uint64_t>(rd()) << 32) ^ rd();
 }
@@ -89,71 +90,6 @@ std::string ServerState::tempFilePath() {
 
 namespace {
 
-int hexValue(char c) {
-  if (c >= '0' && c <= '9') return c - '0';
-  if (c >= 'a' && c <= 'f') return c - 'a' + 10;
-  if (c >= 'A' && c <= 'F') return c - 'A' + 10;
-  return -1;
-}
-
-// %XX decoding; '+' is a space in query strings only. False on a malformed escape.
-bool percentDecode(std::string_view in, bool plusIsSpace, std::string& out) {
-  out.clear();
-  out.reserve(in.size());
-  for (std::size_t i = 0; i < in.size(); ++i) {
-    const char c = in[i];
-    if (c == '%') {
-      if (i + 2 >= in.size()) return false;
-      const int hi = hexValue(in[i + 1]);
-      const int lo = hexValue(in[i + 2]);
-      if (hi < 0 || lo < 0) return false;
-      out.push_back(static_cast<char>(hi * 16 + lo));
-      i += 2;
-    } else if (c == '+' && plusIsSpace) {
-      out.push_back(' ');
-    } else {
-      out.push_back(c);
-    }
-  }
-  return true;
-}
-
-// Splits an origin-form target into a decoded path and query. False (-> 400) on a malformed
-// target, a NUL byte, or a ".." segment.
-bool parseTarget(std::string_view target, std::string& path,
-                 std::map<std::string, std::string>& query) {
-  if (target.empty() || target.front() != '/') return false;
-  const std::size_t hash = target.find('#');
-  if (hash != std::string_view::npos) target = target.substr(0, hash);
-  const std::size_t q = target.find('?');
-  const std::string_view rawPath = target.substr(0, q);
-  if (!percentDecode(rawPath, false, path)) return false;
-  if (path.find('\0') != std::string::npos) return false;
-  std::size_t start = 0;
-  while (start <= path.size()) {
-    std::size_t slash = path.find('/', start);
-    if (slash == std::string::npos) slash = path.size();
-    if (path.compare(start, slash - start, "..") == 0) return false;
-    start = slash + 1;
-  }
-  if (q == std::string_view::npos) return true;
-  std::string_view rest = target.substr(q + 1);
-  while (!rest.empty()) {
-    std::size_t amp = rest.find('&');
-    std::string_view pair = rest.substr(0, amp);
-    rest = amp == std::string_view::npos ? std::string_view() : rest.substr(amp + 1);
-    if (pair.empty()) continue;
-    const std::size_t eq = pair.find('=');
-    std::string key, value;
-    if (!percentDecode(pair.substr(0, eq), true, key)) return false;
-    if (eq != std::string_view::npos && !percentDecode(pair.substr(eq + 1), true, value))
-      return false;
-    if (key.find('\0') != std::string::npos || value.find('\0') != std::string::npos) return false;
-    query[key] = value;
-  }
-  return true;
-}
-
 // Beast 1.74 speaks boost::string_view.
 std::string_view sv(beast::string_view s) {
   return {s.data(), s.size()};
@@ -202,7 +138,9 @@ bool isApiPath(const std::string& path) {
   return path == "/api" || path.rfind("/api/", 0) == 0;
 }
 
-Response invokeHandler(const Route& route, const Request& req) noexcept {
+// An unexpected exception's text goes to the log only: it may hold server paths (a
+// std::filesystem error does) or library internals.
+Response invokeHandler(const Route& route, const Request& req, const ServerState& state) noexcept {
   try {
     try {
       return route.handler(req);
@@ -211,7 +149,8 @@ Response invokeHandler(const Route& route, const Request& req) noexcept {
       r.headers = e.headers();
       return r;
     } catch (const std::exception& e) {
-      return Response::error(500, "internal", e.what());
+      state.log("http: " + req.method + " " + req.path + ": handler failed: " + e.what());
+      return Response::error(500, "internal", "internal error");
     } catch (...) {
       return Response::error(500, "internal", "unknown error");
     }
@@ -231,12 +170,54 @@ bool bodyless(int status) {
 
 // ---------------------------------------------------------------- HttpSession
 
+namespace {
+
+// Bytes asked of one read. Unparsed bytes stay bounded: the header by header_limit, a chunk
+// header line or the trailer section by maxHeaderBytes (see parse()).
+constexpr std::size_t kReadSize = 64 * 1024;
+
+bool isHttpError(const beast::error_code& ec) {
+  return ec.category() == bhttp::make_error_code(bhttp::error::bad_target).category();
+}
+
+}  // namespace
+
 HttpSession::HttpSession(tcp::socket&& socket, std::shared_ptr<ServerState> state)
-    : stream_(std::move(socket)), executor_(stream_.get_executor()), state_(std::move(state)) {}
+    : stream_(std::move(socket)),
+      executor_(stream_.get_executor()),
+      state_(std::move(state)),
+      rate_(state_->config.minBodyRate, state_->config.rateWindow),
+      rateTimer_(executor_) {}
 
 HttpSession::~HttpSession() {
   removeTempFile();
   unregister();
+}
+
+template <class... Args>
+auto HttpSession::guarded(void (HttpSession::*fn)(Args...)) {
+  return [self = shared_from_this(), fn](Args... args) {
+    try {
+      ((*self).*fn)(args...);
+    } catch (const std::exception& e) {
+      self->abort(e.what());
+    } catch (...) {
+      self->abort("unknown exception");
+    }
+  };
+}
+
+void HttpSession::abort(const char* what) noexcept {
+  try {
+    state_->log(std::string("http: ") + request_.method + " " + request_.path +
+                ": connection closed after an exception: " + what);
+  } catch (...) {
+  }
+  try {
+    removeTempFile();
+    closeNow();
+  } catch (...) {
+  }
 }
 
 void HttpSession::unregister() {
@@ -254,7 +235,7 @@ void HttpSession::run() {
     return;
   }
   // Start on the strand (the socket's executor) so every handler of this session is serialized.
-  net::dispatch(executor_, beast::bind_front_handler(&HttpSession::readHeader, shared_from_this()));
+  net::dispatch(executor_, guarded(&HttpSession::readHeader));
 }
 
 void HttpSession::close() {
@@ -262,8 +243,18 @@ void HttpSession::close() {
     if (self->handedOff_) return;
     beast::error_code ec;
     self->stream_.socket().shutdown(tcp::socket::shutdown_both, ec);
-    self->stream_.close();
+    self->closeNow();
   });
+}
+
+void HttpSession::closeNow() {
+  stopRateTimer();
+  stream_.close();
+}
+
+void HttpSession::stopRateTimer() {
+  watchingBody_ = false;
+  if (rateTimerArmed_) rateTimer_.cancel();
 }
 
 void HttpSession::readHeader() {
@@ -275,41 +266,122 @@ void HttpSession::readHeader() {
   keepAlive_ = false;
   head_ = false;
   version_ = 11;
-  headerParser_->header_limit(state_->config.maxHeaderBytes);
-  // Unlimited here (max, not none: Beast 1.74 compares Content-Length against an empty optional
-  // as "over the limit"); the route's limit is checked once the header is known.
-  headerParser_->body_limit(std::numeric_limits<std::uint64_t>::max());
+  tooSlow_ = false;
+  stage_ = Stage::Header;
+  configureHeaderParser(*headerParser_, state_->config.maxHeaderBytes);
+  // One deadline for the whole header however it trickles in: slowloris is cut here.
   stream_.expires_after(state_->config.readTimeout);
-  bhttp::async_read_header(stream_, buffer_, *headerParser_,
-                           beast::bind_front_handler(&HttpSession::onHeader, shared_from_this()));
+  parse();
 }
 
-void HttpSession::onHeader(beast::error_code ec, std::size_t) {
-  started_ = std::chrono::steady_clock::now();
+void HttpSession::parse() {
+  const std::size_t elementLimit = state_->config.maxHeaderBytes;
+  beast::error_code ec;
+  bool complete = false;
+  bool elementTooLarge = false;
+  try {
+    // What bhttp::async_read does, inline, so that a parser exception (Beast throws
+    // std::length_error for a field over 64 KiB, e.g. in a chunk trailer) is caught here.
+    while (buffer_.size() > 0) {
+      net::const_buffer data = buffer_.data();
+      // A chunked body gets at most elementLimit bytes per put(): a chunk header line or the
+      // trailer section that does not fit (Beast bounds neither) is then seen as such below.
+      const bool chunked = stage_ == Stage::Body &&
+                           (fileParser_ ? fileParser_->chunked() : stringParser_->chunked());
+      if (chunked && data.size() > elementLimit) data = net::const_buffer(data.data(), elementLimit);
+      std::size_t used = 0;
+      if (fileParser_)
+        used = fileParser_->put(data, ec);
+      else if (stringParser_)
+        used = stringParser_->put(data, ec);
+      else
+        used = headerParser_->put(data, ec);
+      buffer_.consume(used);
+      if (ec == bhttp::error::need_more) {
+        ec = {};
+        if (used > 0 && buffer_.size() > 0) continue;  // a new element starts: offer it the rest
+        elementTooLarge = chunked && data.size() >= elementLimit;
+        break;
+      }
+      if (ec) break;
+      complete = stage_ == Stage::Header
+                     ? headerParser_->is_header_done()
+                     : (fileParser_ ? fileParser_->is_done() : stringParser_->is_done());
+      if (complete || used == 0) break;
+    }
+  } catch (const std::exception& e) {
+    state_->log(std::string("http: malformed request from ") + remote_ + ": " + e.what());
+    removeTempFile();
+    return sendError(400, "bad_request", "malformed request", stage_ == Stage::Header ? "headers" : "body",
+                     true);
+  }
+  if (ec) return onParseError(ec);
+  if (complete) return stage_ == Stage::Header ? onHeader() : onBody();
+  if (elementTooLarge) {
+    removeTempFile();
+    return sendError(431, "chunk_header_too_large",
+                     "a chunk header or the trailer section exceeds " + std::to_string(elementLimit) +
+                         " bytes",
+                     "body", true);
+  }
+  stream_.async_read_some(buffer_.prepare(kReadSize), guarded(&HttpSession::onRead));
+}
+
+void HttpSession::onRead(beast::error_code ec, std::size_t bytes) {
   if (ec) {
-    if (ec == bhttp::error::header_limit) {
-      request_.method = "-";
-      request_.path = "-";
-      return sendError(431, "header_too_large", "request header too large", true);
+    if (tooSlow_ && ec == net::error::operation_aborted) {
+      removeTempFile();
+      const ServerConfig& cfg = state_->config;
+      return sendError(408, "body_too_slow",
+                       "the request body arrived slower than " +
+                           std::to_string(cfg.minBodyRate / 1024) + " KiB/s over " +
+                           std::to_string(cfg.rateWindow.count()) + " s",
+                       "body", true);
     }
-    if (ec.category() == bhttp::make_error_code(bhttp::error::bad_target).category() &&
-        ec != bhttp::error::end_of_stream && ec != bhttp::error::partial_message) {
-      request_.method = "-";
-      request_.path = "-";
-      return sendError(400, "bad_request", "malformed request: " + ec.message(), true);
-    }
-    // end of stream, timeout, reset, or stop(): close quietly.
+    // End of stream, the header deadline, a reset, or stop(): close quietly.
+    removeTempFile();
     beast::error_code ignored;
     stream_.socket().shutdown(tcp::socket::shutdown_send, ignored);
-    stream_.close();
+    closeNow();
     return;
   }
+  buffer_.commit(bytes);
+  if (stage_ == Stage::Body) rate_.add(bytes, std::chrono::steady_clock::now());
+  parse();
+}
+
+void HttpSession::onParseError(beast::error_code ec) {
+  started_ = std::chrono::steady_clock::now();
+  if (request_.method.empty()) request_.method = "-";
+  if (request_.path.empty()) request_.path = "-";
+  removeTempFile();
+  if (ec == bhttp::error::header_limit)
+    return sendError(431, "header_too_large", "request header too large", "headers", true);
+  if (ec == bhttp::error::body_limit)
+    return sendError(413, "payload_too_large", "request body exceeds the limit", "body", true);
+  if (isHttpError(ec))
+    return sendError(400, "bad_request",
+                     (stage_ == Stage::Header ? "malformed request: " : "malformed request body: ") +
+                         ec.message(),
+                     stage_ == Stage::Header ? "headers" : "body", true);
+  closeNow();
+}
+
+void HttpSession::onHeader() {
+  started_ = std::chrono::steady_clock::now();
   const auto& h = headerParser_->get();
   request_.method = std::string(h.method_string());
   request_.remote = remote_;
   keepAlive_ = h.keep_alive();
   version_ = h.version();
   head_ = h.method() == bhttp::verb::head;
+  if (auto bad = checkFraming(h)) {
+    // The rest of the connection's bytes cannot be trusted to be framed as the client meant:
+    // answer and close, never parse them as another request.
+    const std::string_view raw = sv(h.target());
+    request_.path = std::string(raw.substr(0, std::min<std::size_t>(raw.find('?'), 200)));
+    return sendError(bad->status, bad->code, bad->message, bad->field, true);
+  }
   for (const auto& field : h) {
     std::string name = lower(sv(field.name_string()));
     auto [it, inserted] = request_.headers.emplace(name, std::string(field.value()));
@@ -318,7 +390,8 @@ void HttpSession::onHeader(beast::error_code ec, std::size_t) {
   if (!parseTarget(sv(h.target()), request_.path, request_.query)) {
     const std::string_view raw = sv(h.target());
     request_.path = std::string(raw.substr(0, std::min<std::size_t>(raw.find('?'), 200)));
-    return sendError(400, "bad_request", "invalid request target", !headerParser_->is_done());
+    return sendError(400, "bad_request", "invalid request target", "path",
+                     !headerParser_->is_done());
   }
   routeRequest();
 }
@@ -345,7 +418,8 @@ void HttpSession::routeRequest() {
   const bool wsRoute = m.route && m.route->method == "WS";
   const bool needAuth = !cfg.token.empty() && (m.route ? m.route->options.requireAuth : api);
   if (needAuth && !authorized(request_, cfg.token, wsRoute)) {
-    Response r = Response::error(401, "unauthorized", "missing or invalid bearer token");
+    Response r =
+        Response::error(401, "unauthorized", "missing or invalid bearer token", "authorization");
     r.headers.emplace_back("WWW-Authenticate", "Bearer");
     return send(std::move(r), bodyPending);
   }
@@ -354,7 +428,8 @@ void HttpSession::routeRequest() {
     if (h.method() == bhttp::verb::get && !isUpgrade) {
       Router::Match ws = state_->router.match("GET", path, true);
       if (ws.route && ws.route->method == "WS")
-        return sendError(426, "upgrade_required", "this path is a WebSocket endpoint", bodyPending);
+        return sendError(426, "upgrade_required", "this path is a WebSocket endpoint", "upgrade",
+                         bodyPending);
     }
     if (!api && state_->statics.enabled() &&
         (h.method() == bhttp::verb::get || h.method() == bhttp::verb::head))
@@ -364,11 +439,12 @@ void HttpSession::routeRequest() {
       for (const auto& method : state_->router.allowedMethods(path))
         allow += (allow.empty() ? "" : ", ") + method;
       Response r = Response::error(405, "method_not_allowed",
-                                   request_.method + " is not allowed on " + path);
+                                   request_.method + " is not allowed on " + path, "method");
       r.headers.emplace_back("Allow", allow);
       return send(std::move(r), bodyPending);
     }
-    return sendError(404, "not_found", "no route for " + request_.method + " " + path, bodyPending);
+    return sendError(404, "not_found", "no route for " + request_.method + " " + path, "path",
+                     bodyPending);
   }
 
   route_ = m.route;
@@ -386,7 +462,7 @@ void HttpSession::readBody() {
     return sendError(
         413, "payload_too_large",
         "body of " + std::to_string(*len) + " bytes exceeds the limit of " + std::to_string(limit),
-        true);
+        "body", true);
   const bool expectContinue =
       !headerParser_->is_done() && lower(sv(h[bhttp::field::expect])) == "100-continue";
 
@@ -395,24 +471,25 @@ void HttpSession::readBody() {
     fileParser_.emplace(std::move(*headerParser_));
     headerParser_.reset();
     fileParser_->body_limit(limit);
+    fileParser_->eager(true);
     beast::error_code ec;
     fileParser_->get().body().open(tempFile_.c_str(), beast::file_mode::write_new, ec);
     if (ec) {
       tempFile_.clear();
-      return sendError(500, "internal", "cannot create upload file: " + ec.message(), true);
+      return sendError(500, "internal", "cannot create upload file: " + ec.message(), "", true);
     }
   } else {
     stringParser_.emplace(std::move(*headerParser_));
     headerParser_.reset();
     stringParser_->body_limit(limit);
+    stringParser_->eager(true);
   }
+  stage_ = Stage::Body;
   if (expectContinue) {
     continue_ =
         std::make_shared<bhttp::response<bhttp::empty_body>>(bhttp::status::continue_, version_);
     stream_.expires_after(cfg.readTimeout);
-    return bhttp::async_write(
-        stream_, *continue_,
-        beast::bind_front_handler(&HttpSession::onContinueWritten, shared_from_this()));
+    return bhttp::async_write(stream_, *continue_, guarded(&HttpSession::onContinueWritten));
   }
   startBodyRead();
 }
@@ -421,7 +498,7 @@ void HttpSession::onContinueWritten(beast::error_code ec, std::size_t) {
   continue_.reset();
   if (ec) {
     removeTempFile();
-    stream_.close();
+    closeNow();
     return;
   }
   startBodyRead();
@@ -429,26 +506,34 @@ void HttpSession::onContinueWritten(beast::error_code ec, std::size_t) {
 
 void HttpSession::startBodyRead() {
   const bool done = fileParser_ ? fileParser_->is_done() : stringParser_->is_done();
-  if (done) return onBody({}, 0);
-  stream_.expires_after(state_->config.readTimeout);
-  auto handler = beast::bind_front_handler(&HttpSession::onBody, shared_from_this());
-  if (fileParser_)
-    bhttp::async_read(stream_, buffer_, *fileParser_, std::move(handler));
-  else
-    bhttp::async_read(stream_, buffer_, *stringParser_, std::move(handler));
+  if (done) return onBody();
+  // The body is bounded by progress, not by one deadline: the rate timer watches it.
+  stream_.expires_never();
+  rate_.start(std::chrono::steady_clock::now());
+  watchingBody_ = true;
+  armRateTimer();
+  parse();
 }
 
-void HttpSession::onBody(beast::error_code ec, std::size_t) {
-  if (ec) {
-    removeTempFile();
-    if (ec == bhttp::error::body_limit)
-      return sendError(413, "payload_too_large", "request body exceeds the limit", true);
-    if (ec.category() == bhttp::make_error_code(bhttp::error::bad_target).category() &&
-        ec != bhttp::error::end_of_stream && ec != bhttp::error::partial_message)
-      return sendError(400, "bad_request", "malformed request body: " + ec.message(), true);
-    stream_.close();  // timeout, reset, or stop()
-    return;
-  }
+void HttpSession::armRateTimer() {
+  rateTimerArmed_ = true;
+  rateTimer_.expires_at(rate_.deadline());
+  rateTimer_.async_wait(guarded(&HttpSession::onRateTimer));
+}
+
+void HttpSession::onRateTimer(beast::error_code ec) {
+  rateTimerArmed_ = false;
+  // Cancelled, or already expired when the body completed or a response started.
+  if (ec || !watchingBody_ || tooSlow_) return;
+  if (std::chrono::steady_clock::now() < rate_.deadline()) return armRateTimer();  // progress
+  // Too slow: cancel the read; onRead answers 408.
+  tooSlow_ = true;
+  beast::error_code ignored;
+  stream_.socket().cancel(ignored);
+}
+
+void HttpSession::onBody() {
+  stopRateTimer();
   if (fileParser_) {
     beast::error_code ignored;
     fileParser_->get().body().file().close(ignored);
@@ -462,14 +547,44 @@ void HttpSession::onBody(beast::error_code ec, std::size_t) {
     request_.body = stringParser_->release().body();
     request_.bodySize = request_.body.size();
   }
-  Response res = invokeHandler(*route_, request_);
+  if (route_->options.blocking) return runOnPool();
+  respond(invokeHandler(*route_, request_, *state_));
+}
+
+void HttpSession::runOnPool() {
+  // The session does nothing else while the job runs (no read is pending), so the job may read
+  // request_ and route_; the response comes back through the strand.
+  auto self = shared_from_this();
+  const bool queued = state_->pool.trySubmit([self] {
+    Response res = invokeHandler(*self->route_, self->request_, *self->state_);
+    auto done = [self, res = std::move(res)]() mutable {
+      try {
+        self->respond(std::move(res));
+      } catch (const std::exception& e) {
+        self->abort(e.what());
+      } catch (...) {
+        self->abort("unknown exception");
+      }
+    };
+    net::post(self->executor_, std::move(done));
+  });
+  if (queued) return;
+  removeTempFile();
+  Response r = Response::error(503, "busy",
+                               "the server is busy with slow requests (imports, renders, PDMs); "
+                               "retry shortly");
+  r.headers.emplace_back("Retry-After", "2");
+  send(std::move(r));
+}
+
+void HttpSession::respond(Response res) {
   removeTempFile();  // the handler moved it away if it keeps it
   send(std::move(res));
 }
 
 void HttpSession::upgrade() {
   if (!headerParser_->is_done())
-    return sendError(400, "bad_request", "a WebSocket upgrade cannot carry a body", true);
+    return sendError(400, "bad_request", "a WebSocket upgrade cannot carry a body", "body", true);
   auto connection = std::make_shared<WsConnectionImpl>(state_);
   std::shared_ptr<WsSource> source;
   try {
@@ -478,12 +593,12 @@ void HttpSession::upgrade() {
     } catch (const ApiError& e) {
       return send(Response::error(e.status(), e.code(), e.what(), e.field()));
     } catch (const std::exception& e) {
-      return sendError(500, "internal", e.what());
+      return sendError(500, "internal", e.what(), "");
     }
   } catch (...) {
-    return sendError(500, "internal", "unknown error");
+    return sendError(500, "internal", "unknown error", "");
   }
-  if (!source) return sendError(500, "internal", "the WebSocket handler returned no source");
+  if (!source) return sendError(500, "internal", "the WebSocket handler returned no source", "");
 
   auto ws = std::make_shared<WebsocketSession>(std::move(stream_), state_, std::move(connection),
                                                std::move(source), request_.path);
@@ -493,11 +608,12 @@ void HttpSession::upgrade() {
 }
 
 void HttpSession::sendError(int status, const std::string& code, const std::string& message,
-                            bool close) {
-  send(Response::error(status, code, message), close);
+                            const std::string& field, bool close) {
+  send(Response::error(status, code, message, field), close);
 }
 
 void HttpSession::send(Response res, bool close) {
+  stopRateTimer();  // a response ends the body's reading, whether it was complete or not
   const ServerConfig& cfg = state_->config;
   if (bodyless(res.status)) {
     res.body.clear();
@@ -522,7 +638,7 @@ void HttpSession::send(Response res, bool close) {
     beast::error_code ec;
     body.open(res.file.c_str(), beast::file_mode::scan, ec);
     if (ec) {
-      res = Response::error(404, "not_found", "file not found");
+      res = Response::error(404, "not_found", "file not found", "path");
     } else {
       const std::uint64_t size = body.size();
       if (head_) {
@@ -554,18 +670,17 @@ template <class Message>
 void HttpSession::write(std::shared_ptr<Message> msg, int status, std::uint64_t bytes, bool close) {
   logStatus_ = status;
   logBytes_ = bytes;
-  close = close || !msg->keep_alive();
+  closeAfterWrite_ = close || !msg->keep_alive();
   Message& ref = *msg;
   response_ = std::move(msg);
   // A stuck reader must not hold the connection forever; big files get time at 256 KiB/s.
   stream_.expires_after(std::max<std::chrono::steady_clock::duration>(state_->config.readTimeout,
                                                                       std::chrono::seconds(30)) +
                         std::chrono::seconds(bytes / (256 * 1024)));
-  bhttp::async_write(stream_, ref,
-                     beast::bind_front_handler(&HttpSession::onWrite, shared_from_this(), close));
+  bhttp::async_write(stream_, ref, guarded(&HttpSession::onWrite));
 }
 
-void HttpSession::onWrite(bool close, beast::error_code ec, std::size_t) {
+void HttpSession::onWrite(beast::error_code ec, std::size_t) {
   response_.reset();
   if (state_->config.logRequests) {
     const auto ms = std::chrono::duration_cast<std::chrono::milliseconds>(
@@ -576,10 +691,10 @@ void HttpSession::onWrite(bool close, beast::error_code ec, std::size_t) {
                 (ec ? " (write failed)" : ""));
   }
   if (ec) {
-    stream_.close();
+    closeNow();
     return;
   }
-  if (close) return lingeringClose();
+  if (closeAfterWrite_) return lingeringClose();
   readHeader();
 }
 
@@ -587,23 +702,21 @@ void HttpSession::lingeringClose() {
   beast::error_code ec;
   stream_.socket().shutdown(tcp::socket::shutdown_send, ec);
   if (ec) {
-    stream_.close();
+    closeNow();
     return;
   }
   stream_.expires_after(std::min<std::chrono::steady_clock::duration>(state_->config.readTimeout,
                                                                       std::chrono::seconds(5)));
-  stream_.async_read_some(net::buffer(drain_),
-                          beast::bind_front_handler(&HttpSession::onDrain, shared_from_this()));
+  stream_.async_read_some(net::buffer(drain_), guarded(&HttpSession::onDrain));
 }
 
 void HttpSession::onDrain(beast::error_code ec, std::size_t) {
   if (ec) {  // EOF, the deadline, or stop()
-    stream_.close();
+    closeNow();
     return;
   }
   // Same deadline as before: the whole drain is bounded.
-  stream_.async_read_some(net::buffer(drain_),
-                          beast::bind_front_handler(&HttpSession::onDrain, shared_from_this()));
+  stream_.async_read_some(net::buffer(drain_), guarded(&HttpSession::onDrain));
 }
 
 void HttpSession::removeTempFile() {

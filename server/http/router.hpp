@@ -12,6 +12,9 @@ namespace rover::http {
 struct RouteOptions {
   bool streamBody = false;  // the body is streamed to a temp file (uploads), not kept in memory
   bool requireAuth = true;  // with --token, needs "Authorization: Bearer <token>"
+  // Slow handler (GDAL, rendering, PDM discretisation, whole-DEM validation): runs on the
+  // server's work pool, not on an io thread, so cheap requests keep being answered meanwhile.
+  bool blocking = false;
   std::string summary;      // one line for the OpenAPI document
   nlohmann::json openapi;   // extra OpenAPI operation fields (parameters, requestBody, responses)
 };

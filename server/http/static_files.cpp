@@ -51,7 +51,7 @@ std::optional<fs::path> StaticFiles::resolve(const std::string& urlPath) const {
 
 Response StaticFiles::serve(const std::string& urlPath) const {
   auto file = resolve(urlPath);
-  if (!file) return Response::error(404, "not_found", "no such file: " + urlPath);
+  if (!file) return Response::error(404, "not_found", "no such file: " + urlPath, "path");
   Response r;
   r.status = 200;
   r.file = file->string();

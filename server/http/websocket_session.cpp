@@ -47,7 +47,8 @@ WebsocketSession::WebsocketSession(beast::tcp_stream&& stream, std::shared_ptr<S
       connection_(std::move(connection)),
       source_(std::move(source)),
       path_(std::move(path)),
-      pace_(executor_) {}
+      pace_(executor_),
+      writeTimer_(executor_) {}
 
 WebsocketSession::~WebsocketSession() {
   if (id_) state_->remove(*id_);
@@ -64,16 +65,7 @@ void WebsocketSession::run(bhttp::request<bhttp::empty_body> request) {
   connection_->attach(weak_from_this());
 
   beast::get_lowest_layer(ws_).expires_never();  // the websocket stream has its own timeouts
-  auto timeouts = websocket::stream_base::timeout::suggested(beast::role_type::server);
-  timeouts.handshake_timeout = state_->config.readTimeout;
-  // Idle pings: a peer that stops answering (or reading) is dropped after this long.
-  timeouts.idle_timeout = std::max<std::chrono::steady_clock::duration>(
-      state_->config.readTimeout * 2, std::chrono::seconds(20));
-  timeouts.keep_alive_pings = true;
-  ws_.set_option(timeouts);
-  ws_.set_option(websocket::stream_base::decorator(
-      [](websocket::response_type& res) { res.set(bhttp::field::server, "roverplan"); }));
-  ws_.read_message_max(64 * 1024);  // client messages are discarded anyway
+  configureServerWebsocket(ws_, state_->config);
   ws_.async_accept(request_,
                    beast::bind_front_handler(&WebsocketSession::onAccept, shared_from_this()));
 }
@@ -81,6 +73,7 @@ void WebsocketSession::run(bhttp::request<bhttp::empty_body> request) {
 void WebsocketSession::close() {
   net::post(executor_, [self = shared_from_this()] {
     self->pace_.cancel();
+    self->writeTimer_.cancel();
     beast::error_code ec;
     beast::get_lowest_layer(self->ws_).socket().shutdown(tcp::socket::shutdown_both, ec);
     beast::get_lowest_layer(self->ws_).socket().close(ec);
@@ -134,14 +127,32 @@ void WebsocketSession::pull() {
   }
   frame_ = std::move(*frame);
   writing_ = true;
+  // A subscriber that stops reading must not hold its frame and socket forever: one write gets
+  // readTimeout + 1 s per 256 KiB, then the connection is dropped.
+  writeTimer_.expires_after(state_->config.readTimeout +
+                            std::chrono::seconds(frame_.data.size() / (256 * 1024)));
+  writeTimer_.async_wait(beast::bind_front_handler(&WebsocketSession::onWriteTimer, shared_from_this()));
   ws_.binary(frame_.binary);
   ws_.async_write(net::buffer(frame_.bytes()),
                   beast::bind_front_handler(&WebsocketSession::onWrite, shared_from_this()));
 }
 
+void WebsocketSession::onWriteTimer(beast::error_code ec) {
+  if (ec || !writing_) return;  // the write completed (or the session ended) first
+  // A close frame cannot reach a peer that does not read: tear the connection down instead.
+  if (state_->config.logRequests)
+    state_->log("WS " + path_ + " dropping a subscriber that does not read (" +
+                std::to_string(frame_.data.size()) + " bytes pending)");
+  droppedSlow_ = true;
+  beast::error_code ignored;
+  beast::get_lowest_layer(ws_).socket().shutdown(tcp::socket::shutdown_both, ignored);
+  beast::get_lowest_layer(ws_).socket().close(ignored);
+}
+
 void WebsocketSession::onWrite(beast::error_code ec, std::size_t bytes) {
   writing_ = false;
-  if (ec) return finish("write failed: " + ec.message());
+  writeTimer_.cancel();
+  if (ec) return finish(droppedSlow_ ? "dropped: the client does not read" : "write failed: " + ec.message());
   ++frames_;
   bytes_ += bytes;
   frame_.data = std::string();  // release the frame's memory while parked
@@ -183,6 +194,7 @@ void WebsocketSession::finish(const std::string& why) {
   finished_ = true;
   open_ = false;
   pace_.cancel();
+  writeTimer_.cancel();
   if (state_->config.logRequests) {
     const auto ms = opened_.time_since_epoch().count() == 0
                         ? 0

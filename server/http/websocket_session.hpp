@@ -4,6 +4,7 @@
 // until WsConnection::wake(). Frames that are not `last` are spaced by source->minInterval() (the
 // wait happens before next(), so the frame written is the freshest state). A read loop discards
 // client messages and notices closes. Only wake() runs on other threads.
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cstdint>
@@ -19,6 +20,27 @@
 namespace rover::http {
 
 class WebsocketSession;
+
+// The largest client message read (the server discards client messages; a bigger one is closed
+// with 1009). No permessage-deflate: no compression bombs.
+constexpr std::size_t kMaxClientMessageBytes = 64 * 1024;
+
+// The options every server-side WebSocket gets (also used by tests/fuzz/fuzz_websocket_frame.cpp
+// so the fuzzer parses frames exactly as configured here).
+template <class NextLayer>
+void configureServerWebsocket(boost::beast::websocket::stream<NextLayer>& ws, const ServerConfig& config) {
+  namespace websocket = boost::beast::websocket;
+  auto timeouts = websocket::stream_base::timeout::suggested(beast::role_type::server);
+  timeouts.handshake_timeout = config.readTimeout;
+  // Idle pings: a peer that stops answering (or reading) is dropped after this long.
+  timeouts.idle_timeout = std::max<std::chrono::steady_clock::duration>(config.readTimeout * 2,
+                                                                        std::chrono::seconds(20));
+  timeouts.keep_alive_pings = true;
+  ws.set_option(timeouts);
+  ws.set_option(websocket::stream_base::decorator(
+      [](websocket::response_type& res) { res.set(bhttp::field::server, "roverplan"); }));
+  ws.read_message_max(kMaxClientMessageBytes);
+}
 
 // The handle given to the WsHandler. Holds the session only weakly: it stays safe to call after
 // the session or the whole server is gone (wake() is then a no-op), and wake() never keeps a
@@ -59,6 +81,7 @@ class WebsocketSession : public Closable, public std::enable_shared_from_this<We
   void pull();
   void onWrite(beast::error_code ec, std::size_t bytes);
   void onPaced(beast::error_code ec);
+  void onWriteTimer(beast::error_code ec);
   void closeWith(beast::websocket::close_code code);
   void onClose(beast::error_code ec);
   void finish(const std::string& why);
@@ -71,6 +94,7 @@ class WebsocketSession : public Closable, public std::enable_shared_from_this<We
   const std::string path_;
   std::optional<std::uint64_t> id_;
   net::steady_timer pace_;
+  net::steady_timer writeTimer_;  // the deadline of the write in flight
   beast::flat_buffer readBuffer_;
   bhttp::request<bhttp::empty_body> request_;
 
@@ -81,6 +105,7 @@ class WebsocketSession : public Closable, public std::enable_shared_from_this<We
   bool waiting_ = false;  // next() said "nothing now": parked until wake()
   bool closing_ = false;
   bool finished_ = false;
+  bool droppedSlow_ = false;
   std::uint64_t frames_ = 0;
   std::uint64_t bytes_ = 0;
   std::chrono::steady_clock::time_point opened_;

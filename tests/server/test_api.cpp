@@ -142,7 +142,7 @@ TEST_CASE("api: health, planners, and an OpenAPI document naming every route") {
   json doc = s.get("/api/openapi.json").json();
   CHECK(doc["openapi"] == "3.0.3");
   for (const auto& r : s.router.routes()) CHECK_MESSAGE(doc["paths"].contains(r.pattern), r.pattern);
-  checkError(s.get("/api/nope"), 404, "");
+  checkError(s.get("/api/nope"), 404, "path");
 }
 
 TEST_CASE("api: the default map is there, with metadata and layers in three formats") {
@@ -373,7 +373,7 @@ TEST_CASE("api: with a token every /api route but health needs it") {
   o.token = "s3cret";
   TestServer s(tmp.str("data"), o);
   CHECK(s.get("/api/health").status == 200);
-  checkError(s.get("/api/maps"), 401, "");
+  checkError(s.get("/api/maps"), 401, "authorization");
   auto ok = request(s.port(), "GET", "/api/maps", "", "", {{"Authorization", "Bearer s3cret"}});
   CHECK(ok.status == 200);
   CHECK(request(s.port(), "GET", "/api/maps", "", "", {{"Authorization", "Bearer wrong"}}).status == 401);

@@ -358,11 +358,12 @@ TEST_CASE("http: routes with captures, query decoding, 404 and 405 as JSON error
   CHECK(r.header("allow") == "GET");
   CHECK(r.js()["error"]["code"] == "method_not_allowed");
   CHECK(r.js()["error"]["message"].is_string());
-  CHECK_FALSE(r.js()["error"].contains("field"));
+  CHECK(r.js()["error"]["field"] == "method");
 
   r = call(s.port(), bhttp::verb::get, "/api/nothing/here");
   CHECK(r.status == 404);
   CHECK(r.js()["error"]["code"] == "not_found");
+  CHECK(r.js()["error"]["field"] == "path");
 
   r = call(s.port(), bhttp::verb::get, "/no-web-root");  // no webRoot configured
   CHECK(r.status == 404);
@@ -424,7 +425,8 @@ TEST_CASE("http: a throwing handler gives 500 and the server keeps serving") {
   Reply r = c.send(makeRequest(bhttp::verb::get, "/api/boom"));
   CHECK(r.status == 500);
   CHECK(r.js()["error"]["code"] == "internal");
-  CHECK(r.js()["error"]["message"] == "kaboom");
+  // The exception's text is logged, not shown (it may hold server paths).
+  CHECK(r.js()["error"]["message"] == "internal error");
   r = c.send(makeRequest(bhttp::verb::get, "/api/int"));
   CHECK(r.status == 500);
   r = c.send(makeRequest(bhttp::verb::get, "/api/ok"));  // same connection still works
