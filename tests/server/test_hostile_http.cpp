@@ -523,16 +523,20 @@ TEST_CASE("hostile: with the work pool saturated by slow handlers, /api/health s
   // With the gate shut nothing finishes: of 6 slow requests 2 run, 2 wait, 2 are refused.
   std::vector<std::thread> sleepers;
   std::atomic<int> ok{0}, busy{0}, retryAfter{0};
-  for (int i = 0; i < 6; ++i)
-    sleepers.emplace_back([&] {
-      auto r = test::request(s.port(), "GET", "/api/test/sleep");
-      if (r.status == 200) ++ok;
-      if (r.status == 503) {
-        ++busy;
-        retryAfter += r.headers.count("Retry-After") ? 1 : 0;
-      }
-    });
-  for (int i = 0; i < 1000 && (entered < 2 || busy < 2); ++i) std::this_thread::sleep_for(10ms);
+  auto sleeper = [&] {
+    auto r = test::request(s.port(), "GET", "/api/test/sleep");
+    if (r.status == 200) ++ok;
+    if (r.status == 503) {
+      ++busy;
+      retryAfter += r.headers.count("Retry-After") ? 1 : 0;
+    }
+  };
+  // Two first, until both run; only then four more, so which ones wait is not a race between the
+  // pool's threads picking up work and new requests arriving.
+  for (int i = 0; i < 2; ++i) sleepers.emplace_back(sleeper);
+  for (int i = 0; i < 1000 && entered < 2; ++i) std::this_thread::sleep_for(10ms);
+  for (int i = 0; i < 4; ++i) sleepers.emplace_back(sleeper);
+  for (int i = 0; i < 1000 && busy < 2; ++i) std::this_thread::sleep_for(10ms);
   CHECK(entered == 2);
   CHECK(busy == 2);
   CHECK(retryAfter == 2);
