@@ -54,6 +54,9 @@ struct PlanResult {
   std::vector<Series> series;
   std::vector<Polyline> overlays;
   std::vector<Incident> incidents;
+  // Non-empty: the run completed, but with something the user must be told (a team mission's
+  // short/skipped legs, unreachable ground, collisions…), one line each.
+  std::vector<std::string> warnings;
 
   // The value of a metric; throws NotFound if the planner did not report it.
   double metric(const std::string& key) const;

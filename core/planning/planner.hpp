@@ -28,6 +28,9 @@ struct PlanningProblem {
   std::vector<RoverStart> rovers;
   std::shared_ptr<const terrain::Dem> dem;  // the map at its planning resolution
   std::shared_ptr<const Raster<float>> pdm;  // PDM masses on the DEM's grid; null = none given
+  // Threads the caller grants this run (a server's worker: 1, so missions in parallel do not
+  // oversubscribe the machine; the CLI: all cores). 0 = all cores.
+  unsigned threads = 1;
 };
 
 class Planner {

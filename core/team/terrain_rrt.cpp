@@ -130,7 +130,9 @@ Eigen::Vector2d sampleAt(const Eigen::Vector2d& a, const Eigen::Vector2d& b, int
 
 }  // namespace
 
+// Outside every keep-out zone, and inside the corridor when there is one.
 bool TerrainEdgeModel::outsideKeepOut(const Eigen::Vector2d& p) const {
+  if (corridor_ && !corridor_->contains(p)) return false;
   for (const auto& z : keepOut_)
     if ((p - z.centre).squaredNorm() <= z.radius * z.radius) return false;
   return true;
@@ -395,7 +397,8 @@ class SeededSampler : public ob::RealVectorStateSampler {
 PathResult planPath(const terrain::Dem& dem, const Raster<std::uint8_t>& classes,
                     const Eigen::Vector2d& start, double startHeading, const Eigen::Vector2d& goal,
                     const RrtParams& params, const TerrainCostWeights& weights,
-                    const CancelToken* cancel, const std::vector<KeepOutZone>& keepOut) {
+                    const CancelToken* cancel, const std::vector<KeepOutZone>& keepOut,
+                    const Corridor* corridor) {
   params.validate();
   weights.validate();
   requireFinite("start_heading", startHeading);
@@ -406,8 +409,9 @@ PathResult planPath(const terrain::Dem& dem, const Raster<std::uint8_t>& classes
   const GridGeometry& g = dem.geometry();
   const double resolution = params.edgeResolution > 0 ? params.edgeResolution
                                                       : 0.25 * std::min(g.cellWidth, g.cellHeight);
-  const SearchBounds box = searchBounds(g, start, goal, params.clearance);
+  const SearchBounds box = corridor ? corridor->bounds : searchBounds(g, start, goal, params.clearance);
   TerrainEdgeModel model(dem, classes, box, params.attitudeLimit, resolution);
+  model.setCorridor(corridor);
   for (const auto& z : keepOut)
     if (!z.centre.allFinite() || !std::isfinite(z.radius) || z.radius < 0)
       throwInvalidParameter("keep_out", "zones need a finite centre and a radius >= 0");

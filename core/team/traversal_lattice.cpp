@@ -1,0 +1,232 @@
+#include "core/team/traversal_lattice.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <queue>
+
+#include "core/common/parallel.hpp"
+#include "core/grid/direction.hpp"
+#include "core/terrain/layers.hpp"
+
+namespace rover::team {
+
+namespace {
+
+SearchBounds wholeMap(const GridGeometry& g) { return {{0, 0}, {g.widthMetres(), g.heightMetres()}}; }
+
+}  // namespace
+
+// The move table: for every cell and each of the 8 directions, the eq. 9 cost of the straight
+// move between the two cell centres, or −1 when TerrainEdgeModel::edgeValid refuses it. Eq. 9
+// charges roll and pitch per edge, and RRT*'s edges are up to the range (1 m) long, while a
+// lattice move is one cell (0.25 m on the paper's site): charged per move as they stand, the
+// attitude terms would weigh four times as much per metre on the lattice as in RRT*. They are
+// scaled by move length / range so the guide prefers what RRT* prefers. Δψ is not charged (a
+// lattice node does not know its incoming move); the R term keeps the guide straight.
+TraversalLattice::TraversalLattice(const terrain::Dem& dem, const Raster<std::uint8_t>& classes,
+                                   double attitudeLimit, double edgeResolution,
+                                   const TerrainCostWeights& weights, double range,
+                                   unsigned threads)
+    : dem_(dem),
+      classes_(classes),
+      model_(dem, classes, wholeMap(dem.geometry()), attitudeLimit, edgeResolution),
+      range_(range) {
+  const GridGeometry& g = classes.geometry;
+  const auto n = static_cast<std::size_t>(g.cellCount());
+  node_.assign(n, 0);
+  cost_.assign(n * 8, -1.0f);
+  parallelFor(static_cast<std::size_t>(g.rows), threads, [&](std::size_t row) {
+    const int r = static_cast<int>(row);
+    for (int c = 0; c < g.cols; ++c) {
+      const int i = g.index(r, c);
+      const Eigen::Vector2d a = cellToLocal(g, {r, c});
+      node_[i] = model_.turnValid(a) ? 1 : 0;
+      // Directions E, NE, N, NW here; their opposites are the neighbour's W, SW, S, SE (the
+      // terms are symmetric), so every slot is written by exactly one row.
+      for (int d = 0; d < 4; ++d) {
+        const int rr = r + kDirRow[d], cc = c + kDirCol[d];
+        if (!g.contains(rr, cc)) continue;
+        const Eigen::Vector2d b = cellToLocal(g, {rr, cc});
+        if (!model_.edgeValid(a, b)) continue;
+        const EdgeTerms t = model_.edgeTerms(a, b);
+        const double attitude = weights.wPhi * t.roll / weights.nPhi +
+                                weights.wTheta * t.pitch / weights.nTheta;
+        const auto cost =
+            static_cast<float>(weights.wR * t.length / weights.nR + attitude * t.length / range);
+        cost_[static_cast<std::size_t>(i) * 8 + d] = cost;
+        cost_[static_cast<std::size_t>(g.index(rr, cc)) * 8 + (d + 4)] = cost;
+      }
+    }
+  });
+  // Admissible A* heuristic: the R term alone.
+  heuristicPerMetre_ = weights.wR / weights.nR;
+}
+
+std::vector<int> TraversalLattice::seeds(const Eigen::Vector2d& p) const {
+  const GridGeometry& g = geometry();
+  std::vector<int> out;
+  auto own = localToCell(g, p);
+  if (!own) return out;
+  out.push_back(g.index(*own));
+  const double radius = 0.5;
+  const int span = static_cast<int>(std::ceil(radius / std::min(g.cellWidth, g.cellHeight)));
+  for (int dr = -span; dr <= span; ++dr)
+    for (int dc = -span; dc <= span; ++dc) {
+      const int r = own->row + dr, c = own->col + dc;
+      if ((dr == 0 && dc == 0) || !g.contains(r, c)) continue;
+      if (node_[g.index(r, c)] && (cellToLocal(g, {r, c}) - p).norm() <= radius)
+        out.push_back(g.index(r, c));
+    }
+  return out;
+}
+
+Raster<std::uint8_t> TraversalLattice::reachable(const std::vector<Eigen::Vector2d>& starts) const {
+  const GridGeometry& g = geometry();
+  Raster<std::uint8_t> out(g, 0);
+  std::vector<int> stack;
+  for (const auto& s : starts)
+    for (int i : seeds(s))
+      if (!out.at(i)) {
+        out.at(i) = 1;
+        stack.push_back(i);
+      }
+  while (!stack.empty()) {
+    const int i = stack.back();
+    stack.pop_back();
+    const CellIndex c = g.cell(i);
+    for (int d = 0; d < kDirections; ++d) {
+      if (moveCost(i, d) < 0) continue;
+      const int j = g.index(c.row + kDirRow[d], c.col + kDirCol[d]);
+      if (out.at(j) || !node_[j]) continue;
+      out.at(j) = 1;
+      stack.push_back(j);
+    }
+  }
+  return out;
+}
+
+std::optional<std::vector<Eigen::Vector2d>> TraversalLattice::guidePath(
+    const Eigen::Vector2d& start, const Eigen::Vector2d& goal,
+    const std::vector<KeepOutZone>& keepOut) const {
+  const GridGeometry& g = geometry();
+  auto goalCell = localToCell(g, goal);
+  const std::vector<int> from = seeds(start);
+  if (!goalCell || from.empty()) return std::nullopt;
+  const int target = g.index(*goalCell);
+  auto blocked = [&](int i) {
+    if (keepOut.empty()) return false;
+    const Eigen::Vector2d p = cellToLocal(g, g.cell(i));
+    for (const auto& z : keepOut)
+      if ((p - z.centre).squaredNorm() <= z.radius * z.radius) return true;
+    return false;
+  };
+  // A* with a deterministic order: (f, cell index).
+  const auto n = static_cast<std::size_t>(g.cellCount());
+  std::vector<float> best(n, std::numeric_limits<float>::infinity());
+  std::vector<int> parent(n, -1);
+  using Item = std::pair<double, int>;
+  std::priority_queue<Item, std::vector<Item>, std::greater<>> open;
+  auto h = [&](int i) { return heuristicPerMetre_ * (cellToLocal(g, g.cell(i)) - goal).norm(); };
+  // The start's own cell costs nothing; the other seeds cost the move to them.
+  for (std::size_t k = 0; k < from.size(); ++k) {
+    const int i = from[k];
+    const double d = k == 0 ? 0.0 : heuristicPerMetre_ * (cellToLocal(g, g.cell(i)) - start).norm();
+    if (d < best[i]) {
+      best[i] = static_cast<float>(d);
+      open.push({d + h(i), i});
+    }
+  }
+  bool found = false;
+  while (!open.empty()) {
+    const auto [f, i] = open.top();
+    open.pop();
+    if (f - h(i) > best[i] + 1e-6) continue;  // stale entry
+    if (i == target) {
+      found = true;
+      break;
+    }
+    const CellIndex c = g.cell(i);
+    for (int d = 0; d < kDirections; ++d) {
+      const float m = moveCost(i, d);
+      if (m < 0) continue;
+      const int j = g.index(c.row + kDirRow[d], c.col + kDirCol[d]);
+      if (!node_[j] && j != target) continue;
+      if (blocked(j)) continue;
+      const float cand = best[i] + m;
+      if (cand < best[j]) {
+        best[j] = cand;
+        parent[j] = i;
+        open.push({cand + h(j), j});
+      }
+    }
+  }
+  if (!found) return std::nullopt;
+  std::vector<Eigen::Vector2d> chain;
+  for (int i = target; i >= 0; i = parent[i]) chain.push_back(cellToLocal(g, g.cell(i)));
+  std::reverse(chain.begin(), chain.end());
+  // start, the centres after the start's cell, goal (the end cells' centres are replaced by the
+  // real points).
+  std::vector<Eigen::Vector2d> pts{start};
+  pts.insert(pts.end(), chain.begin() + 1, chain.end());
+  if (pts.size() > 1) pts.back() = goal;
+  else pts.push_back(goal);
+  // Shortcut to the farthest point within the range reachable by one valid edge ending on a
+  // point where the rover may turn: fewer, straighter edges, each still valid.
+  std::vector<Eigen::Vector2d> out{pts.front()};
+  std::size_t i = 0;
+  while (i + 1 < pts.size()) {
+    std::size_t next = i + 1;
+    for (std::size_t j = pts.size() - 1; j > i + 1; --j) {
+      if ((pts[j] - pts[i]).norm() > range_) continue;
+      if ((j + 1 == pts.size() || model_.turnValid(pts[j])) && model_.edgeValid(pts[i], pts[j])) {
+        next = j;
+        break;
+      }
+    }
+    out.push_back(pts[next]);
+    i = next;
+  }
+  return out;
+}
+
+Corridor TraversalLattice::corridor(const std::vector<Eigen::Vector2d>& path, double radius) const {
+  const GridGeometry& g = geometry();
+  Corridor out;
+  out.map = g;
+  Eigen::Vector2d lo = path.front(), hi = path.front();
+  for (const auto& p : path) {
+    lo = lo.cwiseMin(p);
+    hi = hi.cwiseMax(p);
+  }
+  const Eigen::Vector2d extent(g.widthMetres(), g.heightMetres());
+  out.bounds.min = (lo.array() - radius).max(0.0).matrix();
+  out.bounds.max = (hi.array() + radius).min(extent.array()).matrix();
+  const int c0 = std::clamp(static_cast<int>(std::floor(out.bounds.min.x() / g.cellWidth)), 0, g.cols - 1);
+  const int c1 = std::clamp(static_cast<int>(std::floor(out.bounds.max.x() / g.cellWidth)), 0, g.cols - 1);
+  const int r0 = std::clamp(g.rows - 1 - static_cast<int>(std::floor(out.bounds.max.y() / g.cellHeight)), 0, g.rows - 1);
+  const int r1 = std::clamp(g.rows - 1 - static_cast<int>(std::floor(out.bounds.min.y() / g.cellHeight)), 0, g.rows - 1);
+  out.row0 = r0;
+  out.col0 = c0;
+  out.mask = Raster<std::uint8_t>(GridGeometry{r1 - r0 + 1, c1 - c0 + 1, g.cellWidth, g.cellHeight}, 0);
+  const double step = 0.5 * std::min(g.cellWidth, g.cellHeight);
+  const int span = static_cast<int>(std::ceil(radius / std::min(g.cellWidth, g.cellHeight))) + 1;
+  auto stamp = [&](const Eigen::Vector2d& p) {
+    auto c = localToCell(g, p);
+    if (!c) return;
+    for (int dr = -span; dr <= span; ++dr)
+      for (int dc = -span; dc <= span; ++dc) {
+        const int r = c->row + dr, k = c->col + dc;
+        if (r < r0 || r > r1 || k < c0 || k > c1) continue;
+        if ((cellToLocal(g, {r, k}) - p).squaredNorm() <= radius * radius) out.mask(r - r0, k - c0) = 1;
+      }
+  };
+  for (std::size_t i = 0; i + 1 < path.size(); ++i) {
+    const int n = std::max(1, static_cast<int>(std::ceil((path[i + 1] - path[i]).norm() / step)));
+    for (int s = 0; s < n; ++s) stamp(path[i] + (path[i + 1] - path[i]) * (static_cast<double>(s) / n));
+  }
+  stamp(path.back());
+  return out;
+}
+
+}  // namespace rover::team

@@ -1,0 +1,63 @@
+#pragma once
+// The global layer under RRT* (paper 000 fig. 2: global planning on orbital data, local planning
+// in situ; ours for paper 001's team): the DEM's cell centres as an 8-connected lattice, with the
+// rover's own validity rules on every node and move (TerrainEdgeModel: classes, nodata, |roll| and
+// |pitch| along the move) and the eq. 9 terrain cost of each move, built once per mission.
+// On it: the ground the team can reach from its starts (a flood fill, so a walled-in region is
+// known before any target is chosen) and a guide path per leg (A*), around which RRT* then plans
+// in a corridor instead of the start/goal box.
+#include <Eigen/Core>
+#include <cstdint>
+#include <optional>
+#include <vector>
+
+#include "core/grid/raster.hpp"
+#include "core/team/terrain_rrt.hpp"
+#include "core/terrain/dem.hpp"
+
+namespace rover::team {
+
+class TraversalLattice {
+ public:
+  // Holds references: the rasters must outlive it. `threads` (0 = all cores) builds the move
+  // table; the result does not depend on it.
+  TraversalLattice(const terrain::Dem& dem, const Raster<std::uint8_t>& classes,
+                   double attitudeLimit, double edgeResolution, const TerrainCostWeights& weights,
+                   double range, unsigned threads);
+  TraversalLattice(terrain::Dem&&, const Raster<std::uint8_t>&, double, double,
+                   const TerrainCostWeights&, double, unsigned) = delete;
+
+  const GridGeometry& geometry() const { return classes_.geometry; }
+  const TerrainEdgeModel& model() const { return model_; }
+
+  // Cells the rovers can reach from `starts` (1 = reachable): flood fill over valid moves between
+  // valid nodes (turnValid: a rover may stop and turn there). A start's own cell and the valid
+  // cells within 0.5 m of it seed the fill even when the start itself is steep (RRT* escapes it
+  // the same way).
+  Raster<std::uint8_t> reachable(const std::vector<Eigen::Vector2d>& starts) const;
+
+  // The cheapest lattice path from `start` to `goal` (A*, eq. 9 per move, see the .cpp), as
+  // waypoints: `start`, cell centres, `goal`, simplified to straight valid edges no longer than
+  // the range. Nodes inside a keep-out zone are blocked. nullopt when the goal's cell cannot be
+  // reached (or the start's cell has no valid move).
+  std::optional<std::vector<Eigen::Vector2d>> guidePath(
+      const Eigen::Vector2d& start, const Eigen::Vector2d& goal,
+      const std::vector<KeepOutZone>& keepOut = {}) const;
+
+  // Cells whose centre is within `radius` of a point of `path` (sampled every half cell), as a
+  // corridor for planPath.
+  Corridor corridor(const std::vector<Eigen::Vector2d>& path, double radius) const;
+
+ private:
+  const terrain::Dem& dem_;
+  const Raster<std::uint8_t>& classes_;
+  TerrainEdgeModel model_;
+  double range_;
+  double heuristicPerMetre_ = 0;
+  std::vector<std::uint8_t> node_;  // 1 = turnValid at the cell centre
+  std::vector<float> cost_;         // per cell × 8 directions; < 0 = invalid move
+  float moveCost(int cell, int dir) const { return cost_[static_cast<std::size_t>(cell) * 8 + dir]; }
+  std::vector<int> seeds(const Eigen::Vector2d& p) const;
+};
+
+}  // namespace rover::team
