@@ -161,7 +161,11 @@ class Coordinator {
     if (!timed()) return planPath(dem_, classes_, from, heading, goal, rrt, p_.weights, cancel_, keepOut);
     auto guide = lattice_->guidePath(from, goal, keepOut);
     if (!guide) return planPath(dem_, classes_, from, heading, goal, rrt, p_.weights, cancel_, keepOut);
-    const Corridor corridor = lattice_->corridor(*guide, p_.corridorRadius);
+    // The corridor holds the paper's box too: never less room than paper mode, and on a straight
+    // leg the same tree density (a corridor alone packs the 1250 vertices tighter, which costs
+    // rewiring time for nothing).
+    const SearchBounds box = searchBounds(dem_.geometry(), from, goal, rrt.clearance);
+    const Corridor corridor = lattice_->corridor(*guide, p_.corridorRadius, &box);
     PathResult r = planPath(dem_, classes_, from, heading, goal, rrt, p_.weights, cancel_, keepOut,
                             &corridor);
     if (r.status == PathStatus::Exact || r.status == PathStatus::Cancelled ||

@@ -205,6 +205,34 @@ EdgeTerms TerrainEdgeModel::edgeTerms(const Eigen::Vector2d& a, const Eigen::Vec
   return t;
 }
 
+std::optional<EdgeTerms> TerrainEdgeModel::validEdgeTerms(const Eigen::Vector2d& a,
+                                                          const Eigen::Vector2d& b) const {
+  EdgeTerms t;
+  const Eigen::Vector2d d = b - a;
+  t.length = d.norm();
+  if (!(t.length > 0) || escapeRadius_ > 0) {  // the general path (escape discs, no heading)
+    if (!edgeValid(a, b)) return std::nullopt;
+    return edgeTerms(a, b);
+  }
+  const double c = d.x() / t.length, s = d.y() / t.length, tanLimit = std::tan(limit_);
+  const int n = segmentsFor(t.length, resolution_);
+  double tanPitch = 0, tanRoll = 0;
+  for (int i = 0; i <= n; ++i) {
+    const Eigen::Vector2d p = sampleAt(a, b, i, n);
+    if (!cellAllowed(dem_, classes_, bounds_, p) || !outsideKeepOut(p)) return std::nullopt;
+    auto sp = terrain::surfaceAt(dem_, p.x(), p.y());
+    if (!sp) return std::nullopt;
+    const double pitch = std::abs(sp->dzdx * c + sp->dzdy * s);
+    const double roll = std::abs(-sp->dzdx * s + sp->dzdy * c);
+    if (pitch >= tanLimit || roll >= tanLimit) return std::nullopt;
+    tanPitch = std::max(tanPitch, pitch);
+    tanRoll = std::max(tanRoll, roll);
+  }
+  t.pitch = std::atan(tanPitch);
+  t.roll = std::atan(tanRoll);
+  return t;
+}
+
 EdgeTerms TerrainEdgeModel::edgeTerms(const Eigen::Vector2d& a, const Eigen::Vector2d& b,
                                       double previousHeading) const {
   EdgeTerms t = edgeTerms(a, b);

@@ -12,6 +12,7 @@
 #include <Eigen/Core>
 #include <cstdint>
 #include <numbers>
+#include <optional>
 #include <utility>
 #include <vector>
 
@@ -153,6 +154,8 @@ class TerrainEdgeModel {
                       double previousHeading) const;
   // Same without a turn (Δψ = 0).
   EdgeTerms edgeTerms(const Eigen::Vector2d& a, const Eigen::Vector2d& b) const;
+  // edgeValid and edgeTerms in one pass over the samples: the terms when the edge is valid.
+  std::optional<EdgeTerms> validEdgeTerms(const Eigen::Vector2d& a, const Eigen::Vector2d& b) const;
 
   const SearchBounds& bounds() const { return bounds_; }
   double edgeResolution() const { return resolution_; }

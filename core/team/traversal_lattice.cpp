@@ -48,8 +48,9 @@ TraversalLattice::TraversalLattice(const terrain::Dem& dem, const Raster<std::ui
         const int rr = r + kDirRow[d], cc = c + kDirCol[d];
         if (!g.contains(rr, cc)) continue;
         const Eigen::Vector2d b = cellToLocal(g, {rr, cc});
-        if (!model_.edgeValid(a, b)) continue;
-        const EdgeTerms t = model_.edgeTerms(a, b);
+        const std::optional<EdgeTerms> terms = model_.validEdgeTerms(a, b);
+        if (!terms) continue;
+        const EdgeTerms& t = *terms;
         const double attitude = weights.wPhi * t.roll / weights.nPhi +
                                 weights.wTheta * t.pitch / weights.nTheta;
         const auto cost =
@@ -111,9 +112,37 @@ std::optional<std::vector<Eigen::Vector2d>> TraversalLattice::guidePath(
     const std::vector<KeepOutZone>& keepOut) const {
   const GridGeometry& g = geometry();
   auto goalCell = localToCell(g, goal);
+  auto startCell = localToCell(g, start);
   const std::vector<int> from = seeds(start);
-  if (!goalCell || from.empty()) return std::nullopt;
-  const int target = g.index(*goalCell);
+  if (!goalCell || !startCell || from.empty()) return std::nullopt;
+  // A* in a window round start and goal, widened (×4) until it holds a path or is the whole map:
+  // most legs are a few metres long, and a window keeps the search's arrays small.
+  const double cell = std::min(g.cellWidth, g.cellHeight);
+  for (double margin = 8.0;; margin *= 4) {
+    const int m = static_cast<int>(std::ceil(margin / cell));
+    const int r0 = std::max(0, std::min(startCell->row, goalCell->row) - m);
+    const int r1 = std::min(g.rows - 1, std::max(startCell->row, goalCell->row) + m);
+    const int c0 = std::max(0, std::min(startCell->col, goalCell->col) - m);
+    const int c1 = std::min(g.cols - 1, std::max(startCell->col, goalCell->col) + m);
+    auto chain = search(from, start, g.index(*goalCell), goal, keepOut, r0, r1, c0, c1);
+    if (chain) return simplify(*chain, start, goal);
+    if (r0 == 0 && c0 == 0 && r1 == g.rows - 1 && c1 == g.cols - 1) return std::nullopt;
+  }
+}
+
+// A* over the cells of rows r0..r1, cols c0..c1, in a deterministic order (f, cell index).
+std::optional<std::vector<Eigen::Vector2d>> TraversalLattice::search(
+    const std::vector<int>& from, const Eigen::Vector2d& start, int target,
+    const Eigen::Vector2d& goal, const std::vector<KeepOutZone>& keepOut, int r0, int r1, int c0,
+    int c1) const {
+  const GridGeometry& g = geometry();
+  const int wc = c1 - c0 + 1;
+  const auto n = static_cast<std::size_t>((r1 - r0 + 1) * wc);
+  auto local = [&](int i) {
+    const CellIndex c = g.cell(i);
+    return (c.row - r0) * wc + (c.col - c0);
+  };
+  auto inside = [&](int r, int c) { return r >= r0 && r <= r1 && c >= c0 && c <= c1; };
   auto blocked = [&](int i) {
     if (keepOut.empty()) return false;
     const Eigen::Vector2d p = cellToLocal(g, g.cell(i));
@@ -121,8 +150,6 @@ std::optional<std::vector<Eigen::Vector2d>> TraversalLattice::guidePath(
       if ((p - z.centre).squaredNorm() <= z.radius * z.radius) return true;
     return false;
   };
-  // A* with a deterministic order: (f, cell index).
-  const auto n = static_cast<std::size_t>(g.cellCount());
   std::vector<float> best(n, std::numeric_limits<float>::infinity());
   std::vector<int> parent(n, -1);
   using Item = std::pair<double, int>;
@@ -131,9 +158,11 @@ std::optional<std::vector<Eigen::Vector2d>> TraversalLattice::guidePath(
   // The start's own cell costs nothing; the other seeds cost the move to them.
   for (std::size_t k = 0; k < from.size(); ++k) {
     const int i = from[k];
-    const double d = k == 0 ? 0.0 : heuristicPerMetre_ * (cellToLocal(g, g.cell(i)) - start).norm();
-    if (d < best[i]) {
-      best[i] = static_cast<float>(d);
+    const CellIndex c = g.cell(i);
+    if (!inside(c.row, c.col)) continue;
+    const double d = k == 0 ? 0.0 : heuristicPerMetre_ * (cellToLocal(g, c) - start).norm();
+    if (d < best[local(i)]) {
+      best[local(i)] = static_cast<float>(d);
       open.push({d + h(i), i});
     }
   }
@@ -141,7 +170,7 @@ std::optional<std::vector<Eigen::Vector2d>> TraversalLattice::guidePath(
   while (!open.empty()) {
     const auto [f, i] = open.top();
     open.pop();
-    if (f - h(i) > best[i] + 1e-6) continue;  // stale entry
+    if (f - h(i) > best[local(i)] + 1e-6) continue;  // stale entry
     if (i == target) {
       found = true;
       break;
@@ -150,25 +179,35 @@ std::optional<std::vector<Eigen::Vector2d>> TraversalLattice::guidePath(
     for (int d = 0; d < kDirections; ++d) {
       const float m = moveCost(i, d);
       if (m < 0) continue;
-      const int j = g.index(c.row + kDirRow[d], c.col + kDirCol[d]);
+      const int rr = c.row + kDirRow[d], cc = c.col + kDirCol[d];
+      if (!inside(rr, cc)) continue;
+      const int j = g.index(rr, cc);
       if (!node_[j] && j != target) continue;
       if (blocked(j)) continue;
-      const float cand = best[i] + m;
-      if (cand < best[j]) {
-        best[j] = cand;
-        parent[j] = i;
+      const float cand = best[local(i)] + m;
+      if (cand < best[local(j)]) {
+        best[local(j)] = cand;
+        parent[local(j)] = i;
         open.push({cand + h(j), j});
       }
     }
   }
   if (!found) return std::nullopt;
   std::vector<Eigen::Vector2d> chain;
-  for (int i = target; i >= 0; i = parent[i]) chain.push_back(cellToLocal(g, g.cell(i)));
+  for (int i = target; i >= 0; i = parent[local(i)]) chain.push_back(cellToLocal(g, g.cell(i)));
   std::reverse(chain.begin(), chain.end());
+  return chain;
+}
+
+std::vector<Eigen::Vector2d> TraversalLattice::simplify(const std::vector<Eigen::Vector2d>& chain,
+                                                        const Eigen::Vector2d& start,
+                                                        const Eigen::Vector2d& goal) const {
   // start, the centres after the start's cell, goal (the end cells' centres are replaced by the
   // real points).
   std::vector<Eigen::Vector2d> pts{start};
-  pts.insert(pts.end(), chain.begin() + 1, chain.end());
+  auto own = localToCell(geometry(), start);
+  const bool fromOwn = own && (cellToLocal(geometry(), *own) - chain.front()).squaredNorm() < 1e-12;
+  pts.insert(pts.end(), chain.begin() + (fromOwn ? 1 : 0), chain.end());
   if (pts.size() > 1) pts.back() = goal;
   else pts.push_back(goal);
   // Shortcut to the farthest point within the range reachable by one valid edge ending on a
@@ -190,7 +229,10 @@ std::optional<std::vector<Eigen::Vector2d>> TraversalLattice::guidePath(
   return out;
 }
 
-Corridor TraversalLattice::corridor(const std::vector<Eigen::Vector2d>& path, double radius) const {
+
+
+Corridor TraversalLattice::corridor(const std::vector<Eigen::Vector2d>& path, double radius,
+                                   const SearchBounds* box) const {
   const GridGeometry& g = geometry();
   Corridor out;
   out.map = g;
@@ -202,6 +244,10 @@ Corridor TraversalLattice::corridor(const std::vector<Eigen::Vector2d>& path, do
   const Eigen::Vector2d extent(g.widthMetres(), g.heightMetres());
   out.bounds.min = (lo.array() - radius).max(0.0).matrix();
   out.bounds.max = (hi.array() + radius).min(extent.array()).matrix();
+  if (box) {
+    out.bounds.min = out.bounds.min.cwiseMin(box->min);
+    out.bounds.max = out.bounds.max.cwiseMax(box->max);
+  }
   const int c0 = std::clamp(static_cast<int>(std::floor(out.bounds.min.x() / g.cellWidth)), 0, g.cols - 1);
   const int c1 = std::clamp(static_cast<int>(std::floor(out.bounds.max.x() / g.cellWidth)), 0, g.cols - 1);
   const int r0 = std::clamp(g.rows - 1 - static_cast<int>(std::floor(out.bounds.max.y() / g.cellHeight)), 0, g.rows - 1);
@@ -226,6 +272,12 @@ Corridor TraversalLattice::corridor(const std::vector<Eigen::Vector2d>& path, do
     for (int s = 0; s < n; ++s) stamp(path[i] + (path[i + 1] - path[i]) * (static_cast<double>(s) / n));
   }
   stamp(path.back());
+  if (box) {  // every cell the box touches
+    auto a = localToCell(g, box->min), b = localToCell(g, box->max);
+    if (a && b)
+      for (int r = b->row; r <= a->row; ++r)
+        for (int k = a->col; k <= b->col; ++k) out.mask(r - r0, k - c0) = 1;
+  }
   return out;
 }
 

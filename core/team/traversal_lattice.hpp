@@ -44,9 +44,10 @@ class TraversalLattice {
       const Eigen::Vector2d& start, const Eigen::Vector2d& goal,
       const std::vector<KeepOutZone>& keepOut = {}) const;
 
-  // Cells whose centre is within `radius` of a point of `path` (sampled every half cell), as a
-  // corridor for planPath.
-  Corridor corridor(const std::vector<Eigen::Vector2d>& path, double radius) const;
+  // Cells whose centre is within `radius` of a point of `path` (sampled every half cell), and
+  // every cell `box` touches when given, as a corridor for planPath.
+  Corridor corridor(const std::vector<Eigen::Vector2d>& path, double radius,
+                    const SearchBounds* box = nullptr) const;
 
  private:
   const terrain::Dem& dem_;
@@ -58,6 +59,14 @@ class TraversalLattice {
   std::vector<float> cost_;         // per cell × 8 directions; < 0 = invalid move
   float moveCost(int cell, int dir) const { return cost_[static_cast<std::size_t>(cell) * 8 + dir]; }
   std::vector<int> seeds(const Eigen::Vector2d& p) const;
+  std::optional<std::vector<Eigen::Vector2d>> search(const std::vector<int>& from,
+                                                     const Eigen::Vector2d& start, int target,
+                                                     const Eigen::Vector2d& goal,
+                                                     const std::vector<KeepOutZone>& keepOut,
+                                                     int r0, int r1, int c0, int c1) const;
+  std::vector<Eigen::Vector2d> simplify(const std::vector<Eigen::Vector2d>& chain,
+                                        const Eigen::Vector2d& start,
+                                        const Eigen::Vector2d& goal) const;
 };
 
 }  // namespace rover::team
