@@ -13,6 +13,8 @@ namespace rover::team {
 
 namespace {
 
+constexpr std::int64_t kMaxWindowCells = 4'000'000;
+
 SearchBounds wholeMap(const GridGeometry& g) { return {{0, 0}, {g.widthMetres(), g.heightMetres()}}; }
 
 }  // namespace
@@ -35,15 +37,22 @@ TraversalLattice::TraversalLattice(const terrain::Dem& dem, const Raster<std::ui
   const GridGeometry& g = classes.geometry;
   const auto n = static_cast<std::size_t>(g.cellCount());
   node_.assign(n, 0);
-  cost_.assign(n * 8, -1.0f);
+  cost_.assign(n * 4, kInvalid);
+  // The largest cost a valid move can have (the diagonal, attitude terms just under the limit),
+  // split into 65 000 steps: quantisation below 2e-5 of the largest move, far under any cost
+  // difference that matters to a guide.
+  const double diagonal = std::hypot(g.cellWidth, g.cellHeight);
+  const double worst = weights.wR * diagonal / weights.nR +
+                       (weights.wPhi * attitudeLimit / weights.nPhi +
+                        weights.wTheta * attitudeLimit / weights.nTheta) * diagonal / range;
+  costStep_ = worst > 0 ? worst / 65000.0 : 1.0;
   parallelFor(static_cast<std::size_t>(g.rows), threads, [&](std::size_t row) {
     const int r = static_cast<int>(row);
     for (int c = 0; c < g.cols; ++c) {
       const int i = g.index(r, c);
       const Eigen::Vector2d a = cellToLocal(g, {r, c});
       node_[i] = model_.turnValid(a) ? 1 : 0;
-      // Directions E, NE, N, NW here; their opposites are the neighbour's W, SW, S, SE (the
-      // terms are symmetric), so every slot is written by exactly one row.
+      // Directions E, NE, N, NW; their opposites are read from the neighbour (moveCost).
       for (int d = 0; d < 4; ++d) {
         const int rr = r + kDirRow[d], cc = c + kDirCol[d];
         if (!g.contains(rr, cc)) continue;
@@ -53,10 +62,9 @@ TraversalLattice::TraversalLattice(const terrain::Dem& dem, const Raster<std::ui
         const EdgeTerms& t = *terms;
         const double attitude = weights.wPhi * t.roll / weights.nPhi +
                                 weights.wTheta * t.pitch / weights.nTheta;
-        const auto cost =
-            static_cast<float>(weights.wR * t.length / weights.nR + attitude * t.length / range);
-        cost_[static_cast<std::size_t>(i) * 8 + d] = cost;
-        cost_[static_cast<std::size_t>(g.index(rr, cc)) * 8 + (d + 4)] = cost;
+        const double cost = weights.wR * t.length / weights.nR + attitude * t.length / range;
+        cost_[static_cast<std::size_t>(i) * 4 + d] =
+            static_cast<std::uint16_t>(std::min(65000.0, std::round(cost / costStep_)));
       }
     }
   });
@@ -124,6 +132,10 @@ std::optional<std::vector<Eigen::Vector2d>> TraversalLattice::guidePath(
     const int r1 = std::min(g.rows - 1, std::max(startCell->row, goalCell->row) + m);
     const int c0 = std::max(0, std::min(startCell->col, goalCell->col) - m);
     const int c1 = std::min(g.cols - 1, std::max(startCell->col, goalCell->col) + m);
+    // Memory: 8 bytes per window cell; windows stop growing past 4 M cells (32 MB), so a guide
+    // on a huge map stays bounded (the leg then falls back to the boxed RRT*).
+    const std::int64_t cells = static_cast<std::int64_t>(r1 - r0 + 1) * (c1 - c0 + 1);
+    if (cells > kMaxWindowCells) return std::nullopt;
     auto chain = search(from, start, g.index(*goalCell), goal, keepOut, r0, r1, c0, c1);
     if (chain) return simplify(*chain, start, goal);
     if (r0 == 0 && c0 == 0 && r1 == g.rows - 1 && c1 == g.cols - 1) return std::nullopt;

@@ -11,6 +11,7 @@
 #include <optional>
 #include <vector>
 
+#include "core/grid/direction.hpp"
 #include "core/grid/raster.hpp"
 #include "core/team/terrain_rrt.hpp"
 #include "core/terrain/dem.hpp"
@@ -55,9 +56,29 @@ class TraversalLattice {
   TerrainEdgeModel model_;
   double range_;
   double heuristicPerMetre_ = 0;
+  // Memory: 9 bytes per map cell (a node flag and four 16-bit move costs), e.g. 3.2 MB for the
+  // paper's 600 × 600 site, 450 MB for the server's largest map (50 M cells).
   std::vector<std::uint8_t> node_;  // 1 = turnValid at the cell centre
-  std::vector<float> cost_;         // per cell × 8 directions; < 0 = invalid move
-  float moveCost(int cell, int dir) const { return cost_[static_cast<std::size_t>(cell) * 8 + dir]; }
+  // Per cell, the moves E, NE, N, NW (the other four are the neighbours' opposite moves, the
+  // terms being symmetric), quantised by costStep_; kInvalid = not a valid move.
+  std::vector<std::uint16_t> cost_;
+  double costStep_ = 1.0;
+  static constexpr std::uint16_t kInvalid = 0xFFFF;
+  // The cost of the move from `cell` in direction `dir` (0..7), < 0 when invalid or off the grid.
+  float moveCost(int cell, int dir) const {
+    const GridGeometry& g = classes_.geometry;
+    const int row = cell / g.cols, col = cell % g.cols;
+    if (!g.contains(row + kDirRow[dir], col + kDirCol[dir])) return -1.0f;
+    std::size_t slot;
+    if (dir < 4) {
+      slot = static_cast<std::size_t>(cell) * 4 + dir;
+    } else {
+      const int j = g.index(row + kDirRow[dir], col + kDirCol[dir]);
+      slot = static_cast<std::size_t>(j) * 4 + (dir - 4);
+    }
+    const std::uint16_t q = cost_[slot];
+    return q == kInvalid ? -1.0f : static_cast<float>(q * costStep_);
+  }
   std::vector<int> seeds(const Eigen::Vector2d& p) const;
   std::optional<std::vector<Eigen::Vector2d>> search(const std::vector<int>& from,
                                                      const Eigen::Vector2d& start, int target,
