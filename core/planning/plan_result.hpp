@@ -57,6 +57,9 @@ struct PlanResult {
   std::vector<Incident> incidents;
   // What the planner took for granted that the user did not say, e.g. {"body", "mars"}.
   std::vector<std::pair<std::string, std::string>> assumptions;
+  // Non-empty: the run completed, but with something the user must be told (a team mission's
+  // short/skipped legs, unreachable ground, collisions…), one line each.
+  std::vector<std::string> warnings;
 
   // The value of a metric; throws NotFound if the planner did not report it.
   double metric(const std::string& key) const;

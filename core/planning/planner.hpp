@@ -30,6 +30,9 @@ struct PlanningProblem {
   std::shared_ptr<const terrain::Dem> dem;  // the map at its planning resolution
   std::shared_ptr<const Raster<float>> pdm;  // PDM masses on the DEM's grid; null = none given
   terrain::Body body = terrain::Body::Unknown;  // the map's body, from its CRS (maps/georef.hpp)
+  // Threads the caller grants this run (a server's worker: 1, so missions in parallel do not
+  // oversubscribe the machine; the CLI: all cores). 0 = all cores.
+  unsigned threads = 1;
 };
 
 class Planner {

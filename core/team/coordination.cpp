@@ -34,6 +34,51 @@ void CoordinationParams::validate() const {
     throwInvalidParameter("dwell_check", "must be a number of seconds in [0, 3600]");
   if (maxPieces < 1 || maxPieces > 100)
     throwInvalidParameter("max_pieces", "must be an integer in [1, 100]");
+  if (!std::isfinite(corridorRadius) || corridorRadius < 0.5 || corridorRadius > 100)
+    throwInvalidParameter("corridor_radius", "must be a number of metres in [0.5, 100]");
+  if (!std::isfinite(delayStep) || delayStep < controller.samplePeriod || delayStep > 3600)
+    throwInvalidParameter("delay_step", "must be a number of seconds in [sample period, 3600]");
+}
+
+const char* coordinationModeName(CoordinationMode m) {
+  switch (m) {
+    case CoordinationMode::Timed:
+      return "timed";
+    case CoordinationMode::Paper:
+      return "paper";
+  }
+  return "unknown";
+}
+
+const char* legReasonName(LegReason r) {
+  switch (r) {
+    case LegReason::None:
+      return "none";
+    case LegReason::InvalidGoal:
+      return "invalid_goal";
+    case LegReason::NoPath:
+      return "no_path";
+    case LegReason::Steep:
+      return "steep";
+    case LegReason::Conflict:
+      return "conflict";
+    case LegReason::PiecesExhausted:
+      return "pieces_exhausted";
+  }
+  return "unknown";
+}
+
+namespace {
+double edgeResolutionFor(const terrain::Dem& dem, const RrtParams& rrt) {
+  const GridGeometry& g = dem.geometry();
+  return rrt.edgeResolution > 0 ? rrt.edgeResolution : 0.25 * std::min(g.cellWidth, g.cellHeight);
+}
+}  // namespace
+
+TraversalLattice makeLattice(const terrain::Dem& dem, const Raster<std::uint8_t>& classes,
+                             const CoordinationParams& params) {
+  return TraversalLattice(dem, classes, params.rrt.attitudeLimit, edgeResolutionFor(dem, params.rrt),
+                          params.weights, params.rrt.range, params.threads);
 }
 
 const char* legStatusName(LegStatus s) {
@@ -71,7 +116,8 @@ class Coordinator {
  public:
   Coordinator(const terrain::Dem& dem, const Raster<std::uint8_t>& classes,
               const std::vector<RoverTask>& tasks, const CoordinationParams& params,
-              std::uint64_t seed, CoordinationObserver* observer, const CancelToken* cancel)
+              std::uint64_t seed, CoordinationObserver* observer, const CancelToken* cancel,
+              const TraversalLattice* lattice)
       : dem_(dem),
         classes_(classes),
         tasks_(tasks),
@@ -80,7 +126,8 @@ class Coordinator {
         observer_(observer),
         cancel_(cancel),
         period_(params.controller.samplePeriod),
-        wholeMap_(dem, classes, mapBounds(dem), params.rrt.attitudeLimit, edgeResolution()) {}
+        wholeMap_(dem, classes, mapBounds(dem), params.rrt.attitudeLimit, edgeResolution()),
+        lattice_(lattice) {}
 
   CoordinationResult run() {
     const int n = static_cast<int>(tasks_.size());
@@ -101,7 +148,50 @@ class Coordinator {
   }
 
  private:
-  enum class Outcome { Accepted, Skipped, NoPath, Cancelled };
+  enum class Outcome { Accepted, Skipped, NoPath, InvalidGoal, Steep, Cancelled };
+
+  bool timed() const { return p_.mode == CoordinationMode::Timed && lattice_; }
+
+  // s a leg is checked standing at its end. Paper mode: dwell_check, since its next leg starts at
+  // once or only after whole wait steps. Timed: at most the time to get going and drive out of
+  // the safety distance (1 s + safety / nominal speed, 4.3 s by default) — the next leg's delays
+  // check the rover standing there themselves, sample by sample, for as long as it stands; a
+  // longer dwell only refused arrivals a short stop makes safely (measured on the default map,
+  // seeds 1–3: 9 of 960 legs skipped with 10 s, 6 with 4.5 s; with 0.5 s a rover could arrive
+  // where it had no time to get away, 7 skipped on seed 2).
+  double dwell() const {
+    if (!timed()) return p_.dwellCheck;
+    return std::min(p_.dwellCheck, p_.safetyDistance / p_.controller.nominalSpeed + 1.0);
+  }
+
+  // One planning problem of a leg. Paper: RRT* in the start/goal box. Timed: a guide path on the
+  // lattice (keeping out of the keep-out zones), RRT* in the corridor around it, and the guide
+  // itself when RRT* ends short — it is valid by construction, so a leg to a reachable goal
+  // reaches it. Without a guide (goal cell unreachable) the boxed RRT* still gets its chance.
+  PathResult planLeg(const Eigen::Vector2d& from, double heading, const Eigen::Vector2d& goal,
+                     const RrtParams& rrt, const std::vector<KeepOutZone>& keepOut) const {
+    if (!timed()) return planPath(dem_, classes_, from, heading, goal, rrt, p_.weights, cancel_, keepOut);
+    auto guide = lattice_->guidePath(from, goal, keepOut);
+    if (!guide) return planPath(dem_, classes_, from, heading, goal, rrt, p_.weights, cancel_, keepOut);
+    // The corridor holds the paper's box too: never less room than paper mode, and on a straight
+    // leg the same tree density (a corridor alone packs the 1250 vertices tighter, which costs
+    // rewiring time for nothing).
+    const SearchBounds box = searchBounds(dem_.geometry(), from, goal, rrt.clearance);
+    const Corridor corridor = lattice_->corridor(*guide, p_.corridorRadius, &box);
+    PathResult r = planPath(dem_, classes_, from, heading, goal, rrt, p_.weights, cancel_, keepOut,
+                            &corridor);
+    if (r.status == PathStatus::Exact || r.status == PathStatus::Cancelled ||
+        r.status == PathStatus::InvalidGoal)
+      return r;
+    PathResult g;
+    g.status = PathStatus::Exact;
+    g.waypoints = std::move(*guide);
+    g.cost = pathCost(lattice_->model(), g.waypoints, heading, p_.weights, false);
+    g.costWithTurns = pathCost(lattice_->model(), g.waypoints, heading, p_.weights, true);
+    g.vertices = r.vertices;
+    g.iterations = r.iterations;
+    return g;
+  }
 
   struct Candidate {
     std::vector<Eigen::Vector2d> path;         // waypoints, the rover's position first
@@ -174,8 +264,7 @@ class Coordinator {
       rrt.seed = seedFor(seed_, job.rover, job.leg, 0, 0);
       Ahead& a = ahead_[job.rover][job.leg];
       a.start = job.start;
-      a.path = planPath(dem_, classes_, job.start, job.heading, tasks_[job.rover].legs[job.leg].goal,
-                        rrt, p_.weights, cancel_);
+      a.path = planLeg(job.start, job.heading, tasks_[job.rover].legs[job.leg].goal, rrt, {});
       a.planned = true;
     });
     out_.rrtCalls += static_cast<int>(jobs.size());
@@ -212,8 +301,7 @@ class Coordinator {
     RrtParams rrt = p_.rrt;
     rrt.seed = seedFor(seed_, k, i, piece, attempt);
     ++out_.rrtCalls;
-    return planPath(dem_, classes_, from, last(k).heading, goal, rrt, p_.weights, cancel_,
-                    keepOut);
+    return planLeg(from, last(k).heading, goal, rrt, keepOut);
   }
 
   Candidate simulateTry(int k, const std::vector<Eigen::Vector2d>& path, int waitTicks,
@@ -272,7 +360,7 @@ class Coordinator {
     for (int j = 0; j < k; ++j) end = std::max(end, trajectories[j].samples.size());
     const std::size_t from = base + samples.size();
     if (!parkedForGood)
-      end = std::min(end, from + static_cast<std::size_t>(std::lround(p_.dwellCheck / period_)));
+      end = std::min(end, from + static_cast<std::size_t>(std::lround(dwell() / period_)));
     const Eigen::Vector2d p = samples.empty() ? here(k) : xyOf(samples.back());
     for (std::size_t idx = from; idx < end; ++idx)
       if (auto c = check(idx, p)) return c;
@@ -344,7 +432,9 @@ class Coordinator {
     }
     if (!firstTry) {
       rec.note = noPath.empty() ? "every try tilts past the attitude limit" : "no path: " + noPath;
-      return Outcome::NoPath;
+      if (noPath.empty()) return Outcome::Steep;
+      return noPath == pathStatusName(PathStatus::InvalidGoal) ? Outcome::InvalidGoal
+                                                               : Outcome::NoPath;
     }
     for (int w = 1; w <= p_.maxWaits; ++w) {
       if (cancelled()) return Outcome::Cancelled;
@@ -362,6 +452,103 @@ class Coordinator {
     if (!conflict) {
       rec.note = "no clear try";
       return Outcome::Skipped;
+    }
+    char buf[160];
+    std::snprintf(buf, sizeof buf, "within %.2f m of rover %d at t = %.1f s (%.2f, %.2f)",
+                  conflict->distance, conflict->other, conflict->time, conflict->position.x(),
+                  conflict->position.y());
+    rec.note = buf;
+    return Outcome::Skipped;
+  }
+
+  // `c` started `ticks` samples later: the rover stands where it is meanwhile. The terrain does
+  // not change, so the simulated motion is the same, only later.
+  Candidate delayed(int k, const Candidate& c, int ticks) const {
+    if (ticks == 0) return c;
+    const TrajectorySample origin = last(k);
+    const std::size_t base = out_.trajectories[k].samples.size() - 1;
+    Candidate d;
+    d.path = c.path;
+    d.reached = c.reached;
+    d.samples.reserve(c.samples.size() + static_cast<std::size_t>(ticks));
+    for (int j = 1; j <= ticks; ++j) {
+      TrajectorySample s = origin;
+      s.time = static_cast<double>(base + j) * period_;
+      s.speed = 0;
+      d.samples.push_back(s);
+    }
+    for (TrajectorySample s : c.samples) {
+      s.time += ticks * period_;
+      d.samples.push_back(s);
+    }
+    return d;
+  }
+
+  // Timed mode's piece: each try is simulated once, then started at the first delay (0, δ, 2δ,
+  // … up to max_waits × wait_step) at which it keeps the safety distance from every committed
+  // trajectory at every 10 Hz sample (and standing at its end, as in paper mode). Only when no
+  // delay clears it is the leg re-planned, keeping out of where the other rover was.
+  Outcome runPieceTimed(int k, int i, int piece, const Eigen::Vector2d& goal, LegRecord& rec,
+                        bool& reachedGoal) {
+    const bool lastLeg = i + 1 == static_cast<int>(tasks_[k].legs.size());
+    const int step = std::max(1, static_cast<int>(std::lround(p_.delayStep / period_)));
+    const int maxTicks = static_cast<int>(std::lround(p_.maxWaits * p_.waitStep / period_));
+    std::vector<KeepOutZone> keepOut;
+    std::optional<Conflict> conflict;
+    bool withinLimit = false;
+    PathStatus noPath = PathStatus::Exact;
+    for (int attempt = 0; attempt <= p_.maxReplans; ++attempt) {
+      if (cancelled()) return Outcome::Cancelled;
+      if (attempt > 0) {
+        ++rec.replans;
+        ++out_.replans;
+      }
+      PathResult path = tryPath(k, i, piece, attempt, goal, keepOut);
+      if (path.status == PathStatus::Cancelled) return Outcome::Cancelled;
+      if (!path.hasPath() || path.waypoints.size() < 2) {
+        noPath = path.status;
+        if (keepOut.empty() && path.status == PathStatus::InvalidGoal) {
+          rec.note = "no path: invalid_goal (not on ground a rover may stop on)";
+          return Outcome::InvalidGoal;
+        }
+        if (keepOut.empty() && path.status == PathStatus::InvalidStart) break;
+        continue;
+      }
+      const Candidate c0 = simulateTry(
+          k, path.waypoints, 0,
+          seedFor(deriveSeed(seed_ ^ 0x51ee5ull, p_.slip.seed), k, i, piece, attempt));
+      if (cancelled()) return Outcome::Cancelled;
+      if (const auto steep = firstExceedance(c0.samples)) {
+        if ((here(k) - *steep).norm() > 0.5 && (goal - *steep).norm() > 0.5)
+          keepOut.push_back({*steep, 0.5});
+        continue;
+      }
+      withinLimit = true;
+      const bool parks = lastLeg && reachesGoal(c0, goal);
+      std::optional<Conflict> first;
+      for (int ticks = 0; ticks <= maxTicks; ticks += step) {
+        Candidate c = delayed(k, c0, ticks);
+        conflict = firstConflict(k, c.samples, parks);
+        if (!first) first = conflict;
+        if (conflict) continue;
+        if (ticks > 0) {
+          ++rec.waits;
+          ++out_.waits;
+          rec.waitTime += ticks * period_;
+        }
+        reachedGoal = path.status == PathStatus::Exact && c.reached;
+        commit(k, c);
+        return Outcome::Accepted;
+      }
+      conflict = first;
+      const KeepOutZone zone{first->otherPosition, p_.keepOutRadius};
+      if ((here(k) - zone.centre).norm() > zone.radius && (goal - zone.centre).norm() > zone.radius)
+        keepOut.push_back(zone);
+    }
+    if (!withinLimit) {
+      rec.note = noPath != PathStatus::Exact ? std::string("no path: ") + pathStatusName(noPath)
+                                             : "every try tilts past the attitude limit";
+      return noPath != PathStatus::Exact ? Outcome::NoPath : Outcome::Steep;
     }
     char buf[160];
     std::snprintf(buf, sizeof buf, "within %.2f m of rover %d at t = %.1f s (%.2f, %.2f)",
@@ -409,7 +596,7 @@ class Coordinator {
       rrt.seed = seedFor(seed_ ^ 0x9a4cull, k, attempt, 0, 0);
       ++attempt;
       ++out_.rrtCalls;
-      PathResult path = planPath(dem_, classes_, from, last(k).heading, spot, rrt, p_.weights, cancel_);
+      PathResult path = planLeg(from, last(k).heading, spot, rrt, {});
       if (path.status != PathStatus::Exact || path.waypoints.size() < 2) continue;
       Candidate c = simulateTry(k, path.waypoints, 0, seedFor(seed_ ^ 0x9a4dull, k, attempt, 0, 0));
       if (!c.reached || firstConflict(k, c.samples, true) || (pass == 0 && firstExceedance(c.samples)))
@@ -443,16 +630,28 @@ class Coordinator {
         break;
       }
       bool reached = false;
-      const Outcome o = runPiece(k, i, piece, goal, rec, reached);
+      const Outcome o = timed() ? runPieceTimed(k, i, piece, goal, rec, reached)
+                                : runPiece(k, i, piece, goal, rec, reached);
       if (o == Outcome::Cancelled) {
         out_.cancelled = true;
         return;
       }
       if (o == Outcome::Skipped) {
         rec.status = LegStatus::Skipped;
+        rec.reason = LegReason::Conflict;
         break;
       }
-      if (o == Outcome::NoPath) break;  // Short, with the note
+      if (o == Outcome::InvalidGoal) {
+        // A goal off passable ground is skipped outright, not "short" (paper mode: only when no
+        // piece moved the rover; the same when the first piece already finds it invalid).
+        if (rec.pieces == 0) rec.status = LegStatus::Skipped;
+        rec.reason = LegReason::InvalidGoal;
+        break;
+      }
+      if (o == Outcome::NoPath || o == Outcome::Steep) {  // Short, with the note
+        rec.reason = o == Outcome::NoPath ? LegReason::NoPath : LegReason::Steep;
+        break;
+      }
       ++rec.pieces;
       if (reached) {
         rec.status = LegStatus::Reached;
@@ -460,14 +659,15 @@ class Coordinator {
       }
       if ((here(k) - goal).norm() > before - 0.25) {  // no progress: stop chaining
         rec.note = "the tree ends short of the goal and makes no progress";
+        rec.reason = LegReason::NoPath;
         break;
       }
-      if (piece + 1 == p_.maxPieces) rec.note = "goal not reached after max_pieces RRT* pieces";
+      if (piece + 1 == p_.maxPieces) {
+        rec.note = "goal not reached after max_pieces RRT* pieces";
+        rec.reason = LegReason::PiecesExhausted;
+      }
     }
-    // A goal off passable ground is skipped outright, not "short".
-    if (rec.status == LegStatus::Short && rec.pieces == 0 &&
-        rec.note.find("invalid_goal") != std::string::npos)
-      rec.status = LegStatus::Skipped;
+    if (rec.status == LegStatus::Reached) rec.reason = LegReason::None;
     rec.endTime = last(k).time;
     out_.legs.push_back(rec);
     ++legsDone_;
@@ -483,6 +683,7 @@ class Coordinator {
   const CancelToken* cancel_;
   const double period_;
   TerrainEdgeModel wholeMap_;
+  const TraversalLattice* lattice_;
   std::vector<std::vector<Ahead>> ahead_;
   CoordinationResult out_;
   int legsDone_ = 0;
@@ -494,7 +695,8 @@ class Coordinator {
 CoordinationResult coordinate(const terrain::Dem& dem, const Raster<std::uint8_t>& classes,
                               const std::vector<RoverTask>& tasks,
                               const CoordinationParams& params, std::uint64_t seed,
-                              CoordinationObserver* observer, const CancelToken* cancel) {
+                              CoordinationObserver* observer, const CancelToken* cancel,
+                              const TraversalLattice* lattice) {
   params.validate();
   if (tasks.empty()) throw Error(ErrorCode::InvalidInput, "rovers", "rovers: none given");
   for (std::size_t k = 0; k < tasks.size(); ++k) {
@@ -508,7 +710,13 @@ CoordinationResult coordinate(const terrain::Dem& dem, const Raster<std::uint8_t
       if (!finite) throw Error(ErrorCode::InvalidInput, field, field + ": a leg goal is not finite");
     }
   }
-  Coordinator c(dem, classes, tasks, params, seed, observer, cancel);
+  std::optional<TraversalLattice> own;
+  if (params.mode == CoordinationMode::Timed && !lattice) {
+    own.emplace(dem, classes, params.rrt.attitudeLimit, edgeResolutionFor(dem, params.rrt),
+                params.weights, params.rrt.range, params.threads);
+    lattice = &*own;
+  }
+  Coordinator c(dem, classes, tasks, params, seed, observer, cancel, lattice);
   return c.run();
 }
 

@@ -33,6 +33,7 @@
 #include "core/grid/raster.hpp"
 #include "core/team/rover_sim.hpp"
 #include "core/team/terrain_rrt.hpp"
+#include "core/team/traversal_lattice.hpp"
 #include "core/terrain/dem.hpp"
 
 namespace rover::team {
@@ -62,7 +63,26 @@ inline RrtParams teamRrtDefaults() {
   return r;
 }
 
+// How conflicts between rovers are resolved and how a leg is planned.
+enum class CoordinationMode {
+  // Ours (the default): each leg's RRT* runs in a corridor around a guide path on the traversal
+  // lattice (falling back to the guide itself), and a try that comes too close to a higher-
+  // priority rover is first delayed — the same path started later, checked at 10 Hz against
+  // every committed trajectory (a reservation check in time) — and only re-planned with a
+  // keep-out zone when no delay up to max_waits × wait_step clears it.
+  Timed,
+  // Paper 001 fig. 8 as SPEC §3.4 reads it: RRT* in the start/goal box grown by the clearance,
+  // re-planned with a new seed on each conflict, then waits, then the target is skipped.
+  Paper,
+};
+const char* coordinationModeName(CoordinationMode m);
+
 struct CoordinationParams {
+  CoordinationMode mode = CoordinationMode::Timed;  //                          [coordination]
+  // m, Timed: RRT* samples within this distance of the guide path (ours).    [corridor_radius]
+  double corridorRadius = 2.0;
+  // s, Timed: the delays tried before a re-plan are multiples of this (ours).      [delay_step]
+  double delayStep = 0.5;
   RrtParams rrt = teamRrtDefaults();
   TerrainCostWeights weights;
   RoverModel model;
@@ -80,14 +100,18 @@ struct CoordinationParams {
   int maxPieces = 6;
   // s a rover is checked standing at the end of each leg (ours): it stops there and needs a few
   // seconds to get going again, so a leg ending where a higher-priority rover passes a moment
-  // later is refused then, while waiting can still help, not on the next leg.   [dwell_check]
+  // later is refused then, while waiting can still help, not on the next leg. Timed mode uses
+  // at most 1 s + safety_distance / nominal_speed: its next leg checks the standing rover
+  // itself.                                                                     [dwell_check]
   double dwellCheck = 10.0;
   // rad; a simulated try whose |roll| or |pitch| goes above this is refused and planned again like
   // a conflict, keeping out of half a metre around the spot (ours; 0 = off); when no try is within
   // it the leg ends short. Only the final move out of a collision (parking) may exceed it, and
   // that is reported.                                                          [attitude_check]
   double attitudeCheck = kDefaultAttitudeLimit;
-  unsigned threads = 0;  // for the parallel look-ahead planning; 0 = all cores
+  // Threads the caller grants (the look-ahead planning, the lattice); 0 = all cores. The server
+  // gives each mission its share so missions in parallel do not oversubscribe the machine.
+  unsigned threads = 0;
 
   // Throws InvalidParameter with the key (and those of the nested structs).
   void validate() const;
@@ -98,6 +122,16 @@ enum class LegStatus {
   Short,    // it ended away from its goal: no path (unreachable goal, tree short after every piece)
   Skipped,  // given up by the wait-then-skip fallback, or the goal is not on passable ground
 };
+// Why a leg that did not reach its goal ended (None for a reached leg).
+enum class LegReason {
+  None,
+  InvalidGoal,      // the goal is not on ground a rover may stop on
+  NoPath,           // no path to the goal (RRT* and, Timed, the guide), or no progress
+  Steep,            // every try tilts past the attitude check
+  Conflict,         // every try and every delay comes too close to a higher-priority rover
+  PiecesExhausted,  // max_pieces RRT* pieces and still short of the goal
+};
+const char* legReasonName(LegReason r);
 const char* legStatusName(LegStatus s);
 
 struct LegRecord {
@@ -105,8 +139,10 @@ struct LegRecord {
   int leg = 0;
   int target = -1;
   LegStatus status = LegStatus::Reached;
+  LegReason reason = LegReason::None;
   int replans = 0;      // planning attempts after the first, over all pieces
-  int waits = 0;        // waits before the accepted try
+  int waits = 0;        // waits before the accepted try (Timed: pieces started late)
+  double waitTime = 0;  // s spent waiting before accepted pieces
   int pieces = 0;       // accepted path pieces
   double startTime = 0;  // s
   double endTime = 0;    // s
@@ -158,11 +194,18 @@ struct CoordinationResult {
 // DEM's grid. `seed` drives every RRT* call (deriveSeed per rover, leg, piece and attempt) and the
 // slip noise, so the result is the same for a seed whatever the thread count. Throws
 // InvalidParameter for bad parameters and InvalidInput naming rovers[k] for a start off the map.
+// `lattice` (Timed mode; built from the DEM here when null) must be built on the same DEM and
+// classes with the RRT*'s attitude limit.
 CoordinationResult coordinate(const terrain::Dem& dem, const Raster<std::uint8_t>& classes,
                               const std::vector<RoverTask>& tasks,
                               const CoordinationParams& params, std::uint64_t seed,
                               CoordinationObserver* observer = nullptr,
-                              const CancelToken* cancel = nullptr);
+                              const CancelToken* cancel = nullptr,
+                              const TraversalLattice* lattice = nullptr);
+
+// The lattice coordinate() uses for these parameters (attitude limit, edge resolution, eq. 9).
+TraversalLattice makeLattice(const terrain::Dem& dem, const Raster<std::uint8_t>& classes,
+                             const CoordinationParams& params);
 
 // Every episode in which two rovers are closer than `safety` (compared at every sample index,
 // parked rovers included), and the smallest distance between any two rovers over the mission.

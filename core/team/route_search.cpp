@@ -1,6 +1,7 @@
 #include "core/team/route_search.hpp"
 
 #include <algorithm>
+#include <optional>
 #include <cmath>
 #include <string>
 
@@ -54,10 +55,11 @@ class Climb {
     seen_[g_.index(start)] = 1;
     CellIndex cur = start;
     for (int t = 0; t < targets; ++t) {
-      CellIndex next = chooseNext(cur);
-      path.push_back(next);
-      seen_[g_.index(next)] = 1;
-      cur = next;
+      const std::optional<CellIndex> next = chooseNext(cur);
+      if (!next) break;  // walled in: the route ends here (the start never becomes a target)
+      path.push_back(*next);
+      seen_[g_.index(*next)] = 1;
+      cur = *next;
     }
     seen_[g_.index(start)] = 0;
     for (const CellIndex& c : path) seen_[g_.index(c)] = 0;
@@ -112,7 +114,7 @@ class Climb {
     if (b > best.blur) best = Best{true, CellIndex{row, col}, v, true, b};
   }
 
-  CellIndex chooseNext(CellIndex cur) const {
+  std::optional<CellIndex> chooseNext(CellIndex cur) const {
     Best best;
     // The 8 neighbours in the fixed order E, NE, N, NW, W, SW, S, SE (core/grid/direction.hpp).
     for (int d = 0; d < kDirections; ++d) offer(best, cur.row + kDirRow[d], cur.col + kDirCol[d]);
@@ -123,7 +125,7 @@ class Climb {
       for (int dc = -2; dc <= 2; ++dc)
         if (std::max(std::abs(dr), std::abs(dc)) == 2) offer(best, cur.row + dr, cur.col + dc);
     if (best.found) return best.cell;
-    return cur;  // walled in: the team stays (the target repeats)
+    return std::nullopt;  // walled in
   }
 
   const SearchGrid& grid_;

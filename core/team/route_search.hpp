@@ -83,7 +83,7 @@ struct Route {
 // A visited cell's working value is 0 (it is "completely seen"); revisits are allowed but only
 // happen when every passable neighbour's working value is 0. With no passable neighbour, the best passable cell at
 // Chebyshev distance 2 is taken (same ordering, then row-major order); with none there either, the
-// team stays (the target repeats). Global warming runs the climb for k = 0..l on
+// route ends there, shorter than `targets` (a walled-in start never becomes a target). Global warming runs the climb for k = 0..l on
 // p_k = max(p − k·C, 0), C = p_max / l (p_max over passable cells); each path is scored on the
 // ORIGINAL mass of its distinct cells; the best wins, ties to the smallest k.
 // Known limitation kept from the paper: when every neighbour and every neighbour's 3×3 window is

@@ -76,6 +76,21 @@ ParamTable<P> buildTable() {
   addReal(t, realParam("impassable_deg", 0.1, 90, "deg", "Traversability: slope from which a cell is impassable (never a target, never entered)."),
           [](auto& p) -> auto& { return p.mission.traversability.impassableDeg; });
   // Coordination (SPEC §3.4).
+  t.add(choiceParam("coordination", {"timed", "paper"},
+                    "timed (ours): RRT* in a corridor round a guide path on the whole map, conflicts "
+                    "resolved by starting later (checked at 10 Hz), re-planning only as a fallback; "
+                    "paper: paper 001's boxed RRT* and seed re-planning."),
+        [](const P& p) -> ParamValue {
+          return std::string(coordinationModeName(p.mission.coordination.mode));
+        },
+        [](P& p, const ParamInfo& i, const ParamValue& v) {
+          p.mission.coordination.mode = paramAsChoice(i, v) == "paper" ? CoordinationMode::Paper
+                                                                       : CoordinationMode::Timed;
+        });
+  addReal(t, realParam("corridor_radius", 0.5, 100, "m", "timed: RRT* samples within this distance of the leg's guide path."),
+          [](auto& p) -> auto& { return p.mission.coordination.corridorRadius; });
+  addReal(t, realParam("delay_step", 0.1, 3600, "s", "timed: delays tried before a re-plan are multiples of this, up to max_waits × wait_step."),
+          [](auto& p) -> auto& { return p.mission.coordination.delayStep; });
   addReal(t, realParam("safety_distance", 0, 100, "m", "Two rovers closer than this collide (SPEC §3.4: 1 m)."),
           [](auto& p) -> auto& { return p.mission.coordination.safetyDistance; });
   addInt(t, intParam("max_replans", 0, 1000, "", "Re-plans with a new seed before a rover waits (SPEC §3.4: 20)."),
@@ -211,11 +226,17 @@ PlanResult toPlanResult(const TeamMissionResult& r, const TeamPlannerParams& p, 
       {"targets_reached", static_cast<double>(m.targetsReached), "legs"},
       {"targets_skipped", static_cast<double>(m.targetsSkipped), "legs"},
       {"targets_short", static_cast<double>(m.targetsShort), "legs"},
+      {"targets_no_slot", static_cast<double>(m.targetsNoSlot), "legs"},
+      {"unreachable_area_m2", r.reachability.unreachableAreaM2, "m2"},
+      {"unreachable_search_cells", static_cast<double>(r.reachability.unreachableSearchCells), "cells"},
+      {"unreachable_probability", r.reachability.unreachableMass, ""},
       {"replans", static_cast<double>(m.replans), "plans"},
       {"waits", static_cast<double>(m.waits), "waits"},
       {"rrt_calls", static_cast<double>(m.rrtCalls), "plans"},
       {"plan_wall_s", planWallSeconds, "s"},
   };
+  out.warnings = missionWarnings(r);
+  out.metrics.push_back({"warnings", static_cast<double>(out.warnings.size()), "warnings"});
   const double period = p.mission.coordination.controller.samplePeriod;
   const auto every = static_cast<std::size_t>(std::max(1L, std::lround(1.0 / period)));
   for (std::size_t k = 0; k < r.plan.trajectories.size(); ++k) {
@@ -289,6 +310,12 @@ PlanResult toPlanResult(const TeamMissionResult& r, const TeamPlannerParams& p, 
     out.incidents.push_back({legStatusName(leg.status), leg.rover, -1, leg.endTime,
                              {t.samples[i].x, t.samples[i].y}, static_cast<double>(leg.target),
                              "target " + std::to_string(leg.target) + ": " + leg.note});
+  }
+  for (const auto& [rover, target] : r.noSlot) {
+    const Eigen::Vector2d at = r.route.centres[static_cast<std::size_t>(target)];
+    out.incidents.push_back({"no_slot", rover, -1, 0.0, at, static_cast<double>(target),
+                             "target " + std::to_string(target) +
+                                 ": no valid ground for the rover's slot within half a footprint"});
   }
   return out;
 }
@@ -428,8 +455,10 @@ class TeamPlanner final : public Planner {
     std::optional<SinkObserver> observer;
     if (sink) observer.emplace(*sink);
     const Raster<float> noPdm;
+    TeamMissionParams mission = p.mission;
+    mission.coordination.threads = problem.threads;
     TeamMissionResult r = runTeamMission(*problem.dem, problem.pdm ? *problem.pdm : noPdm, starts,
-                                         p.mission, hybrid_, observer ? &*observer : nullptr, cancel);
+                                         mission, hybrid_, observer ? &*observer : nullptr, cancel);
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     PlanResult out = toPlanResult(r, p, hybrid_, wall);
     if (sink && !out.cancelled) {

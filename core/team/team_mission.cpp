@@ -7,6 +7,7 @@
 #include "core/common/error.hpp"
 #include "core/common/random.hpp"
 #include "core/coverage/coverage_planner.hpp"
+#include "core/team/traversal_lattice.hpp"
 
 namespace rover::team {
 
@@ -120,9 +121,14 @@ TerrainEdgeModel wholeMapModel(const terrain::Dem& dem, const Raster<std::uint8_
 // goal and that keeps the safety distance from `taken`.
 std::optional<Eigen::Vector2d> nearestValid(const TerrainEdgeModel& model, Eigen::Vector2d want,
                                             double reach, double safety,
-                                            const std::vector<Eigen::Vector2d>& taken) {
+                                            const std::vector<Eigen::Vector2d>& taken,
+                                            const Raster<std::uint8_t>* reachable = nullptr) {
   auto ok = [&](const Eigen::Vector2d& p) {
     if (!model.turnValid(p)) return false;
+    if (reachable) {
+      auto c = localToCell(reachable->geometry, p);
+      if (!c || (*reachable)(c->row, c->col) == 0) return false;
+    }
     for (const auto& t : taken)
       if ((t - p).norm() < safety) return false;
     return true;
@@ -143,7 +149,7 @@ std::optional<Eigen::Vector2d> nearestValid(const TerrainEdgeModel& model, Eigen
 // Per target, per rover: the slot goal (nullopt when there is none).
 std::vector<std::vector<std::optional<Eigen::Vector2d>>> slotGoals(
     const terrain::Dem& dem, const Raster<std::uint8_t>& classes, int rovers, const Route& route,
-    const TeamMissionParams& params) {
+    const TeamMissionParams& params, const Raster<std::uint8_t>* reachable) {
   const TerrainEdgeModel model = wholeMapModel(dem, classes, params);
   const auto slots = formationSlots(rovers, params.footprint);
   std::vector<std::vector<std::optional<Eigen::Vector2d>>> out;
@@ -152,7 +158,7 @@ std::vector<std::vector<std::optional<Eigen::Vector2d>>> slotGoals(
     std::vector<Eigen::Vector2d> taken;
     for (int k = 0; k < rovers; ++k) {
       auto g = nearestValid(model, centre + slots[k], params.footprint / 2,
-                            params.coordination.safetyDistance, taken);
+                            params.coordination.safetyDistance, taken, reachable);
       if (g) taken.push_back(*g);
       goals.push_back(g);
     }
@@ -170,10 +176,11 @@ void requireStarts(const std::vector<Pose>& starts) {
 
 std::vector<RoverTask> teamSearchTasks(const terrain::Dem& dem, const Raster<std::uint8_t>& classes,
                                        const std::vector<Pose>& starts, const Route& route,
-                                       const TeamMissionParams& params) {
+                                       const TeamMissionParams& params,
+                                       const Raster<std::uint8_t>* reachable) {
   requireStarts(starts);
   const int n = static_cast<int>(starts.size());
-  const auto goals = slotGoals(dem, classes, n, route, params);
+  const auto goals = slotGoals(dem, classes, n, route, params, reachable);
   std::vector<RoverTask> tasks(starts.size());
   for (int k = 0; k < n; ++k) {
     tasks[k].start = starts[k];
@@ -229,10 +236,11 @@ coverage::World footprintWorld(const terrain::Dem& dem, const Raster<std::uint8_
 
 std::vector<RoverTask> hybridTasks(const terrain::Dem& dem, const Raster<std::uint8_t>& classes,
                                    const std::vector<Pose>& starts, const Route& route,
-                                   const TeamMissionParams& params, const CancelToken* cancel) {
+                                   const TeamMissionParams& params, const CancelToken* cancel,
+                                   const Raster<std::uint8_t>* reachable) {
   requireStarts(starts);
   const int n = static_cast<int>(starts.size());
-  const auto goals = slotGoals(dem, classes, n, route, params);
+  const auto goals = slotGoals(dem, classes, n, route, params, reachable);
   const int cells = std::max(1, static_cast<int>(std::lround(params.footprint / params.hybridCell)));
   const double cell = params.footprint / cells;
   coverage::CoverageParams cp;
@@ -432,26 +440,87 @@ TeamMissionResult runTeamMission(const terrain::Dem& dem, const Raster<float>& p
   if (!pdmIn.empty() && (pdmIn.geometry.rows != g.rows || pdmIn.geometry.cols != g.cols))
     throw Error(ErrorCode::InvalidInput, "pdm", "the PDM must have the DEM's rows and columns");
   const Raster<float> pdm = pdmIn.empty() ? uniformPdm(dem) : pdmIn;
+  // Traversability and the lattice once per mission, on the threads the caller granted.
   const terrain::Traversability trav = terrain::traversability(dem, params.traversability, false,
                                                                params.coordination.threads);
+  const TraversalLattice lattice = makeLattice(dem, trav.classes, params.coordination);
+  const bool timed = params.coordination.mode == CoordinationMode::Timed;
 
   TeamMissionResult out;
-  out.grid = makeSearchGrid(pdm, trav.classes, params.footprint);
+  // Reachability first: what the team can reach from its starts, before any target is chosen.
+  std::vector<Eigen::Vector2d> startPoints;
+  for (const auto& s : starts) startPoints.emplace_back(s.x, s.y);
+  const Raster<std::uint8_t> reach = lattice.reachable(startPoints);
+  Raster<std::uint8_t> reachClasses = trav.classes;
+  const auto impassable = static_cast<std::uint8_t>(terrain::TerrainClass::Impassable);
+  for (int i = 0; i < g.cellCount(); ++i) {
+    if (reach.at(i) || trav.classes.at(i) >= impassable) continue;
+    reachClasses.at(i) = impassable;
+    if (std::isnan(dem.z.at(i))) continue;
+    ++out.reachability.unreachableMapCells;
+    if (std::isfinite(pdm.at(i))) out.reachability.unreachableMass += pdm.at(i);
+  }
+  out.reachability.unreachableAreaM2 =
+      static_cast<double>(out.reachability.unreachableMapCells) * g.cellWidth * g.cellHeight;
+  const SearchGrid terrainGrid = makeSearchGrid(pdm, trav.classes, params.footprint);
+  SearchGrid reachGrid = makeSearchGrid(pdm, reachClasses, params.footprint);
+  for (int i = 0; i < reachGrid.geometry().cellCount(); ++i)
+    if (!terrainGrid.impassable.at(i) && reachGrid.impassable.at(i)) {
+      ++out.reachability.unreachableSearchCells;
+      out.reachability.unreachableSearchMass += terrainGrid.mass.at(i);
+    }
+  // Paper mode keeps today's route (on the terrain classes alone) so it can be compared.
+  out.grid = timed ? std::move(reachGrid) : terrainGrid;
   out.route = computeRoute(out.grid, teamStartCell(out.grid, starts), params.routeMethod, params.route);
   out.routeCurve = accumulatedAlongRoute(out.grid, out.route);
   out.slots = formationSlots(static_cast<int>(starts.size()), params.footprint);
   if (observer) observer->routeChosen(out.grid, out.route);
 
+  const Raster<std::uint8_t>* goalsOn = timed ? &reach : nullptr;
   const std::vector<RoverTask> tasks =
-      hybrid ? hybridTasks(dem, trav.classes, starts, out.route, params, cancel)
-             : teamSearchTasks(dem, trav.classes, starts, out.route, params);
+      hybrid ? hybridTasks(dem, trav.classes, starts, out.route, params, cancel, goalsOn)
+             : teamSearchTasks(dem, trav.classes, starts, out.route, params, goalsOn);
+  for (std::size_t k = 0; k < tasks.size(); ++k)
+    for (int t = 0; t < static_cast<int>(out.route.cells.size()); ++t) {
+      const auto& legs = tasks[k].legs;
+      if (std::none_of(legs.begin(), legs.end(), [t](const Leg& l) { return l.target == t; }))
+        out.noSlot.emplace_back(static_cast<int>(k), t);
+    }
   TeamMissionParams p = params;
   p.coordination.slip.seed = deriveSeed(params.seed, 0x511b);
-  out.plan = coordinate(dem, trav.classes, tasks, p.coordination, params.seed, observer, cancel);
+  out.plan = coordinate(dem, trav.classes, tasks, p.coordination, params.seed, observer, cancel,
+                        &lattice);
   if (cancel && cancel->cancelled()) out.plan.cancelled = true;
   out.curves = accumulatedProbability(pdm, out.plan.trajectories, params.sensingDiameter);
   out.metrics = teamMetrics(out.plan, out.curves, out.route, params.exceedanceLimit,
                             params.coordination.safetyDistance);
+  out.metrics.targetsNoSlot = static_cast<int>(out.noSlot.size());
+  return out;
+}
+
+std::vector<std::string> missionWarnings(const TeamMissionResult& r) {
+  std::vector<std::string> out;
+  const TeamMetrics& m = r.metrics;
+  char buf[200];
+  auto add = [&](long long n, const char* what) {
+    if (n <= 0) return;
+    std::snprintf(buf, sizeof buf, "%lld %s", n, what);
+    out.emplace_back(buf);
+  };
+  add(m.targetsShort, "legs ended short of their target");
+  add(m.targetsSkipped, "legs skipped");
+  add(m.targetsNoSlot, "rover slots at a target without valid ground (no leg)");
+  add(m.collisions, "collisions left in the plan");
+  add(static_cast<long long>(m.exceedances), "samples past the roll/pitch limit");
+  const ReachabilityReport& u = r.reachability;
+  if (u.unreachableMapCells > 0) {
+    std::snprintf(buf, sizeof buf,
+                  "%.0f m² of the map (%d search cells, probability %.4f) cannot be reached from "
+                  "the start",
+                  u.unreachableAreaM2, u.unreachableSearchCells, u.unreachableMass);
+    out.emplace_back(buf);
+  }
+  if (r.plan.cancelled) out.emplace_back("cancelled before the end");
   return out;
 }
 

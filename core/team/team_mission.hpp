@@ -56,16 +56,30 @@ Route computeRoute(const SearchGrid& grid, CellIndex start, RouteMethod method,
 // the nearest valid point (RRT* validity, at least the safety distance from the team mates'
 // goals) within half a footprint when it is not; a target with no such point gives that rover no
 // leg there.
+// `reachable` (non-null): goals only on cells marked 1 (TraversalLattice::reachable).
 std::vector<RoverTask> teamSearchTasks(const terrain::Dem& dem, const Raster<std::uint8_t>& classes,
                                        const std::vector<Pose>& starts, const Route& route,
-                                       const TeamMissionParams& params);
+                                       const TeamMissionParams& params,
+                                       const Raster<std::uint8_t>* reachable = nullptr);
 
 // Legs for the hybrid mission: at every target, the slot leg above and then the rover's moves of
 // a myopic coverage run (Laîné & Yoshida / Santra et al., SPEC §1, frontier mode, heights for β)
 // over the footprint from the slots, as fixed points.
 std::vector<RoverTask> hybridTasks(const terrain::Dem& dem, const Raster<std::uint8_t>& classes,
                                    const std::vector<Pose>& starts, const Route& route,
-                                   const TeamMissionParams& params, const CancelToken* cancel);
+                                   const TeamMissionParams& params, const CancelToken* cancel,
+                                   const Raster<std::uint8_t>* reachable = nullptr);
+
+// The ground the team cannot reach from its starts (TraversalLattice::reachable), known before
+// the route is chosen: map cells with data off the team's reach, and search cells that are
+// passable by their terrain classes but not by what the team can reach of them.
+struct ReachabilityReport {
+  std::int64_t unreachableMapCells = 0;
+  double unreachableAreaM2 = 0;
+  double unreachableMass = 0;        // PDM mass on those cells (of 1)
+  int unreachableSearchCells = 0;
+  double unreachableSearchMass = 0;  // original mass of those search cells
+};
 
 // SPEC §3.5.
 struct TeamMetrics {
@@ -85,6 +99,7 @@ struct TeamMetrics {
   int targetsReached = 0;             // rover legs to a target slot that got there
   int targetsSkipped = 0;             // ... given up by wait-then-skip or off passable ground
   int targetsShort = 0;               // ... that ended away from the goal (no path)
+  int targetsNoSlot = 0;              // (rover, target) pairs without valid ground for the slot
   int replans = 0, waits = 0, rrtCalls = 0;
 };
 
@@ -103,7 +118,9 @@ TeamMetrics teamMetrics(const CoordinationResult& plan, const ProbabilityCurves&
 
 // Everything a run produces.
 struct TeamMissionResult {
-  SearchGrid grid;
+  SearchGrid grid;  // Timed: unreachable ground counts as impassable; Paper: the terrain's own
+  ReachabilityReport reachability;
+  std::vector<std::pair<int, int>> noSlot;  // (rover, target) given no leg: no valid slot
   Route route;
   std::vector<Eigen::Vector2d> slots;
   CoordinationResult plan;
@@ -111,6 +128,11 @@ struct TeamMissionResult {
   std::vector<std::pair<double, double>> routeCurve;  // accumulatedAlongRoute
   TeamMetrics metrics;
 };
+
+// What a user must be told before trusting the plan (empty: completed cleanly): short, skipped or
+// slot-less legs, unreachable ground, collisions, attitude exceedances — one line each with the
+// count. The server turns a non-empty list into "completed with warnings".
+std::vector<std::string> missionWarnings(const TeamMissionResult& r);
 
 // Told the route as soon as it is chosen, then everything coordination reports.
 class TeamObserver : public CoordinationObserver {

@@ -130,7 +130,9 @@ Eigen::Vector2d sampleAt(const Eigen::Vector2d& a, const Eigen::Vector2d& b, int
 
 }  // namespace
 
+// Outside every keep-out zone, and inside the corridor when there is one.
 bool TerrainEdgeModel::outsideKeepOut(const Eigen::Vector2d& p) const {
+  if (corridor_ && !corridor_->contains(p)) return false;
   for (const auto& z : keepOut_)
     if ((p - z.centre).squaredNorm() <= z.radius * z.radius) return false;
   return true;
@@ -197,6 +199,34 @@ EdgeTerms TerrainEdgeModel::edgeTerms(const Eigen::Vector2d& a, const Eigen::Vec
       tanPitch = std::max(tanPitch, std::abs(sp->dzdx * c + sp->dzdy * s));
       tanRoll = std::max(tanRoll, std::abs(-sp->dzdx * s + sp->dzdy * c));
     }
+  }
+  t.pitch = std::atan(tanPitch);
+  t.roll = std::atan(tanRoll);
+  return t;
+}
+
+std::optional<EdgeTerms> TerrainEdgeModel::validEdgeTerms(const Eigen::Vector2d& a,
+                                                          const Eigen::Vector2d& b) const {
+  EdgeTerms t;
+  const Eigen::Vector2d d = b - a;
+  t.length = d.norm();
+  if (!(t.length > 0) || escapeRadius_ > 0) {  // the general path (escape discs, no heading)
+    if (!edgeValid(a, b)) return std::nullopt;
+    return edgeTerms(a, b);
+  }
+  const double c = d.x() / t.length, s = d.y() / t.length, tanLimit = std::tan(limit_);
+  const int n = segmentsFor(t.length, resolution_);
+  double tanPitch = 0, tanRoll = 0;
+  for (int i = 0; i <= n; ++i) {
+    const Eigen::Vector2d p = sampleAt(a, b, i, n);
+    if (!cellAllowed(dem_, classes_, bounds_, p) || !outsideKeepOut(p)) return std::nullopt;
+    auto sp = terrain::surfaceAt(dem_, p.x(), p.y());
+    if (!sp) return std::nullopt;
+    const double pitch = std::abs(sp->dzdx * c + sp->dzdy * s);
+    const double roll = std::abs(-sp->dzdx * s + sp->dzdy * c);
+    if (pitch >= tanLimit || roll >= tanLimit) return std::nullopt;
+    tanPitch = std::max(tanPitch, pitch);
+    tanRoll = std::max(tanRoll, roll);
   }
   t.pitch = std::atan(tanPitch);
   t.roll = std::atan(tanRoll);
@@ -395,7 +425,8 @@ class SeededSampler : public ob::RealVectorStateSampler {
 PathResult planPath(const terrain::Dem& dem, const Raster<std::uint8_t>& classes,
                     const Eigen::Vector2d& start, double startHeading, const Eigen::Vector2d& goal,
                     const RrtParams& params, const TerrainCostWeights& weights,
-                    const CancelToken* cancel, const std::vector<KeepOutZone>& keepOut) {
+                    const CancelToken* cancel, const std::vector<KeepOutZone>& keepOut,
+                    const Corridor* corridor) {
   params.validate();
   weights.validate();
   requireFinite("start_heading", startHeading);
@@ -406,8 +437,9 @@ PathResult planPath(const terrain::Dem& dem, const Raster<std::uint8_t>& classes
   const GridGeometry& g = dem.geometry();
   const double resolution = params.edgeResolution > 0 ? params.edgeResolution
                                                       : 0.25 * std::min(g.cellWidth, g.cellHeight);
-  const SearchBounds box = searchBounds(g, start, goal, params.clearance);
+  const SearchBounds box = corridor ? corridor->bounds : searchBounds(g, start, goal, params.clearance);
   TerrainEdgeModel model(dem, classes, box, params.attitudeLimit, resolution);
+  model.setCorridor(corridor);
   for (const auto& z : keepOut)
     if (!z.centre.allFinite() || !std::isfinite(z.radius) || z.radius < 0)
       throwInvalidParameter("keep_out", "zones need a finite centre and a radius >= 0");

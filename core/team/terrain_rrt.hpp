@@ -12,6 +12,7 @@
 #include <Eigen/Core>
 #include <cstdint>
 #include <numbers>
+#include <optional>
 #include <utility>
 #include <vector>
 
@@ -79,6 +80,21 @@ struct KeepOutZone {
   double radius = 0;             // m
 };
 
+// The ground RRT* may use around a guide path (ours, traversal_lattice.hpp): the map cells whose
+// centre is near the guide, and the box around them that bounds the sampling.
+struct Corridor {
+  SearchBounds bounds;           // local frame, clipped to the map
+  GridGeometry map;              // the DEM's grid
+  int row0 = 0, col0 = 0;        // map cell of the mask's (0, 0)
+  Raster<std::uint8_t> mask;     // 1 = inside; rows × cols of the window
+  bool contains(const Eigen::Vector2d& p) const {
+    auto c = localToCell(map, p);
+    if (!c) return false;
+    const int r = c->row - row0, k = c->col - col0;
+    return mask.geometry.contains(r, k) && mask(r, k) != 0;
+  }
+};
+
 // The four quantities of eq. 9 for one edge.
 struct EdgeTerms {
   double length = 0;         // R, m
@@ -116,6 +132,8 @@ class TerrainEdgeModel {
 
   // Zones every point must stay out of (strictly outside the radius). Empty by default.
   void setKeepOut(std::vector<KeepOutZone> zones) { keepOut_ = std::move(zones); }
+  // Points must also lie in the corridor (null: no corridor). Not owned.
+  void setCorridor(const Corridor* corridor) { corridor_ = corridor; }
 
   // Inside the bounds and the map, outside every keep-out zone, on a cell with data that is not
   // Impassable, with a defined surface (bilinear interpolation needs the four surrounding cell
@@ -136,6 +154,8 @@ class TerrainEdgeModel {
                       double previousHeading) const;
   // Same without a turn (Δψ = 0).
   EdgeTerms edgeTerms(const Eigen::Vector2d& a, const Eigen::Vector2d& b) const;
+  // edgeValid and edgeTerms in one pass over the samples: the terms when the edge is valid.
+  std::optional<EdgeTerms> validEdgeTerms(const Eigen::Vector2d& a, const Eigen::Vector2d& b) const;
 
   const SearchBounds& bounds() const { return bounds_; }
   double edgeResolution() const { return resolution_; }
@@ -147,6 +167,7 @@ class TerrainEdgeModel {
   double limit_;
   double resolution_;
   std::vector<KeepOutZone> keepOut_;
+  const Corridor* corridor_ = nullptr;
   Eigen::Vector2d escapeCentre_{0, 0};
   double escapeRadius_ = 0;
   bool outsideKeepOut(const Eigen::Vector2d& p) const;
@@ -191,10 +212,12 @@ struct PathResult {
 // its own OMPL objects and seeded random generators). Bad parameters throw rover::Error.
 // A start on impassable or too steep ground (but on the map, with data) is escaped: the checks are
 // waived within 0.5 m of it (TerrainEdgeModel::setEscape). `keepOut`: discs the path stays out of (a start or goal inside one is InvalidStart/InvalidGoal).
+// `corridor` (ours): sample and stay inside it, within its bounds, instead of the start/goal box.
 PathResult planPath(const terrain::Dem& dem, const Raster<std::uint8_t>& classes,
                     const Eigen::Vector2d& start, double startHeading, const Eigen::Vector2d& goal,
                     const RrtParams& params = {}, const TerrainCostWeights& weights = {},
                     const CancelToken* cancel = nullptr,
-                    const std::vector<KeepOutZone>& keepOut = {});
+                    const std::vector<KeepOutZone>& keepOut = {},
+                    const Corridor* corridor = nullptr);
 
 }  // namespace rover::team

@@ -37,7 +37,13 @@ void printSummary(std::ostream& out, const MissionSetup& s, const PlanResult& r)
       << m("min_separation_m") << " m; " << count("exceedances") << " of " << count("samples")
       << " samples over the attitude limit (" << std::setprecision(4)
       << m("exceedance_fraction") * 100 << " %)\n";
+  out << std::setprecision(2) << "reach      " << m("unreachable_area_m2") << " m² unreachable from the start ("
+      << count("unreachable_search_cells") << " search cells, probability " << std::setprecision(4)
+      << m("unreachable_probability") << "); " << count("targets_no_slot")
+      << " rover slots without valid ground\n";
   out << std::setprecision(2) << "wall       " << m("plan_wall_s") << " s\n";
+  out << "outcome    " << (r.warnings.empty() ? "completed" : "completed with warnings") << "\n";
+  for (const auto& w : r.warnings) out << "  warning: " << w << "\n";
   for (const auto& i : r.incidents)
     out << "  " << i.kind << " rover " << i.rover << " at t = " << std::setprecision(1) << i.time
         << " s (" << i.position.x() << ", " << i.position.y() << "): " << i.note << "\n";
@@ -59,6 +65,7 @@ int missionCommand(const std::vector<std::string>& argv, std::ostream& out) {
   }
   MissionSetup setup = readMissionOptions(args);
   const Planner& planner = setup.registry.get(setup.plannerName);
+  setup.problem.threads = 0;  // the CLI runs one mission: all cores
   PlanResult result = planner.run(setup.problem, setup.params, nullptr, nullptr);
   if (args.has("geojson")) {
     const std::string path = args.str("geojson", "");

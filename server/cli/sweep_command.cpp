@@ -83,6 +83,7 @@ int sweepCommand(const std::vector<std::string>& argv, std::ostream& out) {
   args.option("hirise", "FILE", "../shared/dems/mars_gale_hirise_1m/missionDEM.tif",
               "swinton: the HiRISE DEM cropped to its central 150 × 150 m at 0.25 m ('none' = synthetic site only).");
   args.option("configs", "LIST", "all", "swinton: any of lhc_gw_conv,lhc,lawnmower,hybrid.");
+  args.option("coordination", "LIST", "timed", "swinton: timed and/or paper; paper rows are named CONFIG+paper.");
   args.option("rovers", "N", "5", "swinton: rovers per mission.");
   args.option("targets", "N", "64", "swinton: route targets per mission.");
   args.option("seed", "S", "1", "First seed; runs use seeds S, S+1, ...");
@@ -103,6 +104,10 @@ int sweepCommand(const std::vector<std::string>& argv, std::ostream& out) {
     t.targets = static_cast<int>(args.integer("targets", 64, 1, 10000));
     t.hirisePath = args.str("hirise", "../shared/dems/mars_gale_hirise_1m/missionDEM.tif");
     if (t.hirisePath == "none") t.hirisePath.clear();
+    if (args.has("coordination")) {
+      std::stringstream ss(args.str("coordination", ""));
+      for (std::string c; std::getline(ss, c, ',');) t.coordination.push_back(c);
+    }
     if (args.has("configs")) {
       std::stringstream ss(args.str("configs", ""));
       for (std::string c; std::getline(ss, c, ',');) t.configs.push_back(c);

@@ -2,6 +2,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <ctime>
 #include <iomanip>
 #include <limits>
 #include <map>
@@ -33,7 +34,16 @@ struct Config {
   std::string name;
   team::RouteMethod route;
   bool hybrid;
+  team::CoordinationMode mode = team::CoordinationMode::Timed;
 };
+
+// CPU seconds of the calling thread: a mission runs on one thread here, so this is its cost
+// whatever else the machine is doing (the wall time is not, on a shared machine).
+double threadCpuSeconds() {
+  timespec t{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
+}
 
 // The team curve's probability at mean distance `d` per rover (linear between points); NaN when
 // the team never got that far.
@@ -80,11 +90,24 @@ SweepOutcome runTeamSweep(const TeamSweepOptions& o, std::ostream& progress) {
                           {"lhc", team::RouteMethod::Lhc, false},
                           {"lawnmower", team::RouteMethod::Lawnmower, false},
                           {"hybrid", team::RouteMethod::LhcGwConv, true}};
-  std::vector<Config> configs;
+  std::vector<Config> picked;
   for (const auto& c : all)
     if (o.configs.empty() || std::find(o.configs.begin(), o.configs.end(), c.name) != o.configs.end())
+      picked.push_back(c);
+  if (picked.empty()) throw UsageError("invalid value for --configs: none of lhc_gw_conv, lhc, lawnmower, hybrid");
+  const std::vector<std::string> modes = o.coordination.empty() ? std::vector<std::string>{"timed"} : o.coordination;
+  std::vector<Config> configs;
+  for (const auto& mode : modes) {
+    if (mode != "timed" && mode != "paper")
+      throw UsageError("invalid value for --coordination: " + mode + " (timed, paper)");
+    for (Config c : picked) {
+      if (mode == "paper") {
+        c.name += "+paper";
+        c.mode = team::CoordinationMode::Paper;
+      }
       configs.push_back(c);
-  if (configs.empty()) throw UsageError("invalid value for --configs: none of lhc_gw_conv, lhc, lawnmower, hybrid");
+    }
+  }
 
   // Per site: the PDMs and the formation starts at the site centre.
   struct Job {
@@ -119,9 +142,12 @@ SweepOutcome runTeamSweep(const TeamSweepOptions& o, std::ostream& progress) {
     const Raster<float> pdm = pdm::discretise(pdm::randomGaussians(g, 4, seed), g, valid);
     team::TeamMissionParams p = base;
     p.routeMethod = configs[job.config].route;
+    p.coordination.mode = configs[job.config].mode;
     p.seed = seed;
     const auto w0 = std::chrono::steady_clock::now();
+    const double c0 = threadCpuSeconds();
     team::TeamMissionResult r = team::runTeamMission(site.dem, pdm, starts[job.site], p, configs[job.config].hybrid);
+    const double cpu = threadCpuSeconds() - c0;
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - w0).count();
     const team::TeamMetrics& m = r.metrics;
     auto& v = values[j];
@@ -138,8 +164,18 @@ SweepOutcome runTeamSweep(const TeamSweepOptions& o, std::ostream& progress) {
     v["targets_reached"] = m.targetsReached;
     v["targets_skipped"] = m.targetsSkipped;
     v["targets_short"] = m.targetsShort;
+    v["targets_no_slot"] = m.targetsNoSlot;
+    // Of the legs the route asked for (slot-less ones included), the share that got there.
+    const double legs = m.targetsReached + m.targetsShort + m.targetsSkipped + m.targetsNoSlot;
+    v["legs_reached_pct"] = legs > 0 ? 100.0 * m.targetsReached / legs : 0.0;
+    v["legs_short_pct"] = legs > 0 ? 100.0 * m.targetsShort / legs : 0.0;
+    v["legs_skipped_pct"] = legs > 0 ? 100.0 * (m.targetsSkipped + m.targetsNoSlot) / legs : 0.0;
+    v["unreachable_probability"] = r.reachability.unreachableMass;
     v["replans"] = m.replans;
+    v["rrt_calls"] = m.rrtCalls;
+    v["warnings"] = static_cast<double>(team::missionWarnings(r).size());
     v["plan_wall_s"] = wall;
+    v["plan_cpu_s"] = cpu;
     for (double d : teamSweepDistances()) {
       char key[32];
       std::snprintf(key, sizeof key, "p_at_%gm", d);

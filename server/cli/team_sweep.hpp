@@ -20,6 +20,9 @@ struct TeamSweepOptions {
   int rovers = 5;
   int targets = 64;
   std::vector<std::string> configs;  // empty = all: lhc_gw_conv, lhc, lawnmower, hybrid
+  // Coordination modes each config runs in ("timed", "paper"); empty = timed only. Paper-mode
+  // rows are named "<config>+paper", on the same PDMs.
+  std::vector<std::string> coordination;
 };
 
 // Distances (mean metres per rover) at which each run's team curve is read, for the route

@@ -133,8 +133,10 @@ TEST_CASE("team: a goal on impassable ground is skipped and reported, the rest g
   CoordinationResult r = coordinate(dem, classes, tasks, CoordinationParams{}, 1);
   REQUIRE(r.legs.size() == 2);
   CHECK(r.legs[0].status == LegStatus::Skipped);
+  CHECK(r.legs[0].reason == LegReason::InvalidGoal);
   CHECK(r.legs[0].note.find("invalid_goal") != std::string::npos);
   CHECK(r.legs[1].status == LegStatus::Reached);
+  CHECK(r.legs[1].reason == LegReason::None);
 }
 
 TEST_CASE("team: bad coordination parameters name the field") {

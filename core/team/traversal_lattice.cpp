@@ -1,0 +1,296 @@
+#include "core/team/traversal_lattice.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <queue>
+
+#include "core/common/parallel.hpp"
+#include "core/grid/direction.hpp"
+#include "core/terrain/layers.hpp"
+
+namespace rover::team {
+
+namespace {
+
+constexpr std::int64_t kMaxWindowCells = 4'000'000;
+
+SearchBounds wholeMap(const GridGeometry& g) { return {{0, 0}, {g.widthMetres(), g.heightMetres()}}; }
+
+}  // namespace
+
+// The move table: for every cell and each of the 8 directions, the eq. 9 cost of the straight
+// move between the two cell centres, or −1 when TerrainEdgeModel::edgeValid refuses it. Eq. 9
+// charges roll and pitch per edge, and RRT*'s edges are up to the range (1 m) long, while a
+// lattice move is one cell (0.25 m on the paper's site): charged per move as they stand, the
+// attitude terms would weigh four times as much per metre on the lattice as in RRT*. They are
+// scaled by move length / range so the guide prefers what RRT* prefers. Δψ is not charged (a
+// lattice node does not know its incoming move); the R term keeps the guide straight.
+TraversalLattice::TraversalLattice(const terrain::Dem& dem, const Raster<std::uint8_t>& classes,
+                                   double attitudeLimit, double edgeResolution,
+                                   const TerrainCostWeights& weights, double range,
+                                   unsigned threads)
+    : dem_(dem),
+      classes_(classes),
+      model_(dem, classes, wholeMap(dem.geometry()), attitudeLimit, edgeResolution),
+      range_(range) {
+  const GridGeometry& g = classes.geometry;
+  const auto n = static_cast<std::size_t>(g.cellCount());
+  node_.assign(n, 0);
+  cost_.assign(n * 4, kInvalid);
+  // The largest cost a valid move can have (the diagonal, attitude terms just under the limit),
+  // split into 65 000 steps: quantisation below 2e-5 of the largest move, far under any cost
+  // difference that matters to a guide.
+  const double diagonal = std::hypot(g.cellWidth, g.cellHeight);
+  const double worst = weights.wR * diagonal / weights.nR +
+                       (weights.wPhi * attitudeLimit / weights.nPhi +
+                        weights.wTheta * attitudeLimit / weights.nTheta) * diagonal / range;
+  costStep_ = worst > 0 ? worst / 65000.0 : 1.0;
+  parallelFor(static_cast<std::size_t>(g.rows), threads, [&](std::size_t row) {
+    const int r = static_cast<int>(row);
+    for (int c = 0; c < g.cols; ++c) {
+      const int i = g.index(r, c);
+      const Eigen::Vector2d a = cellToLocal(g, {r, c});
+      node_[i] = model_.turnValid(a) ? 1 : 0;
+      // Directions E, NE, N, NW; their opposites are read from the neighbour (moveCost).
+      for (int d = 0; d < 4; ++d) {
+        const int rr = r + kDirRow[d], cc = c + kDirCol[d];
+        if (!g.contains(rr, cc)) continue;
+        const Eigen::Vector2d b = cellToLocal(g, {rr, cc});
+        const std::optional<EdgeTerms> terms = model_.validEdgeTerms(a, b);
+        if (!terms) continue;
+        const EdgeTerms& t = *terms;
+        const double attitude = weights.wPhi * t.roll / weights.nPhi +
+                                weights.wTheta * t.pitch / weights.nTheta;
+        const double cost = weights.wR * t.length / weights.nR + attitude * t.length / range;
+        cost_[static_cast<std::size_t>(i) * 4 + d] =
+            static_cast<std::uint16_t>(std::min(65000.0, std::round(cost / costStep_)));
+      }
+    }
+  });
+  // Admissible A* heuristic: the R term alone.
+  heuristicPerMetre_ = weights.wR / weights.nR;
+}
+
+std::vector<int> TraversalLattice::seeds(const Eigen::Vector2d& p) const {
+  const GridGeometry& g = geometry();
+  std::vector<int> out;
+  auto own = localToCell(g, p);
+  if (!own) return out;
+  out.push_back(g.index(*own));
+  const double radius = 0.5;
+  const int span = static_cast<int>(std::ceil(radius / std::min(g.cellWidth, g.cellHeight)));
+  for (int dr = -span; dr <= span; ++dr)
+    for (int dc = -span; dc <= span; ++dc) {
+      const int r = own->row + dr, c = own->col + dc;
+      if ((dr == 0 && dc == 0) || !g.contains(r, c)) continue;
+      if (node_[g.index(r, c)] && (cellToLocal(g, {r, c}) - p).norm() <= radius)
+        out.push_back(g.index(r, c));
+    }
+  return out;
+}
+
+Raster<std::uint8_t> TraversalLattice::reachable(const std::vector<Eigen::Vector2d>& starts) const {
+  const GridGeometry& g = geometry();
+  Raster<std::uint8_t> out(g, 0);
+  std::vector<int> stack;
+  for (const auto& s : starts)
+    for (int i : seeds(s))
+      if (!out.at(i)) {
+        out.at(i) = 1;
+        stack.push_back(i);
+      }
+  while (!stack.empty()) {
+    const int i = stack.back();
+    stack.pop_back();
+    const CellIndex c = g.cell(i);
+    for (int d = 0; d < kDirections; ++d) {
+      if (moveCost(i, d) < 0) continue;
+      const int j = g.index(c.row + kDirRow[d], c.col + kDirCol[d]);
+      if (out.at(j) || !node_[j]) continue;
+      out.at(j) = 1;
+      stack.push_back(j);
+    }
+  }
+  return out;
+}
+
+std::optional<std::vector<Eigen::Vector2d>> TraversalLattice::guidePath(
+    const Eigen::Vector2d& start, const Eigen::Vector2d& goal,
+    const std::vector<KeepOutZone>& keepOut) const {
+  const GridGeometry& g = geometry();
+  auto goalCell = localToCell(g, goal);
+  auto startCell = localToCell(g, start);
+  const std::vector<int> from = seeds(start);
+  if (!goalCell || !startCell || from.empty()) return std::nullopt;
+  // A* in a window round start and goal, widened (×4) until it holds a path or is the whole map:
+  // most legs are a few metres long, and a window keeps the search's arrays small.
+  const double cell = std::min(g.cellWidth, g.cellHeight);
+  for (double margin = 8.0;; margin *= 4) {
+    const int m = static_cast<int>(std::ceil(margin / cell));
+    const int r0 = std::max(0, std::min(startCell->row, goalCell->row) - m);
+    const int r1 = std::min(g.rows - 1, std::max(startCell->row, goalCell->row) + m);
+    const int c0 = std::max(0, std::min(startCell->col, goalCell->col) - m);
+    const int c1 = std::min(g.cols - 1, std::max(startCell->col, goalCell->col) + m);
+    // Memory: 8 bytes per window cell; windows stop growing past 4 M cells (32 MB), so a guide
+    // on a huge map stays bounded (the leg then falls back to the boxed RRT*).
+    const std::int64_t cells = static_cast<std::int64_t>(r1 - r0 + 1) * (c1 - c0 + 1);
+    if (cells > kMaxWindowCells) return std::nullopt;
+    auto chain = search(from, start, g.index(*goalCell), goal, keepOut, r0, r1, c0, c1);
+    if (chain) return simplify(*chain, start, goal);
+    if (r0 == 0 && c0 == 0 && r1 == g.rows - 1 && c1 == g.cols - 1) return std::nullopt;
+  }
+}
+
+// A* over the cells of rows r0..r1, cols c0..c1, in a deterministic order (f, cell index).
+std::optional<std::vector<Eigen::Vector2d>> TraversalLattice::search(
+    const std::vector<int>& from, const Eigen::Vector2d& start, int target,
+    const Eigen::Vector2d& goal, const std::vector<KeepOutZone>& keepOut, int r0, int r1, int c0,
+    int c1) const {
+  const GridGeometry& g = geometry();
+  const int wc = c1 - c0 + 1;
+  const auto n = static_cast<std::size_t>((r1 - r0 + 1) * wc);
+  auto local = [&](int i) {
+    const CellIndex c = g.cell(i);
+    return (c.row - r0) * wc + (c.col - c0);
+  };
+  auto inside = [&](int r, int c) { return r >= r0 && r <= r1 && c >= c0 && c <= c1; };
+  auto blocked = [&](int i) {
+    if (keepOut.empty()) return false;
+    const Eigen::Vector2d p = cellToLocal(g, g.cell(i));
+    for (const auto& z : keepOut)
+      if ((p - z.centre).squaredNorm() <= z.radius * z.radius) return true;
+    return false;
+  };
+  std::vector<float> best(n, std::numeric_limits<float>::infinity());
+  std::vector<int> parent(n, -1);
+  using Item = std::pair<double, int>;
+  std::priority_queue<Item, std::vector<Item>, std::greater<>> open;
+  auto h = [&](int i) { return heuristicPerMetre_ * (cellToLocal(g, g.cell(i)) - goal).norm(); };
+  // The start's own cell costs nothing; the other seeds cost the move to them.
+  for (std::size_t k = 0; k < from.size(); ++k) {
+    const int i = from[k];
+    const CellIndex c = g.cell(i);
+    if (!inside(c.row, c.col)) continue;
+    const double d = k == 0 ? 0.0 : heuristicPerMetre_ * (cellToLocal(g, c) - start).norm();
+    if (d < best[local(i)]) {
+      best[local(i)] = static_cast<float>(d);
+      open.push({d + h(i), i});
+    }
+  }
+  bool found = false;
+  while (!open.empty()) {
+    const auto [f, i] = open.top();
+    open.pop();
+    if (f - h(i) > best[local(i)] + 1e-6) continue;  // stale entry
+    if (i == target) {
+      found = true;
+      break;
+    }
+    const CellIndex c = g.cell(i);
+    for (int d = 0; d < kDirections; ++d) {
+      const float m = moveCost(i, d);
+      if (m < 0) continue;
+      const int rr = c.row + kDirRow[d], cc = c.col + kDirCol[d];
+      if (!inside(rr, cc)) continue;
+      const int j = g.index(rr, cc);
+      if (!node_[j] && j != target) continue;
+      if (blocked(j)) continue;
+      const float cand = best[local(i)] + m;
+      if (cand < best[local(j)]) {
+        best[local(j)] = cand;
+        parent[local(j)] = i;
+        open.push({cand + h(j), j});
+      }
+    }
+  }
+  if (!found) return std::nullopt;
+  std::vector<Eigen::Vector2d> chain;
+  for (int i = target; i >= 0; i = parent[local(i)]) chain.push_back(cellToLocal(g, g.cell(i)));
+  std::reverse(chain.begin(), chain.end());
+  return chain;
+}
+
+std::vector<Eigen::Vector2d> TraversalLattice::simplify(const std::vector<Eigen::Vector2d>& chain,
+                                                        const Eigen::Vector2d& start,
+                                                        const Eigen::Vector2d& goal) const {
+  // start, the centres after the start's cell, goal (the end cells' centres are replaced by the
+  // real points).
+  std::vector<Eigen::Vector2d> pts{start};
+  auto own = localToCell(geometry(), start);
+  const bool fromOwn = own && (cellToLocal(geometry(), *own) - chain.front()).squaredNorm() < 1e-12;
+  pts.insert(pts.end(), chain.begin() + (fromOwn ? 1 : 0), chain.end());
+  if (pts.size() > 1) pts.back() = goal;
+  else pts.push_back(goal);
+  // Shortcut to the farthest point within the range reachable by one valid edge ending on a
+  // point where the rover may turn: fewer, straighter edges, each still valid.
+  std::vector<Eigen::Vector2d> out{pts.front()};
+  std::size_t i = 0;
+  while (i + 1 < pts.size()) {
+    std::size_t next = i + 1;
+    for (std::size_t j = pts.size() - 1; j > i + 1; --j) {
+      if ((pts[j] - pts[i]).norm() > range_) continue;
+      if ((j + 1 == pts.size() || model_.turnValid(pts[j])) && model_.edgeValid(pts[i], pts[j])) {
+        next = j;
+        break;
+      }
+    }
+    out.push_back(pts[next]);
+    i = next;
+  }
+  return out;
+}
+
+
+
+Corridor TraversalLattice::corridor(const std::vector<Eigen::Vector2d>& path, double radius,
+                                   const SearchBounds* box) const {
+  const GridGeometry& g = geometry();
+  Corridor out;
+  out.map = g;
+  Eigen::Vector2d lo = path.front(), hi = path.front();
+  for (const auto& p : path) {
+    lo = lo.cwiseMin(p);
+    hi = hi.cwiseMax(p);
+  }
+  const Eigen::Vector2d extent(g.widthMetres(), g.heightMetres());
+  out.bounds.min = (lo.array() - radius).max(0.0).matrix();
+  out.bounds.max = (hi.array() + radius).min(extent.array()).matrix();
+  if (box) {
+    out.bounds.min = out.bounds.min.cwiseMin(box->min);
+    out.bounds.max = out.bounds.max.cwiseMax(box->max);
+  }
+  const int c0 = std::clamp(static_cast<int>(std::floor(out.bounds.min.x() / g.cellWidth)), 0, g.cols - 1);
+  const int c1 = std::clamp(static_cast<int>(std::floor(out.bounds.max.x() / g.cellWidth)), 0, g.cols - 1);
+  const int r0 = std::clamp(g.rows - 1 - static_cast<int>(std::floor(out.bounds.max.y() / g.cellHeight)), 0, g.rows - 1);
+  const int r1 = std::clamp(g.rows - 1 - static_cast<int>(std::floor(out.bounds.min.y() / g.cellHeight)), 0, g.rows - 1);
+  out.row0 = r0;
+  out.col0 = c0;
+  out.mask = Raster<std::uint8_t>(GridGeometry{r1 - r0 + 1, c1 - c0 + 1, g.cellWidth, g.cellHeight}, 0);
+  const double step = 0.5 * std::min(g.cellWidth, g.cellHeight);
+  const int span = static_cast<int>(std::ceil(radius / std::min(g.cellWidth, g.cellHeight))) + 1;
+  auto stamp = [&](const Eigen::Vector2d& p) {
+    auto c = localToCell(g, p);
+    if (!c) return;
+    for (int dr = -span; dr <= span; ++dr)
+      for (int dc = -span; dc <= span; ++dc) {
+        const int r = c->row + dr, k = c->col + dc;
+        if (r < r0 || r > r1 || k < c0 || k > c1) continue;
+        if ((cellToLocal(g, {r, k}) - p).squaredNorm() <= radius * radius) out.mask(r - r0, k - c0) = 1;
+      }
+  };
+  for (std::size_t i = 0; i + 1 < path.size(); ++i) {
+    const int n = std::max(1, static_cast<int>(std::ceil((path[i + 1] - path[i]).norm() / step)));
+    for (int s = 0; s < n; ++s) stamp(path[i] + (path[i + 1] - path[i]) * (static_cast<double>(s) / n));
+  }
+  stamp(path.back());
+  if (box) {  // every cell the box touches
+    auto a = localToCell(g, box->min), b = localToCell(g, box->max);
+    if (a && b)
+      for (int r = b->row; r <= a->row; ++r)
+        for (int k = a->col; k <= b->col; ++k) out.mask(r - r0, k - c0) = 1;
+  }
+  return out;
+}
+
+}  // namespace rover::team

@@ -1,0 +1,93 @@
+#pragma once
+// The global layer under RRT* (paper 000 fig. 2: global planning on orbital data, local planning
+// in situ; ours for paper 001's team): the DEM's cell centres as an 8-connected lattice, with the
+// rover's own validity rules on every node and move (TerrainEdgeModel: classes, nodata, |roll| and
+// |pitch| along the move) and the eq. 9 terrain cost of each move, built once per mission.
+// On it: the ground the team can reach from its starts (a flood fill, so a walled-in region is
+// known before any target is chosen) and a guide path per leg (A*), around which RRT* then plans
+// in a corridor instead of the start/goal box.
+#include <Eigen/Core>
+#include <cstdint>
+#include <optional>
+#include <vector>
+
+#include "core/grid/direction.hpp"
+#include "core/grid/raster.hpp"
+#include "core/team/terrain_rrt.hpp"
+#include "core/terrain/dem.hpp"
+
+namespace rover::team {
+
+class TraversalLattice {
+ public:
+  // Holds references: the rasters must outlive it. `threads` (0 = all cores) builds the move
+  // table; the result does not depend on it.
+  TraversalLattice(const terrain::Dem& dem, const Raster<std::uint8_t>& classes,
+                   double attitudeLimit, double edgeResolution, const TerrainCostWeights& weights,
+                   double range, unsigned threads);
+  TraversalLattice(terrain::Dem&&, const Raster<std::uint8_t>&, double, double,
+                   const TerrainCostWeights&, double, unsigned) = delete;
+
+  const GridGeometry& geometry() const { return classes_.geometry; }
+  const TerrainEdgeModel& model() const { return model_; }
+
+  // Cells the rovers can reach from `starts` (1 = reachable): flood fill over valid moves between
+  // valid nodes (turnValid: a rover may stop and turn there). A start's own cell and the valid
+  // cells within 0.5 m of it seed the fill even when the start itself is steep (RRT* escapes it
+  // the same way).
+  Raster<std::uint8_t> reachable(const std::vector<Eigen::Vector2d>& starts) const;
+
+  // The cheapest lattice path from `start` to `goal` (A*, eq. 9 per move, see the .cpp), as
+  // waypoints: `start`, cell centres, `goal`, simplified to straight valid edges no longer than
+  // the range. Nodes inside a keep-out zone are blocked. nullopt when the goal's cell cannot be
+  // reached (or the start's cell has no valid move).
+  std::optional<std::vector<Eigen::Vector2d>> guidePath(
+      const Eigen::Vector2d& start, const Eigen::Vector2d& goal,
+      const std::vector<KeepOutZone>& keepOut = {}) const;
+
+  // Cells whose centre is within `radius` of a point of `path` (sampled every half cell), and
+  // every cell `box` touches when given, as a corridor for planPath.
+  Corridor corridor(const std::vector<Eigen::Vector2d>& path, double radius,
+                    const SearchBounds* box = nullptr) const;
+
+ private:
+  const terrain::Dem& dem_;
+  const Raster<std::uint8_t>& classes_;
+  TerrainEdgeModel model_;
+  double range_;
+  double heuristicPerMetre_ = 0;
+  // Memory: 9 bytes per map cell (a node flag and four 16-bit move costs), e.g. 3.2 MB for the
+  // paper's 600 × 600 site, 450 MB for the server's largest map (50 M cells).
+  std::vector<std::uint8_t> node_;  // 1 = turnValid at the cell centre
+  // Per cell, the moves E, NE, N, NW (the other four are the neighbours' opposite moves, the
+  // terms being symmetric), quantised by costStep_; kInvalid = not a valid move.
+  std::vector<std::uint16_t> cost_;
+  double costStep_ = 1.0;
+  static constexpr std::uint16_t kInvalid = 0xFFFF;
+  // The cost of the move from `cell` in direction `dir` (0..7), < 0 when invalid or off the grid.
+  float moveCost(int cell, int dir) const {
+    const GridGeometry& g = classes_.geometry;
+    const int row = cell / g.cols, col = cell % g.cols;
+    if (!g.contains(row + kDirRow[dir], col + kDirCol[dir])) return -1.0f;
+    std::size_t slot;
+    if (dir < 4) {
+      slot = static_cast<std::size_t>(cell) * 4 + dir;
+    } else {
+      const int j = g.index(row + kDirRow[dir], col + kDirCol[dir]);
+      slot = static_cast<std::size_t>(j) * 4 + (dir - 4);
+    }
+    const std::uint16_t q = cost_[slot];
+    return q == kInvalid ? -1.0f : static_cast<float>(q * costStep_);
+  }
+  std::vector<int> seeds(const Eigen::Vector2d& p) const;
+  std::optional<std::vector<Eigen::Vector2d>> search(const std::vector<int>& from,
+                                                     const Eigen::Vector2d& start, int target,
+                                                     const Eigen::Vector2d& goal,
+                                                     const std::vector<KeepOutZone>& keepOut,
+                                                     int r0, int r1, int c0, int c1) const;
+  std::vector<Eigen::Vector2d> simplify(const std::vector<Eigen::Vector2d>& chain,
+                                        const Eigen::Vector2d& start,
+                                        const Eigen::Vector2d& goal) const;
+};
+
+}  // namespace rover::team
