@@ -6,6 +6,7 @@
 
 #include "core/common/error.hpp"
 #include "core/planning/mission_check.hpp"
+#include "core/terrain/body.hpp"
 
 namespace rover::team {
 
@@ -457,10 +458,16 @@ class TeamPlanner final : public Planner {
     const Raster<float> noPdm;
     TeamMissionParams mission = p.mission;
     mission.coordination.threads = problem.threads;
+    // The simulated rover climbs against the map's body's gravity (issue 11: body-aware defaults);
+    // the model's own default (Mars, paper 001's site) when the CRS names no known body.
+    if (problem.body != terrain::Body::Unknown) mission.coordination.model.gravity = terrain::bodyGravity(problem.body);
     TeamMissionResult r = runTeamMission(*problem.dem, problem.pdm ? *problem.pdm : noPdm, starts,
                                          mission, hybrid_, observer ? &*observer : nullptr, cancel);
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     PlanResult out = toPlanResult(r, p, hybrid_, wall);
+    out.assumptions.push_back({"body", terrain::bodyName(problem.body)});
+    out.assumptions.push_back({"gravity", problem.body != terrain::Body::Unknown ? "the map's body"
+                                                                               : "default (Mars)"});
     if (sink && !out.cancelled) {
       sink->metrics(out.metrics);
       observer->replay(r, p.poseInterval, p.mission.coordination.controller.samplePeriod, cancel);

@@ -68,6 +68,7 @@ json toJson(const PlanResult& r) {
     }
     j["overlays"] = overlays;
   }
+  j["warnings"] = r.warnings;  // empty: completed cleanly
   if (!r.assumptions.empty()) {
     json a = json::object();
     for (const auto& [k, v] : r.assumptions) a[k] = v;

@@ -195,6 +195,19 @@ void MissionManager::work() {
   }
 }
 
+namespace {
+
+// The warnings in one status message, bounded (result.json holds them all).
+std::string outcomeSummary(const std::vector<std::string>& warnings) {
+  constexpr std::size_t kShown = 4;
+  std::string out;
+  for (std::size_t i = 0; i < warnings.size() && i < kShown; ++i) out += (i ? "; " : "") + warnings[i];
+  if (warnings.size() > kShown) out += "; and " + std::to_string(warnings.size() - kShown) + " more (result.json)";
+  return out;
+}
+
+}  // namespace
+
 void MissionManager::runJob(MissionJob& job, Active a) {
   const std::string id = job.record.id;
   retryUnsaved();
@@ -228,6 +241,11 @@ void MissionManager::runJob(MissionJob& job, Active a) {
       }
       status = shuttingDown ? "interrupted" : "cancelled";
       message = shuttingDown ? "the server stopped while the mission was running" : "cancelled by request";
+    } else if (!result.warnings.empty()) {
+      // It ran to its end, but left something the user must be told (short or skipped legs,
+      // unreachable ground, attitude exceedances…): not a plain success (issue 10).
+      status = "completed_with_warnings";
+      message = outcomeSummary(result.warnings);
     }
     saveResult(job, result, std::move(resultJson), *a.stream);
   } catch (const store::StorageFull& e) {

@@ -128,8 +128,8 @@ nlohmann::json parseJson(const Stmt& s, int col, const char* what) {
 }
 
 bool isFinal(const std::string& status) {
-  return status == "succeeded" || status == "failed" || status == "cancelled" ||
-         status == "interrupted";
+  return status == "succeeded" || status == "completed_with_warnings" || status == "failed" ||
+         status == "cancelled" || status == "interrupted";
 }
 
 // Version 1 of the schema. Later versions add a migrate step from N-1 in Database::Database.
@@ -453,7 +453,7 @@ void Database::updateMission(const std::string& id, const std::string& status,
            "  started_at = CASE WHEN ?2 = 'running' AND status <> 'running' THEN ?4 "
            "                    ELSE started_at END, "
            "  finished_at = CASE WHEN ?5 = 1 AND status NOT IN "
-           "                       ('succeeded', 'failed', 'cancelled', 'interrupted') THEN ?4 "
+           "                       ('succeeded', 'completed_with_warnings', 'failed', 'cancelled', 'interrupted') THEN ?4 "
            "                     ELSE finished_at END, "
            "  metrics = COALESCE(?6, metrics), "
            "  status = ?2, message = ?3 "

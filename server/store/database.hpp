@@ -35,7 +35,7 @@ struct MissionRecord {
   std::string pdmId;    // "" when none
   std::string planner;
   nlohmann::json spec;  // the request as accepted (rovers, params)
-  std::string status;   // queued | running | succeeded | failed | cancelled | interrupted
+  std::string status;   // queued | running | succeeded | completed_with_warnings | failed | cancelled | interrupted
   std::string message;  // failure / interruption reason
   std::string createdAt, startedAt, finishedAt;
   nlohmann::json metrics;  // final metrics (object), null until finished

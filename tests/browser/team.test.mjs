@@ -38,7 +38,12 @@ describe('team mission', { skip: missing || false, timeout: 240000 }, () => {
     await page.waitForFunction(() => window.__roverplan.doneFrames > 0, null, { timeout: 180000 });
     const status = await page.evaluate(() => window.__roverplan.missionStatus);
     console.log(`team mission (${teamPlanner}): ${status}`);
-    assert.equal(status, 'succeeded');
+    // A team mission may end with warnings (a leg skipped, ground out of reach): the page says so
+    // in words, with what went wrong, instead of "succeeded".
+    assert.ok(['succeeded', 'completed_with_warnings'].includes(status), status);
+    if (status === 'completed_with_warnings') {
+      assert.match(await page.textContent('#live-status'), /^completed with warnings: \S/);
+    }
     await screenshot(page, 'team-mission');
     assert.deepEqual(errors, []);
     await context.close();

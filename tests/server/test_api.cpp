@@ -449,7 +449,12 @@ TEST_CASE("api: a team-search mission with a PDM streams the route and paths, an
   const std::string id = r.json()["id"];
   auto frames = test::readAllFrames(s.port(), "/api/missions/" + id + "/stream");
   json m = s.waitFinished(id, 120);
-  REQUIRE(m["status"] == "succeeded");
+  // Ran to its end; with warnings (e.g. ground out of the team's reach) the status says so and the
+  // message says what (issue 10: honest outcomes).
+  MESSAGE(m["status"].get<std::string>() << ": " << m["message"].get<std::string>());
+  REQUIRE((m["status"] == "succeeded" || m["status"] == "completed_with_warnings"));
+  CHECK((m["status"] == "succeeded") == (m["metrics"]["warnings"] == 0));
+  if (m["status"] == "completed_with_warnings") CHECK_FALSE(m["message"].get<std::string>().empty());
   CHECK(m["metrics"]["collisions"] == 0);
   CHECK(m["metrics"]["targets"] == 4);
   CHECK(m["metrics"]["accumulated_probability"].get<double>() > 0);

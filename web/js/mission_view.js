@@ -12,6 +12,9 @@ import { TrailLayer, TrailSet } from './trails.js';
 import { $, el, fmt, report, roverColour } from './util.js';
 import { Replay } from './replay.js';
 
+// A mission that ran to its end: cleanly, or with warnings (short/skipped legs, unreachable ground…).
+const completed = (status) => status === 'succeeded' || status === 'completed_with_warnings';
+
 const SHOWN_METRICS = [
   ['coverage', 'coverage', (v) => `${(v * 100).toFixed(1)} %`],
   ['coverage_reachable', 'of reachable', (v) => `${(v * 100).toFixed(1)} %`],
@@ -121,7 +124,7 @@ export class MissionView {
     $('live-title').textContent = `${mission.planner} · ${mission.id}`;
     $('live-title').title = JSON.stringify(mission.spec || {});
     this.setStatus(mission.status);
-    this.setProgress(mission.progress?.fraction ?? (mission.status === 'succeeded' ? 1 : 0));
+    this.setProgress(mission.progress?.fraction ?? (completed(mission.status) ? 1 : 0));
     this.renderMetrics(mission.metrics);
     this.setExports(null);
     this.replay.disable();
@@ -207,11 +210,11 @@ export class MissionView {
     counters.missionStatus = m.status;
     counters.finalMetrics = m.metrics;
     this.setStatus(m.status + (m.message ? `: ${m.message}` : ''));
-    if (m.status === 'succeeded') this.setProgress(1);
+    if (completed(m.status)) this.setProgress(1);
     this.renderMetrics(m.metrics);
     this.coverage.keepFinal();
     this.updateStatusLine(true);
-    if (m.status === 'succeeded' || m.status === 'cancelled') {
+    if (completed(m.status) || m.status === 'cancelled') {
       try {
         this.result = await api.result(m.mission);
         if (this.mission?.id !== m.mission) return;
@@ -285,12 +288,12 @@ export class MissionView {
   setStatus(status) {
     const badge = $('live-status');
     const word = String(status || '').split(/[\s:(]/)[0];
-    badge.textContent = status || '';
+    badge.textContent = String(status || '').replace(/_/g, ' ');
     badge.className = `badge ${word}`;
     badge.hidden = !status;
     const running = word === 'running' || word === 'queued';
     $('live-cancel').disabled = !running;
-    if (['queued', 'running', 'succeeded', 'failed', 'cancelled', 'interrupted'].includes(word)) counters.missionStatus = word;
+    if (['queued', 'running', 'succeeded', 'completed_with_warnings', 'failed', 'cancelled', 'interrupted'].includes(word)) counters.missionStatus = word;
   }
 
   setProgress(f) {

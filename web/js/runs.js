@@ -62,7 +62,7 @@ export class RunsPanel {
           },
         }),
         el('button', { class: 'name', title: `open run ${m.id}`, onclick: () => this.open(m) }, `${m.planner} · ${m.id}`),
-        el('span', { class: `badge ${m.status}` }, m.status),
+        el('span', { class: `badge ${m.status}`, title: m.message || '' }, m.status.replace(/_/g, ' ')),
         el('span', { class: 'meta' }, m.metrics?.coverage !== undefined ? `${(m.metrics.coverage * 100).toFixed(1)} %` : ''),
         el('div', { class: 'params-line' }, `${m.created_at.replace('T', ' ').slice(0, 19)} · ${paramsLine(m)}`))));
     }
