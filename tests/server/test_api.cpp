@@ -5,95 +5,27 @@
 #include <fstream>
 #include <thread>
 
-#include "core/planning/planner.hpp"
+#include "api_server.hpp"
 #include "maps/dem_io.hpp"
-#include "server/api/map_catalog.hpp"
-#include "server/api/routes.hpp"
-#include "server/http/http_server.hpp"
-#include "server/missions/mission_manager.hpp"
-#include "test_client.hpp"
 
 using namespace rover;
+using rover::test::ApiServer;
+using rover::test::checkError;
 using rover::test::request;
+using rover::test::TempDir;
 using nlohmann::json;
 namespace fs = std::filesystem;
 
 namespace {
 
-struct Options {
-  std::string token;
-  unsigned workers = 2;
-  std::size_t queue = 16;
-  std::uint64_t maxUpload = 64ull << 20;
-};
-
-// A whole server on a data dir: what `roverplan serve` builds, minus the signal handling.
-struct TestServer {
-  std::string dataDir;
-  store::DataDir dir;
-  store::Database db;
-  api::MapCatalog maps;
-  PlannerRegistry planners = makeBuiltinRegistry();
-  missions::MissionManager manager;
-  http::Router router;
-  api::ApiContext ctx;
-  std::unique_ptr<http::HttpServer> server;
-  int interrupted = 0;
-  int orphans = 0;
-
-  explicit TestServer(const std::string& data, Options o = {})
-      : dataDir(data),
-        dir(data),
-        db((dir.cleanTmp(), dir.databasePath())),
-        maps(db, dir),
-        manager(db, dir, planners, o.workers, o.queue),
-        ctx{db, dir, maps, manager, planners} {
-    interrupted = db.markUnfinishedInterrupted();
-    orphans = maps.sweepOrphans();
-    maps.ensureDefaultMap();
-    api::addApiRoutes(router, ctx);
-    http::ServerConfig c;
-    c.port = 0;
-    c.token = o.token;
-    c.uploadDir = dir.tmpDir();
-    c.maxUploadBytes = o.maxUpload;
-    c.logRequests = false;
-    server = std::make_unique<http::HttpServer>(c, router);
-    server->start();
-  }
-  ~TestServer() {
-    server->stop();
-    manager.stop();
-  }
-  unsigned short port() const { return server->port(); }
-  test::HttpResult get(const std::string& t) { return request(port(), "GET", t); }
-  test::HttpResult postJson(const std::string& t, const json& j) {
-    return request(port(), "POST", t, j.dump(), "application/json");
-  }
-  std::string defaultMap() { return get("/api/maps").json()[0]["id"]; }
-  // Waits until the mission has a final status (bounded).
-  json waitFinished(const std::string& id, double seconds = 30) {
-    auto until = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
-    json m;
-    while (std::chrono::steady_clock::now() < until) {
-      m = get("/api/missions/" + id).json();
-      std::string s = m["status"];
-      if (s != "queued" && s != "running") return m;
-      std::this_thread::sleep_for(std::chrono::milliseconds(20));
-    }
-    return m;
-  }
-};
-
-struct TempDir {
-  fs::path path = fs::temp_directory_path() / ("roverplan-api-" + std::to_string(::getpid()) + "-" + std::to_string(std::rand()));
-  TempDir() { fs::create_directories(path); }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(path, ec);
-  }
-  std::string str(const std::string& sub) const { return (path / sub).string(); }
-};
+// This file's servers: two mission workers, sixteen queued missions, uploads up to 64 MiB.
+test::ApiServerOptions options() {
+  test::ApiServerOptions o;
+  o.workers = 2;
+  o.queue = 16;
+  o.http.maxUploadBytes = 64ull << 20;
+  return o;
+}
 
 std::string readBytes(const std::string& p) {
   std::ifstream in(p, std::ios::binary);
@@ -117,21 +49,11 @@ json coverageMission(const std::string& map, double x = 10.5, double y = 10.5) {
           {"params", {{"coverage", 0.5}}}};
 }
 
-void checkError(const test::HttpResult& r, int status, const std::string& field) {
-  CHECK(r.status == status);
-  json j = r.json();
-  REQUIRE(j.contains("error"));
-  CHECK(j["error"].contains("code"));
-  CHECK(j["error"].contains("message"));
-  // "field" names the offending input; it is left out when the error is not about one field.
-  CHECK(j["error"].value("field", std::string()) == field);
-}
-
 }  // namespace
 
 TEST_CASE("api: health, planners, and an OpenAPI document naming every route") {
   TempDir tmp;
-  TestServer s(tmp.str("data"));
+  ApiServer s(tmp.str("data"), options());
   auto h = s.get("/api/health");
   CHECK(h.status == 200);
   CHECK(h.json()["status"] == "ok");
@@ -147,7 +69,7 @@ TEST_CASE("api: health, planners, and an OpenAPI document naming every route") {
 
 TEST_CASE("api: the default map is there, with metadata and layers in three formats") {
   TempDir tmp;
-  TestServer s(tmp.str("data"));
+  ApiServer s(tmp.str("data"), options());
   auto list = s.get("/api/maps").json();
   REQUIRE(list.size() == 1);
   json m = list[0];
@@ -174,7 +96,7 @@ TEST_CASE("api: the default map is there, with metadata and layers in three form
 
 TEST_CASE("api: DEM upload as a raw body, as multipart, bad files and deletion") {
   TempDir tmp;
-  TestServer s(tmp.str("data"));
+  ApiServer s(tmp.str("data"), options());
   const std::string bytes = smallDemBytes(tmp);
   auto r = request(s.port(), "POST", "/api/maps?name=small&filename=small.tif", bytes, "image/tiff");
   REQUIRE(r.status == 201);
@@ -213,7 +135,7 @@ TEST_CASE("api: a PDS3 product uploaded as an .IMG + .LBL multipart pair") {
     return;
   }
   TempDir tmp;
-  TestServer s(tmp.str("data"));
+  ApiServer s(tmp.str("data"), options());
   const std::string b = "PairBoundary";
   std::string body;
   for (const char* f : {"LDEM_4.LBL", "LDEM_4.IMG"})
@@ -228,7 +150,7 @@ TEST_CASE("api: a PDS3 product uploaded as an .IMG + .LBL multipart pair") {
 
 TEST_CASE("api: PDMs from Gaussians, random and raster; errors name the field") {
   TempDir tmp;
-  TestServer s(tmp.str("data"));
+  ApiServer s(tmp.str("data"), options());
   const std::string map = s.defaultMap();
   auto r = s.postJson("/api/maps/" + map + "/pdms",
                       {{"name", "two"}, {"components", {{{"x", 40}, {"y", 50}, {"sigma_x", 10}},
@@ -255,7 +177,7 @@ TEST_CASE("api: PDMs from Gaussians, random and raster; errors name the field") 
 
 TEST_CASE("api: missions are validated fully before they are queued") {
   TempDir tmp;
-  TestServer s(tmp.str("data"));
+  ApiServer s(tmp.str("data"), options());
   const std::string map = s.defaultMap();
   json m = coverageMission(map);
   m["planner"] = "teleport";
@@ -281,7 +203,7 @@ TEST_CASE("api: missions are validated fully before they are queued") {
 
 TEST_CASE("api: a coverage mission runs, reports metrics and exports its results") {
   TempDir tmp;
-  TestServer s(tmp.str("data"));
+  ApiServer s(tmp.str("data"), options());
   const std::string map = s.defaultMap();
   json body = coverageMission(map);
   body["params"] = json::object();  // every default
@@ -305,7 +227,7 @@ TEST_CASE("api: a coverage mission runs, reports metrics and exports its results
 
 TEST_CASE("api: two WebSocket clients see the same final state; a late joiner replays it") {
   TempDir tmp;
-  TestServer s(tmp.str("data"));
+  ApiServer s(tmp.str("data"), options());
   const std::string map = s.defaultMap();
   json body = coverageMission(map);
   body["pace"] = 1500;  // steps per second: about two seconds of live mission
@@ -345,10 +267,10 @@ TEST_CASE("api: two WebSocket clients see the same final state; a late joiner re
 
 TEST_CASE("api: DELETE cancels a running mission promptly; a full queue answers 429") {
   TempDir tmp;
-  Options o;
+  auto o = options();
   o.workers = 1;
   o.queue = 1;
-  TestServer s(tmp.str("data"), o);
+  ApiServer s(tmp.str("data"), o);
   const std::string map = s.defaultMap();
   json slow = coverageMission(map);
   slow["pace"] = 20;
@@ -369,9 +291,9 @@ TEST_CASE("api: DELETE cancels a running mission promptly; a full queue answers 
 
 TEST_CASE("api: with a token every /api route but health needs it") {
   TempDir tmp;
-  Options o;
-  o.token = "s3cret";
-  TestServer s(tmp.str("data"), o);
+  auto o = options();
+  o.http.token = "s3cret";
+  ApiServer s(tmp.str("data"), o);
   CHECK(s.get("/api/health").status == 200);
   checkError(s.get("/api/maps"), 401, "authorization");
   auto ok = request(s.port(), "GET", "/api/maps", "", "", {{"Authorization", "Bearer s3cret"}});
@@ -383,14 +305,14 @@ TEST_CASE("api: maps, PDMs and finished missions survive a restart; running ones
   TempDir tmp;
   std::string map, pdm, done;
   {
-    TestServer s(tmp.str("data"));
+    ApiServer s(tmp.str("data"), options());
     map = s.defaultMap();
     pdm = s.postJson("/api/maps/" + map + "/pdms", {{"random", 4}}).json()["id"];
     done = s.postJson("/api/missions", coverageMission(map)).json()["id"];
     REQUIRE(s.waitFinished(done)["status"] == "succeeded");
   }
   {
-    TestServer s(tmp.str("data"));
+    ApiServer s(tmp.str("data"), options());
     CHECK(s.get("/api/maps").json().size() == 1);  // the default map is not made twice
     CHECK(s.get("/api/maps/" + map + "/pdms/" + pdm).status == 200);
     json m = s.get("/api/missions/" + done).json();
@@ -406,7 +328,7 @@ TEST_CASE("api: folders a crash left without a database row are swept at start-u
   TempDir tmp;
   std::string map;
   {
-    TestServer s(tmp.str("data"));
+    ApiServer s(tmp.str("data"), options());
     map = s.defaultMap();
     CHECK(s.orphans == 0);
   }
@@ -414,7 +336,7 @@ TEST_CASE("api: folders a crash left without a database row are swept at start-u
   fs::create_directories(tmp.path / "data" / "maps" / "0123456789abcdef");
   std::ofstream(tmp.path / "data" / "maps" / "0123456789abcdef" / "dem.tif") << "half";
   fs::create_directories(tmp.path / "data" / "pdms" / "fedcba9876543210");
-  TestServer s(tmp.str("data"));
+  ApiServer s(tmp.str("data"), options());
   CHECK(s.orphans == 2);
   CHECK_FALSE(fs::exists(tmp.path / "data" / "maps" / "0123456789abcdef"));
   CHECK(fs::exists(tmp.path / "data" / "maps" / map));  // the real map stays
@@ -423,7 +345,7 @@ TEST_CASE("api: folders a crash left without a database row are swept at start-u
 
 TEST_CASE("api: a team-search mission with a PDM streams the route and paths, and exports") {
   TempDir tmp;
-  TestServer s(tmp.str("data"));
+  ApiServer s(tmp.str("data"), options());
   const std::string map = s.defaultMap();
   auto pdm = s.postJson("/api/maps/" + map + "/pdms", {{"random", 4}, {"seed", 5}});
   REQUIRE(pdm.status == 201);
@@ -514,7 +436,7 @@ std::string marsEquirectangularBytes(const TempDir& tmp) {
 
 TEST_CASE("api: coverage on an uploaded DEM with non-square pixels, per-map defaults, one start check") {
   TempDir tmp;
-  TestServer s(tmp.str("data"));
+  ApiServer s(tmp.str("data"), options());
   auto up = request(s.port(), "POST", "/api/maps?name=mars&filename=mars.tif", marsEquirectangularBytes(tmp), "image/tiff");
   REQUIRE(up.status == 201);
   const std::string map = up.json()["id"];

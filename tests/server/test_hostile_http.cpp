@@ -23,16 +23,11 @@
 
 #include <boost/beast/http.hpp>
 
-#include "core/planning/planner.hpp"
-#include "server/api/map_catalog.hpp"
+#include "api_server.hpp"
 #include "server/api/multipart.hpp"
-#include "server/api/routes.hpp"
-#include "server/http/http_server.hpp"
 #include "server/http/rate_floor.hpp"
 #include "server/http/request_framing.hpp"
 #include "server/http/work_pool.hpp"
-#include "server/missions/mission_manager.hpp"
-#include "test_client.hpp"
 
 using namespace rover;
 using namespace std::chrono_literals;
@@ -40,24 +35,10 @@ using nlohmann::json;
 namespace fs = std::filesystem;
 namespace bhttp = boost::beast::http;
 using Clock = std::chrono::steady_clock;
+using rover::test::ApiServer;
+using rover::test::TempDir;
 
 namespace {
-
-struct TempDir {
-  fs::path path;
-  TempDir() {
-    static std::atomic<int> counter{0};
-    path = fs::temp_directory_path() /
-           ("rover-hostile-" + std::to_string(::getpid()) + "-" + std::to_string(++counter));
-    fs::remove_all(path);
-    fs::create_directories(path);
-  }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(path, ec);
-  }
-  std::string str(const std::string& sub) const { return (path / sub).string(); }
-};
 
 // A raw TCP client with a receive timeout, so a silent server fails a test instead of hanging it.
 class Raw {
@@ -181,35 +162,15 @@ struct EdgeServer {
   unsigned short port() const { return server->port(); }
 };
 
-// The whole API on a data dir, as `roverplan serve` builds it, plus optional test routes.
-struct ApiServer {
-  store::DataDir dir;
-  store::Database db;
-  api::MapCatalog maps;
-  PlannerRegistry planners = makeBuiltinRegistry();
-  missions::MissionManager manager;
-  http::Router router;
-  api::ApiContext ctx;
-  std::unique_ptr<http::HttpServer> server;
-
-  explicit ApiServer(const std::string& data)
-      : dir(data), db((dir.cleanTmp(), dir.databasePath())), maps(db, dir), manager(db, dir, planners, 1, 4),
-        ctx{db, dir, maps, manager, planners} {
-    api::addApiRoutes(router, ctx);
-  }
-  void start(http::ServerConfig c = {}) {
-    c.port = 0;
-    c.uploadDir = dir.tmpDir();
-    c.logRequests = false;
-    server = std::make_unique<http::HttpServer>(c, router);
-    server->start();
-  }
-  ~ApiServer() {
-    if (server) server->stop();
-    manager.stop();
-  }
-  unsigned short port() const { return server->port(); }
-};
+// The whole API on a data dir (no default map, four queued missions), started by the test once
+// it has added its own routes.
+test::ApiServerOptions unstarted() {
+  test::ApiServerOptions o;
+  o.queue = 4;
+  o.defaultMap = false;
+  o.start = false;
+  return o;
+}
 
 double msSince(Clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
@@ -504,7 +465,7 @@ TEST_CASE("hostile: slowloris with 500 connections is cut at the header deadline
 
 TEST_CASE("hostile: with the work pool saturated by slow handlers, /api/health still answers") {
   TempDir tmp;
-  ApiServer s(tmp.str("data"));
+  ApiServer s(tmp.str("data"), unstarted());
   // Slow handlers that hold their pool thread until the test opens the gate (at most 20 s).
   std::atomic<bool> gate{false};
   std::atomic<int> entered{0};
@@ -559,7 +520,7 @@ TEST_CASE("hostile: with the work pool saturated by slow handlers, /api/health s
 
 TEST_CASE("hostile: failed multipart uploads leave data/tmp empty; a big form field is refused") {
   TempDir tmp;
-  ApiServer s(tmp.str("data"));
+  ApiServer s(tmp.str("data"), unstarted());
   s.start();
   const std::string b = "XyZbound";
   const std::string type = "multipart/form-data; boundary=" + b;

@@ -4,28 +4,25 @@
 #include <doctest/doctest.h>
 
 #include <atomic>
-#include <filesystem>
 #include <fstream>
 #include <set>
 #include <thread>
 
+#include "api_server.hpp"
 #include "core/pdm/pdm.hpp"
-#include "core/planning/planner.hpp"
 #include "maps/dem_io.hpp"
-#include "server/api/map_catalog.hpp"
-#include "server/api/routes.hpp"
-#include "server/http/http_server.hpp"
 #include "server/json/json_edge.hpp"
 #include "server/json/mission_request.hpp"
 #include "server/json/pdm_json.hpp"
-#include "server/missions/mission_manager.hpp"
-#include "test_client.hpp"
 
 using namespace rover;
+using rover::test::ApiServer;
+using rover::test::checkError;
+using rover::test::errorField;
 using rover::test::request;
+using rover::test::TempDir;
 using Json = nlohmann::json;
 namespace rj = rover::json;
-namespace fs = std::filesystem;
 
 namespace {
 
@@ -44,68 +41,6 @@ Thrown apiErrorOf(F&& f) {
     return {e.status(), e.code(), e.field()};
   }
   return {};
-}
-
-struct TempDir {
-  fs::path path = fs::temp_directory_path() /
-                  ("roverplan-hostile-" + std::to_string(::getpid()) + "-" + std::to_string(std::rand()));
-  TempDir() { fs::create_directories(path); }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(path, ec);
-  }
-  std::string str(const std::string& sub) const { return (path / sub).string(); }
-};
-
-// A whole server on a data dir, as `roverplan serve` builds it (see test_api.cpp).
-struct Server {
-  TempDir tmp;
-  store::DataDir dir{tmp.str("data")};
-  store::Database db{(dir.cleanTmp(), dir.databasePath())};
-  api::MapCatalog maps{db, dir};
-  PlannerRegistry planners = makeBuiltinRegistry();
-  missions::MissionManager manager{db, dir, planners, 1, 8};
-  http::Router router;
-  api::ApiContext ctx{db, dir, maps, manager, planners};
-  std::unique_ptr<http::HttpServer> server;
-
-  Server() {
-    maps.ensureDefaultMap();
-    api::addApiRoutes(router, ctx);
-    http::ServerConfig c;
-    c.port = 0;
-    c.uploadDir = dir.tmpDir();
-    c.logRequests = false;
-    server = std::make_unique<http::HttpServer>(c, router);
-    server->start();
-  }
-  ~Server() {
-    server->stop();
-    manager.stop();
-  }
-  unsigned short port() const { return server->port(); }
-  test::HttpResult get(const std::string& t) { return request(port(), "GET", t); }
-  test::HttpResult post(const std::string& t, const std::string& body, const std::string& type = "application/json") {
-    return request(port(), "POST", t, body, type);
-  }
-  std::string defaultMap() { return get("/api/maps").json()[0]["id"]; }
-};
-
-// A 4xx/5xx answer in the project's shape; returns its field ("" when absent).
-std::string errorField(const test::HttpResult& r) {
-  Json j = r.json();
-  REQUIRE(j.contains("error"));
-  CHECK(j["error"].contains("code"));
-  CHECK(j["error"].contains("message"));
-  return j["error"].value("field", std::string());
-}
-
-void checkError(const test::HttpResult& r, int status, const std::string& code, const std::string& field) {
-  CHECK(r.status == status);
-  Json j = r.json();
-  REQUIRE(j.contains("error"));
-  CHECK(j["error"].value("code", std::string()) == code);
-  CHECK(j["error"].value("field", std::string()) == field);
 }
 
 Json mission(const std::string& map, const std::string& planner = "coverage") {
@@ -278,7 +213,8 @@ TEST_CASE("PDM JSON: more than 256 components, non-finite or extreme values name
 // ---- over loopback -----------------------------------------------------------------------------
 
 TEST_CASE("hostile: a 70 000-deep mission body is refused and the server goes on") {
-  Server s;
+  TempDir tmp;
+  ApiServer s(tmp.str("data"));
   const std::string map = s.defaultMap();
   for (int depth : {50'000, 70'000}) {
     Json body = mission(map);
@@ -295,7 +231,8 @@ TEST_CASE("hostile: a 70 000-deep mission body is refused and the server goes on
 }
 
 TEST_CASE("hostile: absurd numbers and names over HTTP, every error naming its field") {
-  Server s;
+  TempDir tmp;
+  ApiServer s(tmp.str("data"));
   const std::string map = s.defaultMap();
   const std::string pdms = "/api/maps/" + map + "/pdms";
   auto pdmBody = [](Json c) { return Json{{"name", "p"}, {"components", Json::array({c})}}.dump(); };
@@ -352,14 +289,14 @@ TEST_CASE("hostile: absurd numbers and names over HTTP, every error naming its f
     CHECK(c.r.status == c.status);
     CHECK(errorField(c.r) == c.field);
     // No server path in any message.
-    CHECK(c.r.body.find(s.tmp.path.string()) == std::string::npos);
+    CHECK(c.r.body.find(tmp.path.string()) == std::string::npos);
   }
   // A DEM upload with an absurd cell size: refused, nothing left behind in tmp.
   Raster<float> z(GridGeometry{20, 20, 1.0, 1.0}, 1.0f);
   z.geo.valid = true;
   z.geo.geotransform = {500000, 1, 0, 4100020, 0, -1};
-  maps::writeGeoTiff(s.tmp.str("dem.tif"), z);
-  std::ifstream in(s.tmp.str("dem.tif"), std::ios::binary);
+  maps::writeGeoTiff(tmp.str("dem.tif"), z);
+  std::ifstream in(tmp.str("dem.tif"), std::ios::binary);
   const std::string dem((std::istreambuf_iterator<char>(in)), {});
   for (const char* cell : {"1e-300", "1e300", "-1", "nan"}) {
     CAPTURE(cell);
@@ -380,7 +317,8 @@ TEST_CASE("hostile: absurd numbers and names over HTTP, every error naming its f
 }
 
 TEST_CASE("hostile: listings are paginated in SQL and bounded in size") {
-  Server s;
+  TempDir tmp;
+  ApiServer s(tmp.str("data"));
   const std::string map = s.defaultMap();
   // 120 stored missions, each with a 200-character name and a ~4 KB spec (inserted directly:
   // what matters is the listing, not running them).
@@ -441,7 +379,8 @@ TEST_CASE("hostile: listings are paginated in SQL and bounded in size") {
 }
 
 TEST_CASE("hostile: the map-body cache never keeps a map a write has changed or deleted") {
-  Server s;
+  TempDir tmp;
+  ApiServer s(tmp.str("data"));
   const std::string map = s.defaultMap();
   // The mechanism: a body read before an invalidation is not cached after it.
   const std::uint64_t ticket = s.ctx.mapCacheTicket();

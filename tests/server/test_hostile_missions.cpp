@@ -3,82 +3,32 @@
 // by every WebSocket subscriber. Over loopback with an in-process server; loops bounded.
 #include <doctest/doctest.h>
 
-#include <filesystem>
 #include <fstream>
 #include <thread>
 
-#include "core/planning/planner.hpp"
+#include "api_server.hpp"
 #include "maps/dem_io.hpp"
-#include "server/api/map_catalog.hpp"
-#include "server/api/routes.hpp"
-#include "server/http/http_server.hpp"
-#include "server/missions/mission_manager.hpp"
 #include "server/missions/mission_memory.hpp"
-#include "test_client.hpp"
 
 using namespace rover;
+using rover::test::ApiServer;
+using rover::test::checkError;
 using rover::test::request;
+using rover::test::TempDir;
 using nlohmann::json;
-namespace fs = std::filesystem;
 
 namespace {
 
 // The default map: 600 × 600 cells of 0.25 m (150 m square).
 constexpr std::int64_t kDefaultMapCells = 600 * 600;
 
-struct Dir {
-  fs::path path = fs::temp_directory_path() /
-                  ("roverplan-hostile-missions-" + std::to_string(::getpid()) + "-" + std::to_string(std::rand()));
-  ~Dir() {
-    std::error_code ec;
-    fs::remove_all(path, ec);
-  }
-};
-
-struct Server {
-  store::DataDir dir;
-  store::Database db;
-  api::MapCatalog maps;
-  PlannerRegistry planners = makeBuiltinRegistry();
-  missions::MissionManager manager;
-  http::Router router;
-  api::ApiContext ctx;
-  std::unique_ptr<http::HttpServer> server;
-
-  Server(const fs::path& data, std::uint64_t budget, std::size_t queue = 8)
-      : dir(data.string()),
-        db((dir.cleanTmp(), dir.databasePath())),
-        maps(db, dir),
-        manager(db, dir, planners, 1, queue, budget),
-        ctx{db, dir, maps, manager, planners} {
-    maps.ensureDefaultMap();
-    api::addApiRoutes(router, ctx);
-    http::ServerConfig c;
-    c.port = 0;
-    c.uploadDir = dir.tmpDir();
-    c.logRequests = false;
-    server = std::make_unique<http::HttpServer>(c, router);
-    server->start();
-  }
-  ~Server() {
-    server->stop();
-    manager.stop();
-  }
-  unsigned short port() const { return server->port(); }
-  test::HttpResult get(const std::string& t) { return request(port(), "GET", t); }
-  test::HttpResult post(const json& j) { return request(port(), "POST", "/api/missions", j.dump(), "application/json"); }
-  std::string map() { return get("/api/maps").json()[0]["id"]; }
-  std::string status(const std::string& id) { return get("/api/missions/" + id).json()["status"]; }
-  json waitFinished(const std::string& id) {
-    json m;
-    for (int i = 0; i < 1500; ++i) {  // 30 s at most
-      m = get("/api/missions/" + id).json();
-      if (m["status"] != "queued" && m["status"] != "running") break;
-      std::this_thread::sleep_for(std::chrono::milliseconds(20));
-    }
-    return m;
-  }
-};
+// A server with this memory budget for missions and room for `queue` waiting ones.
+test::ApiServerOptions budgetOf(std::uint64_t budget, std::size_t queue = 8) {
+  test::ApiServerOptions o;
+  o.memoryBudget = budget;
+  o.queue = queue;
+  return o;
+}
 
 json coverageMission(const std::string& map, double cell, double pace = 0, double goal = 0.05) {
   json j{{"map", map}, {"planner", "coverage"}, {"rovers", {{{"x", 20.5}, {"y", 20.5}, {"heading", 0}}}},
@@ -87,25 +37,17 @@ json coverageMission(const std::string& map, double cell, double pace = 0, doubl
   return j;
 }
 
-void checkError(const test::HttpResult& r, int status, const std::string& code, const std::string& field) {
-  CHECK(r.status == status);
-  const json j = r.json();
-  REQUIRE(j.contains("error"));
-  CHECK(j["error"]["code"] == code);
-  CHECK(j["error"].value("field", std::string()) == field);
-}
-
 }  // namespace
 
 TEST_CASE("hostile missions: one mission over the memory budget is refused with 413, naming coverage_cell") {
-  Dir d;
+  TempDir d;
   // The budget fits two missions on the map's own 0.25 m cells, not one on 0.16 m cells (2.4 times
   // the cells, still under the coverage grid's own cell limit): that one must be refused before its
   // world is built.
   const auto native = missions::coverageMissionMemory(kDefaultMapCells, 0.25, 1, false, 0.05);
-  Server s(d.path / "data", native.bytes * 2);
-  const std::string map = s.map();
-  auto r = s.post(coverageMission(map, 0.16));
+  ApiServer s(d.str("data"), budgetOf(native.bytes * 2));
+  const std::string map = s.defaultMap();
+  auto r = s.postJson("/api/missions", coverageMission(map, 0.16));
   checkError(r, 413, "mission_too_large", "params.coverage_cell");
   const std::string message = r.json()["error"]["message"];
   MESSAGE(message);
@@ -115,22 +57,22 @@ TEST_CASE("hostile missions: one mission over the memory budget is refused with 
   CHECK(s.manager.memoryReserved() == 0);
   CHECK(s.manager.queued() == 0);
   // The same mission on the map's cells is accepted and runs.
-  auto ok = s.post(coverageMission(map, 0));
+  auto ok = s.postJson("/api/missions", coverageMission(map, 0));
   REQUIRE(ok.status == 202);
   CHECK(s.waitFinished(ok.json()["id"])["status"] == "succeeded");
   CHECK(s.manager.memoryReserved() == 0);  // released when it finished
 }
 
 TEST_CASE("hostile missions: running + queued missions over the budget get 429 with Retry-After; cancel frees it") {
-  Dir d;
+  TempDir d;
   const auto one = missions::coverageMissionMemory(kDefaultMapCells, 0.25, 1, false, 1.0);
-  Server s(d.path / "data", one.bytes * 2 + one.bytes / 2);  // room for two
-  const std::string map = s.map();
+  ApiServer s(d.str("data"), budgetOf(one.bytes * 2 + one.bytes / 2));  // room for two
+  const std::string map = s.defaultMap();
   const auto slow = coverageMission(map, 0.25, 5, 1.0);  // 5 steps a second: runs until cancelled
-  const std::string first = s.post(slow).json()["id"];
-  const std::string second = s.post(slow).json()["id"];
+  const std::string first = s.postJson("/api/missions", slow).json()["id"];
+  const std::string second = s.postJson("/api/missions", slow).json()["id"];
   CHECK(s.manager.memoryReserved() == 2 * one.bytes);
-  auto refused = s.post(slow);
+  auto refused = s.postJson("/api/missions", slow);
   checkError(refused, 429, "memory_busy", "");
   CHECK(refused.headers.count("Retry-After") == 1);
   const std::string why = refused.json()["error"]["message"];
@@ -141,21 +83,21 @@ TEST_CASE("hostile missions: running + queued missions over the budget get 429 w
   CHECK(request(s.port(), "DELETE", "/api/missions/" + second).status == 202);
   CHECK(s.waitFinished(second)["status"] == "cancelled");
   CHECK(s.manager.memoryReserved() == one.bytes);
-  const std::string third = s.post(slow).json()["id"];
+  const std::string third = s.postJson("/api/missions", slow).json()["id"];
   for (const auto& id : {first, third}) CHECK(request(s.port(), "DELETE", "/api/missions/" + id).status == 202);
   for (const auto& id : {first, third}) CHECK(s.waitFinished(id)["status"] == "cancelled");
   CHECK(s.manager.memoryReserved() == 0);
 }
 
 TEST_CASE("hostile missions: the queue stays bounded in count too, with Retry-After") {
-  Dir d;
-  Server s(d.path / "data", 64ull << 30, 1);
-  const std::string map = s.map();
+  TempDir d;
+  ApiServer s(d.str("data"), budgetOf(64ull << 30, 1));
+  const std::string map = s.defaultMap();
   const auto slow = coverageMission(map, 0, 5, 1.0);
-  const std::string running = s.post(slow).json()["id"];
+  const std::string running = s.postJson("/api/missions", slow).json()["id"];
   for (int i = 0; i < 200 && s.status(running) == "queued"; ++i) std::this_thread::sleep_for(std::chrono::milliseconds(10));
-  const std::string waiting = s.post(slow).json()["id"];
-  auto full = s.post(slow);
+  const std::string waiting = s.postJson("/api/missions", slow).json()["id"];
+  auto full = s.postJson("/api/missions", slow);
   checkError(full, 429, "queue_full", "");
   CHECK(full.headers.count("Retry-After") == 1);
   for (const auto& id : {waiting, running}) CHECK(request(s.port(), "DELETE", "/api/missions/" + id).status == 202);
@@ -163,9 +105,9 @@ TEST_CASE("hostile missions: the queue stays bounded in count too, with Retry-Af
 }
 
 TEST_CASE("hostile missions: a queued mission holds its request, not its world (built when it starts)") {
-  Dir d;
-  Server s(d.path / "data", 64ull << 30);
-  const std::string map = s.map();
+  TempDir d;
+  ApiServer s(d.str("data"), budgetOf(64ull << 30));
+  const std::string map = s.defaultMap();
   // A second map to delete while a mission on it waits behind a slow one.
   Raster<float> z(GridGeometry{60, 60, 0.5, 0.5}, 0.0f);
   for (int r = 0; r < 60; ++r)
@@ -178,10 +120,10 @@ TEST_CASE("hostile missions: a queued mission holds its request, not its world (
   REQUIRE(up.status == 201);
   const std::string other = up.json()["id"];
 
-  const std::string running = s.post(coverageMission(map, 0, 5, 1.0)).json()["id"];
+  const std::string running = s.postJson("/api/missions", coverageMission(map, 0, 5, 1.0)).json()["id"];
   json waitingBody = coverageMission(other, 0);
   waitingBody["rovers"] = {{{"x", 5.2}, {"y", 5.2}, {"heading", 0}}};
-  auto queued = s.post(waitingBody);
+  auto queued = s.postJson("/api/missions", waitingBody);
   REQUIRE(queued.status == 202);
   const std::string waiting = queued.json()["id"];
   // Its world does not exist yet: deleting the map under it makes the mission fail when a
@@ -195,11 +137,11 @@ TEST_CASE("hostile missions: a queued mission holds its request, not its world (
 }
 
 TEST_CASE("hostile missions: every WebSocket subscriber gets the same snapshot bytes, built once") {
-  Dir d;
-  Server s(d.path / "data", 64ull << 30);
-  json body{{"map", s.map()}, {"planner", "coverage"}, {"params", {{"coverage", 0.3}}}, {"rovers", json::array()}};
+  TempDir d;
+  ApiServer s(d.str("data"), budgetOf(64ull << 30));
+  json body{{"map", s.defaultMap()}, {"planner", "coverage"}, {"params", {{"coverage", 0.3}}}, {"rovers", json::array()}};
   for (int k = 0; k < 4; ++k) body["rovers"].push_back({{"x", 20.5 + 30 * k}, {"y", 20.5}, {"heading", 0}});
-  auto r = s.post(body);
+  auto r = s.postJson("/api/missions", body);
   REQUIRE(r.status == 202);
   const std::string id = r.json()["id"];
   REQUIRE(s.waitFinished(id)["status"] == "succeeded");

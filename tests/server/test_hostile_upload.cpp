@@ -15,66 +15,32 @@
 #include <fstream>
 #include <thread>
 
-#include "core/planning/planner.hpp"
+#include "api_server.hpp"
 #include "maps/dem_io.hpp"
 #include "maps/synthetic_terrain.hpp"
 #include "server/api/layer_cache.hpp"
-#include "server/api/map_catalog.hpp"
-#include "server/api/routes.hpp"
-#include "server/http/http_server.hpp"
-#include "server/missions/mission_manager.hpp"
-#include "test_client.hpp"
 
 using namespace rover;
 using rover::test::request;
+using rover::test::TempDir;
 using nlohmann::json;
 namespace fs = std::filesystem;
 
 namespace {
 
-struct Scratch {
-  fs::path path = fs::temp_directory_path() / ("roverplan-hostile-" + std::to_string(::getpid()) + "-" + std::to_string(std::rand()));
-  Scratch() { fs::create_directories(path); }
-  ~Scratch() {
-    std::error_code ec;
-    fs::remove_all(path, ec);
+// This file's server: one mission worker, four queued missions, uploads up to 64 MiB.
+struct Server : test::ApiServer {
+  static test::ApiServerOptions options() {
+    test::ApiServerOptions o;
+    o.queue = 4;
+    o.http.maxUploadBytes = 64ull << 20;
+    return o;
   }
-  std::string str(const std::string& sub) const { return (path / sub).string(); }
-};
-
-// The server as `roverplan serve` builds it, on an ephemeral loopback port.
-struct Server {
-  store::DataDir dir;
-  store::Database db;
-  api::MapCatalog maps;
-  PlannerRegistry planners = makeBuiltinRegistry();
-  missions::MissionManager manager;
-  http::Router router;
-  api::ApiContext ctx;
-  std::unique_ptr<http::HttpServer> server;
-
-  explicit Server(const std::string& data)
-      : dir(data), db((dir.cleanTmp(), dir.databasePath())), maps(db, dir), manager(db, dir, planners, 1, 4),
-        ctx{db, dir, maps, manager, planners} {
-    maps.ensureDefaultMap();
-    api::addApiRoutes(router, ctx);
-    http::ServerConfig c;
-    c.port = 0;
-    c.uploadDir = dir.tmpDir();
-    c.maxUploadBytes = 64ull << 20;
-    c.logRequests = false;
-    server = std::make_unique<http::HttpServer>(c, router);
-    server->start();
-  }
-  ~Server() {
-    server->stop();
-    manager.stop();
-  }
-  unsigned short port() const { return server->port(); }
+  explicit Server(const std::string& data) : ApiServer(data, options()) {}
   test::HttpResult upload(const std::string& filename, const std::string& bytes, const std::string& query = "") {
     return request(port(), "POST", "/api/maps?filename=" + filename + query, bytes, "application/octet-stream");
   }
-  std::size_t mapCount() { return request(port(), "GET", "/api/maps").json().size(); }
+  std::size_t mapCount() { return get("/api/maps").json().size(); }
 };
 
 std::string readBytes(const std::string& p) {
@@ -97,7 +63,7 @@ std::string pds3Label(const std::string& image, int lines = 8, int samples = 32)
 }
 
 // A GeoTIFF of the synthetic terrain, `size` cells a side of 0.25 m, as bytes.
-std::string terrainTiff(const Scratch& s, int size) {
+std::string terrainTiff(const TempDir& s, int size) {
   maps::SyntheticTerrainParams p;
   p.size = size;
   const std::string path = s.str("terrain-" + std::to_string(size) + ".tif");
@@ -106,7 +72,7 @@ std::string terrainTiff(const Scratch& s, int size) {
 }
 
 // Zip bytes made by GDAL itself (/vsizip/ write support), members in order.
-std::string zipOf(const Scratch& s, const std::string& name, const std::vector<std::pair<std::string, std::string>>& members) {
+std::string zipOf(const TempDir& s, const std::string& name, const std::vector<std::pair<std::string, std::string>>& members) {
   const std::string zip = s.str(name);
   for (const auto& [member, bytes] : members) {
     VSILFILE* f = VSIFOpenL(("/vsizip/" + zip + "/" + member).c_str(), "wb");
@@ -160,7 +126,7 @@ struct Listener {
 }  // namespace
 
 TEST_CASE("hostile upload: VRTs reading /etc/passwd, /proc/self/cmdline or the database are refused") {
-  Scratch tmp;
+  TempDir tmp;
   const std::string data = tmp.str("data");
   Server s(data);
   const std::size_t before = s.mapCount();
@@ -175,7 +141,7 @@ TEST_CASE("hostile upload: VRTs reading /etc/passwd, /proc/self/cmdline or the d
 }
 
 TEST_CASE("hostile upload: a PDS3 label whose ^IMAGE points outside the upload is refused") {
-  Scratch tmp;
+  TempDir tmp;
   const std::string data = tmp.str("data");
   Server s(data);
   auto r = s.upload("evil.lbl", pds3Label("../../../../../../../../../../etc/passwd"));
@@ -193,7 +159,7 @@ TEST_CASE("hostile upload: a PDS3 label whose ^IMAGE points outside the upload i
 }
 
 TEST_CASE("hostile upload: a /vsicurl/ source is refused and no connection is made") {
-  Scratch tmp;
+  TempDir tmp;
   const std::string data = tmp.str("data");
   Server s(data);
   Listener net;
@@ -206,7 +172,7 @@ TEST_CASE("hostile upload: a /vsicurl/ source is refused and no connection is ma
 }
 
 TEST_CASE("hostile upload: zips holding a GeoTIFF or a PDS3 pair import; PDM rasters are confined too") {
-  Scratch tmp;
+  TempDir tmp;
   const std::string data = tmp.str("data");
   Server s(data);
   const std::string tif = terrainTiff(tmp, 64);
@@ -232,7 +198,7 @@ TEST_CASE("hostile upload: zips holding a GeoTIFF or a PDS3 pair import; PDM ras
 }
 
 TEST_CASE("hostile upload: careless files get errors in words") {
-  Scratch tmp;
+  TempDir tmp;
   const std::string data = tmp.str("data");
   Server s(data);
   auto messageOf = [](const test::HttpResult& r) { return r.json()["error"].value("message", std::string()); };
@@ -252,7 +218,7 @@ TEST_CASE("hostile upload: careless files get errors in words") {
 }
 
 TEST_CASE("hostile upload: 40 distinct ?max= values make at most the ladder's files") {
-  Scratch tmp;
+  TempDir tmp;
   const std::string data = tmp.str("data");
   Server s(data);
   auto r = s.upload("big.tif", terrainTiff(tmp, 1000));
@@ -293,7 +259,7 @@ TEST_CASE("hostile upload: 40 distinct ?max= values make at most the ladder's fi
 }
 
 TEST_CASE("layer cache: least recently used files go past the cap; each file is made once") {
-  Scratch tmp;
+  TempDir tmp;
   const fs::path maps = tmp.path / "maps";
   fs::create_directories(maps / "m1" / "layers");
   api::LayerCache cache(maps.string(), 2500);
@@ -329,7 +295,7 @@ TEST_CASE("layer cache: least recently used files go past the cap; each file is 
 }
 
 TEST_CASE("hostile upload: a coverage cell the map cannot hold is refused without the stored file's path") {
-  Scratch tmp;
+  TempDir tmp;
   const std::string data = tmp.str("data");
   Server s(data);
   const std::string map = request(s.port(), "GET", "/api/maps").json()[0]["id"];

@@ -1,0 +1,154 @@
+#pragma once
+// In-process fixtures for the server tests: a scratch directory, the whole API on a data dir as
+// `roverplan serve` builds it (on an ephemeral loopback port), and the checks on the project's
+// error shape. The HTTP client itself is in test_client.hpp.
+#include <doctest/doctest.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <chrono>
+#include <filesystem>
+#include <memory>
+#include <string>
+#include <thread>
+
+#include <nlohmann/json.hpp>
+
+#include "core/planning/planner.hpp"
+#include "server/api/map_catalog.hpp"
+#include "server/api/routes.hpp"
+#include "server/http/http_server.hpp"
+#include "server/missions/mission_manager.hpp"
+#include "server/missions/mission_memory.hpp"
+#include "test_client.hpp"
+
+namespace rover::test {
+
+// A fresh directory under the system temp dir, removed with everything in it. The name carries
+// the pid and a per-process counter, so parallel test processes and successive fixtures never meet.
+struct TempDir {
+  std::filesystem::path path;
+  TempDir() {
+    static std::atomic<int> counter{0};
+    path = std::filesystem::temp_directory_path() /
+           ("roverplan-test-" + std::to_string(::getpid()) + "-" + std::to_string(++counter));
+    std::filesystem::remove_all(path);
+    std::filesystem::create_directories(path);
+  }
+  ~TempDir() {
+    std::error_code ec;
+    std::filesystem::remove_all(path, ec);
+  }
+  TempDir(const TempDir&) = delete;
+  TempDir& operator=(const TempDir&) = delete;
+  std::string str(const std::string& sub) const { return (path / sub).string(); }
+};
+
+// Where the test servers differ. `http` is the HttpServer's config; start() overrides its port
+// (0, ephemeral), uploadDir (the data dir's tmp) and logRequests (off) whatever is set here.
+struct ApiServerOptions {
+  unsigned workers = 1;        // mission worker threads
+  std::size_t queue = 8;       // missions that may wait
+  std::uint64_t memoryBudget = missions::defaultMissionMemoryBudget();
+  bool defaultMap = true;      // create the synthetic default map, as serve does
+  bool start = true;           // false: add test routes to `router`, then call start()
+  http::ServerConfig http{};
+};
+
+// The whole API on a data dir, as `roverplan serve` builds it minus the signal handling: the
+// startup recovery (unfinished missions marked interrupted, orphan map / PDM dirs swept), the
+// default map, the routes, and an HttpServer on 127.0.0.1.
+struct ApiServer {
+  store::DataDir dir;
+  store::Database db;
+  api::MapCatalog maps;
+  PlannerRegistry planners = makeBuiltinRegistry();
+  missions::MissionManager manager;
+  http::Router router;
+  api::ApiContext ctx;
+  std::unique_ptr<http::HttpServer> server;
+  http::ServerConfig config;
+  int interrupted = 0;  // what the startup recovery found
+  int orphans = 0;
+
+  explicit ApiServer(const std::string& data, const ApiServerOptions& o = {})
+      : dir(data),
+        db((dir.cleanTmp(), dir.databasePath())),
+        maps(db, dir),
+        manager(db, dir, planners, o.workers, o.queue, o.memoryBudget),
+        ctx{db, dir, maps, manager, planners},
+        config(o.http) {
+    interrupted = db.markUnfinishedInterrupted();
+    orphans = maps.sweepOrphans();
+    if (o.defaultMap) maps.ensureDefaultMap();
+    api::addApiRoutes(router, ctx);
+    if (o.start) start(config);
+  }
+  ~ApiServer() {
+    if (server) server->stop();
+    manager.stop();
+  }
+  ApiServer(const ApiServer&) = delete;
+  ApiServer& operator=(const ApiServer&) = delete;
+
+  void start(http::ServerConfig c) {
+    c.port = 0;
+    c.uploadDir = dir.tmpDir();
+    c.logRequests = false;
+    config = c;
+    server = std::make_unique<http::HttpServer>(c, router);
+    server->start();
+  }
+  void start() { start(config); }
+
+  unsigned short port() const { return server->port(); }
+  HttpResult get(const std::string& target) { return request(port(), "GET", target); }
+  HttpResult post(const std::string& target, const std::string& body,
+                  const std::string& type = "application/json") {
+    return request(port(), "POST", target, body, type);
+  }
+  HttpResult postJson(const std::string& target, const nlohmann::json& j) {
+    return request(port(), "POST", target, j.dump(), "application/json");
+  }
+  std::string defaultMap() { return get("/api/maps").json()[0]["id"]; }
+  std::string status(const std::string& id) { return get("/api/missions/" + id).json()["status"]; }
+  // Polls until the mission has a final status, for at most `seconds`; returns its last state.
+  nlohmann::json waitFinished(const std::string& id, double seconds = 30) {
+    const auto until = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
+    nlohmann::json m;
+    while (std::chrono::steady_clock::now() < until) {
+      m = get("/api/missions/" + id).json();
+      const std::string s = m["status"];
+      if (s != "queued" && s != "running") return m;
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+    return m;
+  }
+};
+
+// An answer in the project's error shape {"error":{"code","message","field"}}; returns its field
+// ("" when absent: the error is not about one field).
+inline std::string errorField(const HttpResult& r) {
+  const nlohmann::json j = r.json();
+  REQUIRE(j.contains("error"));
+  CHECK(j["error"].contains("code"));
+  CHECK(j["error"].contains("message"));
+  return j["error"].value("field", std::string());
+}
+
+// `status`, the error shape, and the offending field.
+inline void checkError(const HttpResult& r, int status, const std::string& field) {
+  CHECK(r.status == status);
+  CHECK(errorField(r) == field);
+}
+
+// `status`, and the error's code and field exactly.
+inline void checkError(const HttpResult& r, int status, const std::string& code, const std::string& field) {
+  CHECK(r.status == status);
+  const nlohmann::json j = r.json();
+  REQUIRE(j.contains("error"));
+  CHECK(j["error"].value("code", std::string()) == code);
+  CHECK(j["error"].value("field", std::string()) == field);
+}
+
+}  // namespace rover::test
