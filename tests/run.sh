@@ -30,7 +30,7 @@ ninja -C build-asan test_core test_maps test_server
 echo "== Unit tests under sanitizers"
 export ASAN_OPTIONS=abort_on_error=1:detect_leaks=1:strict_string_checks=1
 export UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
-ctest --test-dir build-asan --output-on-failure -j "$jobs" -R '^(core|maps|server)/' -E 'serve-restart'
+ctest --test-dir build-asan --output-on-failure -j "$jobs" -R '^(core|maps|server)/' -E 'serve-restart|disk-full'
 
 echo "== Fuzzing (libFuzzer, ${ROVERPLAN_FUZZ_SECONDS:-30} s per target)"
 bash tests/fuzz/run.sh "${ROVERPLAN_FUZZ_SECONDS:-30}"

@@ -134,29 +134,25 @@ struct Window {
   }
 };
 
-}  // namespace
-
-Raster<float> discretise(const std::vector<Gaussian>& cs, const GridGeometry& g,
-                         const std::vector<std::uint8_t>& valid) {
-  validateGaussians(cs, g);
-  std::vector<double> mass(g.cellCount(), 0.0);
-  const double wTotal = totalWeight(cs);
-  const double area = g.cellWidth * g.cellHeight;
-  for (const auto& gs : cs) {
-    if (gs.weight == 0) continue;
-    Quadratic q = quadratic(gs);
+// One component's share of the work: its sub-samples per cell side and, row by row, the columns
+// of the cells that meet its window (the ±6σ box clipped to the map, then to the 10σ ellipse).
+// Shared by the cost check and the discretisation, so the check counts exactly what is done.
+struct ComponentScan {
+  int s = 1;
+  template <typename RowFn>
+  static ComponentScan run(const Gaussian& gs, const GridGeometry& g, RowFn&& row) {
+    ComponentScan out;
     const Window window(gs);
     const double reach = 6.0 * std::max(gs.sigmaX, gs.sigmaY);
     // Sub-samples per cell side: enough that the narrower σ spans >= ~2 samples.
     const double sMin = std::min(gs.sigmaX, gs.sigmaY);
-    const int s = clampedIndex(std::ceil(2.0 * std::max(g.cellWidth, g.cellHeight) / sMin), 1, 16);
+    out.s = clampedIndex(std::ceil(2.0 * std::max(g.cellWidth, g.cellHeight) / sMin), 1, 16);
     // The ±6σ box (the integration domain), clipped to the map.
     const int c0 = clampedIndex(std::floor((gs.mean.x() - reach) / g.cellWidth), 0, g.cols);
     const int c1 = clampedIndex(std::floor((gs.mean.x() + reach) / g.cellWidth), -1, g.cols - 1);
     // Rows count from the top: y = (rows − row − 0.5)·cellHeight at a centre.
     const int r0 = g.rows - 1 - clampedIndex(std::floor((gs.mean.y() + reach) / g.cellHeight), -1, g.rows - 1);
     const int r1 = g.rows - 1 - clampedIndex(std::floor((gs.mean.y() - reach) / g.cellHeight), 0, g.rows);
-    const double wNorm = gs.weight / wTotal * q.norm * area / (s * s);
     const double yHalf = window.halfHeight();
     for (int r = r0; r <= r1; ++r) {
       // This row's strip of y offsets from the mean, clipped to the ellipse.
@@ -166,6 +162,40 @@ Raster<float> discretise(const std::vector<Gaussian>& cs, const GridGeometry& g,
       const auto [xlo, xhi] = window.xRange(ya, yb);
       const int ca = std::max(c0, clampedIndex(std::floor((gs.mean.x() + xlo) / g.cellWidth), 0, g.cols));
       const int cb = std::min(c1, clampedIndex(std::floor((gs.mean.x() + xhi) / g.cellWidth), -1, g.cols - 1));
+      if (ca <= cb) row(r, ca, cb, out.s);
+    }
+    return out;
+  }
+};
+
+}  // namespace
+
+double discretisationCost(const std::vector<Gaussian>& cs, const GridGeometry& g) {
+  double samples = 0;
+  for (const auto& gs : cs) {
+    if (gs.weight == 0) continue;
+    ComponentScan::run(gs, g, [&](int, int ca, int cb, int s) { samples += double(cb - ca + 1) * s * s; });
+  }
+  return samples;
+}
+
+Raster<float> discretise(const std::vector<Gaussian>& cs, const GridGeometry& g,
+                         const std::vector<std::uint8_t>& valid) {
+  validateGaussians(cs, g);
+  if (const double cost = discretisationCost(cs, g); cost > kMaxDiscretisationSamples) {
+    std::ostringstream m;
+    m << "would take " << cost << " density evaluations on this map, more than the " << kMaxDiscretisationSamples
+      << " a PDM may cost: use fewer, narrower or better placed components (or a PDM raster)";
+    throwInvalidParameter("components", m.str());
+  }
+  std::vector<double> mass(g.cellCount(), 0.0);
+  const double wTotal = totalWeight(cs);
+  const double area = g.cellWidth * g.cellHeight;
+  for (const auto& gs : cs) {
+    if (gs.weight == 0) continue;
+    Quadratic q = quadratic(gs);
+    ComponentScan::run(gs, g, [&](int r, int ca, int cb, int s) {
+      const double wNorm = gs.weight / wTotal * q.norm * area / (s * s);
       for (int c = ca; c <= cb; ++c) {
         double sum = 0;
         for (int a = 0; a < s; ++a) {
@@ -177,7 +207,7 @@ Raster<float> discretise(const std::vector<Gaussian>& cs, const GridGeometry& g,
         }
         mass[g.index(r, c)] += wNorm * sum;
       }
-    }
+    });
   }
   double total = 0;
   for (int i = 0; i < g.cellCount(); ++i) {

@@ -46,6 +46,12 @@ double density(const std::vector<Gaussian>& components, const Eigen::Vector2d& x
 // `valid` empty = all. Validates against `g` (above). Throws InvalidInput if no mass falls on
 // valid cells of the map.
 inline constexpr double kWindowSigmas = 10.0;
+// The work one PDM may cost (density evaluations: Σ cells in each window × s²), so a request's
+// time is bounded whatever its components: about 5–10 s on one core. A few wide components on
+// a 50 M-cell map fit; 256 components each as wide as the map do not (InvalidParameter
+// "components" from discretise, before any work).
+inline constexpr double kMaxDiscretisationSamples = 1e9;
+double discretisationCost(const std::vector<Gaussian>& components, const GridGeometry& g);
 Raster<float> discretise(const std::vector<Gaussian>& components, const GridGeometry& g,
                          const std::vector<std::uint8_t>& valid = {});
 

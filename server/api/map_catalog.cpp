@@ -17,6 +17,7 @@
 #include "maps/render.hpp"
 #include "maps/synthetic_terrain.hpp"
 #include "server/http/http_types.hpp"
+#include "server/json/json_edge.hpp"
 
 namespace rover::api {
 
@@ -24,6 +25,8 @@ namespace fs = std::filesystem;
 using http::ApiError;
 
 namespace {
+
+constexpr std::size_t kMaxFileNameBytes = 200;
 
 std::string safeName(const std::string& name, const std::string& fallback) {
   std::string base = fs::path(name).filename().string(), out;
@@ -150,13 +153,20 @@ store::MapRecord MapCatalog::importDem(const std::vector<UploadedFile>& files, c
   if (files.empty()) throw ApiError(400, "invalid_input", "no DEM file in the request", "file");
   if (!(cellSize >= 0) || !std::isfinite(cellSize) || cellSize > 1e5)
     throw ApiError(400, "invalid_parameter", "cell must be a positive number of metres", "cell");
-  if (name.size() > 200) throw ApiError(400, "invalid_parameter", "name is longer than 200 characters", "name");
+  rover::json::checkName(name, "name");  // the same rule as every other name (server/json/json_edge.hpp)
   const std::string staging = dir_.stagingDir();
   try {
     std::vector<std::string> sources;
     for (std::size_t i = 0; i < files.size(); ++i) {
       std::string fallback = "upload";
       fallback += std::to_string(i);
+      // A file name must fit the file system once staged (NAME_MAX 255) with room for a prefix;
+      // cutting it instead would break the names a PDS3 label gives its image.
+      if (files[i].filename.size() > kMaxFileNameBytes)
+        throw ApiError(400, "invalid_field",
+                       "a file name of " + std::to_string(files[i].filename.size()) + " bytes is longer than the " +
+                           std::to_string(kMaxFileNameBytes) + " allowed",
+                       "filename");
       std::string fname = safeName(files[i].filename, fallback);
       if (std::find(sources.begin(), sources.end(), fname) != sources.end()) {
         std::string unique = std::to_string(i);

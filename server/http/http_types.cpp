@@ -18,8 +18,9 @@ Response Response::json(int status, const nlohmann::json& j) {
 
 Response Response::error(int status, const std::string& code, const std::string& message,
                          const std::string& field) {
-  nlohmann::json e = {{"code", code}, {"message", message}};
-  if (!field.empty()) e["field"] = field;
+  // Every error has the same three keys (DESIGN.md); "" when no one field is at fault (a full
+  // queue, a busy server, an internal error).
+  nlohmann::json e = {{"code", code}, {"message", message}, {"field", field}};
   return json(status, {{"error", e}});
 }
 

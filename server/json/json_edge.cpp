@@ -92,6 +92,10 @@ long utf8Length(std::string_view s) {
 void checkName(std::string_view name, const std::string& field) {
   const long n = utf8Length(name);
   if (n < 0) throw ApiError(400, "invalid_field", field + " must be valid UTF-8 text", field);
+  // No control characters (NUL among them): a name is shown in lists, logs and file headers.
+  for (unsigned char c : name)
+    if (c < 0x20 || c == 0x7f)
+      throw ApiError(400, "invalid_field", field + " must not hold control characters", field);
   if (static_cast<std::size_t>(n) > kMaxNameChars)
     throw ApiError(400, "invalid_field",
                    field + " is " + std::to_string(n) + " characters long, over the limit of " +

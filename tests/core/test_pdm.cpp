@@ -243,3 +243,31 @@ TEST_CASE("PDM bounds relative to the map name their field") {
   // A mean far outside a tiny map does not overflow anything: it is refused by name.
   CHECK_THROWS_WITH_AS(discretise({at(1e15, 1, 1)}, g), doctest::Contains("components[0].x"), Error);
 }
+
+TEST_CASE("pdm: the work is bounded before any is done (issue 14: two PDM requests held the work pool 8 min)") {
+  // A 7000² map (49 M cells): one component as wide as the map costs one evaluation a cell…
+  const GridGeometry g{7000, 7000, 1.0, 1.0};
+  pdm::Gaussian wide;
+  wide.mean = {3500, 3500};
+  wide.sigmaX = wide.sigmaY = 50.0 * 7000;
+  const double one = pdm::discretisationCost({wide}, g);
+  CHECK(one == doctest::Approx(double(g.cellCount())));
+  // …so 256 of them (the attack: 12.5 G evaluations) are refused by discretise at once, naming
+  // the field, without allocating or computing anything.
+  std::vector<pdm::Gaussian> many(256, wide);
+  CHECK(pdm::discretisationCost(many, g) > pdm::kMaxDiscretisationSamples);
+  try {
+    pdm::discretise(many, g);
+    FAIL("accepted");
+  } catch (const Error& e) {
+    CHECK(e.field() == "components");
+    CHECK(std::string(e.what()).find("density evaluations") != std::string::npos);
+  }
+  // The cost counts only the cells a component's window meets: a narrow one in a corner is cheap.
+  pdm::Gaussian narrow;
+  narrow.mean = {10, 10};
+  narrow.sigmaX = narrow.sigmaY = 2.0;
+  const double small = pdm::discretisationCost({narrow}, g);
+  CHECK(small > 0);
+  CHECK(small < 40 * 40 * 16);
+}

@@ -90,6 +90,8 @@ TEST_CASE("json edge: names are UTF-8 text of at most 200 characters") {
   CHECK(longName.field == "name");
   CHECK(apiErrorOf([] { rj::checkName("bad \xC3\x28 utf8", "name"); }).field == "name");
   CHECK(apiErrorOf([] { rj::checkName("\xED\xA0\x80", "name"); }).field == "name");  // a surrogate
+  CHECK(apiErrorOf([] { rj::checkName(std::string("a\0b", 3), "name"); }).field == "name");  // NUL
+  CHECK(apiErrorOf([] { rj::checkName("tab\there", "name"); }).field == "name");
   CHECK(apiErrorOf([] { rj::checkName("\xC0\xAF", "name"); }).field == "name");      // overlong '/'
 }
 

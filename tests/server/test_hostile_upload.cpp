@@ -214,6 +214,17 @@ TEST_CASE("hostile upload: careless files get errors in words") {
   CHECK(r.json()["error"]["field"] == "cell");
   CHECK_MESSAGE(messageOf(r).find("larger than the map") != std::string::npos, messageOf(r));
   for (const auto& m : {messageOf(r)}) CHECK(m.find(data) == std::string::npos);
+  // A file name longer than the file system takes (was 500 from a failed rename), and a map name
+  // holding a NUL: 400 naming the field.
+  r = s.upload(std::string(256, 'a') + ".tif", tif);
+  CHECK(r.status == 400);
+  CHECK(r.json()["error"]["field"] == "filename");
+  r = s.upload("dem.tif", tif, "&name=a%00b");  // the HTTP edge refuses a NUL in the target
+  CHECK(r.status == 400);
+  r = request(s.port(), "POST", "/api/maps/" + s.defaultMap() + "/pdms", R"({"name":"a\u0000b","random":2})",
+              "application/json");
+  CHECK(r.status == 400);
+  CHECK(r.json()["error"]["field"] == "name");
   CHECK(fs::is_empty(s.dir.tmpDir()));
 }
 

@@ -410,7 +410,7 @@ TEST_CASE("http: ApiError becomes its status with the JSON error shape") {
   r = call(s.port(), bhttp::verb::get, "/api/missing");
   CHECK(r.status == 404);
   CHECK(r.js()["error"]["code"] == "not_found");
-  CHECK_FALSE(r.js()["error"].contains("field"));
+  CHECK(r.js()["error"].contains("field"));  // always the three keys
 }
 
 TEST_CASE("http: a throwing handler gives 500 and the server keeps serving") {
