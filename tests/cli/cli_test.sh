@@ -198,6 +198,23 @@ assert d["metrics"]["coverage"] > 0
 ' "$OUT" || fail "coverage --dem: bad JSON"
 pass "coverage on a DEM"
 
+# On a DEM the frontier stop is the default; --no-frontier gives paper 002's rule back.
+python3 -c '
+import json, sys
+d = json.load(open(sys.argv[1]))
+assert d["assumptions"]["stop_rule"].startswith("frontier"), d["assumptions"]
+' "$OUT" || fail "coverage --dem: not the frontier stop by default"
+run coverage --dem "$TMP/t.tif" --coverage-cell 1 --start 5,5,0 --no-frontier --json
+expect_status 0 "coverage --dem --no-frontier"
+python3 -c '
+import json, sys
+d = json.load(open(sys.argv[1]))
+assert d["assumptions"]["stop_rule"].startswith("paper"), d["assumptions"]
+' "$OUT" || fail "coverage --no-frontier: not the paper stop rule"
+run coverage --dem "$TMP/t.tif" --frontier --no-frontier
+expect_status 2 "coverage --frontier --no-frontier"
+pass "frontier is the default on a DEM; --no-frontier turns it off; both at once exit 2"
+
 run coverage --dem "$TMP/t.tif" --start 999,5,0
 expect_status 2 "coverage --dem with a start outside the map"
 grep -q -- "--start" "$ERR" || fail "coverage --start outside: stderr does not name --start"
