@@ -3,12 +3,16 @@
 #include <cpl_conv.h>
 #include <cpl_error.h>
 #include <gdal.h>
+#include <gdal_priv.h>
 #include <gdal_utils.h>
 #include <ogr_srs_api.h>
+#include <sys/statvfs.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
 #include <filesystem>
+#include <functional>
 #include <memory>
 #include <numbers>
 #include <sstream>
@@ -72,6 +76,88 @@ std::string unreadableReason(const std::string& path, bool upload) {
   if (attachedLabel) return "truncated or corrupt PDS3 product (its label or image does not read)";
   if (upload) return "not a raster format roverplan reads (accepted: " + uploadFormatsInWords() + ")";
   return "not a raster GDAL can read" + gdalMessage();
+}
+
+// "1199 bytes", "17 KB", "98 MB": a file size for a message.
+std::string sizeInWords(double bytes) {
+  const char* units[] = {"bytes", "KB", "MB", "GB", "TB"};
+  int u = 0;
+  if (bytes >= 10000)
+    while (bytes >= 1000 && u < 4) bytes /= 1000, ++u;
+  std::ostringstream s;
+  s << std::llround(bytes) << " " << units[u];
+  return s.str();
+}
+
+// A raw (uncompressed) raster reads cells past the end of its data file as 0: a 17 KB .bin whose
+// .hdr says 7000 x 7000 would become a 49 M-cell map of zeros. Refuse unless the data file holds
+// header offset + every cell (GDAL's raw binary layout: ENVI, EHdr, PDS, ISIS2/3, VICAR, PDS4,
+// uncompressed GeoTIFF). Surfer binary grids have no such layout: their one file must at least
+// hold every cell.
+void checkRawDataSize(GDALDatasetH ds, const std::string& driver, const std::string& shownPath,
+                      const std::function<std::string(const std::string&)>& shown) {
+  const int rows = GDALGetRasterYSize(ds), cols = GDALGetRasterXSize(ds), bands = GDALGetRasterCount(ds);
+  auto sizeOf = [](const std::string& f) -> double {
+    VSIStatBufL st;
+    return VSIStatL(f.c_str(), &st) == 0 ? static_cast<double>(st.st_size) : 0.0;
+  };
+  char** files = GDALGetFileList(ds);
+  std::vector<std::string> list;
+  for (char** f = files; f && *f; ++f) list.emplace_back(*f);
+  CSLDestroy(files);
+  std::string dataFile, header;
+  double needed = 0, offset = 0;
+  GDALDataset::RawBinaryLayout layout;
+  // EHdr leaves the layout's file name empty: its data file is the one opened (the .bil).
+  if (GDALDataset::FromHandle(ds)->GetRawBinaryLayout(layout) && layout.osRawFilename.empty() && driver == "EHdr")
+    layout.osRawFilename = GDALGetDescription(ds);
+  if (!layout.osRawFilename.empty()) {
+    const double sample = GDALGetDataTypeSizeBytes(layout.eDataType);
+    auto span = [](double n, double stride) { return n > 1 ? std::max(0.0, (n - 1) * stride) : 0.0; };
+    offset = static_cast<double>(layout.nImageOffset);
+    needed = offset + span(rows, static_cast<double>(layout.nLineOffset)) +
+             span(cols, static_cast<double>(layout.nPixelOffset)) +
+             span(bands, static_cast<double>(layout.nBandOffset)) + sample;
+    dataFile = layout.osRawFilename;
+  } else if ((driver == "GSBG" || driver == "GS7BG") && !list.empty()) {
+    needed = static_cast<double>(rows) * cols * bands *
+             GDALGetDataTypeSizeBytes(GDALGetRasterDataType(GDALGetRasterBand(ds, 1)));
+    dataFile = list.front();
+  } else {
+    return;
+  }
+  const double held = sizeOf(dataFile);
+  if (held >= needed) return;
+  // The header is the file that described the raster: another file of the set, else the file itself.
+  header = dataFile;
+  for (const auto& f : list)
+    if (f != dataFile) {
+      header = f;
+      break;
+    }
+  const std::string headerName = std::filesystem::path(shown(header)).filename().string();
+  const std::string dataName = std::filesystem::path(shown(dataFile)).filename().string();
+  fail(shownPath, headerName + " describes " + std::to_string(rows) + " × " + std::to_string(cols) + " cells" +
+                      (bands > 1 ? " in " + std::to_string(bands) + " bands" : "") +
+                      (offset > 0 ? " after a header offset of " + num(offset) + " bytes" : "") + " but " + dataName +
+                      " holds only " + sizeInWords(held) + ": truncated or mismatched");
+}
+
+// Whether a failed GeoTIFF write was the disk's fault. libtiff often names only the symptom
+// ("TIFFWriteDirectoryTagData:IO error writing tag data", sometimes "_tiffWriteProc:No space left
+// on device") and errno may be overwritten by the time the file is closed, so a folder with less
+// free space than the uncompressed raster (`bytes`) plus 64 KiB counts as full too.
+bool lacksSpace(const std::string& path, int err, double bytes) {
+  if (err == ENOSPC || err == EDQUOT || err == EFBIG) return true;
+  const std::string msg = CPLGetLastErrorMsg();
+  if (msg.find("No space left") != std::string::npos || msg.find("quota exceeded") != std::string::npos ||
+      msg.find("File too large") != std::string::npos)
+    return true;
+  struct statvfs fs {};
+  std::string dir = std::filesystem::path(path).parent_path().string();
+  if (dir.empty()) dir = ".";
+  if (statvfs(dir.c_str(), &fs) != 0) return false;
+  return static_cast<double>(fs.f_bavail) * static_cast<double>(fs.f_frsize) < bytes + 65536.0;
 }
 
 // Runs GDAL's warper into a lazy in-memory VRT: nothing is read until RasterIO, so the size can be
@@ -140,6 +226,8 @@ LoadedDem loadDem(const std::string& path, const LoadOptions& opt) {
   if (!refusal.empty()) throw Error(ErrorCode::InvalidInput, "file", refusal);  // names the file itself
   if (!src) fail(shown, unreadableReason(path, sandbox != nullptr));
   if (GDALGetRasterCount(src.get()) < 1) fail(shown, "the file holds no raster band");
+  checkRawDataSize(src.get(), GDALGetDriverShortName(GDALGetDatasetDriver(src.get())), shown,
+                   [&](const std::string& f) { return sandbox ? sandbox->uploadName(f) : f; });
 
   LoadedDem out;
   DemInfo& info = out.info;
@@ -361,17 +449,27 @@ void writeAtomically(const std::string& path, GDALDataType type, const GridGeome
   const char* options[] = {"COMPRESS=DEFLATE", "ZLEVEL=1", "TILED=YES", "BIGTIFF=IF_SAFER", nullptr};
   GDALDriverH drv = GDALGetDriverByName("GTiff");
   CPLErrorReset();
+  errno = 0;
   Dataset ds(GDALCreate(drv, tmp.c_str(), g.cols, g.rows, 1, type, const_cast<char**>(options)));
-  if (!ds) fail(path, "cannot create the GeoTIFF" + gdalMessage(), "out");
+  if (!ds) {
+    if (lacksSpace(path, errno, 0))
+      throw DiskFull(std::filesystem::path(path).filename().string());
+    fail(path, "cannot create the GeoTIFF" + gdalMessage(), "out");
+  }
   double gt[6] = {0, g.cellWidth, 0, g.rows * g.cellHeight, 0, -g.cellHeight};
   if (geo.valid) std::copy(geo.geotransform.begin(), geo.geotransform.end(), gt);
   GDALSetGeoTransform(ds.get(), gt);
   if (!geo.crsWkt.empty()) GDALSetProjection(ds.get(), geo.crsWkt.c_str());
+  errno = 0;
   bool ok = fill(GDALGetRasterBand(ds.get(), 1));
   ds.reset();  // flushes and closes
+  const int writeErrno = errno;
   std::error_code ec;
   if (!ok || CPLGetLastErrorType() >= CE_Failure) {
     std::filesystem::remove(tmp, ec);
+    std::filesystem::remove(tmp + ".aux.xml", ec);
+    if (lacksSpace(path, writeErrno, static_cast<double>(g.rows) * g.cols * GDALGetDataTypeSizeBytes(type)))
+      throw DiskFull(std::filesystem::path(path).filename().string());
     fail(path, "cannot write the GeoTIFF" + gdalMessage(), "out");
   }
   // GDAL keeps what TIFF tags cannot hold (category names) in a .aux.xml sidecar: move it along,

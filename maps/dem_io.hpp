@@ -7,6 +7,7 @@
 #include <array>
 #include <cstdint>
 #include <optional>
+#include <stdexcept>
 #include <string>
 
 #include "core/terrain/dem.hpp"
@@ -54,8 +55,21 @@ struct LoadedDem {
 // cell size the map cannot hold twice (field "cell"). PATH may be a /vsizip/ or /vsitar/ member.
 LoadedDem loadDem(const std::string& path, const LoadOptions& options = {});
 
+// A GeoTIFF write failed because the disk (or the file size limit) is full. The message names
+// only the file name, never its folder; the server answers it 507 (store::StorageFull).
+class DiskFull : public std::runtime_error {
+ public:
+  explicit DiskFull(const std::string& fileName)
+      : std::runtime_error("cannot write " + fileName + ": the disk is full"), fileName_(fileName) {}
+  const std::string& fileName() const { return fileName_; }
+
+ private:
+  std::string fileName_;
+};
+
 // GeoTIFF writers, atomic (temporary file + rename). Float layers: NaN written as nodata -9999.
 // Classes: uint8 with a colour table and category names (terrain::TerrainClass), nodata = 3.
+// A full disk throws DiskFull and leaves no file behind.
 void writeGeoTiff(const std::string& path, const Raster<float>& layer);
 void writeClassesGeoTiff(const std::string& path, const Raster<std::uint8_t>& classes);
 

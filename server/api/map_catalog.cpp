@@ -28,6 +28,22 @@ namespace {
 
 constexpr std::size_t kMaxFileNameBytes = 200;
 
+// GeoTIFF writes into the data dir: a full disk is the disk's fault, answered 507 like the .f32
+// and .png layers (store::StorageFull), never 400 with the file's path.
+template <class Write>
+void storingGeoTiff(Write&& write) {
+  try {
+    write();
+  } catch (const maps::DiskFull& e) {
+    throw store::StorageFull("cannot write " + e.fileName());
+  } catch (const Error& e) {
+    // Any other failure to write into the data dir is the server's, not the request's: 500 with
+    // the detail (which names the server's path) in the log only (routes.cpp's guard).
+    if (e.field() == "out") throw std::runtime_error(e.what());
+    throw;
+  }
+}
+
 std::string safeName(const std::string& name, const std::string& fallback) {
   std::string base = fs::path(name).filename().string(), out;
   for (char c : base) out += (std::isalnum(static_cast<unsigned char>(c)) || c == '.' || c == '-' || c == '_') ? c : '_';
@@ -222,7 +238,7 @@ store::MapRecord MapCatalog::importDem(const std::vector<UploadedFile>& files, c
       raster = sandbox.uploadName(raster);
     }
     terrain::Traversability t = terrain::traversability(d.dem);
-    maps::writeGeoTiff((fs::path(staging) / "dem.tif").string(), d.dem.z);
+    storingGeoTiff([&] { maps::writeGeoTiff((fs::path(staging) / "dem.tif").string(), d.dem.z); });
     store::MapRecord rec;
     rec.id = store::DataDir::newId();
     rec.name = name.empty() ? fs::path(raster).filename().string() : name;
@@ -390,8 +406,10 @@ void MapCatalog::renderLayerFile(const MapData& mapData, const std::string& laye
   else if (layer == "pdm") values = maps::loadDem(pdmFile(pdm)).dem.z;
   values.geo = dem.z.geo;
   if (format == "tif") {
-    if (layer == "traversability") maps::writeClassesGeoTiff(path, map->traversability.classes);
-    else maps::writeGeoTiff(path, values);
+    storingGeoTiff([&] {
+      if (layer == "traversability") maps::writeClassesGeoTiff(path, map->traversability.classes);
+      else maps::writeGeoTiff(path, values);
+    });
   } else if (format == "f32") {
     std::string bytes;
     const int n = dem.geometry().cellCount();
@@ -442,7 +460,7 @@ store::PdmRecord MapCatalog::storePdm(const std::string& mapId, const std::strin
   // Files first, then the row, as for maps.
   const std::string staging = dir_.stagingDir();
   try {
-    maps::writeGeoTiff((fs::path(staging) / "pdm.tif").string(), mass);
+    storingGeoTiff([&] { maps::writeGeoTiff((fs::path(staging) / "pdm.tif").string(), mass); });
     store::PdmRecord rec;
     rec.id = store::DataDir::newId();
     rec.mapId = mapId;

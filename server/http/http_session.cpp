@@ -3,6 +3,7 @@
 #include <unistd.h>
 #include <algorithm>
 #include <cctype>
+#include <cerrno>
 #include <cstdio>
 #include <filesystem>
 #include <limits>
@@ -171,6 +172,14 @@ bool bodyless(int status) {
 // ---------------------------------------------------------------- HttpSession
 
 namespace {
+
+// A write of the streamed body failed because the disk (or the file size limit) is full: the
+// client gets 507, not a reset (Beast's file body reports the system error through put()).
+bool isDiskFull(const beast::error_code& ec) {
+  if (ec.category() != boost::system::system_category() && ec.category() != boost::system::generic_category())
+    return false;
+  return ec.value() == ENOSPC || ec.value() == EDQUOT || ec.value() == EFBIG;
+}
 
 // Bytes asked of one read. Unparsed bytes stay bounded: the header by header_limit, a chunk
 // header line or the trailer section by maxHeaderBytes (see parse()).
@@ -359,6 +368,10 @@ void HttpSession::onParseError(beast::error_code ec) {
     return sendError(431, "header_too_large", "request header too large", "headers", true);
   if (ec == bhttp::error::body_limit)
     return sendError(413, "payload_too_large", "request body exceeds the limit", "body", true);
+  if (stage_ == Stage::Body && isDiskFull(ec))
+    return sendError(507, "insufficient_storage",
+                     "the server's disk is full: cannot store the request body; free space or try again later",
+                     "body", true);
   if (isHttpError(ec))
     return sendError(400, "bad_request",
                      (stage_ == Stage::Header ? "malformed request: " : "malformed request body: ") +
@@ -476,6 +489,10 @@ void HttpSession::readBody() {
     fileParser_->get().body().open(tempFile_.c_str(), beast::file_mode::write_new, ec);
     if (ec) {
       tempFile_.clear();
+      if (isDiskFull(ec))
+        return sendError(507, "insufficient_storage",
+                         "the server's disk is full: cannot store the request body; free space or try again later",
+                         "body", true);
       return sendError(500, "internal", "cannot create upload file: " + ec.message(), "", true);
     }
   } else {

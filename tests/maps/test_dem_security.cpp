@@ -329,3 +329,74 @@ TEST_CASE("dem security: errors are words without server paths") {
   CHECK(maps::withoutPaths("cannot open /tmp/x/y/dem.tif, see /vsizip//a/b.zip/c.img") ==
         "cannot open dem.tif, see c.img");
 }
+
+namespace {
+
+// An ENVI header for a `rows` × `cols` int16 raster on UTM 33N.
+std::string enviHeader(int rows, int cols, const std::string& offset = "0") {
+  return "ENVI\nsamples = " + std::to_string(cols) + "\nlines = " + std::to_string(rows) +
+         "\nbands = 1\nheader offset = " + offset +
+         "\nfile type = ENVI Standard\ndata type = 2\ninterleave = bsq\nbyte order = 0\n"
+         "map info = {UTM, 1, 1, 500000, 4000000, 1, 1, 33, North, WGS-84}\n";
+}
+
+}  // namespace
+
+TEST_CASE("dem security: a raw raster whose data file is shorter than its header says is refused") {
+  Folder f;
+  // A 20 × 30 int16 ENVI raster with all its data loads.
+  writeText(f.file("ok.hdr"), enviHeader(20, 30));
+  writeText(f.file("ok.bin"), std::string(20 * 30 * 2, '\x10'));
+  Outcome r = loadAsUpload(f.root(), f.file("ok.bin"));
+  CHECK_MESSAGE(r.ok, r.message);
+
+  // The tester's upload: 17 100 bytes of data, a header that says 7000 × 7000 (98 MB).
+  writeText(f.file("x.hdr"), enviHeader(7000, 7000));
+  writeText(f.file("x.bin"), std::string(17100, '\x10'));
+  r = loadAsUpload(f.root(), f.file("x.bin"));
+  CHECK_FALSE(r.ok);
+  CHECK(r.field == "file");
+  CHECK_MESSAGE(r.message == "x.bin: x.hdr describes 7000 × 7000 cells but x.bin holds only 17 KB: truncated or "
+                             "mismatched",
+                r.message);
+  checkNoPaths(r, f);
+
+  // One byte short of a 20 × 30 raster.
+  writeText(f.file("short.hdr"), enviHeader(20, 30));
+  writeText(f.file("short.bin"), std::string(20 * 30 * 2 - 1, '\x10'));
+  r = loadAsUpload(f.root(), f.file("short.bin"));
+  CHECK_MESSAGE(r.message.find("short.hdr describes 20 × 30 cells but short.bin holds only 1199 bytes") !=
+                    std::string::npos,
+                r.message);
+
+  // A header offset far past the end of the file: every cell would read as 0.
+  writeText(f.file("far.hdr"), enviHeader(20, 30, "99999999999"));
+  writeText(f.file("far.bin"), std::string(20 * 30 * 2, '\x10'));
+  r = loadAsUpload(f.root(), f.file("far.bin"));
+  CHECK_FALSE(r.ok);
+  CHECK_MESSAGE(r.message.find("truncated or mismatched") != std::string::npos, r.message);
+  checkNoPaths(r, f);
+
+  // The same for an ESRI .hdr/.bil pair.
+  writeText(f.file("e.hdr"), "NROWS 500\nNCOLS 400\nNBITS 16\nPIXELTYPE SIGNEDINT\nBYTEORDER I\n"
+                             "ULXMAP 0.5\nULYMAP 499.5\nXDIM 1\nYDIM 1\n");
+  writeText(f.file("e.bil"), std::string(1000, '\x01'));
+  r = loadAsUpload(f.root(), f.file("e.bil"));
+  CHECK_MESSAGE(r.message.find("e.hdr describes 500 × 400 cells but e.bil holds only 1000 bytes") != std::string::npos,
+                r.message);
+
+  // A Surfer 6 binary grid (56-byte header, float32 cells) cut short.
+  std::string grd = "DSBB";
+  auto put = [&grd](const void* p, std::size_t n) { grd.append(static_cast<const char*>(p), n); };
+  const std::int16_t nx = 300, ny = 200;
+  const double bounds[6] = {0, 299, 0, 199, 0, 1};
+  put(&nx, 2);
+  put(&ny, 2);
+  put(bounds, sizeof bounds);
+  grd += std::string(1000, '\0');
+  writeText(f.file("s.grd"), grd);
+  r = loadAsUpload(f.root(), f.file("s.grd"));
+  CHECK_FALSE(r.ok);
+  CHECK_MESSAGE(r.message.find("s.grd describes 200 × 300 cells but s.grd holds only") != std::string::npos,
+                r.message);
+}

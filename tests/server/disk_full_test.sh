@@ -61,6 +61,41 @@ grep -q "$MNT" "$TMP/body" && fail "the 507 message shows a server path: $(cat "
 alive || fail "the server died on a full disk"
 pass "a mission submitted on a full disk answers 507 insufficient_storage, no path shown"
 
+# An upload larger than the free space: the body cannot be stored. 507, its partial file removed,
+# and the server still answers (it used to reset the connection with no response).
+head -c 1048576 /dev/urandom > "$TMP/big.tif"
+c=$(code "/api/maps?filename=big.tif&name=big" -X POST -H 'Content-Type: image/tiff' --data-binary @"$TMP/big.tif")
+[ "$c" = 507 ] || fail "an upload larger than the free space: $c $(cat "$TMP/body")"
+[ "$(json 'd["error"]["code"] + " " + d["error"]["field"]' < "$TMP/body")" = "insufficient_storage body" ] ||
+  fail "upload on a full disk: $(cat "$TMP/body")"
+grep -q "$MNT" "$TMP/body" && fail "the upload's 507 shows a server path: $(cat "$TMP/body")"
+[ -z "$(ls -A "$MNT/data/tmp")" ] || fail "a partial upload left in tmp/: $(ls "$MNT/data/tmp")"
+alive || fail "the server stopped answering after an upload on a full disk"
+pass "an upload larger than the free space answers 507 insufficient_storage (field body), nothing left in tmp/"
+
+# A GeoTIFF layer and a PDM written on the full disk: 507, not 400 with the layer's path.
+c=$(code "/api/maps/$MAP/layers/slope.tif")
+[ "$c" = 507 ] || fail "GET slope.tif on a full disk: $c $(cat "$TMP/body")"
+[ "$(json 'd["error"]["code"]' < "$TMP/body")" = insufficient_storage ] || fail "slope.tif: $(cat "$TMP/body")"
+grep -q "$MNT\|/maps/" "$TMP/body" && fail "the slope.tif 507 shows a server path: $(cat "$TMP/body")"
+c=$(code "/api/maps/$MAP/pdms" -H 'Content-Type: application/json' -d '{"random":2,"seed":5}')
+[ "$c" = 507 ] || fail "POST a PDM on a full disk: $c $(cat "$TMP/body")"
+[ "$(json 'd["error"]["code"]' < "$TMP/body")" = insufficient_storage ] || fail "PDM: $(cat "$TMP/body")"
+grep -q "$MNT" "$TMP/body" && fail "the PDM's 507 shows a server path: $(cat "$TMP/body")"
+alive || fail "the server died writing GeoTIFFs on a full disk"
+pass "a .tif layer and a PDM on the full disk answer 507 insufficient_storage, no path shown"
+
+# 48 KiB free: a PDM's small body fits, its pdm.tif does not (libtiff says only "Error fetching
+# directory count"). 507 naming pdm.tif, no path, nothing left in tmp/; then the disk fills again.
+truncate -s -48k "$MNT/filler1"
+c=$(code "/api/maps/$MAP/pdms" -H 'Content-Type: application/json' -d '{"random":2,"seed":6}')
+[ "$c" = 507 ] || fail "a PDM whose GeoTIFF does not fit: $c $(cat "$TMP/body")"
+grep -q 'cannot write pdm.tif' "$TMP/body" || fail "the PDM's 507 is not about its GeoTIFF: $(cat "$TMP/body")"
+grep -q "$MNT" "$TMP/body" && fail "the pdm.tif 507 shows a server path: $(cat "$TMP/body")"
+[ -z "$(ls -A "$MNT/data/tmp")" ] || fail "a half-written PDM left in tmp/: $(ls "$MNT/data/tmp")"
+fill 3
+pass "a PDM whose GeoTIFF does not fit in the last 48 KiB answers 507 (\"$(json 'd["error"]["message"]' < "$TMP/body" | cut -c1-50)...\")"
+
 # The running mission ends (cancelled) and cannot store its result: failed, with the reason.
 [ "$(code "/api/missions/$RUN" -X DELETE)" = 202 ] || fail "cancel on a full disk"
 for _ in $(seq 1 100); do

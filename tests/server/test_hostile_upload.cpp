@@ -320,3 +320,35 @@ TEST_CASE("hostile upload: a coverage cell the map cannot hold is refused withou
   CHECK_MESSAGE(msg.find(data) == std::string::npos, msg);
   CHECK_MESSAGE(msg.find("dem.tif") == std::string::npos, msg);
 }
+
+TEST_CASE("hostile upload: an ENVI header promising more cells than its .bin holds is refused") {
+  TempDir tmp;
+  const std::string data = tmp.str("data");
+  Server s(data);
+  const std::size_t before = s.mapCount();
+  auto header = [](int rows, int cols, const std::string& offset) {
+    return "ENVI\nsamples = " + std::to_string(cols) + "\nlines = " + std::to_string(rows) +
+           "\nbands = 1\nheader offset = " + offset +
+           "\nfile type = ENVI Standard\ndata type = 2\ninterleave = bsq\nbyte order = 0\n"
+           "map info = {UTM, 1, 1, 500000, 4000000, 1, 1, 33, North, WGS-84}\n";
+  };
+  const std::string b = "EnviPair", type = "multipart/form-data; boundary=" + b;
+  // The tester's upload: 17 100 bytes that a header calls 7000 × 7000 int16 cells (98 MB).
+  auto r = request(s.port(), "POST", "/api/maps?name=fake",
+                   multipart(b, {{"x.bin", std::string(17100, '\x10')}, {"x.hdr", header(7000, 7000, "0")}}), type);
+  checkRefused(r, "x.bin", data);
+  CHECK_MESSAGE(r.json()["error"]["message"] ==
+                    "x.bin: x.hdr describes 7000 × 7000 cells but x.bin holds only 17 KB: truncated or mismatched",
+                r.body);
+  // A header offset past the end of the data: every cell would read as 0.
+  r = request(s.port(), "POST", "/api/maps?name=far",
+              multipart(b, {{"x.bin", std::string(95 * 90 * 2, '\x10')}, {"x.hdr", header(95, 90, "99999999999")}}),
+              type);
+  checkRefused(r, "x.hdr describes 95 × 90 cells after a header offset of", data);
+  CHECK(s.mapCount() == before);
+  // The same pair with all its data imports.
+  r = request(s.port(), "POST", "/api/maps?name=real",
+              multipart(b, {{"x.bin", std::string(95 * 90 * 2, '\x10')}, {"x.hdr", header(95, 90, "0")}}), type);
+  CHECK_MESSAGE(r.status == 201, r.body);
+  CHECK(fs::is_empty(s.dir.tmpDir()));
+}
