@@ -90,7 +90,7 @@ describe('DEM upload', { skip: missing || false, timeout: 240000 }, () => {
     await page.waitForSelector('#dem-error:not([hidden])');
     const text = await page.textContent('#dem-error');
     console.log(`upload error shown: ${text}`);
-    assert.match(text, /no raster GDAL can read/);
+    assert.match(text, /not a raster format roverplan reads/);
     assert.match(text, /field: file/);
     // The map stays as it was.
     assert.match(await page.textContent('#map-title'), /Default/);
