@@ -49,15 +49,6 @@ std::string lowerExt(const std::string& path) {
   return e;
 }
 
-std::string headBytes(const std::string& path, std::size_t n) {
-  VSILFILE* f = VSIFOpenL(path.c_str(), "rb");
-  if (!f) return "";
-  std::string b(n, '\0');
-  b.resize(VSIFReadL(b.data(), 1, n, f));
-  VSIFCloseL(f);
-  return b;
-}
-
 bool isTiff(const std::string& head) {
   return head.rfind(std::string("II*\0", 4), 0) == 0 || head.rfind(std::string("MM\0*", 4), 0) == 0 ||
          head.rfind(std::string("II+\0", 4), 0) == 0 || head.rfind(std::string("MM\0+", 4), 0) == 0;
@@ -66,7 +57,7 @@ bool isTiff(const std::string& head) {
 // Why a file did not open, in words: the label a PDS3 .IMG needs, a damaged GeoTIFF, or a format
 // we do not read.
 std::string unreadableReason(const std::string& path, bool upload) {
-  const std::string head = headBytes(path, 64);
+  const std::string head = firstBytes(path, 64);
   if (isTiff(head)) return "truncated or corrupt GeoTIFF";
   const bool attachedLabel = head.find("PDS_VERSION_ID") != std::string::npos ||
                              head.find("ODL_VERSION_ID") != std::string::npos;

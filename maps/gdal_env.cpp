@@ -414,9 +414,6 @@ void DatasetCloser::operator()(void* ds) const {
   if (ds) GDALClose(ds);
 }
 
-namespace {
-
-// The first bytes of a file (through GDAL, so inside the sandbox); "" when unreadable.
 std::string firstBytes(const std::string& path, std::size_t n) {
   VSILFILE* f = VSIFOpenL(path.c_str(), "rb");
   if (!f) return "";
@@ -425,6 +422,8 @@ std::string firstBytes(const std::string& path, std::size_t n) {
   VSIFCloseL(f);
   return b;
 }
+
+namespace {
 
 std::string quoted(const std::vector<std::string>& names) {
   std::string s;

@@ -89,4 +89,8 @@ class GdalErrorLog {
 // `text` with every absolute path replaced by its last component.
 std::string withoutPaths(const std::string& text);
 
+// The first n bytes of a file, read through GDAL (so inside an active UploadSandbox); "" when
+// it cannot be read.
+std::string firstBytes(const std::string& path, std::size_t n);
+
 }  // namespace rover::maps
