@@ -1,6 +1,7 @@
 #include "server/cli/mission_setup.hpp"
 
 #include "core/team/team_entry.hpp"
+#include "maps/georef.hpp"
 #include "server/cli/coverage_options.hpp"
 #include "server/cli/dem_options.hpp"
 
@@ -48,6 +49,7 @@ MissionSetup readMissionOptions(const ArgParser& a) {
   maps::LoadedDem loaded = loadDemOrFail(s.demPath, readDemOptions(a, "cell", 0));
   auto dem = std::make_shared<terrain::Dem>(std::move(loaded.dem));
   s.problem.dem = dem;
+  s.problem.body = maps::bodyOfCrs(dem->z.geo.crsWkt);  // the rover climbs against its body's gravity
   const PdmOptionNames names = missionPdmNames();
   Raster<float> pdm = readPdmOptions(a, *dem, names, true);
   if (a.has(names.random)) {
