@@ -16,6 +16,7 @@
 #include <fstream>
 #include <string>
 
+#include "tests/loopback_listener.hpp"
 #include "core/common/error.hpp"
 #include "maps/dem_io.hpp"
 #include "maps/gdal_env.hpp"
@@ -102,36 +103,7 @@ std::string pds3Label(const std::string& image) {
          "  SAMPLE_TYPE = UNSIGNED_INTEGER\r\n  SAMPLE_BITS = 8\r\nEND_OBJECT = IMAGE\r\nEND\r\n";
 }
 
-// A loopback TCP listener that counts the connections made to it.
-struct Listener {
-  int fd = -1;
-  int port = 0;
-  Listener() {
-    fd = ::socket(AF_INET, SOCK_STREAM, 0);
-    sockaddr_in a{};
-    a.sin_family = AF_INET;
-    a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-    a.sin_port = 0;
-    REQUIRE(::bind(fd, reinterpret_cast<sockaddr*>(&a), sizeof a) == 0);
-    REQUIRE(::listen(fd, 8) == 0);
-    socklen_t len = sizeof a;
-    ::getsockname(fd, reinterpret_cast<sockaddr*>(&a), &len);
-    port = ntohs(a.sin_port);
-  }
-  ~Listener() { ::close(fd); }
-  // Connections waiting to be accepted after `ms` milliseconds.
-  int connections(int ms) const {
-    int n = 0;
-    pollfd p{fd, POLLIN, 0};
-    while (::poll(&p, 1, n == 0 ? ms : 0) > 0) {
-      int c = ::accept(fd, nullptr, nullptr);
-      if (c < 0) break;
-      ::close(c);
-      ++n;
-    }
-    return n;
-  }
-};
+using rover::test::Listener;
 
 }  // namespace
 

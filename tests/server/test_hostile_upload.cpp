@@ -15,6 +15,7 @@
 #include <fstream>
 #include <thread>
 
+#include "tests/loopback_listener.hpp"
 #include "api_server.hpp"
 #include "maps/dem_io.hpp"
 #include "maps/synthetic_terrain.hpp"
@@ -103,25 +104,7 @@ void checkRefused(const test::HttpResult& r, const std::string& file, const std:
   CHECK_MESSAGE(msg.find("root:") == std::string::npos, msg);
 }
 
-struct Listener {
-  int fd = ::socket(AF_INET, SOCK_STREAM, 0);
-  int port = 0;
-  Listener() {
-    sockaddr_in a{};
-    a.sin_family = AF_INET;
-    a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-    REQUIRE(::bind(fd, reinterpret_cast<sockaddr*>(&a), sizeof a) == 0);
-    REQUIRE(::listen(fd, 8) == 0);
-    socklen_t len = sizeof a;
-    ::getsockname(fd, reinterpret_cast<sockaddr*>(&a), &len);
-    port = ntohs(a.sin_port);
-  }
-  ~Listener() { ::close(fd); }
-  bool contacted(int ms) const {
-    pollfd p{fd, POLLIN, 0};
-    return ::poll(&p, 1, ms) > 0;
-  }
-};
+using rover::test::Listener;
 
 }  // namespace
 
