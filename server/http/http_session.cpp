@@ -471,11 +471,8 @@ void HttpSession::readBody() {
   const bool stream = route_->options.streamBody;
   const std::uint64_t limit = stream ? cfg.maxUploadBytes : cfg.maxBodyBytes;
   const auto& h = headerParser_->get();
-  if (auto len = headerParser_->content_length(); len && *len > limit)
-    return sendError(
-        413, "payload_too_large",
-        "body of " + std::to_string(*len) + " bytes exceeds the limit of " + std::to_string(limit),
-        "body", true);
+  if (auto refused = checkBodyLength(headerParser_->content_length(), limit))
+    return sendError(refused->status, refused->code, refused->message, refused->field, true);
   const bool expectContinue =
       !headerParser_->is_done() && lower(sv(h[bhttp::field::expect])) == "100-continue";
 

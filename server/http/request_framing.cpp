@@ -4,6 +4,7 @@
 #include <cctype>
 #include <limits>
 #include <map>
+#include <string>
 #include <string_view>
 
 namespace rover::http {
@@ -146,6 +147,15 @@ std::optional<FramingError> checkFraming(const bhttp::request_header<>& header) 
   }
   if (clLines > 1 || clList) return refuse("more than one Content-Length", "content-length");
   return std::nullopt;
+}
+
+std::optional<FramingError> checkBodyLength(const boost::optional<std::uint64_t>& contentLength,
+                                            std::uint64_t limit) {
+  if (!contentLength || *contentLength <= limit) return std::nullopt;
+  return FramingError{413, "payload_too_large",
+                      "body of " + std::to_string(*contentLength) +
+                          " bytes exceeds the limit of " + std::to_string(limit),
+                      "body"};
 }
 
 }  // namespace rover::http

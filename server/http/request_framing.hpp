@@ -37,6 +37,12 @@ void configureHeaderParser(boost::beast::http::request_parser<boost::beast::http
 std::optional<FramingError> checkFraming(
     const boost::beast::http::request_header<>& header);
 
+// A declared Content-Length over the route's body limit: 413 before any body parser exists. Beast's
+// string_body reserves the declared length up front, so the check must come first, not from the
+// body parser's own limit.
+std::optional<FramingError> checkBodyLength(const boost::optional<std::uint64_t>& contentLength,
+                                            std::uint64_t limit);
+
 // Splits an origin-form request target into a percent-decoded path and query ('+' is a space in
 // the query only). False (-> 400) on a malformed target or escape, a NUL byte, or a ".." segment.
 bool parseTarget(std::string_view target, std::string& path,

@@ -1,8 +1,8 @@
 // libFuzzer: bytes -> the request parsing of HttpSession, step for step: the header parser as
-// configureHeaderParser() sets it up, checkFraming() and parseTarget() on the header, then the
-// body through a string parser with the body limit, a chunked body fed at most maxHeaderBytes per
-// put() (the session's bound on chunk header lines and trailers). Nothing may throw past the
-// try/catch the session has, crash, or read out of bounds.
+// configureHeaderParser() sets it up, checkFraming(), parseTarget() and checkBodyLength() on the
+// header, then the body through a string parser with the body limit, a chunked body fed at most
+// maxHeaderBytes per put() (the session's bound on chunk header lines and trailers). Nothing may
+// throw past the try/catch the session has, crash, or read out of bounds.
 #include <cstddef>
 #include <cstdint>
 #include <map>
@@ -36,6 +36,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       const auto target = header.get().target();
       if (!rover::http::parseTarget({target.data(), target.size()}, path, query)) return 0;
 
+      if (rover::http::checkBodyLength(header.content_length(), config.maxBodyBytes))
+        return 0;  // answered 413, connection closed
       bhttp::request_parser<bhttp::string_body> body(std::move(header));
       body.body_limit(config.maxBodyBytes);
       body.eager(true);
