@@ -134,6 +134,32 @@ void checkRawDataSize(GDALDatasetH ds, const std::string& driver, const std::str
                       " holds only " + sizeInWords(held) + ": truncated or mismatched");
 }
 
+// A block GDAL must hold to read band 1, bounded before any read. A 674-byte GeoTIFF may declare
+// 16384 × 16384 sparse tiles of 64 pixel-interleaved Float64 bands: reading one pixel then makes
+// GDAL calloc the whole 137 GB block (found by fuzz_dem_ingest). A block is refused when it is
+// over 512 MiB, or over 16 MiB and over four times the whole raster (no real product tiles a
+// raster with blocks much larger than itself).
+void checkBlockSize(GDALDatasetH ds, const std::string& shownPath) {
+  GDALRasterBandH band = GDALGetRasterBand(ds, 1);
+  int bx = 0, by = 0;
+  GDALGetBlockSize(band, &bx, &by);
+  const double bands = GDALGetRasterCount(ds);
+  const double sample = GDALGetDataTypeSizeBytes(GDALGetRasterDataType(band));
+  const char* interleave = GDALGetMetadataItem(ds, "INTERLEAVE", "IMAGE_STRUCTURE");
+  const bool pixelInterleaved = interleave && std::string(interleave) == "PIXEL";
+  const double block = static_cast<double>(bx) * by * sample * (pixelInterleaved ? bands : 1.0);
+  const double raster =
+      static_cast<double>(GDALGetRasterXSize(ds)) * GDALGetRasterYSize(ds) * sample * bands;
+  constexpr double kMiB = 1024.0 * 1024.0;
+  if (block > 512 * kMiB || (block > 16 * kMiB && block > 4 * raster))
+    fail(shownPath, "its blocks of " + std::to_string(bx) + " × " + std::to_string(by) + " cells" +
+                        (pixelInterleaved && bands > 1
+                             ? " × " + std::to_string(static_cast<long long>(bands)) + " bands"
+                             : "") +
+                        " (" + sizeInWords(block) + " each) are too large to read for a raster of " +
+                        sizeInWords(raster) + "; re-tile it (gdal_translate -co TILED=YES)");
+}
+
 // Whether a failed GeoTIFF write was the disk's fault. libtiff often names only the symptom
 // ("TIFFWriteDirectoryTagData:IO error writing tag data", sometimes "_tiffWriteProc:No space left
 // on device") and errno may be overwritten by the time the file is closed, so a folder with less
@@ -219,6 +245,7 @@ LoadedDem loadDem(const std::string& path, const LoadOptions& opt) {
   if (GDALGetRasterCount(src.get()) < 1) fail(shown, "the file holds no raster band");
   checkRawDataSize(src.get(), GDALGetDriverShortName(GDALGetDatasetDriver(src.get())), shown,
                    [&](const std::string& f) { return sandbox ? sandbox->uploadName(f) : f; });
+  checkBlockSize(src.get(), shown);
 
   LoadedDem out;
   DemInfo& info = out.info;

@@ -3,11 +3,13 @@
 #   tests/fuzz/run.sh [SECONDS_PER_TARGET=30] [TARGET...]
 # Each target starts from its seed corpus (tests/fuzz/corpus/NAME/, read only: new inputs go to a
 # scratch copy). A crash leaves its input in build-fuzz/crashes/NAME/ and fails the run; turn it into
-# a regression test (a unit test, and a file in the seed corpus).
+# a regression test (a unit test, and a file in the seed corpus). The seed is explicit
+# (ROVER_FUZZ_SEED, default 1) so a run can be repeated; other seeds explore other inputs.
 set -euo pipefail
 root=$(cd "$(dirname "$0")/../.." && pwd)
 cd "$root"
 secs=${1:-30}
+seed=${ROVER_FUZZ_SEED:-1}
 shift || true
 export CCACHE_BASEDIR="$root" CCACHE_NOHASHDIR=1
 cmake -S . -B build-fuzz -G Ninja -DCMAKE_BUILD_TYPE=Debug -DCMAKE_CXX_COMPILER=clang++ -DROVER_FUZZ=ON \
@@ -28,9 +30,9 @@ for t in "${targets[@]}"; do
   rm -rf "$work"; mkdir -p "$work" "$crashes"
   seeds=tests/fuzz/corpus/$name
   dict=(); [ -f "tests/fuzz/$name.dict" ] && dict=(-dict="tests/fuzz/$name.dict")
-  echo "== fuzz $t for ${secs}s"
+  echo "== fuzz $t for ${secs}s, seed $seed"
   if ! build-fuzz/bin/"$t" "$work" $( [ -d "$seeds" ] && echo "$seeds" ) "${dict[@]}" \
-       -max_total_time="$secs" -rss_limit_mb=2048 -timeout=10 -artifact_prefix="$crashes/" \
+       -max_total_time="$secs" -seed="$seed" -rss_limit_mb=2048 -timeout=10 -artifact_prefix="$crashes/" \
        -print_final_stats=1 2>build-fuzz/"$t".log; then
     echo "FAIL: $t found a crash (input in $crashes/)"; tail -40 build-fuzz/"$t".log; status=1
   fi

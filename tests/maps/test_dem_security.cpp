@@ -15,6 +15,7 @@
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <vector>
 
 #include "tests/loopback_listener.hpp"
 #include "core/common/error.hpp"
@@ -371,4 +372,36 @@ TEST_CASE("dem security: a raw raster whose data file is shorter than its header
   CHECK_FALSE(r.ok);
   CHECK_MESSAGE(r.message.find("s.grd describes 200 × 300 cells but s.grd holds only") != std::string::npos,
                 r.message);
+}
+
+TEST_CASE("dem security: a tiny GeoTIFF declaring huge sparse tiles is refused before any read") {
+  // Found by fuzz_dem_ingest: an 8 × 8 GeoTIFF of 674 bytes with 16384 × 16384 sparse tiles of 64
+  // pixel-interleaved Float64 bands made GDAL calloc the whole 137 GB tile on the first read.
+  Folder f;
+  maps::ensureGdal();
+  const char* options[] = {"TILED=YES", "BLOCKXSIZE=16384", "BLOCKYSIZE=16384", "SPARSE_OK=TRUE",
+                           "INTERLEAVE=PIXEL", nullptr};
+  GDALDatasetH ds = GDALCreate(GDALGetDriverByName("GTiff"), f.file("bomb.tif").c_str(), 8, 8, 64,
+                               GDT_Float64, const_cast<char**>(options));
+  REQUIRE(ds);
+  GDALClose(ds);
+  CHECK(fs::file_size(f.file("bomb.tif")) < 4096);
+  Outcome r = loadAsUpload(f.root(), f.file("bomb.tif"));
+  CHECK_FALSE(r.ok);
+  CHECK(r.field == "file");
+  CHECK_MESSAGE(r.message.find("bomb.tif: its blocks of 16384 × 16384 cells × 64 bands") == 0, r.message);
+  CHECK_MESSAGE(r.message.find("too large to read") != std::string::npos, r.message);
+  checkNoPaths(r, f);
+
+  // A legitimately tiled GeoTIFF whose 256 × 256 tiles are larger than its 20 × 30 raster loads.
+  const char* tiled[] = {"TILED=YES", "BLOCKXSIZE=256", "BLOCKYSIZE=256", nullptr};
+  ds = GDALCreate(GDALGetDriverByName("GTiff"), f.file("tiled.tif").c_str(), 30, 20, 1, GDT_Float32,
+                  const_cast<char**>(tiled));
+  REQUIRE(ds);
+  std::vector<float> z(20 * 30, 5.0f);
+  CHECK(GDALRasterIO(GDALGetRasterBand(ds, 1), GF_Write, 0, 0, 30, 20, z.data(), 30, 20, GDT_Float32, 0,
+                     0) == CE_None);
+  GDALClose(ds);
+  r = loadAsUpload(f.root(), f.file("tiled.tif"));
+  CHECK_MESSAGE(r.ok, r.message);
 }
