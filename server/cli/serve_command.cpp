@@ -14,12 +14,37 @@
 
 namespace rover::cli {
 
+namespace {
+
+namespace fs = std::filesystem;
+
+bool holdsPage(const fs::path& dir) {
+  std::error_code ec;
+  return fs::is_regular_file(dir / "index.html", ec);
+}
+
+// The web root when --web is not given: an installed binary's PREFIX/share/roverplan/web (`cmake
+// --install`, the container image), else the source tree's web/ this binary was built from.
+std::string defaultWebRoot() {
+  std::error_code ec;
+  const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
+  if (!ec) {
+    const fs::path installed = exe.parent_path().parent_path() / "share" / "roverplan" / "web";
+    if (holdsPage(installed)) return installed.string();
+  }
+  return holdsPage(ROVER_WEB_DIR) ? std::string(ROVER_WEB_DIR) : std::string();
+}
+
+}  // namespace
+
 int serveCommand(const std::vector<std::string>& argv, std::ostream& out) {
   ArgParser a("serve", "The planning server: REST API, live WebSocket streams, the web page.");
   a.option("host", "ADDR", "127.0.0.1", "Address to bind (loopback by default; 0.0.0.0 for all).");
   a.option("port", "N", "8080", "TCP port (0 = any free port).");
   a.option("data", "DIR", "roverplan-data", "Data directory (SQLite database, maps, results).");
-  a.option("web", "DIR", ROVER_WEB_DIR, "Static web root served at /.");
+  a.option("web", "DIR", "installed",
+           "Static web root served at /. Default: PREFIX/share/roverplan/web next to an installed "
+           "binary, else the source tree's web/.");
   a.option("token", "T", "", "Require 'Authorization: Bearer T' on every /api route except health.");
   a.option("workers", "N", "cores", "Missions run in parallel.");
   a.option("queue", "N", "64", "Missions that may wait; more are refused with 429.");
@@ -42,8 +67,13 @@ int serveCommand(const std::vector<std::string>& argv, std::ostream& out) {
   http::ServerConfig config;
   config.host = a.str("host", config.host);
   config.port = static_cast<unsigned short>(a.integer("port", 8080, 0, 65535));
-  config.webRoot = a.str("web", ROVER_WEB_DIR);
-  if (!std::filesystem::is_directory(config.webRoot)) config.webRoot.clear();
+  if (a.has("web")) {
+    config.webRoot = a.str("web", "");
+    if (!holdsPage(config.webRoot))
+      throw UsageError("--web: " + config.webRoot + " is not a folder holding index.html");
+  } else {
+    config.webRoot = defaultWebRoot();  // "" = API only, said at start
+  }
   config.token = a.str("token", "");
   config.corsOrigin = a.str("cors", "");
   config.maxUploadBytes = static_cast<std::uint64_t>(a.integer("max-upload-mb", 512, 1, 1 << 20)) << 20;
@@ -100,6 +130,8 @@ int serveCommand(const std::vector<std::string>& argv, std::ostream& out) {
       << std::filesystem::absolute(dir.root()).string() << ", " << workers << " workers, "
       << missions::formatBytes(missionMemory) << " mission memory"
       << (config.token.empty() ? "" : ", token required") << ")" << std::endl;
+  if (config.webRoot.empty())
+    out << "warning: no web page found (pass --web DIR); serving the API only" << std::endl;
   if (!fullDisk.empty()) out << "warning: " << fullDisk << std::endl;
   if (orphans > 0) out << "removed " << orphans << " half-stored map/PDM folder(s) left by a crash" << std::endl;
   if (interrupted > 0) out << interrupted << " mission(s) were running at the last stop: marked interrupted" << std::endl;

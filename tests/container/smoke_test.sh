@@ -60,14 +60,14 @@ grep -q api/health "$state/healthcheck.json" || fail "no HEALTHCHECK on /api/hea
 pass "non-root user and a HEALTHCHECK"
 
 pm run -d --rm --network host --name "$name" "$image" \
-  roverplan serve --host 127.0.0.1 --port "$port" --data /var/lib/roverplan/data --web /usr/share/roverplan/web >/dev/null
+  roverplan serve --host 127.0.0.1 --port "$port" --data /var/lib/roverplan/data >/dev/null
 trap 'podman --runtime runc stop -t 2 "$name" >/dev/null 2>&1 || true' EXIT
 url="http://127.0.0.1:$port"
 for _ in $(seq 1 150); do curl -fs "$url/api/health" >/dev/null 2>&1 && break; sleep 0.2; done
 # (Bodies go to files first: with pipefail, `curl | grep -q` fails when grep stops reading early.)
 curl -fs "$url/api/health" > "$state/health.json" && grep -q '"status":"ok"' "$state/health.json" || fail "health"
 curl -fs "$url/" > "$state/index.html" && grep -qi "<html" "$state/index.html" || fail "the web page is not served"
-pass "container serves the API and the web page"
+pass "container serves the API and the web page (found without --web)"
 
 pm exec "$name" roverplan terrain --preset moon --size 64 --cell 1 --seed 2 --out /tmp/moon.tif >/dev/null
 pm cp "$name:/tmp/moon.tif" "$state/moon.tif"
