@@ -643,6 +643,9 @@ void HttpSession::send(Response res, bool close) {
     if (!cfg.corsOrigin.empty()) {
       msg.set(bhttp::field::access_control_allow_origin, cfg.corsOrigin);
       msg.set(bhttp::field::vary, "Origin");
+      // Without this a cross-origin client cannot read how listings are paged.
+      msg.set(bhttp::field::access_control_expose_headers,
+              "X-Total-Count, Link, Retry-After, Content-Disposition");
     }
     msg.keep_alive(keepAlive_ && !close);
   };

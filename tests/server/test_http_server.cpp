@@ -762,6 +762,8 @@ TEST_CASE("http: CORS headers only with corsOrigin; OPTIONS preflight gives 204"
     CHECK(r.status == 200);
     CHECK(r.header("access-control-allow-origin") == "http://localhost:5173");
     CHECK(r.header("vary") == "Origin");
+    CHECK(r.header("access-control-expose-headers") ==
+          "X-Total-Count, Link, Retry-After, Content-Disposition");
     r = call(s.port(), bhttp::verb::get, "/api/x");  // errors carry it too
     CHECK(r.status == 401);
     CHECK(r.header("access-control-allow-origin") == "http://localhost:5173");
