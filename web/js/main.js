@@ -35,10 +35,10 @@ window.addEventListener('unhandledrejection', (e) => {
 const view = new MapView($('map-canvas'));
 view.padLeft = 256;  // the floating layers/legend panels
 const layers = new LayerStack(view);
-const missionView = new MissionView({ view, layers, statusLine, selectMap, onFinished: () => runs.reload() });
+const missionView = new MissionView({ view, layers, statusLine, selectMap, onFinished: () => runs.reload(), onShown: (m) => setAddress(m ? { mission: m.id } : state.map ? { map: state.map.id } : {}) });
 const pdmEditor = new PdmEditor({ view, layers });
 const missionForm = new MissionForm({ view, onLaunched: (m) => launched(m) });
-const mapsPanel = new MapsPanel({ selectMap });
+const mapsPanel = new MapsPanel({ selectMap: chooseMap });
 const runs = new RunsPanel({ missionView });
 const view3d = new View3D({ container: $('view3d'), message: $('view3d-message'), layers, missionView });
 window.__roverplanApp = { view, layers, missionView, pdmEditor, missionForm, mapsPanel, runs, view3d, state };
@@ -70,11 +70,54 @@ async function selectMap(id) {
   await loading;
 }
 
+// A map the operator chose: a mission shown on another map is closed, not drawn over the new one.
+async function chooseMap(id) {
+  if (missionView.mission && missionView.mission.map !== id) missionView.clear();
+  if (!missionView.mission) setAddress(id ? { map: id } : {});
+  await selectMap(id);
+}
+
+// --- the address: #mission=ID (or #map=ID) so a reload or a shared link opens the same view ---
+function readAddress() {
+  const q = new URLSearchParams(location.hash.replace(/^#/, ''));
+  return { mission: q.get('mission') || '', map: q.get('map') || '' };
+}
+function setAddress(parts) {
+  const q = new URLSearchParams();
+  for (const [k, v] of Object.entries(parts)) if (v) q.set(k, v);
+  const hash = q.toString() ? `#${q}` : '';
+  if (hash !== location.hash) history.replaceState(null, '', `${location.pathname}${location.search}${hash}`);
+}
+// Opens what the address names. Returns '' when it did, else why not (said once a map is shown, so
+// the map's own status message does not replace it).
+async function openAddress() {
+  const { mission, map } = readAddress();
+  if (mission) {
+    try {
+      await missionView.show(mission);
+      return '';
+    } catch (err) {
+      return err.status === 404 ? `mission ${mission} (from the address) does not exist` : String(err.message || err);
+    }
+  }
+  if (map && state.maps.some((m) => m.id === map)) {
+    await chooseMap(map);
+    return '';
+  }
+  return map ? `map ${map} (from the address) does not exist` : 'nothing';
+}
+window.addEventListener('hashchange', () => {
+  const { mission, map } = readAddress();
+  if ((mission && mission !== missionView.mission?.id) || (!mission && map && map !== state.map?.id))
+    openAddress().then((why) => why && why !== 'nothing' && report(why)).catch(report);
+});
+
 async function launched(mission) {
   await missionView.show(mission);
   runs.reload();
 }
 
+let addressNotice = '';  // why the address could not be opened, once the first map is drawn
 // First map drawn (the tests print it): the first frame with the elevation layer in it.
 view.onRender(() => {
   counters.mapDraws++;
@@ -82,6 +125,8 @@ view.onRender(() => {
     counters.mapDrawn = true;
     counters.firstMapDrawMs = Math.round(performance.now());
     statusLine(`map drawn ${counters.firstMapDrawMs} ms after page start`);
+    if (addressNotice) report(addressNotice);
+    addressNotice = '';
   }
 });
 
@@ -181,7 +226,14 @@ async function start() {
     state.planners = await api.planners();
     missionForm.setPlanners(state.planners);
     await mapsPanel.reload();
-    await selectMap(mapsPanel.initialMapId());
+    const why = await openAddress();
+    if (why) {
+      await chooseMap(mapsPanel.initialMapId());
+      if (why !== 'nothing') {
+        if (counters.mapDrawn) report(why);
+        else addressNotice = why;  // said after "map drawn …", which would replace it
+      }
+    }
     runs.reload();
   } catch (err) {
     if (err.status === 401) report('the server wants a token: enter it at the top right');

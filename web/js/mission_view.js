@@ -44,12 +44,13 @@ const SHOWN_METRICS = [
 ];
 
 export class MissionView {
-  constructor({ view, layers, statusLine, selectMap, onFinished }) {
+  constructor({ view, layers, statusLine, selectMap, onFinished, onShown }) {
     this.view = view;
     this.layers = layers;
     this.statusLine = statusLine;
     this.selectMap = selectMap;
     this.onFinished = onFinished || (() => {});
+    this.onShown = onShown || (() => {});
     this.coverage = new CoverageLayer();
     this.trailLayer = new TrailLayer(view);
     this.trails = this.trailLayer.add(new TrailSet({ width: 2 }));
@@ -100,6 +101,36 @@ export class MissionView {
     }
     this.reset(mission);
     this.stream.open(mission.id);
+    this.onShown(mission);
+  }
+
+  // No mission shown (another map was chosen): the stream closed, the layers and the dock empty.
+  clear() {
+    this.stream.close();
+    this.replay.stop();
+    this.replay.disable();
+    this.mission = null;
+    this.result = null;
+    this.progressCurve = { x: [], y: [] };
+    this.coverage.reset();
+    this.plan.clear();
+    this.trails.clear(0);
+    this.setCompare([]);
+    counters.missionId = null;
+    counters.missionStatus = null;
+    counters.finalMetrics = null;
+    this.progressText = '';
+    $('live-title').textContent = 'no mission';
+    $('live-title').title = '';
+    this.setStatus('');
+    this.setProgress(0);
+    this.renderMetrics(null);
+    this.setExports(null);
+    $('live-counters').replaceChildren();
+    this.layers.renderLegends();
+    this.drawCharts();
+    this.view.invalidate();
+    this.onShown(null);
   }
 
   reset(mission) {
@@ -123,7 +154,7 @@ export class MissionView {
     this.liveSince = performance.now();
     $('live-title').textContent = `${mission.planner} · ${mission.id}`;
     $('live-title').title = JSON.stringify(mission.spec || {});
-    this.setStatus(mission.status);
+    this.setStatus(mission.status, mission.message || '');
     this.setProgress(mission.progress?.fraction ?? (completed(mission.status) ? 1 : 0));
     this.renderMetrics(mission.metrics);
     this.setExports(null);
@@ -166,7 +197,7 @@ export class MissionView {
       done: (m) => this.onDone(m),
       closed: (info) => {
         if (!info.done) {
-          this.setStatus(`${counters.missionStatus || ''} (stream closed${info.code !== 1000 ? ` ${info.code}` : ''})`);
+          this.setStatus(counters.missionStatus || '', `stream closed${info.code !== 1000 ? ` (code ${info.code})` : ''} before the end`);
           report(`mission stream closed before the end (code ${info.code}${info.reason ? `: ${info.reason}` : ''})`);
         }
         this.updateStatusLine(true);
@@ -209,7 +240,7 @@ export class MissionView {
   async onDone(m) {
     counters.missionStatus = m.status;
     counters.finalMetrics = m.metrics;
-    this.setStatus(m.status + (m.message ? `: ${m.message}` : ''));
+    this.setStatus(m.status, m.message || '');
     if (completed(m.status)) this.setProgress(1);
     this.renderMetrics(m.metrics);
     this.coverage.keepFinal();
@@ -285,14 +316,22 @@ export class MissionView {
   }
 
   // --- dock widgets ---
-  setStatus(status) {
+  // The badge holds the status in words; what went wrong (warnings, the failure, a closed stream)
+  // goes on its own line under it, clamped to three lines with the whole text as its tooltip.
+  setStatus(status, message = '') {
     const badge = $('live-status');
     const word = String(status || '').split(/[\s:(]/)[0];
     badge.textContent = String(status || '').replace(/_/g, ' ');
     badge.className = `badge ${word}`;
     badge.hidden = !status;
+    const line = $('live-message');
+    line.textContent = message;
+    line.title = message;
+    line.hidden = !message;
+    line.classList.toggle('error', ['failed', 'cancelled', 'interrupted'].includes(word));
     const running = word === 'running' || word === 'queued';
     $('live-cancel').disabled = !running;
+    $('live-cancel').hidden = !running;  // its room goes to the mission's title
     if (['queued', 'running', 'succeeded', 'completed_with_warnings', 'failed', 'cancelled', 'interrupted'].includes(word)) counters.missionStatus = word;
   }
 
@@ -307,14 +346,9 @@ export class MissionView {
       return;
     }
     const cells = SHOWN_METRICS.filter(([k]) => metrics[k] !== undefined).map(([k, label, f]) => [label, f ? f(metrics[k]) : fmt(metrics[k]), k]);
-    const rows = [];
-    for (let i = 0; i < cells.length; i += 2) {
-      const a = cells[i], b = cells[i + 1];
-      rows.push(el('tr', {},
-        el('td', {}, a[0]), el('td', { dataset: { metric: a[2] } }, a[1]),
-        el('td', {}, b ? b[0] : ''), el('td', b ? { dataset: { metric: b[2] } } : {}, b ? b[1] : '')));
-    }
-    table.replaceChildren(...rows);
+    // One metric a row: two a row were cut at 1280 px ("probability 0.139" read "0").
+    table.replaceChildren(...cells.map(([label, value, key]) =>
+      el('tr', {}, el('td', {}, label), el('td', { dataset: { metric: key }, title: value }, value))));
   }
 
   setExports(id) {
