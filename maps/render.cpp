@@ -76,9 +76,6 @@ Rgba rampColour(const Stop (&stops)[N], double v) {
 constexpr Rgba kClassColours[4] = {
     {50, 170, 80, 255}, {255, 176, 0, 255}, {215, 35, 35, 255}, {40, 40, 40, 160}};
 
-// Zero probability mass: the ramp's dark end, darker still and partly transparent.
-constexpr Rgba kZeroMass = {24, 9, 37, 180};
-
 // Hillshade of flat ground at the default sun altitude, 255·sin(45°): shading by s / kNeutralShade
 // keeps flat terrain at its tint; missing shade (borders, nodata neighbours) is neutral.
 constexpr double kNeutralShade = 180.3;
@@ -413,7 +410,9 @@ Image renderLayer(RenderLayer layer, const RenderInput& input, const RenderOptio
         lo -= 0.5;
         hi += 0.5;
       }
-      scale = {"elevation (m)", lo, hi, {(lo + hi) / 2}, [](double v, const RampLegend& l) {
+      // The ramp spans the 2nd to 98th percentile: the title says so, since the map's own
+      // range (its info) is wider.
+      scale = {"elevation (m), 2-98 %", lo, hi, {(lo + hi) / 2}, [](double v, const RampLegend& l) {
                 return rampColour(kHypsometric, (v - l.lo) / (l.hi - l.lo));
               }};
       break;
@@ -475,7 +474,12 @@ Image renderLayer(RenderLayer layer, const RenderInput& input, const RenderOptio
           if (std::isfinite(v)) px = scale.colour(v, scale);
           break;
         case RenderLayer::Pdm:
-          if (std::isfinite(v)) px = v > 0 ? scale.colour(v, scale) : kZeroMass;
+          // Opacity grows with the mass (√ so the tails still show): a PDM is drawn over the
+          // map, and an opaque ramp down to ~0 tinted the whole map one colour.
+          if (std::isfinite(v) && v > 0) {
+            px = scale.colour(v, scale);
+            px.a = toByte(255.0 * std::sqrt(std::min(1.0, v / scale.hi)));
+          }
           break;
         case RenderLayer::Traversability:
           px = kClassColours[std::clamp(static_cast<int>(v), 0, 3)];
