@@ -29,6 +29,11 @@ describe('team mission', { skip: missing || false, timeout: 240000 }, () => {
     await waitForMap(page);
     await page.click('#tab-mission');
     await page.selectOption('#m-planner', teamPlanner);
+    // Defaults read as numbers, not float noise ("14.999999999999998").
+    const noisy = await page.evaluate(() => [...document.querySelectorAll('#m-params input')]
+      .filter((i) => /\d{13,}/.test(i.value.replace(/[-.e]/g, '')) || /\d{13,}/.test(i.title.replace(/\./g, '')))
+      .map((i) => `${i.id}=${i.value}`));
+    assert.deepEqual(noisy, []);
     for (const [x, y] of [[40, 40], [110, 110]]) {
       const p = await mapPoint(page, x, y);
       await page.mouse.click(p.x, p.y);

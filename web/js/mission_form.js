@@ -7,6 +7,13 @@ import { api } from './api.js';
 import { state } from './state.js';
 import { $, el, fmt, roverColour, showError } from './util.js';
 
+// A number as a person reads it: 12 significant digits, so a default converted from radians shows
+// "15", not "14.999999999999998". Lists are tidied element by element.
+function tidy(v) {
+  if (Array.isArray(v)) return v.map(tidy);
+  return typeof v === 'number' && Number.isFinite(v) ? Number(v.toPrecision(12)) : v;
+}
+
 const FIELD_PREFIX = 'm-param-';
 
 export class MissionForm {
@@ -110,8 +117,9 @@ export class MissionForm {
 
   paramRow(info) {
     const id = FIELD_PREFIX + info.key;
+    const shown = tidy(info.default);
     const range = [info.min !== undefined ? `min ${fmt(info.min)}` : '', info.max !== undefined ? `max ${fmt(info.max)}` : ''].filter(Boolean).join(', ');
-    const help = `${info.doc}${info.unit ? ` [${info.unit}]` : ''} — default ${JSON.stringify(info.default)}${range ? `; ${range}` : ''}`;
+    const help = `${info.doc}${info.unit ? ` [${info.unit}]` : ''} — default ${JSON.stringify(shown)}${range ? `; ${range}` : ''}`;
     let input;
     switch (info.type) {
       case 'choice':
@@ -124,12 +132,12 @@ export class MissionForm {
       case 'int':
       case 'real':
         input = el('input', {
-          id, type: 'number', value: String(info.default), step: info.type === 'int' ? '1' : 'any',
-          min: info.min !== undefined ? String(info.min) : undefined, max: info.max !== undefined ? String(info.max) : undefined,
+          id, type: 'number', value: String(shown), step: info.type === 'int' ? '1' : 'any',
+          min: info.min !== undefined ? String(tidy(info.min)) : undefined, max: info.max !== undefined ? String(tidy(info.max)) : undefined,
         });
         break;
       default:  // real_list
-        input = el('input', { id, type: 'text', value: (info.default || []).join(', '), placeholder: 'comma-separated numbers' });
+        input = el('input', { id, type: 'text', value: (shown || []).join(', '), placeholder: 'comma-separated numbers' });
     }
     input.title = help;
     input.dataset.key = info.key;
@@ -140,7 +148,7 @@ export class MissionForm {
     });
     return el('div', { class: 'param', dataset: { param: info.key } },
       el('div', { class: 'form-row' }, el('label', { for: id, title: help }, info.key), input, info.unit ? el('span', { class: 'unit' }, info.unit) : null),
-      el('div', { class: 'doc', id: `${id}-doc` }, `${info.doc} (default ${Array.isArray(info.default) ? `[${info.default.join(', ')}]` : info.default}${range ? `; ${range}` : ''})`),
+      el('div', { class: 'doc', id: `${id}-doc` }, `${info.doc} (default ${Array.isArray(shown) ? `[${shown.join(', ')}]` : shown}${range ? `; ${range}` : ''})`),
       el('div', { class: 'field-error', dataset: { field: `params.${info.key}` } }));
   }
 
@@ -179,7 +187,8 @@ export class MissionForm {
         else if (info.min !== undefined && value < info.min) errors.push([field, `must be at least ${fmt(info.min)}`]);
         else if (info.max !== undefined && value > info.max) errors.push([field, `must be at most ${fmt(info.max)}`]);
       }
-      if (JSON.stringify(value) !== JSON.stringify(info.default)) params[info.key] = value;
+      // Left as shown (the default rounded for reading): the server's exact default applies.
+      if (JSON.stringify(value) !== JSON.stringify(tidy(info.default))) params[info.key] = value;
     }
     return { params, errors };
   }
