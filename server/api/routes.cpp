@@ -79,6 +79,9 @@ json pdmJson(const store::PdmRecord& p) {
 
 json missionJson(const store::MissionRecord& m) {
   return {{"id", m.id},          {"map", m.mapId},          {"pdm", m.pdmId.empty() ? json(nullptr) : json(m.pdmId)},
+          {"label", m.label},
+          {"map_name", m.mapName.empty() ? json(nullptr) : json(m.mapName)},
+          {"pdm_name", m.pdmName.empty() ? json(nullptr) : json(m.pdmName)},
           {"planner", m.planner}, {"status", m.status},      {"message", m.message},
           {"created_at", m.createdAt}, {"started_at", m.startedAt}, {"finished_at", m.finishedAt},
           {"metrics", m.metrics}, {"spec", m.spec},
@@ -195,6 +198,7 @@ missions::MissionJob buildMission(ApiContext& ctx, const json& body) {
   job.record.mapId = request.mapId;
   job.record.pdmId = request.pdmId;
   job.record.planner = request.planner;
+  job.record.label = request.name;
   job.params = std::move(request.params);
   job.problem.rovers = std::move(request.rovers);
   if (request.pace) job.pace = *request.pace;
@@ -539,8 +543,31 @@ void addApiRoutes(http::Router& router, ApiContext& ctx) {
     auto m = ctx.db.getMission(id);
     if (!m) throw ApiError(404, "not_found", "no mission '" + id + "'", "id");
     if (ctx.missions.cancel(id)) return Response::json(202, {{"id", id}, {"status", "cancelling"}});
-    return Response::json(409, {{"error", {{"code", "not_running"}, {"message", "mission " + id + " is " + m->status + ", not running"}, {"field", "id"}}}});
-  }), doc("Cancel a queued or running mission (the planner stops within one step)."));
+    // Not running (any more): the run is deleted, its row first so no listing shows a run whose
+    // files are half gone. A mission that is still finishing cannot be deleted yet.
+    if (!store::isFinal(m->status))
+      throw ApiError(409, "not_finished", "mission " + id + " is " + m->status + ": try again when it has ended", "id");
+    ctx.db.deleteMission(id);
+    store::DataDir::removeTree(ctx.dir.missionDir(id));
+    return Response::json(200, {{"deleted", id}});
+  }), doc("Cancel a queued or running mission (202; the planner stops within one step), or delete "
+          "an ended one with its result files (200)."));
+
+  router.add("PATCH", "/api/missions/{id}", guarded([&ctx](const Request& req) {
+    const std::string id = req.params.at("id");
+    json body = rj::parseJsonLimited(req.body, rj::kMissionJsonLimits);
+    if (!body.is_object()) throw ApiError(400, "bad_json", "the request body must be a JSON object", "body");
+    for (const auto& item : body.items())
+      if (item.key() != "label")
+        throw ApiError(400, "unknown_field", "only 'label' can be changed", item.key().substr(0, 64));
+    auto label = body.find("label");
+    if (label == body.end() || !label->is_string())
+      throw ApiError(400, "invalid_field", "label must be a string", "label");
+    rj::checkName(label->get<std::string>(), "label");
+    if (!ctx.db.setMissionLabel(id, label->get<std::string>()))
+      throw ApiError(404, "not_found", "no mission '" + id + "'", "id");
+    return Response::json(200, missionJson(*ctx.db.getMission(id)));
+  }), doc("Rename a run: {\"label\": \"...\"} (at most 200 characters, no control characters)."));
 
   router.add("GET", "/api/missions/{id}/{file}", guarded([&ctx](const Request& req) {
     const std::string id = req.params.at("id"), file = req.params.at("file");

@@ -26,7 +26,7 @@ namespace rover::store {
 
 namespace {
 
-constexpr int kSchemaVersion = 1;
+constexpr int kSchemaVersion = 2;
 
 // A full disk (SQLITE_FULL), a failed write (SQLITE_IOERR_*) or a file over RLIMIT_FSIZE are
 // the disk's fault, not a bug: StorageFull, answered 507.
@@ -127,10 +127,6 @@ nlohmann::json parseJson(const Stmt& s, int col, const char* what) {
   }
 }
 
-bool isFinal(const std::string& status) {
-  return status == "succeeded" || status == "completed_with_warnings" || status == "failed" ||
-         status == "cancelled" || status == "interrupted";
-}
 
 // Version 1 of the schema. Later versions add a migrate step from N-1 in Database::Database.
 constexpr const char* kSchemaV1 = R"sql(
@@ -174,9 +170,19 @@ PdmRecord readPdm(const Stmt& s) {
   return PdmRecord{s.text(0), s.text(1), s.text(2), s.text(3), parseJson(s, 4, "PDM meta")};
 }
 
-constexpr const char* kMissionColumns =
-    "id, map_id, pdm_id, planner, spec, status, message, created_at, started_at, finished_at, "
-    "metrics";
+// Version 2: a mission's label, first the request's name.
+constexpr const char* kMigrateV1toV2 = R"sql(
+ALTER TABLE missions ADD COLUMN label TEXT NOT NULL DEFAULT '';
+UPDATE missions SET label = COALESCE(json_extract(spec, '$.name'), '')
+  WHERE json_valid(spec) AND json_type(spec, '$.name') = 'text';
+)sql";
+
+// A mission row with the names of its map and PDM (empty once they are deleted).
+constexpr const char* kMissionSelect =
+    "SELECT m.id, m.map_id, m.pdm_id, m.planner, m.spec, m.status, m.message, m.created_at, "
+    "m.started_at, m.finished_at, m.metrics, m.label, COALESCE(maps.name, ''), "
+    "COALESCE(pdms.name, '') FROM missions m LEFT JOIN maps ON maps.id = m.map_id "
+    "LEFT JOIN pdms ON pdms.id = m.pdm_id ";
 
 MissionRecord readMission(const Stmt& s) {
   MissionRecord m;
@@ -191,10 +197,18 @@ MissionRecord readMission(const Stmt& s) {
   m.startedAt = s.text(8);
   m.finishedAt = s.text(9);
   m.metrics = parseJson(s, 10, "mission metrics");
+  m.label = s.text(11);
+  m.mapName = s.text(12);
+  m.pdmName = s.text(13);
   return m;
 }
 
 }  // namespace
+
+bool isFinal(const std::string& status) {
+  return status == "succeeded" || status == "completed_with_warnings" || status == "failed" ||
+         status == "cancelled" || status == "interrupted";
+}
 
 Database::Database(const std::string& path) {
   if (!path.empty() && path != ":memory:" && path.rfind("file:", 0) != 0) {
@@ -286,11 +300,18 @@ void Database::open(const std::string& path, bool exclusive) {
         throw std::runtime_error("database: '" + path + "' has schema version " +
                                  std::to_string(version) + ", newer than this server supports (" +
                                  std::to_string(kSchemaVersion) + ")");
-      // Migrations go here: if (version == 1) { ...ALTER...; version = 2; } and so on.
+      // A new file gets version 1, then every migration from N-1 to N in turn.
       exec(db_, kSchemaV1);
       if (version == 0) {
         Stmt s(db_, "INSERT INTO schema_version(version) VALUES (1)");
         s.run();
+        version = 1;
+      }
+      if (version == 1) {
+        exec(db_, kMigrateV1toV2);
+        Stmt s(db_, "INSERT INTO schema_version(version) VALUES (2)");
+        s.run();
+        version = 2;
       }
       exec(db_, "COMMIT");
     } catch (...) {
@@ -407,16 +428,18 @@ void Database::insertMission(const MissionRecord& m) {
   ensureReserves();
   Stmt s(db_,
          "INSERT INTO missions(id, map_id, pdm_id, planner, spec, status, message, created_at, "
-         "started_at, finished_at, metrics) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11)");
+         "started_at, finished_at, metrics, label) "
+         "VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12)");
   s.bind(1, m.id).bind(2, m.mapId).bind(3, m.pdmId).bind(4, m.planner).bind(5, spec);
   s.bind(6, m.status).bind(7, m.message).bind(8, m.createdAt);
   s.bindOrNull(9, m.startedAt).bindOrNull(10, m.finishedAt).bindOrNull(11, metrics);
+  s.bind(12, m.label);
   s.run();
 }
 
 std::optional<MissionRecord> Database::getMission(const std::string& id) {
   std::lock_guard lock(mutex_);
-  Stmt s(db_, (std::string("SELECT ") + kMissionColumns + " FROM missions WHERE id = ?1").c_str());
+  Stmt s(db_, (std::string(kMissionSelect) + "WHERE m.id = ?1").c_str());
   s.bind(1, id);
   if (!s.step()) return std::nullopt;
   return readMission(s);
@@ -424,8 +447,8 @@ std::optional<MissionRecord> Database::getMission(const std::string& id) {
 
 std::vector<MissionRecord> Database::listMissions(long long limit, long long offset) {
   std::lock_guard lock(mutex_);
-  Stmt s(db_, (std::string("SELECT ") + kMissionColumns +
-               " FROM missions ORDER BY created_at DESC, id ASC LIMIT ?1 OFFSET ?2")
+  Stmt s(db_, (std::string(kMissionSelect) +
+               "ORDER BY m.created_at DESC, m.id ASC LIMIT ?1 OFFSET ?2")
                   .c_str());
   s.bindInt(1, limit).bindInt(2, offset);
   std::vector<MissionRecord> out;
@@ -467,6 +490,24 @@ void Database::updateMission(const std::string& id, const std::string& status,
   ensureReserves();
   const int changed = isFinal(status) ? withReserve(statusReserve_, update) : update();
   if (changed == 0) throw std::runtime_error("database: no mission '" + id + "'");
+}
+
+bool Database::setMissionLabel(const std::string& id, const std::string& label) {
+  std::lock_guard lock(mutex_);
+  ensureReserves();
+  Stmt s(db_, "UPDATE missions SET label = ?2 WHERE id = ?1");
+  s.bind(1, id).bind(2, label).run();
+  return sqlite3_changes(db_) > 0;
+}
+
+bool Database::deleteMission(const std::string& id) {
+  std::lock_guard lock(mutex_);
+  ensureReserves();
+  return withReserve(deleteReserve_, [&] {
+    Stmt s(db_, "DELETE FROM missions WHERE id = ?1");
+    s.bind(1, id).run();
+    return sqlite3_changes(db_) > 0;
+  });
 }
 
 int Database::markUnfinishedInterrupted() {

@@ -29,6 +29,10 @@ struct PdmRecord {
   nlohmann::json meta;  // kind (gaussians | random | raster), components, files
 };
 
+// A status a mission does not leave: succeeded, completed_with_warnings, failed, cancelled,
+// interrupted.
+bool isFinal(const std::string& status);
+
 struct MissionRecord {
   std::string id;
   std::string mapId;
@@ -39,6 +43,9 @@ struct MissionRecord {
   std::string message;  // failure / interruption reason
   std::string createdAt, startedAt, finishedAt;
   nlohmann::json metrics;  // final metrics (object), null until finished
+  std::string label;       // the operator's name for the run (the request's "name", editable)
+  // Read only, from the maps / PDMs tables: "" once the map or PDM is deleted.
+  std::string mapName, pdmName;
 };
 
 // A full disk: every write throws StorageFull (data_dir.hpp, answered 507) and leaves the old row.
@@ -78,6 +85,8 @@ class Database {
   // a final status; stores metrics when given.
   void updateMission(const std::string& id, const std::string& status, const std::string& message,
                      const nlohmann::json& metrics = nullptr);
+  bool setMissionLabel(const std::string& id, const std::string& label);  // false if absent
+  bool deleteMission(const std::string& id);                                // false if absent
   // After a restart: every queued or running mission becomes interrupted. Returns how many.
   int markUnfinishedInterrupted();
 

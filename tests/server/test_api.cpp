@@ -222,7 +222,59 @@ TEST_CASE("api: a coverage mission runs, reports metrics and exports its results
   auto csv = s.get("/api/missions/" + id + "/result.csv");
   CHECK(csv.body.rfind("rover,index,x_m,y_m\n", 0) == 0);
   checkError(s.get("/api/missions/" + id + "/result.xml"), 404, "file");
-  CHECK(request(s.port(), "DELETE", "/api/missions/" + id).status == 409);  // finished: nothing to cancel
+}
+
+TEST_CASE("api: runs carry their map and PDM names and a label; an ended run can be deleted") {
+  TempDir tmp;
+  ApiServer s(tmp.str("data"), options());
+  const std::string bytes = smallDemBytes(tmp);
+  auto up = request(s.port(), "POST", "/api/maps?name=small%20site&filename=small.tif", bytes, "image/tiff");
+  REQUIRE(up.status == 201);
+  const std::string map = up.json()["id"];
+  auto pdm = s.postJson("/api/maps/" + map + "/pdms", {{"name", "ridge"}, {"random", 2}, {"seed", 3}});
+  REQUIRE(pdm.status == 201);
+  json body = coverageMission(map);
+  body["name"] = "first try";
+  body["pdm"] = pdm.json()["id"];
+  body["params"]["coverage"] = 0.2;
+  auto r = s.postJson("/api/missions", body);
+  REQUIRE(r.status == 202);
+  const std::string id = r.json()["id"];
+  CHECK(r.json()["label"] == "first try");
+  json m = s.waitFinished(id);
+  CHECK(m["map_name"] == "small site");
+  CHECK(m["pdm_name"] == "ridge");
+  CHECK(s.get("/api/missions").json()[0]["map_name"] == "small site");
+
+  // PATCH renames; nothing else can be changed, and the label follows the names' rule.
+  auto p = request(s.port(), "PATCH", "/api/missions/" + id, R"({"label":"transect A"})", "application/json");
+  CHECK(p.status == 200);
+  CHECK(p.json()["label"] == "transect A");
+  CHECK(s.get("/api/missions/" + id).json()["label"] == "transect A");
+  checkError(request(s.port(), "PATCH", "/api/missions/" + id, R"({"status":"succeeded"})", "application/json"),
+             400, "status");
+  checkError(request(s.port(), "PATCH", "/api/missions/" + id, R"({"label":7})", "application/json"), 400, "label");
+  checkError(request(s.port(), "PATCH", "/api/missions/" + id, json{{"label", std::string(201, 'x')}}.dump(),
+                     "application/json"), 400, "label");
+  checkError(request(s.port(), "PATCH", "/api/missions/" + id, "[1]", "application/json"), 400, "body");
+  checkError(request(s.port(), "PATCH", "/api/missions/nope", R"({"label":"x"})", "application/json"), 404, "id");
+
+  // A deleted map leaves its runs, without the name.
+  CHECK(request(s.port(), "DELETE", "/api/maps/" + map).status == 200);
+  m = s.get("/api/missions/" + id).json();
+  CHECK(m["map_name"].is_null());
+  CHECK(m["pdm_name"].is_null());
+
+  // DELETE on an ended run removes it and its files; a second DELETE finds nothing.
+  REQUIRE(fs::exists(s.dir.missionDir(id)));
+  auto d = request(s.port(), "DELETE", "/api/missions/" + id);
+  CHECK(d.status == 200);
+  CHECK(d.json()["deleted"] == id);
+  CHECK_FALSE(fs::exists(s.dir.missionDir(id)));
+  checkError(s.get("/api/missions/" + id), 404, "id");
+  checkError(s.get("/api/missions/" + id + "/result.json"), 404, "id");
+  CHECK(s.get("/api/missions").json().empty());
+  checkError(request(s.port(), "DELETE", "/api/missions/" + id), 404, "id");
 }
 
 TEST_CASE("api: two WebSocket clients see the same final state; a late joiner replays it") {

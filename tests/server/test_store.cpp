@@ -344,23 +344,63 @@ TEST_CASE("database: WAL mode and schema version") {
     db.insertMap(makeMap("m", "2026-01-01T00:00:00.000Z"));
     CHECK(fs::exists(t.db() + "-wal"));
     CHECK(rawQuery(t.db(), "PRAGMA journal_mode") == "wal");
-    CHECK(rawQuery(t.db(), "SELECT version FROM schema_version") == "1");
-    CHECK(rawQuery(t.db(), "SELECT COUNT(*) FROM schema_version") == "1");
+    CHECK(rawQuery(t.db(), "SELECT MAX(version) FROM schema_version") == "2");
+    CHECK(rawQuery(t.db(), "SELECT COUNT(*) FROM schema_version") == "2");  // 1, then 1 -> 2
   }
   {
     Database again(t.db());  // reopening an existing schema is a no-op
     CHECK(again.getMap("m").has_value());
   }
-  CHECK(rawQuery(t.db(), "SELECT COUNT(*) FROM schema_version") == "1");
+  CHECK(rawQuery(t.db(), "SELECT COUNT(*) FROM schema_version") == "2");
 
   // A database written by a newer server is refused rather than misread.
-  rawQuery(t.db(), "UPDATE schema_version SET version = 2");
+  rawQuery(t.db(), "INSERT INTO schema_version(version) VALUES (3)");
   try {
     Database newer(t.db());
     FAIL("expected an exception");
   } catch (const std::runtime_error& e) {
-    CHECK(std::string(e.what()).find("schema version 2") != std::string::npos);
+    CHECK(std::string(e.what()).find("schema version 3") != std::string::npos);
   }
+}
+
+TEST_CASE("database: a version 1 file migrates to 2, its runs labelled with their request's name") {
+  TempDir t;
+  {  // The version 1 schema as servers before the migration wrote it.
+    sqlite3* db = nullptr;
+    REQUIRE(sqlite3_open(t.db().c_str(), &db) == SQLITE_OK);
+    REQUIRE(sqlite3_exec(db, R"sql(
+      CREATE TABLE schema_version(version INTEGER NOT NULL); INSERT INTO schema_version VALUES (1);
+      CREATE TABLE maps(id TEXT PRIMARY KEY, name TEXT NOT NULL, created_at TEXT NOT NULL,
+                        meta TEXT NOT NULL DEFAULT 'null');
+      CREATE TABLE pdms(id TEXT PRIMARY KEY, map_id TEXT NOT NULL REFERENCES maps(id) ON DELETE CASCADE,
+                        name TEXT NOT NULL, created_at TEXT NOT NULL, meta TEXT NOT NULL DEFAULT 'null');
+      CREATE TABLE missions(id TEXT PRIMARY KEY, map_id TEXT NOT NULL, pdm_id TEXT NOT NULL DEFAULT '',
+        planner TEXT NOT NULL, spec TEXT NOT NULL DEFAULT 'null', status TEXT NOT NULL,
+        message TEXT NOT NULL DEFAULT '', created_at TEXT NOT NULL, started_at TEXT, finished_at TEXT,
+        metrics TEXT);
+      INSERT INTO maps VALUES ('m1', 'gale', '2026-01-01T00:00:00.000Z', 'null');
+      INSERT INTO missions(id, map_id, planner, spec, status, created_at, metrics) VALUES
+        ('a', 'm1', 'coverage', '{"name":"old run","rovers":[]}', 'succeeded', '2026-01-02T00:00:00.000Z', '{"coverage":0.9}'),
+        ('b', 'gone', 'coverage', '{"rovers":[]}', 'failed', '2026-01-03T00:00:00.000Z', NULL);
+    )sql", nullptr, nullptr, nullptr) == SQLITE_OK);
+    sqlite3_close(db);
+  }
+  Database db(t.db());
+  CHECK(rawQuery(t.db(), "SELECT MAX(version) FROM schema_version") == "2");
+  auto a = db.getMission("a");
+  REQUIRE(a);
+  CHECK(a->label == "old run");
+  CHECK(a->mapName == "gale");
+  CHECK(a->metrics["coverage"] == 0.9);
+  auto b = db.getMission("b");
+  REQUIRE(b);
+  CHECK(b->label.empty());
+  CHECK(b->mapName.empty());
+  CHECK(db.setMissionLabel("b", "retry"));
+  CHECK(db.listMissions()[0].label == "retry");
+  CHECK(db.deleteMission("a"));
+  CHECK_FALSE(db.deleteMission("a"));
+  CHECK(db.countMissions() == 1);
 }
 
 TEST_CASE("database: cannot open a path under a regular file") {
