@@ -99,6 +99,8 @@ export const api = {
   mission: (id) => getJson(`/api/missions/${id}`),
   launch: (body) => sendJson('POST', '/api/missions', body),
   cancel: (id) => sendJson('DELETE', `/api/missions/${id}`),
+  deleteMission: (id) => sendJson('DELETE', `/api/missions/${id}`),
+  labelMission: (id, label) => sendJson('PATCH', `/api/missions/${id}`, { label }),
   result: (id) => getJson(`/api/missions/${id}/result.json`),
 };
 

@@ -62,9 +62,9 @@ export class MissionView {
     this.renderTimes = [];
     this.stream = new LiveStream(this.handlers());
 
-    const covLayer = layers.addOverlay({ id: 'coverage', label: 'coverage', legendTitle: 'coverage grid (cell state, visits)', visible: true, opacity: 0.75, legend: () => CoverageLayer.legend() });
+    const covLayer = layers.addOverlay({ id: 'coverage', label: 'coverage', legendTitle: 'coverage grid (cell state, visits)', visible: true, opacity: 0.75, legend: () => (this.coverage.ready ? CoverageLayer.legend() : null) });
     const trailLayer = layers.addOverlay({ id: 'trails', label: 'trails', legendTitle: 'rover trails', visible: true, opacity: 0.95, legend: () => this.trailLegend() });
-    const planLayer = layers.addOverlay({ id: 'plan', label: 'team plan', legendTitle: 'team plan', visible: true, opacity: 0.9, legend: () => el('div', { class: 'muted small' }, 'white: team route through the numbered targets; dashed: each rover\'s planned RRT* path') });
+    const planLayer = layers.addOverlay({ id: 'plan', label: 'team plan', legendTitle: 'team plan', visible: true, opacity: 0.9, legend: () => (this.plan.route.length || this.plan.paths.length ? el('div', { class: 'muted small' }, 'white: team route through the numbered targets; dashed: each rover\'s planned RRT* path') : null) });
     view.addLayer({ id: 'coverage', order: 30, draw: (ctx, v) => covLayer.visible && this.coverage.draw(ctx, v, covLayer.opacity) });
     view.addLayer({ id: 'plan', order: 35, draw: (ctx, v) => planLayer.visible && this.plan.draw(ctx, v, planLayer.opacity) });
     view.addLayer({ id: 'trails', order: 40, draw: (ctx, v) => this.trailLayer.draw(ctx, v, trailLayer.opacity, trailLayer.visible) });
@@ -189,7 +189,9 @@ export class MissionView {
         this.view.invalidate();
       },
       overlay: (m) => {
+        const first = !this.plan.route.length && !this.plan.paths.length;
         this.plan.apply(m);
+        if (first) this.layers.renderLegends();  // the team plan's legend, now it has one
         this.view.invalidate();
       },
       progress: (m) => this.onProgress(m),
@@ -251,6 +253,7 @@ export class MissionView {
         if (this.mission?.id !== m.mission) return;
         this.trails.setPaths(this.result.rovers.map((r) => r.path));
         if (this.result.overlays) this.plan.setFromResult(this.result.overlays);
+        this.layers.renderLegends();
         this.setExports(m.mission);
         this.replay.enable(this.trails.longest - 1);
       } catch (err) {
@@ -312,7 +315,7 @@ export class MissionView {
         rows.push(el('span', {}, el('span', { class: 'swatch', style: `background:${c}` }), `${s.style.label ? `${s.style.label} ` : ''}rover ${k + 1}${s.style.dash ? ' (dashed)' : ''}`));
       });
     });
-    return rows.length ? el('div', { class: 'swatches' }, rows) : el('div', { class: 'muted small' }, 'no mission shown');
+    return rows.length ? el('div', { class: 'swatches' }, rows) : null;  // no mission: no legend
   }
 
   // --- dock widgets ---

@@ -1,6 +1,7 @@
-// The Runs tab: every mission with its parameters (GET /api/missions); open one (live or
-// finished: its stream replays the stored final state), or tick two and compare them side by
-// side — metrics table and both runs' trails on the map.
+// The Runs tab: every mission with its label, map, PDM, key metrics and parameters
+// (GET /api/missions); open one (live or finished: its stream replays the stored final state),
+// rename it (PATCH), delete an ended one, or tick two and compare them side by side — metrics
+// table and both runs' trails on the map.
 
 import { api } from './api.js';
 import { $, el, fmt, report } from './util.js';
@@ -20,11 +21,31 @@ const COMPARED = [
   ['steps', 'steps', 'min'],
 ];
 
+// The figures a run is judged by, per planner family: coverage runs by coverage and moves, team
+// runs by probability found, targets and collisions.
+function keyMetrics(m) {
+  const x = m.metrics || {};
+  const parts = [];
+  if (x.accumulated_probability !== undefined) {
+    parts.push(`p ${x.accumulated_probability.toFixed(3)}`);
+    if (x.targets_reached !== undefined) parts.push(`${fmt(x.targets_reached)} targets`);
+    if (x.collisions !== undefined) parts.push(`${fmt(x.collisions)} collisions`);
+    if (x.mission_time_min !== undefined) parts.push(`${x.mission_time_min.toFixed(1)} min`);
+  } else if (x.coverage !== undefined) {
+    parts.push(`${(x.coverage * 100).toFixed(1)} %`);
+    if (x.moves !== undefined) parts.push(`${fmt(x.moves)} moves`);
+    if (x.makespan !== undefined && x.makespan !== x.moves) parts.push(`makespan ${fmt(x.makespan)}`);
+  }
+  return parts.join(' · ');
+}
+
+const ENDED = ['succeeded', 'completed_with_warnings', 'failed', 'cancelled', 'interrupted'];
+
 function paramsLine(m) {
   const spec = m.spec || {};
   const rovers = (spec.rovers || []).map((r) => `(${fmt(r.x)}, ${fmt(r.y)}${r.heading ? `, ${fmt(r.heading)}°` : ''})`).join(' ');
   const params = Object.entries(spec.params || {}).map(([k, v]) => `${k}=${Array.isArray(v) ? `[${v.join(',')}]` : v}`).join(' ');
-  return `${(spec.rovers || []).length} rover(s) ${rovers}; ${params || 'default parameters'}${spec.pace !== undefined ? `; pace ${spec.pace}` : ''}${m.pdm ? `; PDM ${m.pdm}` : ''}`;
+  return `${(spec.rovers || []).length} rover(s) ${rovers}; ${params || 'default parameters'}${spec.pace !== undefined ? `; pace ${spec.pace}` : ''}`;
 }
 
 export class RunsPanel {
@@ -61,12 +82,57 @@ export class RunsPanel {
             this.updateCompareButton();
           },
         }),
-        el('button', { class: 'name', title: `open run ${m.id}`, onclick: () => this.open(m) }, `${m.planner} · ${m.id}`),
+        el('button', { class: 'name', title: `open run ${m.id}`, onclick: () => this.open(m) }, m.label || `${m.planner} · ${m.id}`),
+        el('button', { class: 'small', title: 'rename this run', 'aria-label': `rename run ${m.id}`, onclick: (e) => this.rename(m, e.currentTarget.closest('li')) }, '✎'),
         el('span', { class: `badge ${m.status}`, title: m.message || '' }, m.status.replace(/_/g, ' ')),
-        el('span', { class: 'meta' }, m.metrics?.coverage !== undefined ? `${(m.metrics.coverage * 100).toFixed(1)} %` : ''),
-        el('div', { class: 'params-line' }, `${m.created_at.replace('T', ' ').slice(0, 19)} · ${paramsLine(m)}`))));
+        ENDED.includes(m.status)
+          ? el('button', { class: 'small', title: 'delete this run and its results', 'aria-label': `delete run ${m.id}`, onclick: () => this.remove(m) }, '✕')
+          : null,
+        el('div', { class: 'run-where' },
+          `${m.map_name ?? 'deleted map'}${m.pdm ? ` · PDM ${m.pdm_name ?? 'deleted'}` : ''} · ${m.label ? `${m.planner} · ` : ''}${m.created_at.replace('T', ' ').slice(0, 16)}`,
+          el('span', { class: 'run-metrics', dataset: { keyMetrics: m.id } }, keyMetrics(m))),
+        el('div', { class: 'params-line' }, paramsLine(m)))));
     }
     this.updateCompareButton();
+  }
+
+  // The label becomes an input: Enter saves it (PATCH), Escape or leaving it keeps the old one.
+  rename(m, row) {
+    const name = row.querySelector('button.name');
+    const input = el('input', { type: 'text', value: m.label || '', maxlength: '200', placeholder: `${m.planner} · ${m.id}`, 'aria-label': `label of run ${m.id}`, class: 'run-label' });
+    let done = false;
+    const finish = async (save) => {
+      if (done) return;
+      done = true;
+      if (save && input.value.trim() !== (m.label || '')) {
+        try {
+          Object.assign(m, await api.labelMission(m.id, input.value.trim()));
+        } catch (err) {
+          report(err);
+        }
+      }
+      this.render();
+    };
+    input.addEventListener('keydown', (e) => {
+      if (e.key === 'Enter') finish(true);
+      else if (e.key === 'Escape') finish(false);
+    });
+    input.addEventListener('blur', () => finish(false));
+    name.replaceWith(input);
+    input.focus();
+    input.select();
+  }
+
+  async remove(m) {
+    if (!window.confirm(`Delete the run “${m.label || m.id}” and its results?`)) return;
+    try {
+      await api.deleteMission(m.id);
+      if (this.missionView.mission?.id === m.id) this.missionView.clear();
+      this.selected.delete(m.id);
+      await this.reload();
+    } catch (err) {
+      report(err);
+    }
   }
 
   updateCompareButton() {
