@@ -12,6 +12,7 @@
 #include "core/coverage/terrain_world.hpp"
 #include "maps/georef.hpp"
 #include "server/api/multipart.hpp"
+#include "server/problems/problem_builder.hpp"
 #include "server/json/json_edge.hpp"
 #include "server/json/mission_request.hpp"
 #include "server/json/pdm_json.hpp"
@@ -217,43 +218,34 @@ missions::MissionJob buildMission(ApiContext& ctx, const json& body) {
   // worker builds the world again when it starts the mission (MissionJob::build).
   const GridGeometry mapGeometry = ctx.maps.get(job.record.mapId)->dem.geometry();
   const int roverCount = static_cast<int>(job.problem.rovers.size());
-  double cell = 0;
-  terrain::TraversabilityParams traversal;
-  if (job.record.planner == "coverage") {
-    coverage::CoverageParams cp;
-    try {
-      cp = coverage::parseCoverageParams(job.params);
-      // Square cells laid on the map at its own resolution (core/coverage/terrain_world); the
-      // cell comes from the map when not given and is refused past the grid's cell limit.
-      cell = coverage::resolveCoverageCell(mapGeometry, cp.coverageCell, cp.cellBudget);
-    } catch (const Error& e) {
-      throw fromCore(e, "params.");
-    }
-    traversal = cp.traversability();
+  problems::MapGround ground;
+  try {
+    ground = problems::groundOnMap(job.record.planner, mapGeometry, job.params);
+  } catch (const Error& e) {
+    throw fromCore(e, "params.");
+  }
+  if (ground.coverageGrid) {
+    const double cell = ground.cell;
     const double cells = std::ceil(mapGeometry.heightMetres() / cell - 1e-9) *
                          std::ceil(mapGeometry.widthMetres() / cell - 1e-9);
     job.memory = missions::coverageMissionMemory(static_cast<std::int64_t>(cells), cell, roverCount,
-                                                 cp.mode == coverage::TeamMode::Voronoi, cp.coverage);
+                                                 ground.coverage.mode == coverage::TeamMode::Voronoi,
+                                                 ground.coverage.coverage);
   } else {
     job.memory = missions::teamMissionMemory(mapGeometry.cellCount(), roverCount, !job.record.pdmId.empty());
   }
   ctx.missions.admit(job.memory);
-  job.build = [&maps = ctx.maps, coverageWorld = job.record.planner == "coverage", cell,
-               traversal](missions::MissionJob& j) {
+  job.build = [&maps = ctx.maps, ground](missions::MissionJob& j) {
     auto dem = maps.demAtCell(j.record.mapId, 0);
-    j.problem.body = maps::bodyOfCrs(dem->z.geo.crsWkt);
-    if (coverageWorld) {
-      j.problem.world = coverage::worldFromDem(*dem, cell, traversal);
-      j.problem.dem = dem;  // the start check reads the map itself
-      j.geo = dem->z.geo;
-      j.mapGrid = dem->geometry();
-    } else {
-      j.problem.dem = dem;
-      if (!j.record.pdmId.empty())
-        j.problem.pdm = std::make_shared<Raster<float>>(maps.pdmMass(j.record.pdmId));
-      j.geo = dem->z.geo;
-      j.mapGrid = dem->geometry();
-    }
+    std::shared_ptr<const Raster<float>> pdm;
+    if (!ground.coverageGrid && !j.record.pdmId.empty())
+      pdm = std::make_shared<Raster<float>>(maps.pdmMass(j.record.pdmId));
+    PlanningProblem built = problems::problemOnMap(ground, dem, std::move(pdm));
+    built.rovers = std::move(j.problem.rovers);  // the request's, kept
+    built.threads = j.problem.threads;
+    j.problem = std::move(built);
+    j.geo = dem->z.geo;
+    j.mapGrid = dem->geometry();
   };
   job.build(job);
   try {

@@ -16,27 +16,11 @@
 #include "server/cli/coverage_options.hpp"
 #include "server/cli/dem_options.hpp"
 #include "server/json/plan_json.hpp"
+#include "server/problems/problem_builder.hpp"
 
 namespace rover::cli {
 
 namespace {
-
-// Random distinct starts on free cells of the largest free region that also pass the mission
-// check (a free coverage cell can still sit next to nodata); a few seeds are tried in turn.
-std::vector<RoverStart> randomValidStarts(const Planner& planner, const PlanningProblem& problem,
-                                          const ParamSet& params, int rovers, std::uint64_t seed) {
-  PlanningProblem trial = problem;
-  for (std::uint64_t k = 0;; ++k) {
-    trial.rovers = coverage::cellsToStarts(problem.world.geometry(),
-                                           coverage::randomStarts(problem.world, rovers, seed + k));
-    try {
-      planner.validate(trial, params);
-      return trial.rovers;
-    } catch (const Error& e) {
-      if (k >= 20 || e.field().rfind("rovers", 0) != 0) return trial.rovers;  // validate says why
-    }
-  }
-}
 
 void printSummary(std::ostream& out, const coverage::World& world, const coverage::WorldParams& wp,
                   const coverage::CoverageParams& p, int rovers, const PlanResult& r) {
@@ -107,15 +91,12 @@ int coverageCommand(const std::vector<std::string>& argv, std::ostream& out) {
     typed = coverage::parseCoverageParams(params);
     if (dem) {
       // Square cells of coverage_cell metres in the map's local frame, whatever its pixels.
-      const double cell = coverage::resolveCoverageCell(dem->dem.geometry(), typed.coverageCell,
-                                                        typed.cellBudget);
-      problem.world = coverage::worldFromDem(dem->dem, cell, typed.traversability());
-      problem.dem = std::make_shared<terrain::Dem>(dem->dem);
-      problem.body = maps::bodyOfCrs(dem->dem.z.geo.crsWkt);
+      problem = problems::problemOnMap(problems::groundOnMap("coverage", dem->dem.geometry(), params),
+                                       std::make_shared<terrain::Dem>(dem->dem));
     } else {
-      problem.world = coverage::generateWorld(wp);
+      problem = problems::problemOnGrid(wp);
     }
-    problem.rovers = !starts.empty() ? starts : randomValidStarts(planner, problem, params, rovers, wp.seed);
+    problem.rovers = !starts.empty() ? starts : problems::randomValidStarts(planner, problem, params, rovers, wp.seed);
     planner.validate(problem, params);
   } catch (const Error& e) {
     if (e.field().rfind("rovers", 0) == 0 && !starts.empty())

@@ -8,6 +8,7 @@
 #include "core/common/error.hpp"
 #include "core/pdm/pdm.hpp"
 #include "server/json/pdm_json.hpp"
+#include "server/problems/problem_builder.hpp"
 
 namespace rover::cli {
 
@@ -75,9 +76,7 @@ Raster<float> readPdmOptions(const ArgParser& a, const terrain::Dem& dem, const 
     int count = static_cast<int>(a.integer(n.random, 4, 1, 1000));
     const std::string seedOption = a.has(n.seed) ? n.seed : "seed";
     auto seed = static_cast<std::uint64_t>(a.integer(seedOption, 1, 0, INT64_MAX));
-    Raster<float> p = orUsage([&] { return pdm::discretise(pdm::randomGaussians(g, count, seed), g, valid); });
-    p.geo = dem.z.geo;
-    return p;
+    return orUsage([&] { return problems::randomPdm(dem, count, seed); });
   }
   if (a.has(n.gaussians)) {
     const std::string path = a.str(n.gaussians, "");

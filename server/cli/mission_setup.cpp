@@ -4,6 +4,7 @@
 #include "maps/georef.hpp"
 #include "server/cli/coverage_options.hpp"
 #include "server/cli/dem_options.hpp"
+#include "server/problems/problem_builder.hpp"
 
 namespace rover::cli {
 
@@ -39,17 +40,14 @@ MissionSetup readMissionOptions(const ArgParser& a) {
   if (s.plannerName != "team-search" && s.plannerName != "hybrid")
     throw UsageError("invalid value for --planner: '" + s.plannerName + "' (team-search | hybrid)");
   s.params = readParamOptions(a, team::teamParamTable().infos());
-  team::TeamPlannerParams typed;
   try {
-    typed = team::parseTeamParams(s.params);
+    (void)team::parseTeamParams(s.params);  // a bad parameter is refused before the DEM is read
   } catch (const Error& e) {
     throwAsUsage(e);
   }
   s.demPath = a.str("dem", "");
   maps::LoadedDem loaded = loadDemOrFail(s.demPath, readDemOptions(a, "cell", 0));
   auto dem = std::make_shared<terrain::Dem>(std::move(loaded.dem));
-  s.problem.dem = dem;
-  s.problem.body = maps::bodyOfCrs(dem->z.geo.crsWkt);  // the rover climbs against its body's gravity
   const PdmOptionNames names = missionPdmNames();
   Raster<float> pdm = readPdmOptions(a, *dem, names, true);
   if (a.has(names.random)) {
@@ -62,15 +60,13 @@ MissionSetup readMissionOptions(const ArgParser& a) {
   } else {
     s.pdmSource = "uniform";
   }
-  if (!pdm.empty()) s.problem.pdm = std::make_shared<Raster<float>>(std::move(pdm));
+  s.problem = problems::problemOnMap(problems::groundOnMap(s.plannerName, dem->geometry(), s.params), dem,
+                                     pdm.empty() ? nullptr : std::make_shared<Raster<float>>(std::move(pdm)));
 
   std::vector<RoverStart> starts = readStartOption(a);
   if (starts.empty()) {
     const int n = static_cast<int>(a.integer("rovers", 5, 1, 64));
-    const GridGeometry& g = dem->geometry();
-    const Eigen::Vector2d centre(g.widthMetres() / 2, g.heightMetres() / 2);
-    for (const auto& p : orUsage([&] { return team::formationStarts(*dem, typed.mission, centre, n); }))
-      starts.push_back({{p.x, p.y}, p.heading});
+    starts = orUsage([&] { return problems::formationStarts(*dem, s.params, n); });
   }
   s.problem.rovers = starts;
   try {
