@@ -14,6 +14,7 @@ build_pkgs=(
   libboost-dev libboost-system-dev libboost-serialization-dev libboost-filesystem-dev
   libboost-program-options-dev
   nlohmann-json3-dev libgdal-dev libsqlite3-dev doctest-dev
+  libssl-dev   # SHA-256 of a map's grid (maps/dem_digest)
 )
 test_pkgs=(
   gdal-bin   # gdaldem/gdalinfo/ogrinfo: reference outputs the tests compare against
@@ -22,7 +23,7 @@ test_pkgs=(
   curl python3
   clang libclang-rt-14-dev   # libFuzzer harnesses (tests/fuzz/run.sh)
 )
-runtime_pkgs=(libompl16 libgdal32 libsqlite3-0 gdal-data curl ca-certificates)  # curl: HEALTHCHECK
+runtime_pkgs=(libompl16 libgdal32 libsqlite3-0 libssl3 gdal-data curl ca-certificates)  # curl: HEALTHCHECK
 bench_pkgs=(wrk nginx-light time curl)  # tests/bench/*: load generator and the nginx baseline
 
 mode=${1:-all}

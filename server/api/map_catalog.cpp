@@ -12,6 +12,7 @@
 #include <set>
 
 #include "core/common/error.hpp"
+#include "maps/dem_digest.hpp"
 #include "maps/dem_io.hpp"
 #include "maps/gdal_env.hpp"
 #include "maps/render.hpp"
@@ -148,6 +149,7 @@ nlohmann::json metaFor(const maps::LoadedDem& d, const terrain::Traversability& 
           {"geographic", d.info.geographic},
           {"driver", d.info.driver},
           {"source_files", sources},
+          {"dem_sha256", maps::demSha256(d.dem)},
           {"resampling", d.info.resampling},
           {"elevation", {{"min", d.info.minHeight}, {"max", d.info.maxHeight}}},
           {"classes",

@@ -10,7 +10,9 @@
 #include "core/coverage/coverage_params.hpp"
 #include "core/coverage/coverage_entry.hpp"
 #include "core/coverage/terrain_world.hpp"
+#include "maps/dem_digest.hpp"
 #include "maps/georef.hpp"
+#include "server/api/mission_file.hpp"
 #include "server/api/multipart.hpp"
 #include "server/problems/problem_builder.hpp"
 #include "server/json/json_edge.hpp"
@@ -192,9 +194,17 @@ std::vector<UploadedFile> uploadedFiles(const Request& req, store::DataDir& dir,
   return files;
 }
 
+// The digest of a map's grid (maps/dem_digest): stored with maps imported since mission files,
+// computed from the loaded grid for older ones.
+std::string mapDigest(ApiContext& ctx, const std::string& mapId) {
+  if (auto rec = ctx.db.getMap(mapId); rec && rec->meta.contains("dem_sha256"))
+    return rec->meta["dem_sha256"].get<std::string>();
+  return maps::demSha256(ctx.maps.get(mapId)->dem);
+}
+
 // Builds the planning problem for a mission request; every error names its field.
 missions::MissionJob buildMission(ApiContext& ctx, const json& body) {
-  rj::MissionRequest request = rj::parseMissionRequest(body, ctx.planners);
+  rj::MissionRequest request = rj::parseMissionRequest(body, ctx.planners, kMissionFileVersion);
   missions::MissionJob job;
   job.record.mapId = request.mapId;
   job.record.pdmId = request.pdmId;
@@ -206,6 +216,12 @@ missions::MissionJob buildMission(ApiContext& ctx, const json& body) {
   const Planner* planner = &ctx.planners.get(job.record.planner);
   if (!ctx.db.getMap(job.record.mapId))
     throw ApiError(400, "not_found", "no map '" + job.record.mapId + "'", "map");
+  if (request.demSha256 && *request.demSha256 != mapDigest(ctx, job.record.mapId))
+    throw ApiError(409, "map_changed",
+                   "map " + job.record.mapId + " is not the grid this mission file was planned on "
+                   "(its dem_sha256 differs): upload the same DEM with the same crop and cell size, "
+                   "and put that map's id in the file",
+                   "dem_sha256");
   if (!job.record.pdmId.empty()) {
     auto p = ctx.db.getPdm(job.record.pdmId);
     if (!p || p->mapId != job.record.mapId)
@@ -565,18 +581,26 @@ void addApiRoutes(http::Router& router, ApiContext& ctx) {
     const std::string id = req.params.at("id"), file = req.params.at("file");
     auto m = ctx.db.getMission(id);
     if (!m) throw ApiError(404, "not_found", "no mission '" + id + "'", "id");
+    if (file == "mission.json") {
+      const std::string digest = ctx.db.getMap(m->mapId) ? mapDigest(ctx, m->mapId) : std::string();
+      Response r = Response::json(200, missionFile(*m, digest, ctx.version));
+      r.headers.emplace_back("Content-Disposition", "attachment; filename=\"mission-" + id + ".json\"");
+      return r;
+    }
     static const std::map<std::string, std::string> types{{"result.json", "application/json"},
                                                           {"result.geojson", "application/geo+json"},
                                                           {"result.csv", "text/csv"}};
     auto t = types.find(file);
-    if (t == types.end()) throw ApiError(404, "not_found", "no file '" + file + "' (result.json, result.geojson, result.csv)", "file");
+    if (t == types.end())
+      throw ApiError(404, "not_found", "no file '" + file + "' (mission.json, result.json, result.geojson, result.csv)", "file");
     const fs::path path = fs::path(ctx.dir.missionDir(id)) / file;
     if (!fs::exists(path))
       throw ApiError(409, "not_ready", "mission " + id + " is " + m->status + ": no result yet", "id");
     Response r = fileResponse(path.string(), t->second);
     r.headers.emplace_back("Content-Disposition", "attachment; filename=\"mission-" + id + "-" + file + "\"");
     return r;
-  }), doc("A finished mission's result: result.json, result.geojson (map CRS), result.csv."));
+  }), doc("A mission's file (mission.json: everything to run it again, POST it to /api/missions), or "
+          "a finished mission's result: result.json, result.geojson (map CRS), result.csv.", onPool));
 
   http::RouteOptions ws;
   ws.summary = "WebSocket: a snapshot, then live events (binary grid frames, JSON poses/progress), "

@@ -67,9 +67,12 @@ ParamValue paramValue(const ParamInfo& info, const json& value) {
 
 }  // namespace
 
-MissionRequest parseMissionRequest(const json& body, const PlannerRegistry& planners) {
+MissionRequest parseMissionRequest(const json& body, const PlannerRegistry& planners,
+                                   int maxFileVersion) {
   if (!body.is_object()) throw ApiError(400, "bad_json", "the request body must be a JSON object", "body");
-  static const std::vector<std::string> known{"map", "pdm", "planner", "rovers", "params", "pace", "name"};
+  static const std::vector<std::string> known{"map",     "pdm",       "planner",    "rovers",
+                                              "params",  "pace",      "name",       "format",
+                                              "version", "roverplan", "dem_sha256", "map_name"};
   for (const auto& item : body.items())
     if (std::find(known.begin(), known.end(), item.key()) == known.end())
       throw ApiError(400, "unknown_field", "unknown field '" + shown(item.key()) + "'", shown(item.key()));
@@ -129,10 +132,32 @@ MissionRequest parseMissionRequest(const json& body, const PlannerRegistry& plan
   if (auto pace = body.find("pace"); pace != body.end())
     req.pace = boundedNumber(*pace, "pace", 0, kMaxPace, "a number of steps per second in [0, 1e6]");
 
+  // A mission file's own fields.
+  if (body.contains("format")) {
+    if (stringField(body, "format", false) != "roverplan-mission")
+      throw ApiError(400, "invalid_field", "format must be \"roverplan-mission\"", "format");
+  }
+  if (auto v = body.find("version"); v != body.end()) {
+    if (!v->is_number_integer() || v->get<long long>() < 1)
+      throw ApiError(400, "invalid_field", "version must be a whole number from 1", "version");
+    if (v->get<long long>() > maxFileVersion)
+      throw ApiError(400, "unsupported_version",
+                     "mission file version " + std::to_string(v->get<long long>()) +
+                         " is newer than this server reads (" + std::to_string(maxFileVersion) + ")",
+                     "version");
+  }
+  stringField(body, "roverplan", false);
+  stringField(body, "map_name", false);
+  if (auto d = body.find("dem_sha256"); d != body.end() && !d->is_null()) {
+    const bool hex = d->is_string() && d->get<std::string>().size() == 64 &&
+                     d->get<std::string>().find_first_not_of("0123456789abcdef") == std::string::npos;
+    if (!hex) throw ApiError(400, "invalid_field", "dem_sha256 must be 64 lower-case hex digits", "dem_sha256");
+    req.demSha256 = d->get<std::string>();
+  }
+
   req.spec = body;
-  req.spec.erase("map");
-  req.spec.erase("pdm");
-  req.spec.erase("planner");
+  for (const char* key : {"map", "pdm", "planner", "format", "version", "roverplan", "dem_sha256", "map_name"})
+    req.spec.erase(key);
   return req;
 }
 

@@ -22,6 +22,8 @@ struct MissionRequest {
   std::vector<RoverStart> rovers;  // local metres; heading in radians
   std::optional<double> pace;      // steps per second
   nlohmann::json spec;             // the body as accepted, without map, pdm and planner
+  // From a mission file (server/api/mission_file.hpp): the grid digest its map must have.
+  std::optional<std::string> demSha256;
 };
 
 // Limits stated in README (API): at most kMaxRovers rovers; x and y finite with |v| <= 1e9 m (the
@@ -31,7 +33,11 @@ inline constexpr double kMaxCoordinateM = 1e9;
 inline constexpr double kMaxHeadingDeg = 360;
 inline constexpr double kMaxPace = 1e6;
 
+// A mission file's own fields are accepted too: format ("roverplan-mission"), version (at most
+// `maxFileVersion`), dem_sha256 (64 hex digits, or null) and the informative roverplan and
+// map_name (strings, not checked further).
 // Throws http::ApiError (400) naming the field: "map", "planner", "params.KEY", "rovers[2].x", ...
-MissionRequest parseMissionRequest(const nlohmann::json& body, const PlannerRegistry& planners);
+MissionRequest parseMissionRequest(const nlohmann::json& body, const PlannerRegistry& planners,
+                                   int maxFileVersion = 1);
 
 }  // namespace rover::json

@@ -4,6 +4,7 @@
 #include <ogr_srs_api.h>
 
 #include <cmath>
+#include <limits>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -12,6 +13,7 @@
 
 #include "core/common/error.hpp"
 #include "core/terrain/layers.hpp"
+#include "maps/dem_digest.hpp"
 #include "maps/dem_io.hpp"
 #include "maps/gdal_env.hpp"
 
@@ -326,4 +328,22 @@ TEST_CASE("Horn slope agrees with gdaldem on the real Kepler crater DEM") {
   for (int r = 1; r < 803; ++r)
     for (int c = 1; c < 803; ++c) worst = std::max(worst, std::fabs(double(ours(r, c)) - ref(r, c)));
   CHECK(worst < 0.01);
+}
+
+TEST_CASE("dem digest: the SHA-256 of the grid as defined, whatever the NaN payload") {
+  terrain::Dem d;
+  d.z = Raster<float>(GridGeometry{2, 3, 1.0, 0.5}, 0.0f);
+  const float v[6] = {1, 2, 3, 4, 5, std::numeric_limits<float>::quiet_NaN()};
+  for (int i = 0; i < 6; ++i) d.z.at(i) = v[i];
+  // Python: sha256(b'roverplan-dem-v1' + struct.pack('<qqddq', 2, 3, 1.0, 0.5, 0)
+  //                + struct.pack('<6f', 1, 2, 3, 4, 5, float('nan')))
+  CHECK(maps::demSha256(d) == "9c2233b4be5cbbd45ea3db1d6dd7587a1b0f99b30b66fd04385c78192a0261b4");
+  terrain::Dem e = d;
+  e.z.at(5) = -std::numeric_limits<float>::quiet_NaN();  // another NaN: the same nodata cell
+  CHECK(maps::demSha256(e) == maps::demSha256(d));
+  e.z.at(0) = 1.0001f;
+  CHECK(maps::demSha256(e) != maps::demSha256(d));
+  e = d;
+  e.rowCellWidth = {1.0, 1.0};  // per-row widths are part of the ground
+  CHECK(maps::demSha256(e) != maps::demSha256(d));
 }

@@ -277,6 +277,60 @@ TEST_CASE("api: runs carry their map and PDM names and a label; an ended run can
   checkError(request(s.port(), "DELETE", "/api/missions/" + id), 404, "id");
 }
 
+TEST_CASE("api: a mission file runs the mission again, with the same result") {
+  TempDir tmp;
+  ApiServer s(tmp.str("data"), options());
+  const std::string map = s.defaultMap();
+  json body = coverageMission(map, 30, 40);
+  body["name"] = "strip";
+  body["params"] = {{"coverage", 0.3}, {"pattern", "boustrophedon"}};
+  auto r = s.postJson("/api/missions", body);
+  REQUIRE(r.status == 202);
+  const std::string first = r.json()["id"];
+  REQUIRE(s.waitFinished(first)["status"] == "succeeded");
+
+  auto f = s.get("/api/missions/" + first + "/mission.json");
+  REQUIRE(f.status == 200);
+  CHECK(f.headers["Content-Disposition"].find("mission-" + first + ".json") != std::string::npos);
+  json file = f.json();
+  CHECK(file["format"] == "roverplan-mission");
+  CHECK(file["version"] == 1);
+  CHECK(file["map"] == map);
+  CHECK(file["dem_sha256"].get<std::string>().size() == 64);
+  CHECK(file["dem_sha256"] == s.get("/api/maps/" + map).json()["dem_sha256"]);
+  CHECK(file["planner"] == "coverage");
+  CHECK(file["name"] == "strip");
+  CHECK(file["params"] == body["params"]);
+  CHECK(file["rovers"] == body["rovers"]);
+
+  // Posted back as it is: the same run.
+  r = s.postJson("/api/missions", file);
+  REQUIRE(r.status == 202);
+  const std::string second = r.json()["id"];
+  REQUIRE(s.waitFinished(second)["status"] == "succeeded");
+  json a = s.get("/api/missions/" + first + "/result.json").json();
+  json b = s.get("/api/missions/" + second + "/result.json").json();
+  CHECK(a["rovers"] == b["rovers"]);
+  CHECK(a["metrics"] == b["metrics"]);
+  CHECK(s.get("/api/missions/" + second + "/mission.json").json()["params"] == file["params"]);
+
+  // Its own fields are checked: other ground, a newer format, a wrong one.
+  json other = file;
+  other["dem_sha256"] = std::string(64, '0');
+  checkError(s.postJson("/api/missions", other), 409, "dem_sha256");
+  other["dem_sha256"] = "ABC";
+  checkError(s.postJson("/api/missions", other), 400, "dem_sha256");
+  other = file;
+  other["version"] = 2;
+  auto newer = s.postJson("/api/missions", other);
+  checkError(newer, 400, "version");
+  CHECK(newer.json()["error"]["code"] == "unsupported_version");
+  other = file;
+  other["format"] = "qgc-plan";
+  checkError(s.postJson("/api/missions", other), 400, "format");
+  checkError(s.get("/api/missions/nope/mission.json"), 404, "id");
+}
+
 TEST_CASE("api: two WebSocket clients see the same final state; a late joiner replays it") {
   TempDir tmp;
   ApiServer s(tmp.str("data"), options());

@@ -101,6 +101,7 @@ export const api = {
   cancel: (id) => sendJson('DELETE', `/api/missions/${id}`),
   deleteMission: (id) => sendJson('DELETE', `/api/missions/${id}`),
   labelMission: (id, label) => sendJson('PATCH', `/api/missions/${id}`, { label }),
+  missionFile: (id) => request(`/api/missions/${id}/mission.json`).then((r) => r.json()),
   result: (id) => getJson(`/api/missions/${id}/result.json`),
 };
 

@@ -39,7 +39,13 @@ const missionView = new MissionView({ view, layers, statusLine, selectMap, onFin
 const pdmEditor = new PdmEditor({ view, layers });
 const missionForm = new MissionForm({ view, onLaunched: (m) => launched(m) });
 const mapsPanel = new MapsPanel({ selectMap: chooseMap });
-const runs = new RunsPanel({ missionView });
+const runs = new RunsPanel({
+  missionView,
+  onDuplicate: async (file) => {
+    await missionForm.load(file, chooseMap);
+    showTab('mission');
+  },
+});
 const view3d = new View3D({ container: $('view3d'), message: $('view3d-message'), layers, missionView });
 window.__roverplanApp = { view, layers, missionView, pdmEditor, missionForm, mapsPanel, runs, view3d, state };
 

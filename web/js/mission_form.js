@@ -46,8 +46,9 @@ export class MissionForm {
       this.next = 0;
       this.renderRovers();
       this.renderPdms();
-      this.loadMapDefaults();
+      this.defaultsLoading = this.loadMapDefaults();  // load() waits for it before filling in
     });
+    $('m-file').addEventListener('change', (e) => this.runFile(e.target));
     state.on('pdms', () => this.renderPdms());
     state.on('pdm-selected', () => this.renderPdms());
     this.setCount(Number($('m-rover-count').value) || 1);
@@ -354,6 +355,61 @@ export class MissionForm {
   }
 
   // --- launch ---
+  // --- mission files (GET /api/missions/{id}/mission.json) ---
+  // "Duplicate and edit": the file's map, planner, PDM, rovers, parameters, pace and name in the
+  // form, to change and launch.
+  async load(file, selectMap) {
+    if (state.map?.id !== file.map) await selectMap(file.map);
+    await this.defaultsLoading;
+    const sel = $('m-planner');
+    if (![...sel.options].some((o) => o.value === file.planner)) throw new Error(`this server has no planner ${file.planner}`);
+    sel.value = file.planner;
+    this.renderParams();
+    for (const [key, value] of Object.entries(file.params || {})) {
+      const input = $(FIELD_PREFIX + key);
+      if (!input) throw new Error(`planner ${file.planner} has no parameter ${key}`);
+      if (input.type === 'checkbox') input.checked = Boolean(value);
+      else input.value = Array.isArray(value) ? value.join(', ') : String(value);
+    }
+    this.updateDependent();
+    $('m-pdm').value = file.pdm || '';
+    $('m-pdm').dispatchEvent(new Event('change'));
+    const rovers = (file.rovers || []).map((r) => ({ x: r.x, y: r.y, heading: r.heading ?? 0 }));
+    $('m-rover-count').value = String(rovers.length);
+    this.rovers = rovers;
+    this.next = 0;
+    this.setPlacing(false);  // every rover is placed
+    this.renderRovers();
+    if (file.pace !== undefined) $('m-pace').value = String(file.pace);
+    $('m-name').value = file.name ? `${file.name} (copy)` : '';
+    this.view.invalidate();
+  }
+
+  // "Open mission file": the file is sent as it is, so the server checks its map's digest and the
+  // run is the same as the one that wrote it.
+  async runFile(input) {
+    const f = input.files && input.files[0];
+    input.value = '';
+    if (!f) return;
+    const status = $('m-file-status');
+    try {
+      if (f.size > 64 * 1024) throw new Error(`${f.name} is ${Math.round(f.size / 1024)} KB: a mission file is at most 64 KB`);
+      let file;
+      try {
+        file = JSON.parse(await f.text());
+      } catch {
+        throw new Error(`${f.name} is not JSON`);
+      }
+      status.textContent = `sending ${f.name}…`;
+      const mission = await api.launch(file);
+      status.textContent = `launched ${mission.id} from ${f.name}`;
+      await this.onLaunched(mission);
+    } catch (err) {
+      status.textContent = '';
+      showError($('m-error'), `${f.name}: ${err.message}${err.field ? ` (field: ${err.field})` : ''}`);
+    }
+  }
+
   async launch() {
     this.clearErrors();
     const map = state.map;
@@ -377,6 +433,7 @@ export class MissionForm {
       pace,
     };
     if ($('m-pdm').value) body.pdm = $('m-pdm').value;
+    if ($('m-name').value.trim()) body.name = $('m-name').value.trim();
     const button = $('m-launch');
     button.disabled = true;
     $('m-launch-status').textContent = 'sending…';

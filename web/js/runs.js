@@ -3,7 +3,7 @@
 // rename it (PATCH), delete an ended one, or tick two and compare them side by side — metrics
 // table and both runs' trails on the map.
 
-import { api } from './api.js';
+import { api, downloadWithToken } from './api.js';
 import { $, el, fmt, report } from './util.js';
 
 const COMPARED = [
@@ -49,8 +49,9 @@ function paramsLine(m) {
 }
 
 export class RunsPanel {
-  constructor({ missionView }) {
+  constructor({ missionView, onDuplicate }) {
     this.missionView = missionView;
+    this.onDuplicate = onDuplicate;
     this.missions = [];
     this.selected = new Set();
     $('runs-refresh').addEventListener('click', () => this.reload());
@@ -85,6 +86,8 @@ export class RunsPanel {
         el('button', { class: 'name', title: `open run ${m.id}`, onclick: () => this.open(m) }, m.label || `${m.planner} · ${m.id}`),
         el('button', { class: 'small', title: 'rename this run', 'aria-label': `rename run ${m.id}`, onclick: (e) => this.rename(m, e.currentTarget.closest('li')) }, '✎'),
         el('span', { class: `badge ${m.status}`, title: m.message || '' }, m.status.replace(/_/g, ' ')),
+        el('button', { class: 'small', title: 'duplicate and edit: this run in the Mission form', 'aria-label': `duplicate run ${m.id}`, onclick: () => this.duplicate(m) }, '⧉'),
+        el('button', { class: 'small', title: 'download its mission file (open it in the Mission tab to run it again)', 'aria-label': `mission file of run ${m.id}`, onclick: () => downloadWithToken(`/api/missions/${m.id}/mission.json`, `mission-${m.id}.json`).catch(report) }, '⤓'),
         ENDED.includes(m.status)
           ? el('button', { class: 'small', title: 'delete this run and its results', 'aria-label': `delete run ${m.id}`, onclick: () => this.remove(m) }, '✕')
           : null,
@@ -121,6 +124,14 @@ export class RunsPanel {
     name.replaceWith(input);
     input.focus();
     input.select();
+  }
+
+  async duplicate(m) {
+    try {
+      await this.onDuplicate(await api.missionFile(m.id));
+    } catch (err) {
+      report(err);
+    }
   }
 
   async remove(m) {

@@ -1,0 +1,26 @@
+#include "server/api/mission_file.hpp"
+
+namespace rover::api {
+
+using nlohmann::json;
+
+json missionFile(const store::MissionRecord& m, const std::string& demSha256,
+                 const std::string& version) {
+  const json& spec = m.spec.is_object() ? m.spec : json::object();
+  json f{{"format", kMissionFileFormat},
+         {"version", kMissionFileVersion},
+         {"roverplan", version},
+         {"map", m.mapId},
+         {"map_name", m.mapName.empty() ? json(nullptr) : json(m.mapName)},
+         {"dem_sha256", demSha256.empty() ? json(nullptr) : json(demSha256)},
+         {"pdm", m.pdmId.empty() ? json(nullptr) : json(m.pdmId)},
+         {"planner", m.planner},
+         {"rovers", spec.value("rovers", json::array())},
+         {"params", spec.value("params", json::object())}};
+  if (spec.contains("pace")) f["pace"] = spec["pace"];
+  const std::string name = !m.label.empty() ? m.label : spec.value("name", std::string());
+  if (!name.empty()) f["name"] = name;
+  return f;
+}
+
+}  // namespace rover::api
