@@ -135,6 +135,8 @@ class Engine {
   }
   Eigen::Vector2d truePos(const RoverRun& r) const { return believedPos(r) + r.odo->error(); }
   void recordPose(RoverRun& r);
+  // No neighbour the rover's map lets it enter, team mates aside.
+  bool walledIn(const RoverRun& r) const;
   void summariseLocalisation(CoverageResult& res) const;
   int trueVisitedTotal() const { return loc_ ? trueVisitedCount_ : visitedTotal(); }
   void afterContourMove(RoverRun& r);
@@ -530,6 +532,18 @@ void Engine::closeLoop(RoverRun& r) {
   ++r.track.loopClosures;
 }
 
+bool Engine::walledIn(const RoverRun& r) const {
+  const KnowledgeMap& m = maps_[r.mapId];
+  const CellIndex c = g_.cell(r.cell);
+  for (int d = 0; d < kDirections; ++d) {
+    const int row = c.row + kDirRow[d], col = c.col + kDirCol[d];
+    if (!g_.contains(row, col)) continue;
+    const int i = g_.index(row, col);
+    if (m.inRegion(i) && m.state(i) != CellState::Obstacle) return false;
+  }
+  return true;
+}
+
 void Engine::recordPose(RoverRun& r) {
   const double error = r.odo->error().norm();
   r.track.truePoints.push_back(truePos(r));
@@ -650,6 +664,13 @@ CoverageResult Engine::run() {
       int next = choose(r);
       if (r.done) continue;
       if (next < 0) {
+        if (loc_ && walledIn(r)) {
+          // Under localisation error the map itself can wall a rover in (bumps and smeared
+          // obstacles all round): it can never move again, so it stops.
+          r.done = true;
+          r.doneReason = StopReason::NothingLeft;
+          continue;
+        }
         ++r.track.waits;  // boxed in by team mates this step
         continue;
       }

@@ -25,7 +25,8 @@ std::vector<StartCell> randomStarts(const World& world, int count, std::uint64_t
 
 enum class StopReason {
   GoalReached,  // coverage goal met (for Voronoi: by every rover in its region)
-  NothingLeft,  // frontier mode: no reachable unexplored cell remains
+  NothingLeft,  // frontier mode: no reachable unexplored cell remains; under localisation
+                // error also: every rover's own map walls it in
   StepBudget,   // max_steps ran out first
   Cancelled,
 };

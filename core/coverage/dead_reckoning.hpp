@@ -25,6 +25,8 @@
 // rover stays where it truly is, knows it did not move (a bumper, a stalled wheel), marks C an
 // obstacle in its map and the bump is an incident. Only the end of a move is checked, as the
 // planner allows diagonal moves between corner-touching obstacles.
+// A rover whose map walls it in (bumps and smeared obstacles on all 8 sides) can never move again
+// and stops (StopReason::NothingLeft) instead of waiting out the step budget.
 //
 // Sensing: the cells around the rover's *true* cell are read from the truth and written into its
 // map around its *believed* cell (same offsets), so the map smears as the pose drifts; first

@@ -229,7 +229,8 @@ missions::MissionJob buildMission(ApiContext& ctx, const json& body) {
     const double cells = std::ceil(mapGeometry.heightMetres() / cell - 1e-9) *
                          std::ceil(mapGeometry.widthMetres() / cell - 1e-9);
     job.memory = missions::coverageMissionMemory(static_cast<std::int64_t>(cells), cell, roverCount,
-                                                 cp.mode == coverage::TeamMode::Voronoi, cp.coverage);
+                                                 cp.mode == coverage::TeamMode::Voronoi, cp.coverage,
+                                                 cp.localisation.active());
   } else {
     job.memory = missions::teamMissionMemory(mapGeometry.cellCount(), roverCount, !job.record.pdmId.empty());
   }
