@@ -270,3 +270,15 @@ TEST_CASE("localisation parameters: table keys, ranges and the map's bump rule")
   CHECK(m.state(1) == CellState::Obstacle);
   CHECK_FALSE(m.markObstacle(1));
 }
+
+TEST_CASE("a rover its own map walls in stops instead of waiting out the step budget") {
+  // The CLI's default world (60 × 60, seed 1) with 3 % / 1° drift and loop closure: the rover
+  // ends on the field's south edge with every neighbour an obstacle in its map (bumps, smear).
+  World w = generateWorld({});
+  CoverageParams p = noisy(3.0, 1.0, true);
+  const CoverageResult r = runCoverage(w, randomStarts(w, 1, 1), p);
+  CHECK(r.stop == StopReason::NothingLeft);
+  CHECK(r.metrics.steps < p.stepBudget(w.geometry().cellCount()));
+  CHECK(r.rovers[0].waits < 100);
+  CHECK(r.metrics.trueCoverage < r.metrics.coverage);
+}
