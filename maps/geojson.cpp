@@ -120,33 +120,31 @@ std::string tracksToGeoJson(const std::vector<Track>& tracks, const GridGeometry
 
     OGRFieldDefn roverField("rover", OFTInteger);
     if (layer->CreateField(&roverField) != OGRERR_NONE) throwGdal("cannot create field rover");
+    // Localisation error (coverage): each rover's true track, then its believed one.
+    bool believed = false;
+    for (const Track& t : tracks) believed = believed || !t.believed.empty();
+    if (believed) {
+      OGRFieldDefn trackField("track", OFTString);
+      if (layer->CreateField(&trackField) != OGRERR_NONE) throwGdal("cannot create field track");
+    }
     for (const auto& key : metricKeys) {
       OGRFieldDefn field(key.c_str(), OFTReal);
       if (layer->CreateField(&field) != OGRERR_NONE) throwGdal("cannot create field " + key);
     }
 
-    for (const Track& t : tracks) {
-      OGRFeature feature(layer->GetLayerDefn());
-      feature.SetField("rover", t.rover);
-      for (const Metric& m : t.metrics) {
-        const std::string name = fieldNameFor(m.key);
-        // Non-finite values would make invalid JSON: store them as null.
-        if (std::isfinite(m.value))
-          feature.SetField(name.c_str(), m.value);
-        else
-          feature.SetFieldNull(feature.GetFieldIndex(name.c_str()));
-      }
-
+    // One feature: its geometry from `points` (a LineString needs two points: a one-point track
+    // is a Point, an empty one has no geometry).
+    auto writeFeature = [&](OGRFeature& feature, const Track& t,
+                            const std::vector<Eigen::Vector2d>& points) {
       std::vector<Eigen::Vector2d> crs;
-      crs.reserve(t.points.size());
-      for (const auto& p : t.points) {
+      crs.reserve(points.size());
+      for (const auto& p : points) {
         const Eigen::Vector2d c = localToCrs(g, geo, p);
         if (!std::isfinite(c.x()) || !std::isfinite(c.y()))
           throw Error(ErrorCode::InvalidInput, "tracks",
                       "track of rover " + std::to_string(t.rover) + " has a non-finite point");
         crs.push_back(c);
       }
-      // A LineString needs two points: a one-point track is a Point, an empty one has no geometry.
       if (crs.size() >= 2) {
         OGRLineString line;
         line.setNumPoints(static_cast<int>(crs.size()));
@@ -159,6 +157,27 @@ std::string tracksToGeoJson(const std::vector<Track>& tracks, const GridGeometry
       }
       if (layer->CreateFeature(&feature) != OGRERR_NONE)
         throwGdal("cannot write the track of rover " + std::to_string(t.rover));
+    };
+
+    for (const Track& t : tracks) {
+      OGRFeature feature(layer->GetLayerDefn());
+      feature.SetField("rover", t.rover);
+      if (believed) feature.SetField("track", "true");
+      for (const Metric& m : t.metrics) {
+        const std::string name = fieldNameFor(m.key);
+        // Non-finite values would make invalid JSON: store them as null.
+        if (std::isfinite(m.value))
+          feature.SetField(name.c_str(), m.value);
+        else
+          feature.SetFieldNull(feature.GetFieldIndex(name.c_str()));
+      }
+      writeFeature(feature, t, t.points);
+      if (!t.believed.empty()) {
+        OGRFeature b(layer->GetLayerDefn());
+        b.SetField("rover", t.rover);
+        b.SetField("track", "believed");
+        writeFeature(b, t, t.believed);
+      }
     }
   }  // closing the dataset flushes the file
 

@@ -5,7 +5,9 @@
 //
 // Properties: "rover" (integer) and one real field per metric key (a metric named "rover" is
 // stored as "rover_metric"; non-finite values are null). A one-point track is a Point feature,
-// an empty one has a null geometry. Coordinates go through localToCrs. The "crs" member names
+// an empty one has a null geometry. A track with believed points (coverage under localisation
+// error) is followed by a second feature, its believed track, with the same "rover"; both then
+// carry "track": "true" or "believed" (the metrics on the true one). Coordinates go through localToCrs. The "crs" member names
 // the map's CRS: "urn:ogc:def:crs:AUTH::CODE" when it has an authority code, else its WKT2 text
 // (GDAL's reader takes both); none when geo.crsWkt is empty. Throws rover::Error
 // (InvalidInput, "crs") for an unparsable CRS and (InvalidInput, "tracks") for non-finite points.

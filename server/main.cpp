@@ -20,7 +20,7 @@ const char* kUsage =
     "(paper 001)\n"
     "  sweep      many seeded runs on all cores, summarised (--preset "
     "laine-fig6|laine-fig8|frontier|swinton)\n"
-    "  bench      benchmarks that print their figures (bench coverage|mission)\n"
+    "  bench      benchmarks that print their figures (bench coverage|mission|localisation)\n"
     "  terrain    synthetic moon/mars terrain as a GeoTIFF (the default map)\n"
     "  traversability  traversability classes and their shares from any DEM GDAL reads\n"
     "  slope      Horn slope (degrees) as a GeoTIFF, as gdaldem slope\n"

@@ -1,7 +1,9 @@
 #pragma once
 // Seeded randomness with fully specified algorithms, so a seed gives the same numbers on every
 // standard library (std::uniform_int_distribution is implementation-defined; we avoid it).
+#include <cmath>
 #include <cstdint>
+#include <numbers>
 
 namespace rover {
 
@@ -27,6 +29,14 @@ class Rng {
  private:
   std::uint64_t state_;
 };
+
+// A standard normal draw (Box–Muller, one value per call), so the stream is the same on every
+// standard library (std::normal_distribution is implementation-defined too).
+inline double normalDraw(Rng& rng) {
+  const double u1 = 1.0 - rng.uniform();  // (0, 1]
+  const double u2 = rng.uniform();
+  return std::sqrt(-2.0 * std::log(u1)) * std::cos(2 * std::numbers::pi * u2);
+}
 
 // A sub-seed for a named purpose, so streams for obstacles, starts, ... never overlap.
 inline std::uint64_t deriveSeed(std::uint64_t seed, std::uint64_t stream) {

@@ -1,5 +1,7 @@
 #include "core/coverage/coverage_entry.hpp"
 
+#include <cstdio>
+
 #include "core/common/error.hpp"
 #include "core/grid/direction.hpp"
 #include "core/planning/mission_check.hpp"
@@ -51,17 +53,60 @@ PlanResult toPlanResult(const CoverageResult& r, const GridGeometry& g) {
       {"visited_cells", static_cast<double>(m.visitedCells), "cells"},
       {"unreachable_cells", static_cast<double>(m.unreachableCells), "cells"},
   };
+  if (m.localisation) {
+    // Localisation error (dead_reckoning.hpp): `coverage` above is the rover's own (believed) map.
+    out.metrics.insert(out.metrics.end(), {
+        {"true_coverage", m.trueCoverage, ""},
+        {"believed_coverage", m.coverage, ""},
+        {"true_visited_cells", static_cast<double>(m.trueVisitedCells), "cells"},
+        {"localisation_mae_m", m.maeM, "m"},
+        {"localisation_max_error_m", m.maxErrorM, "m"},
+        {"localisation_final_error_m", m.finalErrorM, "m"},
+        {"map_accuracy", m.mapAccuracy, ""},
+        {"mapped_cells", static_cast<double>(m.mappedCells), "cells"},
+        {"bumps", static_cast<double>(m.bumps), "moves"},
+        {"loop_closures", static_cast<double>(m.loopClosures), ""},
+    });
+    for (const Bump& b : r.bumps) {
+      const Eigen::Vector2d cell = cellToLocal(g, g.cell(b.cell));
+      char note[160];
+      std::snprintf(note, sizeof note,
+                    "step %lld: %s; the cell at (%.2f, %.2f) is now an obstacle in its map",
+                    static_cast<long long>(b.step),
+                    b.offField ? "the move would have left the field" : "drove into an obstacle its map held free",
+                    cell.x(), cell.y());
+      Incident inc{"bump", b.rover, -1, 0.0, b.truePosition, static_cast<double>(b.cell), note};
+      inc.step = b.step;
+      out.incidents.push_back(std::move(inc));
+    }
+    if (m.bumps > 0)
+      out.warnings.push_back(std::to_string(m.bumps) + " bump" + (m.bumps == 1 ? "" : "s") +
+                             ": moves into obstacles the rovers' maps held free (localisation error)" +
+                             (static_cast<std::size_t>(m.bumps) > r.bumps.size()
+                                  ? "; the first " + std::to_string(r.bumps.size()) + " are listed"
+                                  : ""));
+  }
   for (std::size_t k = 0; k < r.rovers.size(); ++k) {
     const RoverTrack& t = r.rovers[k];
     Track track;
     track.rover = static_cast<int>(k);
-    for (int c : t.cells) track.points.push_back(cellToLocal(g, g.cell(c)));
+    if (m.localisation) {
+      track.points = t.truePoints;
+      track.believed = t.believedPoints;
+    } else {
+      for (int c : t.cells) track.points.push_back(cellToLocal(g, g.cell(c)));
+    }
     track.metrics = {{"moves", static_cast<double>(t.moves), "moves"},
                      {"waits", static_cast<double>(t.waits), "steps"},
                      {"revisits", static_cast<double>(t.revisits), "moves"},
                      {"distance_m", t.distanceM, "m"},
                      {"energy_j", t.energyJ, "J"},
                      {"max_pitch_deg", t.maxPitchDeg, "deg"}};
+    if (m.localisation)
+      track.metrics.insert(track.metrics.end(),
+                           {{"bumps", static_cast<double>(t.bumps), "moves"},
+                            {"loop_closures", static_cast<double>(t.loopClosures), ""},
+                            {"localisation_mae_m", t.maeM, "m"}});
     out.tracks.push_back(std::move(track));
   }
   Series curve{"coverage_vs_moves", "moves", "coverage", {}, {}};
@@ -70,6 +115,23 @@ PlanResult toPlanResult(const CoverageResult& r, const GridGeometry& g) {
     curve.y.push_back(static_cast<double>(p.visited) / m.freeCells);
   }
   out.series.push_back(std::move(curve));
+  if (m.localisation) {
+    Series truth{"true_coverage_vs_moves", "moves", "true_coverage", {}, {}};
+    for (const auto& p : r.curve) {
+      truth.x.push_back(static_cast<double>(p.moves));
+      truth.y.push_back(static_cast<double>(p.trueVisited) / m.freeCells);
+    }
+    out.series.push_back(std::move(truth));
+    for (std::size_t k = 0; k < r.rovers.size(); ++k) {
+      Series err{"localisation_error_m_rover_" + std::to_string(k), "move", "error_m", {}, {}};
+      const auto& e = r.rovers[k].errorM;
+      for (std::size_t i = 0; i < e.size(); ++i) {
+        err.x.push_back(static_cast<double>(i + 1));
+        err.y.push_back(e[i]);
+      }
+      out.series.push_back(std::move(err));
+    }
+  }
   for (std::size_t k = 0; k < r.rovers.size(); ++k) {
     Series pitch{"pitch_deg_rover_" + std::to_string(k), "move", "pitch_deg", {}, {}};
     const auto& pd = r.rovers[k].pitchDeg;

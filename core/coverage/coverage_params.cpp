@@ -36,6 +36,13 @@ void addEnergy(ParamTable<P>& t, ParamInfo info, double EnergyModel::*field) {
         p.energy.*field = paramAsReal(i, v);
       });
 }
+void addLocalisation(ParamTable<P>& t, ParamInfo info, double LocalisationModel::*field) {
+  t.add(
+      std::move(info), [field](const P& p) -> ParamValue { return p.localisation.*field; },
+      [field](P& p, const ParamInfo& i, const ParamValue& v) {
+        p.localisation.*field = paramAsReal(i, v);
+      });
+}
 void addFlag(ParamTable<P>& t, ParamInfo info, bool P::*field) {
   t.add(
       std::move(info), [field](const P& p) -> ParamValue { return p.*field; },
@@ -135,6 +142,50 @@ ParamTable<P> buildTable() {
             &EnergyModel::efficiency);
   addEnergy(t, realParam("turn_energy", 0.0, 1000.0, "J/rad", "Energy per radian of spot turn."),
             &EnergyModel::turnJoulesPerRad);
+  // Localisation error (issue 15, core/coverage/dead_reckoning.hpp).
+  addLocalisation(t,
+                  realParam("odometry_noise", 0.0, 50.0, "%",
+                            "Odometry drift: std of each move's travelled distance, in % of the "
+                            "move; 0 with heading_noise 0 = the rover knows its pose exactly."),
+                  &LocalisationModel::distanceNoisePct);
+  addLocalisation(t,
+                  realParam("heading_noise", 0.0, 45.0, "deg",
+                            "Odometry drift: std of the heading error each move adds (it "
+                            "accumulates, like the dead-reckoned heading)."),
+                  &LocalisationModel::headingNoiseDeg);
+  addLocalisation(t,
+                  realParam("slip_per_deg", 0.0, 10.0, "%/deg",
+                            "Wheel slip: an uphill move falls short by this % of its length per "
+                            "degree of pitch (at most 90 %); the odometry does not see it."),
+                  &LocalisationModel::slipPctPerDeg);
+  t.add(
+      boolParam("loop_closure",
+                "On a revisit of a cell mapped at least loop_closure_gap moves before, the pose "
+                "error shrinks to loop_closure_keep of itself (a stand-in for paper 000's graph "
+                "SLAM)."),
+      [](const P& p) -> ParamValue { return p.localisation.loopClosure; },
+      [](P& p, const ParamInfo& i, const ParamValue& v) {
+        p.localisation.loopClosure = paramAsBool(i.key, v);
+      });
+  addLocalisation(t,
+                  realParam("loop_closure_keep", 0.0, 1.0, "",
+                            "Fraction of the position and heading error left after a loop closure."),
+                  &LocalisationModel::loopClosureKeep);
+  t.add(
+      intParam("loop_closure_gap", 1, 1e9, "moves",
+               "A revisit closes a loop only when the cell was last entered at least this many "
+               "moves (of the team) before."),
+      [](const P& p) -> ParamValue { return p.localisation.loopClosureGap; },
+      [](P& p, const ParamInfo& i, const ParamValue& v) {
+        p.localisation.loopClosureGap = paramAsInt(i, v);
+      });
+  t.add(
+      intParam("noise_seed", 0, 9.007199254740992e15, "",
+               "Seed of the odometry noise (same seed, same run)."),
+      [](const P& p) -> ParamValue { return static_cast<std::int64_t>(p.localisation.seed); },
+      [](P& p, const ParamInfo& i, const ParamValue& v) {
+        p.localisation.seed = static_cast<std::uint64_t>(paramAsInt(i, v));
+      });
   return t;
 }
 

@@ -23,6 +23,23 @@ struct EnergyModel {
   double turnJoulesPerRad = 2.0;    // spot turn
 };
 
+// Localisation error (issue 15): odometry drift, the map it smears and loop closure; the model is
+// documented where it is made, core/coverage/dead_reckoning.hpp. All zero / off by default: the
+// rover then knows its pose exactly, as in papers 000/002's simulations.
+struct LocalisationModel {
+  double distanceNoisePct = 0.0;  // std of a move's travelled distance, % of the move
+  double headingNoiseDeg = 0.0;   // std of the heading error added per move (a random walk), deg
+  double slipPctPerDeg = 0.0;     // uphill shortfall of a move, % per degree of pitch
+  bool loopClosure = false;
+  double loopClosureKeep = 0.1;        // fraction of the pose error left after a loop closure
+  std::int64_t loopClosureGap = 20;    // moves since the cell was last entered, at least
+  std::uint64_t seed = 1;              // of the odometry noise
+  // Whether the believed and the true pose are kept apart at all (any noise, or loop closure on).
+  bool active() const {
+    return distanceNoisePct > 0 || headingNoiseDeg > 0 || slipPctPerDeg > 0 || loopClosure;
+  }
+};
+
 struct CoverageParams {
   TeamMode mode = TeamMode::Overlap;
   std::string pattern = "spiral";  // spiral | boustrophedon | custom
@@ -46,6 +63,7 @@ struct CoverageParams {
   // A DEM pixel with a slope of this or more to a neighbour is impassable (SPEC §2).
   double impassableDeg = 15.0;
   EnergyModel energy;
+  LocalisationModel localisation;
 
   MotionCostTable table() const;
   // The traversability thresholds of impassableDeg (only the impassable class matters here).

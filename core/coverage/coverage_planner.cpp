@@ -5,9 +5,11 @@
 #include <limits>
 #include <numbers>
 #include <numeric>
+#include <optional>
 
 #include "core/common/error.hpp"
 #include "core/common/random.hpp"
+#include "core/coverage/dead_reckoning.hpp"
 #include "core/coverage/energy.hpp"
 #include "core/grid/direction.hpp"
 
@@ -72,6 +74,17 @@ struct RoverRun {
   // Frontier mode: the known path being walked to the nearest unexplored cell.
   std::vector<int> plan;
   std::size_t planPos = 0;
+  // Localisation error (dead_reckoning.hpp), when modelled: the cell the rover truly stands in and
+  // its dead reckoning; `cell` and `heading` above are then the believed pose.
+  int trueCell = 0;
+  std::optional<DeadReckoning> odo;
+  double errorSum = 0;
+};
+
+// Localisation error: the true side of one move that happened.
+struct TrueMove {
+  int from = 0, to = 0;   // true cells
+  double horizontal = 0;  // metres truly driven
 };
 
 // Direction of a one-cell move (dr, dc) in -1..1; -1 for (0, 0).
@@ -91,6 +104,7 @@ class Engine {
         table_(params.table()),
         sink_(sink),
         cancel_(cancel),
+        loc_(params.localisation.active()),
         occupant_(g_.cellCount(), kNoRover) {
     setUp(starts);
   }
@@ -111,7 +125,20 @@ class Engine {
   bool worthCircling(const RoverRun& r) const;
   int frontierStep(RoverRun& r);
   int bfsToFrontier(RoverRun& r, bool avoidRovers);
-  void moveTo(RoverRun& r, int next);
+  void moveTo(RoverRun& r, int next, const TrueMove* truth);
+  // Localisation error: drives the true rover toward `next`.
+  enum class Drive { Moved, Bumped, Blocked /* a team mate truly in the way */ };
+  Drive driveTrue(RoverRun& r, int next, std::int64_t step, TrueMove& out);
+  void closeLoop(RoverRun& r);
+  Eigen::Vector2d believedPos(const RoverRun& r) const {
+    return cellToLocal(g_, g_.cell(r.cell)) + r.odo->offset();
+  }
+  Eigen::Vector2d truePos(const RoverRun& r) const { return believedPos(r) + r.odo->error(); }
+  void recordPose(RoverRun& r);
+  // No neighbour the rover's map lets it enter, team mates aside.
+  bool walledIn(const RoverRun& r) const;
+  void summariseLocalisation(CoverageResult& res) const;
+  int trueVisitedTotal() const { return loc_ ? trueVisitedCount_ : visitedTotal(); }
   void afterContourMove(RoverRun& r);
   int visitedTotal() const;
   bool teamGoalReached() const;
@@ -123,7 +150,8 @@ class Engine {
   MotionCostTable table_;
   EventSink* sink_;
   const CancelToken* cancel_;
-  std::vector<int> occupant_;
+  const bool loc_;  // localisation error modelled (dead_reckoning.hpp)
+  std::vector<int> occupant_;  // by believed cell
   std::vector<KnowledgeMap> maps_;
   std::vector<RoverRun> rovers_;
   std::vector<int> region_;
@@ -137,6 +165,14 @@ class Engine {
   std::vector<std::uint32_t> bfsSeen_;
   std::uint32_t bfsStamp_ = 0;
   std::vector<int> bfsQueue_;
+  // Localisation error: true occupancy and visits, loop-closure bookkeeping, bumps.
+  std::vector<int> trueOccupant_;
+  std::vector<std::uint8_t> trueVisited_;
+  int trueVisitedCount_ = 0;
+  std::vector<std::int64_t> lastEntered_;  // team move count at a cell's last entry
+  std::int64_t teamMoves_ = 0;
+  std::vector<Bump> bumps_;
+  int bumpCount_ = 0;
 };
 
 void Engine::setUp(const std::vector<StartCell>& starts) {
@@ -196,7 +232,20 @@ void Engine::setUp(const std::vector<StartCell>& starts) {
     r.heading = starts[k].heading;
     r.mapId = maps_.size() > 1 ? k : 0;
     r.track.cells.push_back(r.cell);
+    r.trueCell = r.cell;
+    if (loc_) r.odo.emplace(p_.localisation, p_.localisation.seed, k);
     rovers_.push_back(std::move(r));
+  }
+  if (loc_) {
+    trueOccupant_ = occupant_;
+    trueVisited_.assign(n, 0);
+    if (p_.localisation.loopClosure) lastEntered_.assign(n, 0);
+    for (auto& r : rovers_) {
+      trueVisitedCount_ += !trueVisited_[r.trueCell];
+      trueVisited_[r.trueCell] = 1;
+      r.track.truePoints.push_back(truePos(r));
+      r.track.believedPoints.push_back(believedPos(r));
+    }
   }
   for (auto& r : rovers_) {
     mapOf(r).visit(r.cell);
@@ -216,8 +265,11 @@ bool Engine::enterable(const RoverRun& r, int row, int col) const {
 
 void Engine::senseAround(RoverRun& r) {
   // Myopic, omnidirectional sensing: every cell within Chebyshev radius R (SPEC §1 step 1).
+  // With localisation error the truth around the true cell is written around the believed one
+  // (dead_reckoning.hpp); beyond the field's edge is an obstacle.
   KnowledgeMap& m = mapOf(r);
   CellIndex c = g_.cell(r.cell);
+  CellIndex t = g_.cell(loc_ ? r.trueCell : r.cell);
   const int R = p_.senseRadius;
   for (int dr = -R; dr <= R; ++dr) {
     for (int dc = -R; dc <= R; ++dc) {
@@ -225,7 +277,9 @@ void Engine::senseAround(RoverRun& r) {
       if (!g_.contains(row, col)) continue;
       int i = g_.index(row, col);
       if (!m.inRegion(i)) continue;
-      if (m.sense(i, world_.isObstacle(i)) && sink_)
+      const int tr = t.row + dr, tc = t.col + dc;
+      const bool obstacle = !g_.contains(tr, tc) || world_.isObstacle(g_.index(tr, tc));
+      if (m.sense(i, obstacle) && sink_)
         changes_.push_back({i, std::uint8_t(m.state(i)), 0});
     }
   }
@@ -407,12 +461,111 @@ int Engine::bfsToFrontier(RoverRun& r, bool avoidRovers) {
   return r.plan[0];
 }
 
-void Engine::moveTo(RoverRun& r, int next) {
+Engine::Drive Engine::driveTrue(RoverRun& r, int next, std::int64_t step, TrueMove& out) {
+  DeadReckoning& odo = *r.odo;
+  const CellIndex a = g_.cell(r.cell), b = g_.cell(next);
+  const int dir = moveDir(b.row - a.row, b.col - a.col);
+  // Commanded: from the believed position to the centre of `next` (local y is north, rows south).
+  const Eigen::Vector2d step2((b.col - a.col) * g_.cellWidth, (a.row - b.row) * g_.cellWidth);
+  const bool centred = odo.offset().x() == 0 && odo.offset().y() == 0;
+  const Eigen::Vector2d d = step2 - odo.offset();
+  const double length =
+      centred ? g_.cellWidth * (isDiagonal(dir) ? std::numbers::sqrt2 : 1.0) : d.norm();
+  const Eigen::Vector2d from = truePos(r);
+  const Eigen::Vector2d D = odo.drive(d, length, [&](const Eigen::Vector2d& move) {
+    auto end = localToCell(g_, from + move);
+    if (!end) return 0.0;
+    const double dh = world_.height(g_.index(*end)) - world_.height(r.trueCell);
+    return std::atan2(dh, length) * 180.0 / std::numbers::pi;
+  });
+  // Where the rover truly ends: the new believed centre plus the new error (as recordPose sees it).
+  const Eigen::Vector2d newError = odo.error() + (D - d);
+  const Eigen::Vector2d to = cellToLocal(g_, b) + newError;
+  const auto end = localToCell(g_, to);
+  const int me = static_cast<int>(&r - rovers_.data());
+  if (end && !world_.isObstacle(g_.index(*end))) {
+    const int e = g_.index(*end);
+    if (trueOccupant_[e] != kNoRover && trueOccupant_[e] != me) return Drive::Blocked;
+    out = {r.trueCell, e, odo.travelled()};
+    odo.arrived(d, D);
+    trueOccupant_[r.trueCell] = kNoRover;
+    trueOccupant_[e] = me;
+    r.trueCell = e;
+    trueVisitedCount_ += !trueVisited_[e];
+    trueVisited_[e] = 1;
+    return Drive::Moved;
+  }
+  // A bump: the rover stays, faces the cell it tried and marks it an obstacle in its map.
+  ++r.track.bumps;
+  ++bumpCount_;
+  if (bumps_.size() < kMaxBumpRecords) bumps_.push_back({me, step, next, from, !end});
+  if (mapOf(r).markObstacle(next) && sink_)
+    changes_.push_back({next, std::uint8_t(CellState::Obstacle), 0});
+  r.track.energyJ += turnEnergy(p_.energy, r.heading, dir);
+  r.heading = dir;
+  r.circling = false;
+  return Drive::Bumped;
+}
+
+void Engine::closeLoop(RoverRun& r) {
+  DeadReckoning& odo = *r.odo;
+  const Eigen::Vector2d oldError = odo.error();
+  const double oldHeading = odo.headingError();
+  const Eigen::Vector2d believed = believedPos(r) + odo.closeLoop(p_.localisation.loopClosureKeep);
+  const auto cell = localToCell(g_, believed);
+  const int i = cell ? g_.index(*cell) : -1;
+  KnowledgeMap& m = mapOf(r);
+  if (i < 0 || (i != r.cell && (!m.inRegion(i) || m.state(i) == CellState::Obstacle ||
+                                occupant_[i] != kNoRover))) {
+    odo.undoLoop(oldError, oldHeading);  // waits for the next revisit
+    return;
+  }
+  if (i != r.cell) {
+    occupant_[r.cell] = kNoRover;
+    occupant_[i] = static_cast<int>(&r - rovers_.data());
+    r.cell = i;
+    m.visit(i);
+    lastEntered_[i] = teamMoves_;
+    if (sink_) changes_.push_back({i, std::uint8_t(CellState::Visited), m.visits(i)});
+  }
+  odo.setOffset(believed - cellToLocal(g_, *cell));
+  ++r.track.loopClosures;
+}
+
+bool Engine::walledIn(const RoverRun& r) const {
+  const KnowledgeMap& m = maps_[r.mapId];
+  const CellIndex c = g_.cell(r.cell);
+  for (int d = 0; d < kDirections; ++d) {
+    const int row = c.row + kDirRow[d], col = c.col + kDirCol[d];
+    if (!g_.contains(row, col)) continue;
+    const int i = g_.index(row, col);
+    if (m.inRegion(i) && m.state(i) != CellState::Obstacle) return false;
+  }
+  return true;
+}
+
+void Engine::recordPose(RoverRun& r) {
+  const double error = r.odo->error().norm();
+  r.track.truePoints.push_back(truePos(r));
+  r.track.believedPoints.push_back(believedPos(r));
+  r.track.errorM.push_back(static_cast<float>(error));
+  r.errorSum += error;
+}
+
+void Engine::moveTo(RoverRun& r, int next, const TrueMove* truth) {
   KnowledgeMap& m = mapOf(r);
   CellIndex a = g_.cell(r.cell), b = g_.cell(next);
   int dir = moveDir(b.row - a.row, b.col - a.col);
   double horizontal = g_.cellWidth * (isDiagonal(dir) ? std::numbers::sqrt2 : 1.0);
   double dh = world_.height(next) - world_.height(r.cell);
+  if (truth) {
+    // Energy and pitch of the motion that truly happened.
+    horizontal = truth->horizontal;
+    dh = world_.height(truth->to) - world_.height(truth->from);
+  }
+  // A revisit of a cell last entered long enough ago closes a loop (dead_reckoning.hpp).
+  const bool loop = truth && p_.localisation.loopClosure && m.visits(next) > 0 &&
+                    teamMoves_ + 1 - lastEntered_[next] >= p_.localisation.loopClosureGap;
   double pitchDeg = std::atan(std::fabs(dh) / horizontal) * 180.0 / std::numbers::pi;
 
   RoverTrack& t = r.track;
@@ -429,6 +582,12 @@ void Engine::moveTo(RoverRun& r, int next) {
   occupant_[next] = static_cast<int>(&r - rovers_.data());
   r.cell = next;
   r.heading = dir;
+  if (truth) {
+    ++teamMoves_;
+    if (p_.localisation.loopClosure) lastEntered_[next] = teamMoves_;
+    if (loop) closeLoop(r);
+    recordPose(r);
+  }
 }
 
 int Engine::visitedTotal() const {
@@ -447,8 +606,14 @@ void Engine::emit(std::int64_t step) {
   changes_.clear();
   poses_.clear();
   for (std::size_t k = 0; k < rovers_.size(); ++k) {
-    Eigen::Vector2d xy = cellToLocal(g_, g_.cell(rovers_[k].cell));
-    poses_.push_back({static_cast<int>(k), xy.x(), xy.y(), dirToRadians(rovers_[k].heading)});
+    const RoverRun& r = rovers_[k];
+    if (loc_) {
+      const Eigen::Vector2d t = truePos(r), b = believedPos(r);
+      poses_.push_back({static_cast<int>(k), t.x(), t.y(), dirToRadians(r.heading), true, b.x(), b.y()});
+      continue;
+    }
+    Eigen::Vector2d xy = cellToLocal(g_, g_.cell(r.cell));
+    poses_.push_back({static_cast<int>(k), xy.x(), xy.y(), dirToRadians(r.heading)});
   }
   sink_->roverPoses(step, poses_);
   double needed = 0;
@@ -475,7 +640,7 @@ CoverageResult Engine::run() {
   };
   for (auto& r : rovers_) checkRegionGoal(r);
   bool goal = teamGoalReached();
-  curve_.push_back({0, 0, visitedTotal()});
+  curve_.push_back({0, 0, visitedTotal(), trueVisitedTotal()});
   emit(0);
 
   StopReason stop = StopReason::StepBudget;
@@ -499,11 +664,31 @@ CoverageResult Engine::run() {
       int next = choose(r);
       if (r.done) continue;
       if (next < 0) {
+        if (loc_ && walledIn(r)) {
+          // Under localisation error the map itself can wall a rover in (bumps and smeared
+          // obstacles all round): it can never move again, so it stops.
+          r.done = true;
+          r.doneReason = StopReason::NothingLeft;
+          continue;
+        }
         ++r.track.waits;  // boxed in by team mates this step
         continue;
       }
       bool wasCircling = r.circling;
-      moveTo(r, next);
+      TrueMove truth;
+      if (const Drive drive = loc_ ? driveTrue(r, next, step, truth) : Drive::Moved;
+          drive != Drive::Moved) {
+        // Not moved: a team mate truly in the way, or a bump (the map changed: the goal, which
+        // counts known obstacles, may now be met).
+        if (drive == Drive::Blocked) ++r.track.waits;
+        checkRegionGoal(r);
+        if (teamGoalReached()) {
+          goal = true;
+          break;
+        }
+        continue;
+      }
+      moveTo(r, next, loc_ ? &truth : nullptr);
       if (wasCircling && r.circling) afterContourMove(r);
       ++moves;
       senseAround(r);
@@ -513,7 +698,7 @@ CoverageResult Engine::run() {
         break;
       }
     }
-    curve_.push_back({step, moves, visitedTotal()});
+    curve_.push_back({step, moves, visitedTotal(), trueVisitedTotal()});
     emit(step);
   }
 
@@ -548,7 +733,40 @@ CoverageResult Engine::run() {
     res.finalStates[i] = m.state(i);
     res.finalVisits[i] = m.visits(i);
   }
+  if (loc_) summariseLocalisation(res);
   return res;
+}
+
+void Engine::summariseLocalisation(CoverageResult& res) const {
+  CoverageMetrics& mt = res.metrics;
+  mt.localisation = true;
+  mt.trueVisitedCells = trueVisitedCount_;
+  mt.trueCoverage = static_cast<double>(trueVisitedCount_) / mt.freeCells;
+  mt.bumps = bumpCount_;
+  double errorSum = 0, finalSum = 0;
+  std::size_t samples = 0;
+  for (std::size_t k = 0; k < rovers_.size(); ++k) {
+    const RoverRun& r = rovers_[k];
+    RoverTrack& t = res.rovers[k];
+    errorSum += r.errorSum;
+    samples += t.errorM.size();
+    t.maeM = t.errorM.empty() ? 0.0 : r.errorSum / static_cast<double>(t.errorM.size());
+    for (float e : t.errorM) mt.maxErrorM = std::max(mt.maxErrorM, static_cast<double>(e));
+    finalSum += r.odo->error().norm();
+    mt.loopClosures += t.loopClosures;
+  }
+  // Paper 000 eq. 6 with the 1/N it omits, N = every move of every rover.
+  mt.maeM = samples ? errorSum / static_cast<double>(samples) : 0.0;
+  mt.finalErrorM = finalSum / static_cast<double>(rovers_.size());
+  int matches = 0;
+  for (int i = 0; i < g_.cellCount(); ++i) {
+    const CellState s = res.finalStates[i];
+    if (s == CellState::Unknown) continue;
+    ++mt.mappedCells;
+    matches += (s == CellState::Obstacle) == world_.isObstacle(i);
+  }
+  mt.mapAccuracy = mt.mappedCells ? static_cast<double>(matches) / mt.mappedCells : 1.0;
+  res.bumps = bumps_;
 }
 
 }  // namespace

@@ -2,6 +2,7 @@
 // Myopic coverage path planning for one rover or a team (SPEC §1): papers 002 (Laîné & Yoshida
 // 2019, eq. 1, Algorithm 1, §2.3) and 000 (Santra et al., eq. 3 cost with heights, eq. 5 energy),
 // plus our `frontier` mode.
+#include <Eigen/Core>
 #include <cstdint>
 #include <vector>
 
@@ -24,7 +25,8 @@ std::vector<StartCell> randomStarts(const World& world, int count, std::uint64_t
 
 enum class StopReason {
   GoalReached,  // coverage goal met (for Voronoi: by every rover in its region)
-  NothingLeft,  // frontier mode: no reachable unexplored cell remains
+  NothingLeft,  // frontier mode: no reachable unexplored cell remains; under localisation
+                // error also: every rover's own map walls it in
   StepBudget,   // max_steps ran out first
   Cancelled,
 };
@@ -39,12 +41,30 @@ struct RoverTrack {
   double distanceM = 0;    // horizontal; diagonal moves are √2 cells
   double energyJ = 0;      // paper 000 eq. 5
   double maxPitchDeg = 0;
+  // Localisation error (params.localisation.active(), core/coverage/dead_reckoning.hpp); empty
+  // otherwise. `cells` above are then the believed cells; energy and pitch are the true motion's.
+  std::vector<Eigen::Vector2d> truePoints;      // true position at the start and after each move
+  std::vector<Eigen::Vector2d> believedPoints;  // believed position, likewise
+  std::vector<float> errorM;                    // |true − believed| after each move, m
+  int bumps = 0;
+  int loopClosures = 0;
+  double maeM = 0;  // mean of errorM (paper 000 eq. 6 with its 1/N)
 };
 
 struct CurvePoint {
   std::int64_t step = 0;
   std::int64_t moves = 0;  // all rovers' moves so far
   int visited = 0;         // distinct cells visited by the team so far
+  int trueVisited = 0;     // localisation error: distinct cells truly stood in (else = visited)
+};
+
+// A move into a true obstacle (localisation error): the rover stayed and marked `cell` an obstacle.
+struct Bump {
+  int rover = 0;
+  std::int64_t step = 0;
+  int cell = 0;                   // the believed target cell, now an obstacle in the map
+  Eigen::Vector2d truePosition;   // where the rover truly stands (local frame)
+  bool offField = false;          // the move would have left the field
 };
 
 struct CoverageMetrics {
@@ -64,6 +84,18 @@ struct CoverageMetrics {
   int reachableCells = 0;
   int unreachableCells = 0;  // free cells no rover can reach (sealed off, or outside its region)
   int visitedCells = 0;
+  // Localisation error (core/coverage/dead_reckoning.hpp); `coverage` above is then the believed
+  // coverage, the planner's own map.
+  bool localisation = false;
+  double trueCoverage = 0;      // distinct cells truly stood in / free cells
+  int trueVisitedCells = 0;
+  double maeM = 0;              // over every move of every rover
+  double maxErrorM = 0;
+  double finalErrorM = 0;       // mean over rovers of the last error
+  double mapAccuracy = 0;       // mapped cells whose obstacle/free state is true / mapped cells
+  int mappedCells = 0;
+  int bumps = 0;
+  int loopClosures = 0;
 };
 
 struct CoverageResult {
@@ -74,7 +106,10 @@ struct CoverageResult {
   std::vector<int> region;        // Voronoi: owning rover per cell; empty for overlap
   std::vector<CellState> finalStates;
   std::vector<std::uint32_t> finalVisits;
+  std::vector<Bump> bumps;  // the first kMaxBumpRecords; metrics.bumps counts them all
 };
+
+inline constexpr std::size_t kMaxBumpRecords = 1000;
 
 // Runs the planner to its stop rule. Throws rover::Error for a bad world, parameters or start
 // (outside the grid, on an obstacle, two rovers on one cell). `sink` and `cancel` may be null.

@@ -29,6 +29,15 @@ bool KnowledgeMap::visit(int i) {
   return before;
 }
 
+bool KnowledgeMap::markObstacle(int i) {
+  if (state_[i] == CellState::Obstacle) return false;
+  if (state_[i] == CellState::Visited) --visited_;
+  state_[i] = CellState::Obstacle;
+  visits_[i] = 0;
+  ++knownObstacles_;
+  return true;
+}
+
 bool KnowledgeMap::goalReached(double goal) const {
   // The small epsilon keeps e.g. 0.95 · 3420 = 3249 from needing 3250 through rounding.
   double needed = goal * static_cast<double>(regionCells_ - knownObstacles_);

@@ -29,6 +29,9 @@ class KnowledgeMap {
   bool sense(int i, bool obstacle);
   // Enters a cell (it must not be an obstacle); returns whether it was visited before.
   bool visit(int i);
+  // A bump (core/coverage/dead_reckoning.hpp): the cell is an obstacle whatever the map held;
+  // a cell believed visited no longer counts as visited. Returns whether the map changed.
+  bool markObstacle(int i);
   // Paper 002 Algorithm 1 line 13 (with the printed `≤` read as `≥`, SPEC §1):
   // visited >= goal · (cells − known obstacles).
   bool goalReached(double goal) const;

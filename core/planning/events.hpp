@@ -24,6 +24,11 @@ struct RoverPose {
   double x = 0;        // metres east of the lower-left corner
   double y = 0;        // metres north
   double heading = 0;  // radians counter-clockwise from east
+  // A planner that models localisation error (coverage, core/coverage/dead_reckoning.hpp): x and
+  // y are then the true position, and this is where the rover believes it is.
+  bool hasBelief = false;
+  double believedX = 0;
+  double believedY = 0;
 };
 
 struct Progress {

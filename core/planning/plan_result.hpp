@@ -2,6 +2,7 @@
 // What every planner returns, in a planner-neutral shape the server, CLI and exports read:
 // named metrics, one track per rover in the local frame, and named curves.
 #include <Eigen/Core>
+#include <cstdint>
 #include <string>
 #include <utility>
 #include <vector>
@@ -18,6 +19,9 @@ struct Track {
   int rover = 0;
   std::vector<Eigen::Vector2d> points;  // local frame, metres
   std::vector<Metric> metrics;
+  // A planner that models localisation error (coverage): `points` are the true positions and
+  // these, one per point, where the rover believed it was; empty otherwise.
+  std::vector<Eigen::Vector2d> believed;
 };
 
 struct Series {
@@ -35,7 +39,8 @@ struct Polyline {
 
 // Something the user must be told about, with where and when: kind "collision" (two rovers
 // closer than the safety distance in the returned plan), "skipped" or "short" (a rover's leg given
-// up or ended away from its goal).
+// up or ended away from its goal), "bump" (coverage under localisation error: a move into an
+// obstacle the rover's map held free).
 struct Incident {
   std::string kind;
   int rover = 0;
@@ -44,6 +49,7 @@ struct Incident {
   Eigen::Vector2d position{0, 0};
   double value = 0;  // collision: the closest distance, m
   std::string note;
+  std::int64_t step = -1;  // a planner without a clock (coverage's "bump"): the step, else -1
 };
 
 struct PlanResult {

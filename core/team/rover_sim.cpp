@@ -31,13 +31,8 @@ double wrapAngle(double a) {
   return w <= -kPi ? w + 2 * kPi : w;
 }
 
-// A standard normal draw from the project's seeded generator (Box–Muller, one value per call), so
-// the stream is the same on every standard library.
-double normal(Rng& rng) {
-  const double u1 = 1.0 - rng.uniform();  // (0, 1]
-  const double u2 = rng.uniform();
-  return std::sqrt(-2.0 * std::log(u1)) * std::cos(2 * kPi * u2);
-}
+// The project's seeded standard normal (core/common/random.hpp).
+double normal(Rng& rng) { return normalDraw(rng); }
 
 // PID with derivative on the measurement (no kick when the setpoint jumps at a waypoint switch)
 // and anti-windup by conditional integration: the integral only grows when that does not push a

@@ -246,7 +246,7 @@ missions::MissionJob buildMission(ApiContext& ctx, const json& body) {
                          std::ceil(mapGeometry.widthMetres() / cell - 1e-9);
     job.memory = missions::coverageMissionMemory(static_cast<std::int64_t>(cells), cell, roverCount,
                                                  ground.coverage.mode == coverage::TeamMode::Voronoi,
-                                                 ground.coverage.coverage);
+                                                 ground.coverage.coverage, ground.coverage.localisation.active());
   } else {
     job.memory = missions::teamMissionMemory(mapGeometry.cellCount(), roverCount, !job.record.pdmId.empty());
   }

@@ -9,6 +9,7 @@
 #include "maps/synthetic_terrain.hpp"
 #include "server/cli/arg_parser.hpp"
 #include "server/cli/commands.hpp"
+#include "server/cli/localisation_bench.hpp"
 #include "server/cli/sweep.hpp"
 
 namespace rover::cli {
@@ -88,16 +89,20 @@ int benchMission(std::ostream& out) {
 }  // namespace
 
 int benchCommand(const std::vector<std::string>& argv, std::ostream& out) {
-  ArgParser args("bench", "Benchmarks that print their figures. Targets: coverage, mission.");
-  args.positional("TARGET", "coverage | mission");
+  ArgParser args("bench", "Benchmarks that print their figures. Targets: coverage, mission, "
+                         "localisation.");
+  args.positional("TARGET", "coverage | mission | localisation");
   args.option("runs", "N", "2000", "Runs per measurement.");
+  addLocalisationBenchOptions(args);
   if (!args.parse(argv)) {
     out << args.help();
     return 0;
   }
   if (args.positionals()[0] == "mission") return benchMission(out);
+  if (args.positionals()[0] == "localisation")
+    return benchLocalisation(args, static_cast<int>(args.integer("runs", 100, 1, 100000)), out);
   if (args.positionals()[0] != "coverage")
-    throw UsageError("unknown benchmark '" + args.positionals()[0] + "' (coverage, mission)");
+    throw UsageError("unknown benchmark '" + args.positionals()[0] + "' (coverage, mission, localisation)");
   int runs = static_cast<int>(args.integer("runs", 2000, 1, 10000000));
   unsigned all = hardwareThreads();
   out << "bench coverage: spiral to 95 % on 60x60, 5 % obstacles, " << runs

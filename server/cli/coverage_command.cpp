@@ -1,3 +1,4 @@
+#include <algorithm>
 #include <cmath>
 #include <iomanip>
 #include <iostream>
@@ -46,6 +47,13 @@ void printSummary(std::ostream& out, const coverage::World& world, const coverag
   out << std::setprecision(1) << "distance   " << m("distance_m") << " m   energy " << m("energy_j")
       << " J   max pitch " << std::setprecision(2) << m("max_pitch_deg") << " deg   revisits "
       << static_cast<long>(m("revisits")) << "\n";
+  if (std::any_of(r.metrics.begin(), r.metrics.end(), [](auto& x) { return x.key == "true_coverage"; }))
+    out << std::setprecision(2) << "truth      coverage " << m("true_coverage") * 100
+        << " % truly (believed " << m("believed_coverage") * 100 << " %), localisation MAE "
+        << std::setprecision(3) << m("localisation_mae_m") << " m (max " << m("localisation_max_error_m")
+        << " m), map accuracy " << std::setprecision(2) << m("map_accuracy") * 100 << " %, "
+        << static_cast<long>(m("bumps")) << " bumps, " << static_cast<long>(m("loop_closures"))
+        << " loop closures\n";
   std::string body = "unknown", gravity;
   for (const auto& [k, v] : r.assumptions) {
     if (k == "body") body = v;

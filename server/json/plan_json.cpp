@@ -52,7 +52,13 @@ json toJson(const PlanResult& r) {
   for (const auto& t : r.tracks) {
     json path = json::array();
     for (const auto& p : t.points) path.push_back({p.x(), p.y()});
-    rovers.push_back({{"rover", t.rover}, {"metrics", metricsObject(t.metrics)}, {"path", path}});
+    json rover{{"rover", t.rover}, {"metrics", metricsObject(t.metrics)}, {"path", path}};
+    if (!t.believed.empty()) {
+      json believed = json::array();
+      for (const auto& p : t.believed) believed.push_back({p.x(), p.y()});
+      rover["believed_path"] = std::move(believed);
+    }
+    rovers.push_back(std::move(rover));
   }
   j["rovers"] = rovers;
   json series = json::object();
@@ -79,8 +85,10 @@ json toJson(const PlanResult& r) {
     json x{{"kind", i.kind},       {"rover", i.rover}, {"time_s", i.time},
            {"x", i.position.x()}, {"y", i.position.y()}, {"note", i.note}};
     if (i.other >= 0) x["other"] = i.other;
+    if (i.step >= 0) x["step"] = i.step;
     if (i.kind == "collision") x["distance_m"] = i.value;
     else if (i.kind == "exceedance") x["max_angle_deg"] = i.value;
+    else if (i.kind == "bump") x["cell"] = static_cast<int>(i.value);
     else if (i.value >= 0) x["target"] = static_cast<int>(i.value);
     incidents.push_back(std::move(x));
   }

@@ -163,6 +163,8 @@ std::shared_ptr<MissionStream> MissionManager::stream(const std::string& id) {
   auto s = MissionStream::fromStored(id, grid, trails, rec->status, rec->message, rec->metrics);
   if (fs::exists(dir / "overlays.json"))
     s->restoreOverlays(nlohmann::json::parse(readFile(dir / "overlays.json"), nullptr, false));
+  if (fs::exists(dir / "beliefs.json"))
+    s->restoreBeliefs(nlohmann::json::parse(readFile(dir / "beliefs.json"), nullptr, false));
   std::lock_guard lock(mutex_);
   rememberFinished(id, s);
   return s;
@@ -288,14 +290,22 @@ void MissionManager::writeResultFiles(const MissionJob& job, const PlanResult& r
       (s / "result.geojson").string(),
       maps::tracksToGeoJson(result.tracks, job.mapGrid, job.geo));
   std::ostringstream csv;
-  csv << "rover,index,x_m,y_m\n";
+  // Coverage under localisation error: the true position, then the believed one.
+  bool believed = false;
+  for (const auto& t : result.tracks) believed = believed || !t.believed.empty();
+  csv << "rover,index,x_m,y_m" << (believed ? ",believed_x_m,believed_y_m" : "") << "\n";
   for (const auto& t : result.tracks)
-    for (std::size_t i = 0; i < t.points.size(); ++i)
-      csv << t.rover << "," << i << "," << t.points[i].x() << "," << t.points[i].y() << "\n";
+    for (std::size_t i = 0; i < t.points.size(); ++i) {
+      csv << t.rover << "," << i << "," << t.points[i].x() << "," << t.points[i].y();
+      if (i < t.believed.size()) csv << "," << t.believed[i].x() << "," << t.believed[i].y();
+      csv << "\n";
+    }
   store::DataDir::writeFileAtomic((s / "result.csv").string(), csv.str());
   store::DataDir::writeFileAtomic((s / "grid.bin").string(), stream.fullGridFrame());
   store::DataDir::writeFileAtomic((s / "trails.json").string(), stream.trailsJson().dump());
   store::DataDir::writeFileAtomic((s / "overlays.json").string(), stream.overlaysJson().dump());
+  if (believed)  // coverage under localisation error: the believed trails (issue 15)
+    store::DataDir::writeFileAtomic((s / "beliefs.json").string(), stream.beliefsJson().dump());
 }
 
 void MissionManager::stop() {

@@ -21,6 +21,11 @@ constexpr std::uint64_t kVoronoiPerCell = 4, kVoronoiPerRoverCell = 6;
 // default map (360 000 cells, 459 582 moves) peaked 316 MB over the idle server, ~690 bytes a move.
 // Moves: about two per cell to cover.
 constexpr std::uint64_t kCoveragePerMove = 700;
+// Localisation error (issue 15): per cell the true occupancy 4, true visits 1, last entry 8; per
+// move the true and believed points 32 and the error 4 in the track, the stream's believed trail 8,
+// the believed path and error series in the result's JSON tree and text (~250, as measured above
+// for the path).
+constexpr std::uint64_t kLocalisationPerCell = 13, kLocalisationPerMove = 300;
 constexpr double kMovesPerGoalCell = 2.0;
 // Team planners, per DEM cell: traversability classes 1 (twice), the PDM as given 4, the
 // planner's PDM copy 4, the terrain edge model and route search grids ~16, the stream's grid is
@@ -36,14 +41,16 @@ constexpr std::uint64_t kPerMission = 4ull << 20;
 }  // namespace
 
 MemoryEstimate coverageMissionMemory(std::int64_t cells, double cellSize, int rovers, bool voronoi,
-                                     double goal) {
+                                     double goal, bool localisation) {
   const auto n = static_cast<std::uint64_t>(std::max<std::int64_t>(cells, 0));
   const auto k = static_cast<std::uint64_t>(std::max(rovers, 1));
   std::uint64_t perCell = kCoveragePerCell;
   if (voronoi && k > 1) perCell += kVoronoiPerCell + kVoronoiPerRoverCell * k;
   const double moves = kMovesPerGoalCell * std::clamp(goal, 0.0, 1.0) * static_cast<double>(n);
   MemoryEstimate e;
-  e.bytes = kPerMission + n * perCell + static_cast<std::uint64_t>(moves) * kCoveragePerMove;
+  if (localisation) perCell += kLocalisationPerCell;
+  const std::uint64_t perMove = kCoveragePerMove + (localisation ? kLocalisationPerMove : 0);
+  e.bytes = kPerMission + n * perCell + static_cast<std::uint64_t>(moves) * perMove;
   char buf[160];
   std::snprintf(buf, sizeof buf, "%llu coverage cells of %g m, %llu rover%s%s",
                 static_cast<unsigned long long>(n), cellSize, static_cast<unsigned long long>(k),

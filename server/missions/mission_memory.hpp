@@ -21,9 +21,10 @@ struct MemoryEstimate {
   std::string field;  // the request field that drives it (params.coverage_cell, map, rovers)
 };
 
-// A coverage mission on a grid of `cells` cells of `cellSize` metres, to cover the fraction `goal`.
+// A coverage mission on a grid of `cells` cells of `cellSize` metres, to cover the fraction `goal`;
+// `localisation`: with localisation error modelled (true and believed tracks, issue 15).
 MemoryEstimate coverageMissionMemory(std::int64_t cells, double cellSize, int rovers, bool voronoi,
-                                     double goal = 0.95);
+                                     double goal = 0.95, bool localisation = false);
 // A team-search / hybrid mission on a DEM of `demCells` cells.
 MemoryEstimate teamMissionMemory(std::int64_t demCells, int rovers, bool pdm);
 

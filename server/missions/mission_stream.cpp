@@ -40,6 +40,7 @@ class MissionStream::Subscription : public http::WsSource {
       std::shared_ptr<const Snapshot> snap = s.snapshot();
       snapshotSent_ = true;
       trailSent_ = snap->trailLengths;
+      beliefSent_ = snap->beliefLengths;
       pathSent_ = snap->pathLengths;
       routeSeen_ = snap->routeVersion;
       progressSeen_ = snap->progressVersion;
@@ -94,14 +95,24 @@ class MissionStream::Subscription : public http::WsSource {
       }
       if (kind == 1) {
         if (trailSent_.size() < s.trails_.size()) trailSent_.resize(s.trails_.size(), 0);
+        if (beliefSent_.size() < s.beliefs_.size()) beliefSent_.resize(s.beliefs_.size(), 0);
         nlohmann::json rovers = nlohmann::json::array();
         for (std::size_t k = 0; k < s.trails_.size(); ++k) {
-          if (trailSent_[k] == s.trails_[k].size()) continue;
+          const bool newBelief = k < s.beliefs_.size() && beliefSent_[k] < s.beliefs_[k].size();
+          if (trailSent_[k] == s.trails_[k].size() && !newBelief) continue;
           nlohmann::json append = nlohmann::json::array();
           for (std::size_t i = trailSent_[k]; i < s.trails_[k].size(); ++i)
             append.push_back({s.trails_[k][i].x, s.trails_[k][i].y});
-          const Pose& p = s.trails_[k].back();
-          rovers.push_back({{"rover", k}, {"append", append}, {"pose", poseJson(p.x, p.y, p.headingDeg)}});
+          nlohmann::json r{{"rover", k}, {"append", append}, {"pose", nullptr}};
+          if (!s.trails_[k].empty()) {
+            const Pose& p = s.trails_[k].back();
+            r["pose"] = poseJson(p.x, p.y, p.headingDeg);
+          }
+          if (newBelief) {
+            r["believed"] = std::vector<std::array<float, 2>>(s.beliefs_[k].begin() + beliefSent_[k], s.beliefs_[k].end());
+            beliefSent_[k] = s.beliefs_[k].size();
+          }
+          rovers.push_back(std::move(r));
           trailSent_[k] = s.trails_[k].size();
         }
         if (!rovers.empty()) {
@@ -135,7 +146,7 @@ class MissionStream::Subscription : public http::WsSource {
   std::shared_ptr<MissionStream> stream_;
   bool snapshotSent_ = false, gridSent_ = false, doneSent_ = false;
   std::uint64_t gridSeen_ = 0, progressSeen_ = 0, statusSeen_ = 0;
-  std::vector<std::size_t> trailSent_, pathSent_;
+  std::vector<std::size_t> trailSent_, pathSent_, beliefSent_;
   std::uint64_t routeSeen_ = 0;
   std::shared_ptr<const std::string> pendingGrid_;  // the snapshot's grid, sent right after it
   int lastKind_ = 3;  // 0 grid, 1 poses, 2 progress, 3 overlays: the kind sent last, for taking turns
@@ -169,6 +180,7 @@ std::shared_ptr<const MissionStream::Snapshot> MissionStream::snapshot() {
   // Under the stream's lock only copies of the compact state (12 bytes a trail point) and the
   // shared grid frame; the JSON, several times bigger, is formatted after the lock is released.
   std::vector<std::vector<Pose>> trails;
+  std::vector<std::vector<std::array<float, 2>>> beliefs;
   nlohmann::json j;
   {
     std::lock_guard lock(mutex_);
@@ -179,6 +191,8 @@ std::shared_ptr<const MissionStream::Snapshot> MissionStream::snapshot() {
     snap->progressVersion = progressVersion_;
     snap->statusVersion = statusVersion_;
     for (const auto& t : trails_) snap->trailLengths.push_back(t.size());
+    for (const auto& b : beliefs_) snap->beliefLengths.push_back(b.size());
+    beliefs = beliefs_;
     for (const auto& p : paths_) snap->pathLengths.push_back(p.size());
     trails = trails_;
     if (grid_.cellCount() > 0) snap->grid = sharedFullGridLocked();
@@ -202,6 +216,10 @@ std::shared_ptr<const MissionStream::Snapshot> MissionStream::snapshot() {
     if (!trails[k].empty()) {
       const Pose& p = trails[k].back();
       r["pose"] = poseJson(p.x, p.y, p.headingDeg);
+    }
+    if (k < beliefs.size()) {
+      r["believed_trail"] = beliefs[k];
+      std::vector<std::array<float, 2>>().swap(beliefs[k]);
     }
     if (k > 0) rovers += ',';
     rovers += r.dump();
@@ -254,6 +272,12 @@ void MissionStream::roverPoses(std::int64_t step, std::span<const RoverPose> pos
              static_cast<float>(p.heading * 180.0 / std::numbers::pi)};
       if (t.empty() || t.back().x != q.x || t.back().y != q.y) t.push_back(q);
       else t.back().headingDeg = q.headingDeg;
+      if (p.hasBelief) {
+        if (beliefs_.size() < trails_.size()) beliefs_.resize(trails_.size());
+        auto& b = beliefs_[p.rover];
+        const std::array<float, 2> xy{static_cast<float>(p.believedX), static_cast<float>(p.believedY)};
+        if (b.empty() || b.back() != xy) b.push_back(xy);
+      }
     }
   }
   wakeAll(false);
@@ -321,6 +345,22 @@ void MissionStream::restoreOverlays(const nlohmann::json& o) {
   } catch (const nlohmann::json::exception&) {
     route_.clear();
     paths_.clear();
+  }
+}
+
+nlohmann::json MissionStream::beliefsJson() const {
+  std::lock_guard lock(mutex_);
+  return beliefs_;
+}
+
+void MissionStream::restoreBeliefs(const nlohmann::json& b) {
+  std::lock_guard lock(mutex_);
+  if (!b.is_array() || b.size() > 4096) return;
+  ++stateVersion_;
+  try {
+    beliefs_ = b.get<std::vector<std::vector<std::array<float, 2>>>>();
+  } catch (const nlohmann::json::exception&) {
+    beliefs_.clear();
   }
 }
 

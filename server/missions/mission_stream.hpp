@@ -9,7 +9,10 @@
 // Protocol (documented in README.md):
 //   1. text   {"type":"snapshot", mission, status, grid{rows,cols,cell_size_m}|null, rovers[{trail,pose}], progress, metrics}
 //   2. binary full grid (type 2), then diffs (type 1) as cells change
-//   3. text   {"type":"poses", step, rovers[{rover, append[[x,y]...], pose{x,y,heading_deg}}]}
+//   3. text   {"type":"poses", step, rovers[{rover, append[[x,y]...], pose{x,y,heading_deg}, believed?[[x,y]...]}]}
+//             — a coverage mission under localisation error (issue 15): `append` and `pose` are the
+//             true positions, `believed` appends to where the rover believes it has been; the
+//             snapshot's rovers then carry "believed_trail" whole
 //   4. text   {"type":"progress", ..., metrics?} and {"type":"status", status}
 //      text   {"type":"overlay", route?[[x,y]...], paths[{rover, append[[x,y]...]}]} — the team
 //             route (replaces the last) and each rover's planned path as it is accepted; the
@@ -70,6 +73,9 @@ class MissionStream : public EventSink, public std::enable_shared_from_this<Miss
   // {"route": [[x,y]...], "paths": [[[x,y]...] per rover]} — stored beside the trails.
   nlohmann::json overlaysJson() const;
   void restoreOverlays(const nlohmann::json& overlays);
+  // [[[x,y]...] per rover] — the believed trails (localisation error), stored beside the trails.
+  nlohmann::json beliefsJson() const;
+  void restoreBeliefs(const nlohmann::json& beliefs);
   // Rebuilds a finished mission's stream from its stored grid frame and result.
   static std::shared_ptr<MissionStream> fromStored(const std::string& missionId,
                                                    const std::string& gridFrame,
@@ -94,7 +100,7 @@ class MissionStream : public EventSink, public std::enable_shared_from_this<Miss
     std::uint64_t version = 0;  // stateVersion_ it was built at
     std::shared_ptr<const std::string> json, grid;  // grid null when the planner has none
     std::uint64_t gridVersion = 0, routeVersion = 0, progressVersion = 0, statusVersion = 0;
-    std::vector<std::size_t> trailLengths, pathLengths;
+    std::vector<std::size_t> trailLengths, pathLengths, beliefLengths;
   };
   std::shared_ptr<const Snapshot> snapshot();
   void wakeAll(bool force);
@@ -118,6 +124,7 @@ class MissionStream : public EventSink, public std::enable_shared_from_this<Miss
   std::vector<std::int32_t> changeLog_;  // cell indices in change order
   std::uint64_t logBase_ = 0;            // version of changeLog_[0]
   std::vector<std::vector<Pose>> trails_;
+  std::vector<std::vector<std::array<float, 2>>> beliefs_;  // believed trails; empty when none
   std::vector<std::array<float, 2>> route_;
   std::uint64_t routeVersion_ = 0;
   std::vector<std::vector<std::array<float, 2>>> paths_;

@@ -331,6 +331,52 @@ TEST_CASE("api: a mission file runs the mission again, with the same result") {
   checkError(s.get("/api/missions/nope/mission.json"), 404, "id");
 }
 
+TEST_CASE("api: a coverage mission under localisation error streams and exports true and believed tracks") {
+  TempDir tmp;
+  ApiServer s(tmp.str("data"), options());
+  const std::string map = s.defaultMap();
+  json body = coverageMission(map);
+  body["params"] = {{"odometry_noise", -1}};
+  checkError(s.postJson("/api/missions", body), 400, "params.odometry_noise");
+  body["params"] = {{"coverage", 0.2}, {"odometry_noise", 5}, {"heading_noise", 1.0},
+                    {"loop_closure", true}, {"noise_seed", 3}};
+  body["pace"] = 3000;
+  const std::string id = s.postJson("/api/missions", body).json()["id"];
+  auto frames = test::readAllFrames(s.port(), "/api/missions/" + id + "/stream");
+  REQUIRE(frames.size() >= 3);
+  std::size_t believed = 0;
+  for (const auto& f : frames) {
+    if (f.binary) continue;
+    json j = json::parse(f.data);
+    if (j["type"] == "poses")
+      for (const auto& r : j["rovers"]) believed += r.contains("believed") ? r["believed"].size() : 0;
+  }
+  CHECK(believed > 1);
+  json m = s.waitFinished(id);
+  // Bumps, if any, are warnings: completed_with_warnings.
+  REQUIRE((m["status"] == "succeeded" || m["status"] == "completed_with_warnings"));
+  CHECK(m["metrics"].contains("true_coverage"));
+  CHECK(m["metrics"].contains("localisation_mae_m"));
+  CHECK(m["metrics"]["localisation_mae_m"].get<double>() > 0);
+  auto res = s.get("/api/missions/" + id + "/result.json").json();
+  REQUIRE(res["rovers"].size() == 1);
+  CHECK(res["rovers"][0]["believed_path"].size() == res["rovers"][0]["path"].size());
+  CHECK(res["series"].contains("true_coverage_vs_moves"));
+  CHECK(res["series"].contains("localisation_error_m_rover_0"));
+  auto geo = s.get("/api/missions/" + id + "/result.geojson").json();
+  REQUIRE(geo["features"].size() == 2);
+  CHECK(geo["features"][0]["properties"]["track"] == "true");
+  CHECK(geo["features"][1]["properties"]["track"] == "believed");
+  auto csv = s.get("/api/missions/" + id + "/result.csv");
+  CHECK(csv.body.rfind("rover,index,x_m,y_m,believed_x_m,believed_y_m\n", 0) == 0);
+  // A late joiner gets both trails whole in the snapshot.
+  auto late = test::readAllFrames(s.port(), "/api/missions/" + id + "/stream");
+  REQUIRE(!late.empty());
+  json snap = json::parse(late[0].data);
+  CHECK(snap["rovers"][0]["believed_trail"].size() > 1);
+  CHECK(snap["rovers"][0]["trail"].size() > 1);
+}
+
 TEST_CASE("api: two WebSocket clients see the same final state; a late joiner replays it") {
   TempDir tmp;
   ApiServer s(tmp.str("data"), options());

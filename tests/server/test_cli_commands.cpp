@@ -462,7 +462,7 @@ TEST_CASE("bench usage errors") {
   std::ostringstream out;
   CHECK_THROWS_WITH_AS(rover::cli::benchCommand({}, out), "missing argument TARGET", UsageError);
   CHECK_THROWS_WITH_AS(rover::cli::benchCommand({"planner"}, out),
-                       "unknown benchmark 'planner' (coverage, mission)", UsageError);
+                       "unknown benchmark 'planner' (coverage, mission, localisation)", UsageError);
   try {
     rover::cli::benchCommand({"coverage", "--runs", "0"}, out);
     FAIL("bench --runs 0 ran");
@@ -480,4 +480,28 @@ TEST_CASE("an out-of-range --beta alone is reported as --beta, not as the implie
   CHECK_THROWS_WITH_AS(rover::cli::coverageCommand({"--beta", "1.5"}, out),
                        "invalid value for --beta: must be in [0, 1], got 1.5",
                        rover::cli::UsageError);
+}
+
+TEST_CASE("coverage with odometry noise: the truth line, and --json's true and believed paths") {
+  const std::string text = runCoverage({"--rows", "20", "--cols", "20", "--odometry-noise", "5",
+                                        "--heading-noise", "1", "--loop-closure"});
+  CHECK(contains(text, "truth      coverage "));
+  CHECK(contains(text, "localisation MAE "));
+  CHECK_FALSE(contains(runCoverage({"--rows", "20", "--cols", "20"}), "truth "));
+  json j = runCoverageJson({"--rows", "20", "--cols", "20", "--odometry-noise", "5", "--noise-seed", "4"});
+  CHECK(j["metrics"].contains("true_coverage"));
+  CHECK(j["params"]["noise_seed"] == 4);
+  CHECK(j["rovers"][0]["believed_path"].size() == j["rovers"][0]["path"].size());
+  CHECK(contains(coverageUsageError({"--heading-noise", "90"}), "--heading-noise"));
+}
+
+TEST_CASE("bench localisation prints MAE and true coverage at the believed stop per level") {
+  std::ostringstream out;
+  REQUIRE(rover::cli::benchCommand({"localisation", "--runs", "4", "--sizes", "5", "--levels", "0,2"}, out) == 0);
+  const std::string text = out.str();
+  CHECK(contains(text, "field 5 x 5 m"));
+  CHECK(contains(text, "true @ goal"));
+  // Zero noise: no error, true coverage = believed.
+  CHECK(contains(text, "0.000  0.000   0.000   off      0.000"));
+  CHECK(contains(text, "2.000  8.000   2.000   on "));
 }

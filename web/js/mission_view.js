@@ -15,8 +15,15 @@ import { Replay } from './replay.js';
 // A mission that ran to its end: cleanly, or with warnings (short/skipped legs, unreachable ground…).
 const completed = (status) => status === 'succeeded' || status === 'completed_with_warnings';
 
+const pct = (v) => `${(v * 100).toFixed(1)} %`;
 const SHOWN_METRICS = [
-  ['coverage', 'coverage', (v) => `${(v * 100).toFixed(1)} %`],
+  ['coverage', 'coverage', pct],
+  // Coverage under localisation error (issue 15): `coverage` is then the rover's own map.
+  ['true_coverage', 'true coverage', pct],
+  ['localisation_mae_m', 'loc. MAE', (v) => `${v.toFixed(2)} m`],
+  ['map_accuracy', 'map accuracy', pct],
+  ['bumps', 'bumps'],
+  ['loop_closures', 'loop closures'],
   ['coverage_reachable', 'of reachable', (v) => `${(v * 100).toFixed(1)} %`],
   ['moves', 'moves'],
   ['makespan', 'makespan'],
@@ -54,6 +61,10 @@ export class MissionView {
     this.coverage = new CoverageLayer();
     this.trailLayer = new TrailLayer(view);
     this.trails = this.trailLayer.add(new TrailSet({ width: 2 }));
+    // Coverage under localisation error: where each rover believed it was (dashed, hollow marker);
+    // `trails` are then the true positions. A layer of its own, so each can be toggled.
+    this.beliefLayer = new TrailLayer(view);
+    this.believed = this.beliefLayer.add(new TrailSet({ width: 1.5, dash: [5, 4], hollow: true, label: 'believed' }));
     this.plan = new PlanLayer();
     this.compareSets = [];
     this.mission = null;
@@ -68,6 +79,8 @@ export class MissionView {
     view.addLayer({ id: 'coverage', order: 30, draw: (ctx, v) => covLayer.visible && this.coverage.draw(ctx, v, covLayer.opacity) });
     view.addLayer({ id: 'plan', order: 35, draw: (ctx, v) => planLayer.visible && this.plan.draw(ctx, v, planLayer.opacity) });
     view.addLayer({ id: 'trails', order: 40, draw: (ctx, v) => this.trailLayer.draw(ctx, v, trailLayer.opacity, trailLayer.visible) });
+    const beliefLayer = layers.addOverlay({ id: 'believed', label: 'believed trails', legendTitle: 'believed trails (localisation error)', visible: true, opacity: 0.95, legend: () => this.beliefLegend() });
+    view.addLayer({ id: 'believed', order: 41, draw: (ctx, v) => beliefLayer.visible && this.hasBeliefs() && this.beliefLayer.draw(ctx, v, beliefLayer.opacity, true) });
     view.onRender((t) => this.countFrame(t));
 
     this.replay = new Replay({
@@ -142,6 +155,7 @@ export class MissionView {
     this.coverage.reset();
     this.plan.clear();
     this.trails.clear((mission.spec?.rovers || []).length);
+    this.believed.clear();
     this.layers.renderLegends();
     this.lastProgress = mission.progress || null;
     this.progressText = '';
@@ -170,6 +184,8 @@ export class MissionView {
         if (m.grid) this.coverage.reset(m.grid.rows, m.grid.cols, m.grid.cell_size_m);
         this.trails.clear(m.rovers.length);
         for (const r of m.rovers) this.trails.append(r.rover, r.trail, r.pose);
+        this.believed.clear();
+        for (const r of m.rovers) if (r.believed_trail) this.believed.append(r.rover, r.believed_trail, r.pose);
         this.plan.clear();
         if (m.route || m.paths) this.plan.apply(m, true);
         this.layers.renderLegends();
@@ -184,7 +200,10 @@ export class MissionView {
         return type;
       },
       poses: (m) => {
-        for (const r of m.rovers) this.trails.append(r.rover, r.append, r.pose);
+        for (const r of m.rovers) {
+          this.trails.append(r.rover, r.append, r.pose);
+          if (r.believed) this.believed.append(r.rover, r.believed, r.pose);
+        }
         this.step = m.step;
         this.view.invalidate();
       },
@@ -252,6 +271,8 @@ export class MissionView {
         this.result = await api.result(m.mission);
         if (this.mission?.id !== m.mission) return;
         this.trails.setPaths(this.result.rovers.map((r) => r.path));
+        this.believed.setPaths(this.result.rovers.some((r) => r.believed_path) ? this.result.rovers.map((r) => r.believed_path || []) : []);
+        this.layers.renderLegends();
         if (this.result.overlays) this.plan.setFromResult(this.result.overlays);
         this.layers.renderLegends();
         this.setExports(m.mission);
@@ -280,12 +301,15 @@ export class MissionView {
   // --- replay ---
   seek(step, end) {
     if (!this.result) return;
-    const paths = this.result.rovers.map((r) => r.path);
+    // The grid is the rovers' own map: under localisation error it is rebuilt from the believed paths.
+    const paths = this.result.rovers.map((r) => r.believed_path || r.path);
     if (end) {
       this.trails.setLimit(Infinity);
+      this.believed.setLimit(Infinity);
       this.coverage.restoreFinal();
     } else {
       this.trails.setLimit(step);
+      this.believed.setLimit(step);
       this.coverage.replayTo(paths, step);
     }
     counters.replayStep = step;
@@ -304,6 +328,15 @@ export class MissionView {
     this.trails.setPaths(runs.length ? [] : this.result ? this.result.rovers.map((r) => r.path) : this.trails.paths);
     this.layers.renderLegends();
     this.view.invalidate();
+  }
+
+  hasBeliefs() {
+    return this.believed.paths.some((p) => p.length > 0);
+  }
+
+  beliefLegend() {
+    if (!this.hasBeliefs()) return el('div', { class: 'muted small' }, 'only with localisation error (odometry_noise, heading_noise, slip_per_deg)');
+    return el('div', { class: 'muted small' }, 'dashed, hollow marker: where each rover believed it was; the solid trails are where it truly went');
   }
 
   trailLegend() {
@@ -386,8 +419,11 @@ export class MissionView {
         ...(single ? [{ x: single.x, y: single.y, colour: '#ffb14f', label: 'one rover' }] : []),
       ], { yMin: 0, yMax, legend: true, empty: 'no probability curve' });
     } else {
-      lineChart($('chart-coverage'), cov ? [{ x: cov.x, y: cov.y, colour: '#4fb3ff' }] : [{ ...this.progressCurve, colour: '#4fb3ff' }],
-        { yMin: 0, yMax: 1, empty: 'waiting for progress', cursorX: cursorStep !== null ? cursorStep * rovers : null });
+      const truth = r?.series?.true_coverage_vs_moves;
+      const lines = cov ? [{ x: cov.x, y: cov.y, colour: '#4fb3ff', label: truth ? 'believed' : undefined }] : [{ ...this.progressCurve, colour: '#4fb3ff' }];
+      if (truth) lines.push({ x: truth.x, y: truth.y, colour: '#ff7a45', label: 'true' });
+      lineChart($('chart-coverage'), lines,
+        { yMin: 0, yMax: 1, legend: Boolean(truth), empty: 'waiting for progress', cursorX: cursorStep !== null ? cursorStep * rovers : null });
     }
     const pitch = [];
     if (r) {

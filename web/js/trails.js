@@ -169,12 +169,20 @@ export class TrailLayer {
       ctx.lineTo(-3, 0);
       ctx.lineTo(-6, -6);
       ctx.closePath();
-      ctx.fillStyle = roverColour(k + (set.style.colourOffset || 0));
-      ctx.strokeStyle = '#000';
-      ctx.lineWidth = 1.5;
+      const colour = roverColour(k + (set.style.colourOffset || 0));
       ctx.globalAlpha = 1;
-      ctx.fill();
-      ctx.stroke();
+      if (set.style.hollow) {
+        // The believed pose (localisation error): an outline in the rover's colour.
+        ctx.strokeStyle = colour;
+        ctx.lineWidth = 2;
+        ctx.stroke();
+      } else {
+        ctx.fillStyle = colour;
+        ctx.strokeStyle = '#000';
+        ctx.lineWidth = 1.5;
+        ctx.fill();
+        ctx.stroke();
+      }
       ctx.setTransform(view.dpr, 0, 0, view.dpr, 0, 0);
     });
     ctx.restore();
