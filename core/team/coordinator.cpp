@@ -196,6 +196,18 @@ class Coordinator {
                          cancel_);
   }
 
+  // Rover k standing where it is for `ticks` samples, appended to `samples`.
+  void stand(int k, int ticks, std::vector<TrajectorySample>& samples) const {
+    const TrajectorySample origin = last(k);
+    const std::size_t base = out_.trajectories[k].samples.size() - 1;  // index of `origin`
+    for (int j = 1; j <= ticks; ++j) {
+      TrajectorySample s = origin;
+      s.time = static_cast<double>(base + j) * period_;
+      s.speed = 0;
+      samples.push_back(s);
+    }
+  }
+
   // The rover stands `waitTicks` samples, then drives `path`.
   Candidate simulateTry(int k, const std::vector<Eigen::Vector2d>& path, int waitTicks,
                         std::uint64_t seed) {
@@ -203,12 +215,7 @@ class Coordinator {
     const std::size_t base = out_.trajectories[k].samples.size() - 1;  // index of `origin`
     Candidate c;
     c.path = path;
-    for (int j = 1; j <= waitTicks; ++j) {
-      TrajectorySample s = origin;
-      s.time = static_cast<double>(base + j) * period_;
-      s.speed = 0;
-      c.samples.push_back(s);
-    }
+    stand(k, waitTicks, c.samples);
     std::vector<Eigen::Vector2d> waypoints(path.begin() + 1, path.end());
     if (waypoints.empty()) {
       c.reached = true;
@@ -231,18 +238,11 @@ class Coordinator {
   // not change, so the simulated motion is the same, only later.
   Candidate delayed(int k, const Candidate& c, int ticks) const {
     if (ticks == 0) return c;
-    const TrajectorySample origin = last(k);
-    const std::size_t base = out_.trajectories[k].samples.size() - 1;
     Candidate d;
     d.path = c.path;
     d.reached = c.reached;
     d.samples.reserve(c.samples.size() + static_cast<std::size_t>(ticks));
-    for (int j = 1; j <= ticks; ++j) {
-      TrajectorySample s = origin;
-      s.time = static_cast<double>(base + j) * period_;
-      s.speed = 0;
-      d.samples.push_back(s);
-    }
+    stand(k, ticks, d.samples);
     for (TrajectorySample s : c.samples) {
       s.time += ticks * period_;
       d.samples.push_back(s);
