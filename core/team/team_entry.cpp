@@ -1,6 +1,8 @@
 #include "core/team/team_entry.hpp"
 
 #include <chrono>
+#include <memory>
+#include <mutex>
 #include <optional>
 
 #include "core/common/error.hpp"
@@ -37,10 +39,10 @@ class TeamPlanner final : public Planner {
       throw Error(ErrorCode::InvalidInput, "rovers", "between 1 and 64 rovers are supported");
     if (p.mission.footprint < std::max(g.cellWidth, g.cellHeight))
       throwInvalidParameter("footprint_m", "must be at least the map cell size");
-    const terrain::Traversability trav = terrain::traversability(*problem.dem, p.mission.traversability);
+    const auto classes = classesFor(problem, p.mission.traversability);
     planning::MissionGround ground;  // the one start check of every planner
     ground.dem = problem.dem.get();
-    ground.classes = &trav.classes;
+    ground.classes = classes.get();
     ground.impassableDeg = p.mission.traversability.impassableDeg;
     planning::StartRules rules;
     rules.safetyDistance = p.mission.coordination.safetyDistance;
@@ -70,8 +72,10 @@ class TeamPlanner final : public Planner {
     // The simulated rover climbs against the map's body's gravity (issue 11: body-aware defaults);
     // the model's own default (Mars, paper 001's site) when the CRS names no known body.
     if (problem.body != terrain::Body::Unknown) mission.coordination.model.gravity = terrain::bodyGravity(problem.body);
-    TeamMissionResult r = runTeamMission(*problem.dem, problem.pdm ? *problem.pdm : noPdm, starts,
-                                         mission, hybrid_, observer ? &*observer : nullptr, cancel);
+    const auto classes = classesFor(problem, mission.traversability);
+    TeamMissionResult r = runTeamMission(*problem.dem, *classes, problem.pdm ? *problem.pdm : noPdm,
+                                         starts, mission, hybrid_, observer ? &*observer : nullptr,
+                                         cancel);
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     PlanResult out = toPlanResult(r, p, hybrid_, wall);
     out.assumptions.push_back({"body", terrain::bodyName(problem.body)});
@@ -89,7 +93,35 @@ class TeamPlanner final : public Planner {
   }
 
  private:
+  // The traversability classes of the last map planned on, kept while the map lives: a mission
+  // is validated when it is queued and run later on the same map, and a map serves many missions,
+  // so the classes are computed once per map and thresholds, not once per call. Memory: one byte
+  // per map cell (at most 50 MB for the server's largest map), one map at a time.
+  std::shared_ptr<const Raster<std::uint8_t>> classesFor(
+      const PlanningProblem& problem, const terrain::TraversabilityParams& params) const {
+    {
+      std::lock_guard lock(cacheMutex_);
+      if (cachedDem_.expired()) cachedClasses_.reset();  // the map is gone: so are its classes
+      if (cachedClasses_ && cachedDem_.lock() == problem.dem &&
+          cachedParams_.highRiskDeg == params.highRiskDeg &&
+          cachedParams_.impassableDeg == params.impassableDeg)
+        return cachedClasses_;
+    }
+    // On the threads the caller granted (a server worker's share, not every core).
+    auto classes = std::make_shared<const Raster<std::uint8_t>>(
+        terrain::traversability(*problem.dem, params, false, problem.threads).classes);
+    std::lock_guard lock(cacheMutex_);
+    cachedDem_ = problem.dem;
+    cachedParams_ = params;
+    cachedClasses_ = classes;
+    return classes;
+  }
+
   bool hybrid_;
+  mutable std::mutex cacheMutex_;
+  mutable std::weak_ptr<const terrain::Dem> cachedDem_;
+  mutable terrain::TraversabilityParams cachedParams_;
+  mutable std::shared_ptr<const Raster<std::uint8_t>> cachedClasses_;
 };
 
 }  // namespace
