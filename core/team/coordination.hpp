@@ -7,6 +7,9 @@
 // distance is planned again with a new seed, up to a bound; then the rover waits and tries again;
 // then it skips the leg. Whatever is left is reported: a returned plan is collision-free or lists
 // exactly where it is not (`conflicts`).
+// This header holds the parameters, the tasks and the result; the stages are apart:
+// route_generator → task_builder → coordinator (taking a leg_planner and a leg_simulator, the
+// policy on conflicts a parameter) → team_metrics; separation.hpp is the one distance check.
 //
 // Choices made here where the paper is silent (each repeated where it is implemented):
 // - Every rover starts at t = 0 and all trajectories share one 10 Hz clock, so "the same time" is
@@ -18,7 +21,7 @@
 //   conflict (KeepOutZone): with only a new seed, RRT* converges to the same straight line on
 //   open ground and a head-on pair could never separate.
 // - A conflict within the first second of a try cannot be dodged by another path (the rover has
-//   barely moved): the re-plans are skipped and the rover goes straight to waiting.
+//   barely moved): in paper mode the re-plans are skipped and the rover goes straight to waiting.
 // - The rover stops at the end of each leg (it looks at its target) and starts the next at rest.
 // - Legs are planned ahead in parallel from their nominal start (the previous leg's goal), which
 //   is within the acceptance radius of where the rover stops; a leg whose rover ended elsewhere
@@ -32,6 +35,7 @@
 #include "core/common/cancel.hpp"
 #include "core/grid/raster.hpp"
 #include "core/team/rover_sim.hpp"
+#include "core/team/separation.hpp"
 #include "core/team/terrain_rrt.hpp"
 #include "core/team/traversal_lattice.hpp"
 #include "core/terrain/dem.hpp"
@@ -149,17 +153,6 @@ struct LegRecord {
   std::string note;      // why it was skipped or ended short
 };
 
-// Two rovers closer than the safety distance.
-struct Conflict {
-  int rover = 0;  // the lower-priority rover
-  int other = 0;  // the higher-priority rover
-  double time = 0;        // s, first sample of the episode
-  double duration = 0;    // s, until the pair is apart again
-  double distance = 0;    // m, the smallest distance in the episode
-  Eigen::Vector2d position{0, 0};       // the rover, at `time`
-  Eigen::Vector2d otherPosition{0, 0};  // the other rover, at `time`
-};
-
 // Told about each accepted piece as soon as it is committed (the server streams it).
 class CoordinationObserver {
  public:
@@ -190,7 +183,9 @@ struct CoordinationResult {
   bool cancelled = false;
 };
 
-// Plans, simulates and coordinates the team. `classes` holds terrain::TerrainClass values on the
+// Plans, simulates and coordinates the team with the terrain stages of `params.mode`
+// (coordinator.hpp): Paper, the boxed RRT* planner and the paper's policy; Timed, the guided
+// planner and the timed policy; the rover simulator on `dem` for both. `classes` holds terrain::TerrainClass values on the
 // DEM's grid. `seed` drives every RRT* call (deriveSeed per rover, leg, piece and attempt) and the
 // slip noise, so the result is the same for a seed whatever the thread count. Throws
 // InvalidParameter for bad parameters and InvalidInput naming rovers[k] for a start off the map.
@@ -206,15 +201,5 @@ CoordinationResult coordinate(const terrain::Dem& dem, const Raster<std::uint8_t
 // The lattice coordinate() uses for these parameters (attitude limit, edge resolution, eq. 9).
 TraversalLattice makeLattice(const terrain::Dem& dem, const Raster<std::uint8_t>& classes,
                              const CoordinationParams& params);
-
-// Every episode in which two rovers are closer than `safety` (compared at every sample index,
-// parked rovers included), and the smallest distance between any two rovers over the mission.
-struct SeparationReport {
-  std::vector<Conflict> conflicts;
-  double minimumDistance = 0;  // m; +∞ with fewer than two rovers
-  double minimumTime = 0;      // s
-  int minimumPair[2] = {0, 0};
-};
-SeparationReport checkSeparation(const std::vector<Trajectory>& trajectories, double safety);
 
 }  // namespace rover::team

@@ -170,6 +170,12 @@ Route makeRoute(const SearchGrid& grid, CellIndex start, std::vector<CellIndex> 
 
 }  // namespace
 
+CellIndex searchCellAt(const GridGeometry& g, double footprint, const Eigen::Vector2d& p) {
+  const int col = std::clamp(static_cast<int>(std::floor(p.x() / footprint)), 0, g.cols - 1);
+  const int fromBottom = std::clamp(static_cast<int>(std::floor(p.y() / footprint)), 0, g.rows - 1);
+  return {g.rows - 1 - fromBottom, col};
+}
+
 Eigen::Vector2d SearchGrid::centre(CellIndex c) const {
   Eigen::Vector2d p = cellToLocal(geometry(), c);
   // Partial cells on the north row / east column: the centre of the part inside the map.
@@ -219,11 +225,8 @@ SearchGrid makeSearchGrid(const Raster<float>& pdmMass, const Raster<std::uint8_
       if (!std::isfinite(v) || v < 0)
         throw Error(ErrorCode::InvalidInput, "pdm", "PDM masses must be finite and >= 0");
       // The map cell goes to the search cell holding its centre.
-      const Eigen::Vector2d xy = cellToLocal(mg, {r, c});
-      const int sc = std::clamp(static_cast<int>(std::floor(xy.x() / footprintM)), 0, sgeo.cols - 1);
-      const int fromBottom =
-          std::clamp(static_cast<int>(std::floor(xy.y() / footprintM)), 0, sgeo.rows - 1);
-      const int si = sgeo.index(sgeo.rows - 1 - fromBottom, sc);
+      const CellIndex sc = searchCellAt(sgeo, footprintM, cellToLocal(mg, {r, c}));
+      const int si = sgeo.index(sc.row, sc.col);
       sg.mass.at(si) += v;
       ++total[static_cast<std::size_t>(si)];
       // Impassable and NoData (and any larger, unknown code) block the map cell.

@@ -24,6 +24,11 @@
 
 namespace rover::team {
 
+// The search cell (of `searchGrid`, squares of `footprint` metres anchored at the map's south-west
+// corner) holding the local position `p`, clamped into the grid: the one position → search-cell
+// function of the team planner (the grid's own cells, the team's start, the replay).
+CellIndex searchCellAt(const GridGeometry& searchGrid, double footprint, const Eigen::Vector2d& p);
+
 struct SearchGrid {
   // Original PDM mass per search cell (sum of the masses of the map cells whose centre lies in
   // it), for every cell, impassable ones included. geometry: rows, cols, cellWidth = cellHeight =
@@ -43,6 +48,8 @@ struct SearchGrid {
   // Centre of a search cell in the local frame (SPEC §0: x east, y north, metres from the map's
   // south-west corner); for a partial edge cell, the centre of its part inside the map.
   Eigen::Vector2d centre(CellIndex c) const;
+  // The search cell holding a position (searchCellAt).
+  CellIndex cellAt(const Eigen::Vector2d& p) const { return searchCellAt(geometry(), footprint, p); }
   // Total mass over passable cells.
   double passableMass() const;
 };

@@ -329,44 +329,4 @@ AttitudeExceedance attitudeExceedance(const Trajectory& t, double limit) {
   return e;
 }
 
-Eigen::Vector2d positionAt(const Trajectory& t, double time) {
-  const auto& s = t.samples;
-  if (s.empty()) throw Error(ErrorCode::InvalidInput, "trajectory", "trajectory: no samples");
-  if (!(time > s.front().time)) return {s.front().x, s.front().y};
-  if (time >= s.back().time) return {s.back().x, s.back().y};
-  auto it = std::upper_bound(s.begin(), s.end(), time,
-                             [](double v, const TrajectorySample& a) { return v < a.time; });
-  const TrajectorySample& b = *it;
-  const TrajectorySample& a = *(it - 1);
-  const double f = (time - a.time) / (b.time - a.time);
-  return {a.x + f * (b.x - a.x), a.y + f * (b.y - a.y)};
-}
-
-Separation minimumSeparation(const Trajectory& a, const Trajectory& b, bool holdEnds) {
-  if (a.samples.empty() || b.samples.empty())
-    throw Error(ErrorCode::InvalidInput, "trajectory", "trajectory: no samples");
-  double lo = -std::numeric_limits<double>::infinity(), hi = -lo;
-  if (!holdEnds) {
-    lo = std::max(a.samples.front().time, b.samples.front().time);
-    hi = std::min(a.samples.back().time, b.samples.back().time);
-  }
-  Separation best{std::numeric_limits<double>::infinity(), std::numeric_limits<double>::quiet_NaN()};
-  auto check = [&](double time) {
-    if (time < lo || time > hi) return;
-    const double d = (positionAt(a, time) - positionAt(b, time)).norm();
-    if (d < best.distance) best = {d, time};
-  };
-  // Walk both sample clocks in time order (each sample time once when the clocks coincide).
-  std::size_t i = 0, j = 0;
-  while (i < a.samples.size() || j < b.samples.size()) {
-    const double ta = i < a.samples.size() ? a.samples[i].time : std::numeric_limits<double>::infinity();
-    const double tb = j < b.samples.size() ? b.samples[j].time : std::numeric_limits<double>::infinity();
-    const double t = std::min(ta, tb);
-    check(t);
-    if (ta == t) ++i;
-    if (tb == t) ++j;
-  }
-  return best;
-}
-
 }  // namespace rover::team

@@ -159,20 +159,6 @@ struct AttitudeExceedance {
 };
 AttitudeExceedance attitudeExceedance(const Trajectory& t, double limit = kDefaultAttitudeLimit);
 
-// Position at time `time`, linearly interpolated between samples. Before the first sample the
-// rover waits at its start, after the last it stays where it stopped. Throws InvalidInput when the
-// trajectory has no samples.
-Eigen::Vector2d positionAt(const Trajectory& t, double time);
-
-// Closest approach of two rovers, compared sample by sample in time: at every sample time of
-// either trajectory (the same 10 Hz clock when their start times are aligned) the other's position
-// is interpolated. With holdEnds, a rover is present before its start and after its end (waiting
-// or parked, see positionAt) and the whole union of the time spans is checked; without, only the
-// overlap (distance +∞ and time NaN when there is none). Throws InvalidInput on an empty trajectory.
-struct Separation {
-  double distance = 0;  // m
-  double time = 0;      // s, when it occurs (the first such time)
-};
-Separation minimumSeparation(const Trajectory& a, const Trajectory& b, bool holdEnds = true);
+// Separation between rovers: separation.hpp (one routine for the coordinator and the metrics).
 
 }  // namespace rover::team

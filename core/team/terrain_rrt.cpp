@@ -82,6 +82,15 @@ SearchBounds searchBounds(const GridGeometry& map, const Eigen::Vector2d& start,
   return b;
 }
 
+SearchBounds mapBounds(const GridGeometry& map) {
+  return {{0, 0}, {map.widthMetres(), map.heightMetres()}};
+}
+
+double edgeResolutionOn(const GridGeometry& map, const RrtParams& params) {
+  return params.edgeResolution > 0 ? params.edgeResolution
+                                   : 0.25 * std::min(map.cellWidth, map.cellHeight);
+}
+
 double headingChange(double from, double to) {
   double d = std::remainder(to - from, 2 * std::numbers::pi);  // in [−π, π]
   return std::abs(d);
@@ -435,8 +444,7 @@ PathResult planPath(const terrain::Dem& dem, const Raster<std::uint8_t>& classes
   silenceOmpl();
 
   const GridGeometry& g = dem.geometry();
-  const double resolution = params.edgeResolution > 0 ? params.edgeResolution
-                                                      : 0.25 * std::min(g.cellWidth, g.cellHeight);
+  const double resolution = edgeResolutionOn(g, params);
   const SearchBounds box = corridor ? corridor->bounds : searchBounds(g, start, goal, params.clearance);
   TerrainEdgeModel model(dem, classes, box, params.attitudeLimit, resolution);
   model.setCorridor(corridor);

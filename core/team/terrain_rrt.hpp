@@ -67,6 +67,11 @@ struct SearchBounds {
 };
 SearchBounds searchBounds(const GridGeometry& map, const Eigen::Vector2d& start,
                           const Eigen::Vector2d& goal, double clearance);
+// The whole map as search bounds.
+SearchBounds mapBounds(const GridGeometry& map);
+// The spacing of the validity samples along an edge: `params.edgeResolution`, or a quarter of
+// the map's (smaller) cell side when it is 0.
+double edgeResolutionOn(const GridGeometry& map, const RrtParams& params);
 
 // |to − from| wrapped to [0, π]: the smaller turn from heading `from` to heading `to`.
 double headingChange(double from, double to);

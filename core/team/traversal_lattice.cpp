@@ -15,7 +15,6 @@ namespace {
 
 constexpr std::int64_t kMaxWindowCells = 4'000'000;
 
-SearchBounds wholeMap(const GridGeometry& g) { return {{0, 0}, {g.widthMetres(), g.heightMetres()}}; }
 
 }  // namespace
 
@@ -32,7 +31,7 @@ TraversalLattice::TraversalLattice(const terrain::Dem& dem, const Raster<std::ui
                                    unsigned threads)
     : dem_(dem),
       classes_(classes),
-      model_(dem, classes, wholeMap(dem.geometry()), attitudeLimit, edgeResolution),
+      model_(dem, classes, mapBounds(dem.geometry()), attitudeLimit, edgeResolution),
       range_(range) {
   const GridGeometry& g = classes.geometry;
   const auto n = static_cast<std::size_t>(g.cellCount());

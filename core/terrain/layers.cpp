@@ -185,7 +185,11 @@ std::optional<SurfacePoint> surfaceAt(const Dem& dem, double x, double y) {
   s.height = (1 - fv) * ((1 - fu) * z00 + fu * z01) + fv * ((1 - fu) * z10 + fu * z11);
   double dzdu = (1 - fv) * (z01 - z00) + fv * (z11 - z10);
   double dzdv = (1 - fu) * (z10 - z00) + fu * (z11 - z01);
-  s.dzdx = dzdu / dem.dx(std::clamp(static_cast<int>(std::lround(v)), 0, g.rows - 1));
+  // The row's cell width only matters on maps with per-row widths (geographic grids); the
+  // rounding is skipped on the rest (it showed up in the RRT* profile, issue 10).
+  s.dzdx = dzdu / (dem.rowCellWidth.empty()
+                       ? g.cellWidth
+                       : dem.dx(std::clamp(static_cast<int>(std::lround(v)), 0, g.rows - 1)));
   s.dzdy = -dzdv / dem.dy();  // v grows southwards
   return s;
 }

@@ -88,6 +88,7 @@ int sweepCommand(const std::vector<std::string>& argv, std::ostream& out) {
   args.option("targets", "N", "64", "swinton: route targets per mission.");
   args.option("seed", "S", "1", "First seed; runs use seeds S, S+1, ...");
   args.option("threads", "N", "all cores", "Worker threads.");
+  args.option("mission-threads", "N", "1", "swinton: threads each mission plans on (plan_cpu_s then counts the mission's calling thread only).");
   args.option("out", "DIR", "", "Write summary.json and summary.csv into DIR.");
   if (!args.parse(argv)) {
     out << args.help();
@@ -100,6 +101,7 @@ int sweepCommand(const std::vector<std::string>& argv, std::ostream& out) {
     t.runs = static_cast<int>(args.integer("runs", 20, 1, 100000));
     t.firstSeed = static_cast<std::uint64_t>(args.integer("seed", 1, 0, INT64_MAX));
     t.threads = static_cast<unsigned>(args.integer("threads", hardwareThreads(), 1, 1024));
+    t.missionThreads = static_cast<unsigned>(args.integer("mission-threads", 1, 1, 1024));
     t.rovers = static_cast<int>(args.integer("rovers", 5, 1, 64));
     t.targets = static_cast<int>(args.integer("targets", 64, 1, 10000));
     t.hirisePath = args.str("hirise", "../shared/dems/mars_gale_hirise_1m/missionDEM.tif");

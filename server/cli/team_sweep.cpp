@@ -121,11 +121,14 @@ SweepOutcome runTeamSweep(const TeamSweepOptions& o, std::ostream& progress) {
 
   team::TeamMissionParams base;
   base.route.targets = o.targets;
-  base.coordination.threads = 1;  // the sweep is parallel over missions
+  base.coordination.threads = o.missionThreads;  // 1: the sweep is parallel over missions
+  // The traversability classes once per site, not once per mission.
+  std::vector<Raster<std::uint8_t>> classes;
   std::vector<std::vector<team::Pose>> starts;
   for (const auto& site : sites) {
     const GridGeometry& g = site.dem.geometry();
-    starts.push_back(team::formationStarts(site.dem, base, {g.widthMetres() / 2, g.heightMetres() / 2}, o.rovers));
+    classes.push_back(terrain::traversability(site.dem, base.traversability).classes);
+    starts.push_back(team::formationStarts(site.dem, classes.back(), base, {g.widthMetres() / 2, g.heightMetres() / 2}, o.rovers));
   }
 
   // Metric values per (site/config, metric), in run order.
@@ -146,7 +149,8 @@ SweepOutcome runTeamSweep(const TeamSweepOptions& o, std::ostream& progress) {
     p.seed = seed;
     const auto w0 = std::chrono::steady_clock::now();
     const double c0 = threadCpuSeconds();
-    team::TeamMissionResult r = team::runTeamMission(site.dem, pdm, starts[job.site], p, configs[job.config].hybrid);
+    team::TeamMissionResult r = team::runTeamMission(site.dem, classes[job.site], pdm, starts[job.site], p,
+                                                    configs[job.config].hybrid);
     const double cpu = threadCpuSeconds() - c0;
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - w0).count();
     const team::TeamMetrics& m = r.metrics;

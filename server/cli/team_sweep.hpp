@@ -15,7 +15,8 @@ namespace rover::cli {
 struct TeamSweepOptions {
   int runs = 20;                     // PDMs per site
   std::uint64_t firstSeed = 1;       // PDM seeds firstSeed, firstSeed + 1, ...; RRT* seed = PDM seed
-  unsigned threads = 0;              // missions run in parallel (each on one thread)
+  unsigned threads = 0;              // missions run in parallel
+  unsigned missionThreads = 1;       // threads each mission plans on (0 = all cores)
   std::string hirisePath;            // "" = the synthetic site only
   int rovers = 5;
   int targets = 64;

@@ -1,4 +1,5 @@
 #include "core/team/rover_sim.hpp"
+#include "core/team/separation.hpp"
 
 #include <doctest/doctest.h>
 
@@ -43,19 +44,6 @@ double settlingTime(const Trajectory& t, double target, double tol, double until
   return settled;
 }
 
-Trajectory synthetic(double t0, Eigen::Vector2d from, Eigen::Vector2d to, int n, double dt = 0.1) {
-  Trajectory t;
-  t.samplePeriod = dt;
-  for (int k = 0; k <= n; ++k) {
-    TrajectorySample s;
-    s.time = t0 + k * dt;
-    Eigen::Vector2d p = from + (to - from) * (static_cast<double>(k) / n);
-    s.x = p.x();
-    s.y = p.y();
-    t.samples.push_back(s);
-  }
-  return t;
-}
 }  // namespace
 
 TEST_CASE("sim: straight line on flat ground settles at the nominal speed, sampled at 10 Hz") {
@@ -263,40 +251,22 @@ TEST_CASE("sim: exceedance counting on a steep ramp") {
   CHECK(attitudeExceedance(Trajectory{}).fraction() == 0.0);
 }
 
-TEST_CASE("sim: position at a time and minimum separation of crossing trajectories") {
-  // Hand-made: A east along y = 0, B north along x = 5, both 1 m/s; they meet at (5, 0) at t = 5.
-  Trajectory a = synthetic(0.0, {0, 0}, {10, 0}, 100);
-  Trajectory b = synthetic(0.0, {5, -5}, {5, 5}, 100);
-  CHECK(positionAt(a, 2.55).x() == doctest::Approx(2.55));
-  CHECK(positionAt(a, -3.0) == Eigen::Vector2d(0, 0));    // waiting at the start
-  CHECK(positionAt(a, 99.0) == Eigen::Vector2d(10, 0));  // parked at the end
-  Separation s = minimumSeparation(a, b);
-  CHECK(s.distance == doctest::Approx(0.0));
-  CHECK(s.time == doctest::Approx(5.0));
-  // B two seconds late: at t = 5 A is at (5, 0) and B at (5, −2); closest when both are 45° off.
-  Trajectory late = synthetic(2.0, {5, -5}, {5, 5}, 100);
-  Separation sl = minimumSeparation(a, late);
-  CHECK(sl.distance == doctest::Approx(std::sqrt(2.0)).epsilon(1e-9));
-  CHECK(sl.time == doctest::Approx(6.0));
-  // Disjoint in time: with the ends held, the parked A at (10, 0) meets B on its way…
-  Trajectory after = synthetic(20.0, {10, -5}, {10, 5}, 100);
-  CHECK(minimumSeparation(a, after).distance == doctest::Approx(0.0));
-  // …without, there is nothing to compare.
-  CHECK(std::isinf(minimumSeparation(a, after, false).distance));
-  CHECK_THROWS_AS(positionAt(Trajectory{}, 0.0), Error);
-
-  // Simulated: two rovers crossing at (10, 10) at the same time, then one delayed by 10 s.
+TEST_CASE("sim: separation of simulated rovers crossing, on time and one delayed") {
+  // Two rovers crossing at (10, 10) at the same time, then one held 10 s at its start: on the
+  // team's shared 10 Hz clock (separation.hpp) a delay is samples standing still first.
   const terrain::Dem dem = flat20();
   Trajectory east = run(dem, {{18.0, 10.0}}, {2.0, 10.0, 0.0});
   Trajectory north = run(dem, {{10.0, 18.0}}, {10.0, 2.0, kPi / 2});
-  Separation cross = minimumSeparation(east, north);
-  MESSAGE("crossing: " << cross.distance << " m at t = " << cross.time << " s");
-  CHECK(cross.distance < 0.05);
-  Trajectory delayed = run(dem, {{10.0, 18.0}}, {10.0, 2.0, kPi / 2}, {}, 10.0);
-  CHECK(delayed.samples.front().time == 10.0);
-  Separation apart = minimumSeparation(east, delayed);
-  MESSAGE("delayed 10 s: " << apart.distance << " m at t = " << apart.time << " s");
-  CHECK(apart.distance > 2.0);
+  const SeparationReport cross = checkSeparation({east, north}, 1.0);
+  MESSAGE("crossing: " << cross.minimumDistance << " m at t = " << cross.minimumTime << " s");
+  CHECK(cross.minimumDistance < 0.05);
+  CHECK(cross.conflicts.size() == 1);
+  Trajectory delayed = north;
+  delayed.samples.insert(delayed.samples.begin(), 100, north.samples.front());
+  const SeparationReport apart = checkSeparation({east, delayed}, 1.0);
+  MESSAGE("delayed 10 s: " << apart.minimumDistance << " m at t = " << apart.minimumTime << " s");
+  CHECK(apart.minimumDistance > 2.0);
+  CHECK(apart.conflicts.empty());
 }
 
 TEST_CASE("sim: statuses for the time limit, leaving the map and cancellation") {

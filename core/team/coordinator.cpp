@@ -1,0 +1,551 @@
+#include "core/team/coordinator.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <numbers>
+#include <optional>
+
+#include "core/common/error.hpp"
+#include "core/common/parallel.hpp"
+#include "core/common/random.hpp"
+#include "core/team/separation.hpp"
+
+namespace rover::team {
+
+ConflictPolicy paperPolicy(const CoordinationParams& p) {
+  ConflictPolicy c;
+  c.startDelays = {0};
+  c.checkTiltedTries = true;
+  c.earlyConflictEndsReplans = true;
+  c.waitsAfterReplans = p.maxWaits;
+  c.invalidGoalEndsPiece = false;
+  c.dwell = p.dwellCheck;
+  return c;
+}
+
+// The dwell: measured on the default map, seeds 1–3, 9 of 960 legs were skipped with 10 s, 6 with
+// 4.5 s; with 0.5 s a rover could arrive where it had no time to get away (7 skipped on seed 2).
+ConflictPolicy timedPolicy(const CoordinationParams& p) {
+  ConflictPolicy c;
+  const double period = p.controller.samplePeriod;
+  const int step = std::max(1, static_cast<int>(std::lround(p.delayStep / period)));
+  const int maxTicks = static_cast<int>(std::lround(p.maxWaits * p.waitStep / period));
+  c.startDelays.clear();
+  for (int ticks = 0; ticks <= maxTicks; ticks += step) c.startDelays.push_back(ticks);
+  c.checkTiltedTries = false;
+  c.earlyConflictEndsReplans = false;
+  c.waitsAfterReplans = 0;
+  c.invalidGoalEndsPiece = true;
+  c.dwell = std::min(p.dwellCheck, p.safetyDistance / p.controller.nominalSpeed + 1.0);
+  return c;
+}
+
+namespace {
+
+Eigen::Vector2d xyOf(const TrajectorySample& s) { return {s.x, s.y}; }
+
+std::uint64_t seedFor(std::uint64_t seed, int rover, int leg, int piece, int attempt) {
+  std::uint64_t s = deriveSeed(seed, static_cast<std::uint64_t>(rover));
+  s = deriveSeed(s, static_cast<std::uint64_t>(leg));
+  s = deriveSeed(s, static_cast<std::uint64_t>(piece));
+  return deriveSeed(s, static_cast<std::uint64_t>(attempt));
+}
+
+Eigen::Vector2d legGoal(const Leg& leg) { return leg.via.empty() ? leg.goal : leg.via.back(); }
+
+// Choices made here where the paper is silent are listed in coordination.hpp.
+class Coordinator {
+ public:
+  Coordinator(const std::vector<RoverTask>& tasks, const LegPlanner& planner,
+              const LegSimulator& simulator, const ConflictPolicy& policy,
+              const CoordinationParams& params, std::uint64_t seed,
+              CoordinationObserver* observer, const CancelToken* cancel)
+      : tasks_(tasks),
+        planner_(planner),
+        simulator_(simulator),
+        policy_(policy),
+        p_(params),
+        seed_(seed),
+        observer_(observer),
+        cancel_(cancel),
+        period_(params.controller.samplePeriod) {}
+
+  CoordinationResult run() {
+    const int n = static_cast<int>(tasks_.size());
+    out_.trajectories.resize(n);
+    out_.paths.resize(n);
+    for (int k = 0; k < n; ++k) startRover(k);
+    for (const auto& t : tasks_) legsTotal_ += static_cast<int>(t.legs.size());
+    planAhead();
+    for (int k = 0; k < n && !out_.cancelled; ++k) {
+      for (int i = 0; i < static_cast<int>(tasks_[k].legs.size()); ++i) {
+        runLeg(k, i);
+        if (out_.cancelled) break;
+      }
+      if (!out_.cancelled) park(k);
+    }
+    out_.conflicts = checkSeparation(out_.trajectories, p_.safetyDistance).conflicts;
+    return std::move(out_);
+  }
+
+ private:
+  enum class Outcome { Accepted, Skipped, NoPath, InvalidGoal, Steep, Cancelled };
+
+  struct Candidate {
+    std::vector<Eigen::Vector2d> path;         // waypoints, the rover's position first
+    std::vector<TrajectorySample> samples;     // new samples (waits, then driving)
+    bool reached = false;                      // the simulation entered the last waypoint's circle
+  };
+
+  struct Ahead {
+    bool planned = false;
+    Eigen::Vector2d start{0, 0};
+    PathResult path;
+  };
+
+  bool cancelled() const { return cancel_ && cancel_->cancelled(); }
+  const TrajectorySample& last(int k) const { return out_.trajectories[k].samples.back(); }
+  Eigen::Vector2d here(int k) const { return xyOf(last(k)); }
+  std::uint64_t slipSeed(std::uint64_t salt, int k, int i, int piece, int attempt) const {
+    return seedFor(deriveSeed(seed_ ^ salt, p_.slip.seed), k, i, piece, attempt);
+  }
+
+  // The first sample: the rover at rest on its start (a drive with the start as its only
+  // waypoint records exactly that, with the terrain height and attitude).
+  void startRover(int k) {
+    const Pose& s = tasks_[k].start;
+    Trajectory t;
+    try {
+      t = simulator_.drive({Eigen::Vector2d(s.x, s.y)}, s, 0.0, p_.slip.seed, nullptr);
+    } catch (const Error&) {
+      const std::string field = "rovers[" + std::to_string(k) + "]";
+      throw Error(ErrorCode::InvalidInput, field,
+                  field + ": start is outside the map or next to nodata");
+    }
+    t.samples.resize(1);
+    t.samples[0].time = 0;
+    t.status = SimStatus::Reached;
+    out_.trajectories[k] = std::move(t);
+    out_.paths[k].push_back({s.x, s.y});
+  }
+
+  // Plans every planned leg from its nominal start in parallel (the legs are independent
+  // problems), on the threads the caller granted.
+  void planAhead() {
+    ahead_.resize(tasks_.size());
+    struct Job {
+      int rover, leg;
+      Eigen::Vector2d start;
+      double heading;
+    };
+    std::vector<Job> jobs;
+    for (int k = 0; k < static_cast<int>(tasks_.size()); ++k) {
+      const RoverTask& task = tasks_[k];
+      ahead_[k].resize(task.legs.size());
+      Eigen::Vector2d start(task.start.x, task.start.y);
+      double heading = task.start.heading;
+      for (int i = 0; i < static_cast<int>(task.legs.size()); ++i) {
+        const Eigen::Vector2d goal = legGoal(task.legs[i]);
+        if (task.legs[i].via.empty()) jobs.push_back({k, i, start, heading});
+        if ((goal - start).norm() > 1e-9) heading = std::atan2(goal.y() - start.y(), goal.x() - start.x());
+        start = goal;
+      }
+    }
+    parallelFor(jobs.size(), p_.threads, [&](std::size_t j) {
+      const Job& job = jobs[j];
+      Ahead& a = ahead_[job.rover][job.leg];
+      a.start = job.start;
+      a.path = planner_.plan(job.start, job.heading, tasks_[job.rover].legs[job.leg].goal,
+                             seedFor(seed_, job.rover, job.leg, 0, 0), {}, cancel_);
+      a.planned = true;
+    });
+    out_.rrtCalls += static_cast<int>(jobs.size());
+  }
+
+  // The path of one try: the fixed points of a via leg (first try, if every edge is valid), the
+  // path planned ahead (first try, if the rover stopped where that plan started), else a plan now.
+  PathResult tryPath(int k, int i, int piece, int attempt, const Eigen::Vector2d& goal,
+                     const std::vector<KeepOutZone>& keepOut) {
+    const Leg& leg = tasks_[k].legs[i];
+    const Eigen::Vector2d from = here(k);
+    if (attempt == 0 && piece == 0 && !leg.via.empty()) {
+      PathResult r;
+      r.waypoints.push_back(from);
+      bool valid = true;
+      for (const auto& v : leg.via) {
+        valid = valid && planner_.edgeValid(r.waypoints.back(), v);
+        r.waypoints.push_back(v);
+      }
+      if (valid) {
+        r.status = PathStatus::Exact;
+        return r;
+      }
+    }
+    if (attempt == 0 && piece == 0 && leg.via.empty()) {
+      const Ahead& a = ahead_[k][i];
+      if (a.planned && a.path.hasPath() &&
+          (a.start - from).norm() <= p_.controller.acceptanceRadius + 0.05) {
+        PathResult r = a.path;
+        r.waypoints.front() = from;
+        return r;
+      }
+    }
+    ++out_.rrtCalls;
+    return planner_.plan(from, last(k).heading, goal, seedFor(seed_, k, i, piece, attempt), keepOut,
+                         cancel_);
+  }
+
+  // Rover k standing where it is for `ticks` samples, appended to `samples`.
+  void stand(int k, int ticks, std::vector<TrajectorySample>& samples) const {
+    const TrajectorySample origin = last(k);
+    const std::size_t base = out_.trajectories[k].samples.size() - 1;  // index of `origin`
+    for (int j = 1; j <= ticks; ++j) {
+      TrajectorySample s = origin;
+      s.time = static_cast<double>(base + j) * period_;
+      s.speed = 0;
+      samples.push_back(s);
+    }
+  }
+
+  // The rover stands `waitTicks` samples, then drives `path`.
+  Candidate simulateTry(int k, const std::vector<Eigen::Vector2d>& path, int waitTicks,
+                        std::uint64_t seed) {
+    const TrajectorySample origin = last(k);
+    const std::size_t base = out_.trajectories[k].samples.size() - 1;  // index of `origin`
+    Candidate c;
+    c.path = path;
+    stand(k, waitTicks, c.samples);
+    std::vector<Eigen::Vector2d> waypoints(path.begin() + 1, path.end());
+    if (waypoints.empty()) {
+      c.reached = true;
+      return c;
+    }
+    const std::size_t startIndex = base + waitTicks;
+    Trajectory sim = simulator_.drive(waypoints, {origin.x, origin.y, origin.heading},
+                                      static_cast<double>(startIndex) * period_, seed, cancel_);
+    for (std::size_t m = 1; m < sim.samples.size(); ++m) {
+      TrajectorySample s = sim.samples[m];
+      s.time = static_cast<double>(startIndex + m) * period_;
+      s.distance += origin.distance;
+      c.samples.push_back(s);
+    }
+    c.reached = sim.status == SimStatus::Reached;
+    return c;
+  }
+
+  // `c` started `ticks` samples later: the rover stands where it is meanwhile. The terrain does
+  // not change, so the simulated motion is the same, only later.
+  Candidate delayed(int k, const Candidate& c, int ticks) const {
+    if (ticks == 0) return c;
+    Candidate d;
+    d.path = c.path;
+    d.reached = c.reached;
+    d.samples.reserve(c.samples.size() + static_cast<std::size_t>(ticks));
+    stand(k, ticks, d.samples);
+    for (TrajectorySample s : c.samples) {
+      s.time += ticks * period_;
+      d.samples.push_back(s);
+    }
+    return d;
+  }
+
+  // The first sample of `samples` (appended to rover k's trajectory) closer than the safety
+  // distance to a higher-priority rover; then rover k standing at its last position for the
+  // policy's dwell, or, with `parkedForGood`, for as long as any higher-priority rover moves.
+  std::optional<Conflict> firstConflict(int k, const std::vector<TrajectorySample>& samples,
+                                        bool parkedForGood) const {
+    const std::span<const Trajectory> others(out_.trajectories.data(), static_cast<std::size_t>(k));
+    const std::size_t base = out_.trajectories[k].samples.size();
+    for (std::size_t m = 0; m < samples.size(); ++m)
+      if (auto c = conflictAt(others, k, base + m, xyOf(samples[m]), p_.safetyDistance, period_))
+        return c;
+    std::size_t end = 0;
+    for (const Trajectory& t : others) end = std::max(end, t.samples.size());
+    const std::size_t from = base + samples.size();
+    if (!parkedForGood)
+      end = std::min(end, from + static_cast<std::size_t>(std::lround(policy_.dwell / period_)));
+    const Eigen::Vector2d p = samples.empty() ? here(k) : xyOf(samples.back());
+    for (std::size_t idx = from; idx < end; ++idx)
+      if (auto c = conflictAt(others, k, idx, p, p_.safetyDistance, period_)) return c;
+    return std::nullopt;
+  }
+
+  // The first sample with |roll| or |pitch| above the attitude check, if any.
+  std::optional<Eigen::Vector2d> firstExceedance(const std::vector<TrajectorySample>& samples) const {
+    if (!(p_.attitudeCheck > 0)) return std::nullopt;
+    for (const auto& s : samples)
+      if (std::abs(s.roll) > p_.attitudeCheck || std::abs(s.pitch) > p_.attitudeCheck)
+        return xyOf(s);
+    return std::nullopt;
+  }
+
+  void commit(int k, const Candidate& c) {
+    auto& t = out_.trajectories[k].samples;
+    t.insert(t.end(), c.samples.begin(), c.samples.end());
+    auto& path = out_.paths[k];
+    path.insert(path.end(), c.path.begin() + 1, c.path.end());
+    if (observer_) observer_->pieceAccepted(k, c.path, c.samples);
+  }
+
+  bool reachesGoal(const Candidate& c, const Eigen::Vector2d& goal) const {
+    const Eigen::Vector2d end = c.samples.empty() ? c.path.front() : xyOf(c.samples.back());
+    return (end - goal).norm() <= p_.controller.acceptanceRadius + 0.1;
+  }
+
+  // Keeps later tries out of `zone`, unless that would wall in the start or the goal (then only
+  // the seed changes).
+  void keepOutOf(int k, const Eigen::Vector2d& goal, const KeepOutZone& zone,
+                 std::vector<KeepOutZone>& keepOut) const {
+    if ((here(k) - zone.centre).norm() > zone.radius && (goal - zone.centre).norm() > zone.radius)
+      keepOut.push_back(zone);
+  }
+
+  static std::string conflictNote(const Conflict& c) {
+    char buf[160];
+    std::snprintf(buf, sizeof buf, "within %.2f m of rover %d at t = %.1f s (%.2f, %.2f)",
+                  c.distance, c.other, c.time, c.position.x(), c.position.y());
+    return buf;
+  }
+
+  // One piece of a leg, the same loop for every policy: tries with new seeds, each keeping out
+  // of where the earlier ones came too close or tilted; each within-limit try started at the
+  // policy's delays; then the policy's waits; then the caller skips the leg.
+  Outcome runPiece(int k, int i, int piece, const Eigen::Vector2d& goal, LegRecord& rec,
+                   bool& reachedGoal) {
+    const bool lastLeg = i + 1 == static_cast<int>(tasks_[k].legs.size());
+    std::vector<KeepOutZone> keepOut;
+    std::optional<Candidate> firstTry;  // the first try within the attitude check
+    std::optional<Conflict> conflict;
+    std::optional<PathStatus> noPath;
+    for (int attempt = 0; attempt <= p_.maxReplans; ++attempt) {
+      if (cancelled()) return Outcome::Cancelled;
+      if (attempt > 0) {
+        ++rec.replans;
+        ++out_.replans;
+      }
+      PathResult path = tryPath(k, i, piece, attempt, goal, keepOut);
+      if (path.status == PathStatus::Cancelled) return Outcome::Cancelled;
+      if (!path.hasPath() || path.waypoints.size() < 2) {
+        noPath = path.status;
+        // Without keep-out zones a new seed cannot turn an invalid start or goal valid.
+        if (keepOut.empty() && path.status == PathStatus::InvalidGoal && policy_.invalidGoalEndsPiece) {
+          rec.note = "no path: invalid_goal (not on ground a rover may stop on)";
+          return Outcome::InvalidGoal;
+        }
+        if (keepOut.empty() &&
+            (path.status == PathStatus::InvalidGoal || path.status == PathStatus::InvalidStart))
+          break;
+        continue;
+      }
+      const Candidate c0 = simulateTry(k, path.waypoints, 0, slipSeed(0x51ee5ull, k, i, piece, attempt));
+      if (cancelled()) return Outcome::Cancelled;
+      const std::optional<Eigen::Vector2d> steep = firstExceedance(c0.samples);
+      if (steep && !policy_.checkTiltedTries) {
+        keepOutOf(k, goal, {*steep, 0.5}, keepOut);
+        continue;
+      }
+      // The leg's last piece decides whether the rover parks here for good.
+      const bool parks = lastLeg && reachesGoal(c0, goal);
+      std::optional<Conflict> first;
+      for (int ticks : policy_.startDelays) {
+        Candidate c = delayed(k, c0, ticks);
+        conflict = firstConflict(k, c.samples, parks);
+        if (!first) first = conflict;
+        if (conflict || steep) continue;
+        if (ticks > 0) {
+          ++rec.waits;
+          ++out_.waits;
+          rec.waitTime += ticks * period_;
+        }
+        reachedGoal = path.status == PathStatus::Exact && c.reached;
+        commit(k, c);
+        return Outcome::Accepted;
+      }
+      conflict = first;
+      // Waiting can only help a try that is within the attitude limit.
+      if (!firstTry && !steep) firstTry = c0;
+      // A conflict in the first second: no other path can dodge it, only waiting can.
+      if (policy_.earlyConflictEndsReplans && conflict && conflict->time - last(k).time < 1.0) break;
+      // Keep out of where the other rover was, or of where the simulated rover tilted.
+      keepOutOf(k, goal, conflict ? KeepOutZone{conflict->otherPosition, p_.keepOutRadius}
+                                  : KeepOutZone{*steep, 0.5},
+                keepOut);
+    }
+    if (!firstTry) {
+      if (!noPath) {
+        rec.note = "every try tilts past the attitude limit";
+        return Outcome::Steep;
+      }
+      rec.note = std::string("no path: ") + pathStatusName(*noPath);
+      return *noPath == PathStatus::InvalidGoal ? Outcome::InvalidGoal : Outcome::NoPath;
+    }
+    for (int w = 1; w <= policy_.waitsAfterReplans; ++w) {
+      if (cancelled()) return Outcome::Cancelled;
+      const int ticks = static_cast<int>(std::lround(w * p_.waitStep / period_));
+      Candidate c = simulateTry(k, firstTry->path, ticks, slipSeed(0x3a17ull, k, i, piece, w));
+      conflict = firstConflict(k, c.samples, lastLeg && reachesGoal(c, goal));
+      if (!conflict && !firstExceedance(c.samples)) {
+        rec.waits = w;
+        out_.waits += w;
+        reachedGoal = c.reached && (firstTry->path.back() - goal).norm() < 1e-9;
+        commit(k, c);
+        return Outcome::Accepted;
+      }
+    }
+    rec.note = conflict ? conflictNote(*conflict) : "no clear try";
+    return Outcome::Skipped;
+  }
+
+  // The rover stays where its last leg left it for the rest of the mission. If a higher-priority
+  // rover still moving would pass too close, it drives out of the way (ours): to the first spot,
+  // in rings of growing radius around it, that it can reach and stay at without a conflict.
+  void park(int k) {
+    if (!firstConflict(k, {}, true)) return;
+    const Eigen::Vector2d from = here(k);
+    // Candidates: first back along its own trajectory (ground it has driven, so reachable even
+    // in a dead end), every 2 m up to 40 m; then rings of growing radius around it.
+    std::vector<Eigen::Vector2d> spots;
+    const auto& samples = out_.trajectories[k].samples;
+    const double end = samples.back().distance;
+    double next = 2.0;
+    for (auto it = samples.rbegin(); it != samples.rend() && next <= 40.0; ++it) {
+      if (end - it->distance < next) continue;
+      spots.emplace_back(it->x, it->y);
+      next += 2.0;
+    }
+    for (double radius : {1.5, 2.5, 3.5, 5.0, 7.0})
+      for (int d = 0; d < 8; ++d) {
+        const double a = d * std::numbers::pi / 4;
+        spots.push_back(from + radius * Eigen::Vector2d(std::cos(a), std::sin(a)));
+      }
+    // Within the attitude limit if at all possible; a collision is worse than a tilt, so the
+    // second pass accepts a move that exceeds it (reported as an exceedance).
+    int attempt = 0;
+    for (int pass = 0; pass < 2; ++pass)
+      for (const Eigen::Vector2d& spot : spots) {
+        if (cancelled()) return;
+        if (!planner_.canStop(spot)) continue;
+        const std::uint64_t seed = seedFor(seed_ ^ 0x9a4cull, k, attempt, 0, 0);
+        ++attempt;
+        ++out_.rrtCalls;
+        PathResult path = planner_.plan(from, last(k).heading, spot, seed, {}, cancel_);
+        if (path.status != PathStatus::Exact || path.waypoints.size() < 2) continue;
+        Candidate c = simulateTry(k, path.waypoints, 0, seedFor(seed_ ^ 0x9a4dull, k, attempt, 0, 0));
+        if (!c.reached || firstConflict(k, c.samples, true) ||
+            (pass == 0 && firstExceedance(c.samples)))
+          continue;
+        commit(k, c);
+        LegRecord rec;
+        rec.rover = k;
+        rec.leg = static_cast<int>(tasks_[k].legs.size());
+        rec.startTime = c.samples.front().time;
+        rec.endTime = last(k).time;
+        rec.pieces = 1;
+        rec.note = "parked out of the way";
+        out_.legs.push_back(rec);
+        return;
+      }
+  }
+
+  void runLeg(int k, int i) {
+    const Leg& leg = tasks_[k].legs[i];
+    const Eigen::Vector2d goal = legGoal(leg);
+    LegRecord rec;
+    rec.rover = k;
+    rec.leg = i;
+    rec.target = leg.target;
+    rec.startTime = last(k).time;
+    rec.status = LegStatus::Short;
+    for (int piece = 0; piece < p_.maxPieces; ++piece) {
+      const double before = (here(k) - goal).norm();
+      if (before <= p_.controller.acceptanceRadius) {
+        rec.status = LegStatus::Reached;
+        break;
+      }
+      bool reached = false;
+      const Outcome o = runPiece(k, i, piece, goal, rec, reached);
+      if (o == Outcome::Cancelled) {
+        out_.cancelled = true;
+        return;
+      }
+      if (o == Outcome::Skipped) {
+        rec.status = LegStatus::Skipped;
+        rec.reason = LegReason::Conflict;
+        break;
+      }
+      if (o == Outcome::InvalidGoal) {
+        // A goal off passable ground is skipped outright, not "short" (when no piece moved the
+        // rover yet).
+        if (rec.pieces == 0) rec.status = LegStatus::Skipped;
+        rec.reason = LegReason::InvalidGoal;
+        break;
+      }
+      if (o == Outcome::NoPath || o == Outcome::Steep) {  // Short, with the note
+        rec.reason = o == Outcome::NoPath ? LegReason::NoPath : LegReason::Steep;
+        break;
+      }
+      ++rec.pieces;
+      if (reached) {
+        rec.status = LegStatus::Reached;
+        break;
+      }
+      if ((here(k) - goal).norm() > before - 0.25) {  // no progress: stop chaining
+        rec.note = "the tree ends short of the goal and makes no progress";
+        rec.reason = LegReason::NoPath;
+        break;
+      }
+      if (piece + 1 == p_.maxPieces) {
+        rec.note = "goal not reached after max_pieces RRT* pieces";
+        rec.reason = LegReason::PiecesExhausted;
+      }
+    }
+    if (rec.status == LegStatus::Reached) rec.reason = LegReason::None;
+    rec.endTime = last(k).time;
+    out_.legs.push_back(rec);
+    ++legsDone_;
+    if (observer_) observer_->legDone(rec, legsDone_, legsTotal_);
+  }
+
+  const std::vector<RoverTask>& tasks_;
+  const LegPlanner& planner_;
+  const LegSimulator& simulator_;
+  const ConflictPolicy& policy_;
+  const CoordinationParams& p_;
+  const std::uint64_t seed_;
+  CoordinationObserver* observer_;
+  const CancelToken* cancel_;
+  const double period_;
+  std::vector<std::vector<Ahead>> ahead_;
+  CoordinationResult out_;
+  int legsDone_ = 0;
+  int legsTotal_ = 0;
+};
+
+}  // namespace
+
+CoordinationResult coordinateWith(const std::vector<RoverTask>& tasks, const LegPlanner& planner,
+                                  const LegSimulator& simulator, const ConflictPolicy& policy,
+                                  const CoordinationParams& params, std::uint64_t seed,
+                                  CoordinationObserver* observer, const CancelToken* cancel) {
+  params.validate();
+  if (tasks.empty()) throw Error(ErrorCode::InvalidInput, "rovers", "rovers: none given");
+  if (policy.startDelays.empty() || policy.startDelays.front() != 0 || policy.waitsAfterReplans < 0 ||
+      !(policy.dwell >= 0))
+    throw Error(ErrorCode::InvalidParameter, "coordination",
+                "coordination: a policy starts each try without delay first");
+  for (std::size_t k = 0; k < tasks.size(); ++k) {
+    const std::string field = "rovers[" + std::to_string(k) + "]";
+    const Pose& s = tasks[k].start;
+    if (!std::isfinite(s.x) || !std::isfinite(s.y) || !std::isfinite(s.heading))
+      throw Error(ErrorCode::InvalidInput, field, field + ": start must be finite");
+    for (const Leg& leg : tasks[k].legs) {
+      bool finite = leg.goal.allFinite();
+      for (const auto& v : leg.via) finite = finite && v.allFinite();
+      if (!finite) throw Error(ErrorCode::InvalidInput, field, field + ": a leg goal is not finite");
+    }
+  }
+  return Coordinator(tasks, planner, simulator, policy, params, seed, observer, cancel).run();
+}
+
+}  // namespace rover::team

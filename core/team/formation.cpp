@@ -1,0 +1,106 @@
+#include "core/team/formation.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "core/common/error.hpp"
+
+namespace rover::team {
+
+std::vector<Eigen::Vector2d> formationSlots(int rovers, double footprint) {
+  if (rovers < 1) return {};
+  const int m = static_cast<int>(std::ceil(std::sqrt(static_cast<double>(rovers)) - 1e-9));
+  const double spacing = footprint / m;
+  std::vector<Eigen::Vector2d> lattice;
+  for (int r = 0; r < m; ++r)
+    for (int c = 0; c < m; ++c)
+      lattice.emplace_back((c - (m - 1) / 2.0) * spacing, ((m - 1) / 2.0 - r) * spacing);
+  // Farthest-point order from the point nearest the centre; ties to the earlier lattice point.
+  std::vector<Eigen::Vector2d> out;
+  std::vector<bool> used(lattice.size(), false);
+  std::size_t first = 0;
+  for (std::size_t i = 1; i < lattice.size(); ++i)
+    if (lattice[i].norm() < lattice[first].norm() - 1e-12) first = i;
+  out.push_back(lattice[first]);
+  used[first] = true;
+  while (static_cast<int>(out.size()) < rovers) {
+    std::size_t best = 0;
+    double bestD = -1;
+    for (std::size_t i = 0; i < lattice.size(); ++i) {
+      if (used[i]) continue;
+      double d = std::numeric_limits<double>::infinity();
+      for (const auto& o : out) d = std::min(d, (lattice[i] - o).norm());
+      if (d > bestD + 1e-12) {
+        bestD = d;
+        best = i;
+      }
+    }
+    used[best] = true;
+    out.push_back(lattice[best]);
+  }
+  return out;
+}
+
+TerrainEdgeModel wholeMapModel(const terrain::Dem& dem, const Raster<std::uint8_t>& classes,
+                               const RrtParams& rrt) {
+  const GridGeometry& g = dem.geometry();
+  return TerrainEdgeModel(dem, classes, mapBounds(g), rrt.attitudeLimit, edgeResolutionOn(g, rrt));
+}
+
+std::optional<Eigen::Vector2d> nearestValid(const TerrainEdgeModel& model, Eigen::Vector2d want,
+                                            double reach, double safety,
+                                            const std::vector<Eigen::Vector2d>& taken,
+                                            const Raster<std::uint8_t>* reachable) {
+  auto ok = [&](const Eigen::Vector2d& p) {
+    if (!model.turnValid(p)) return false;
+    if (reachable) {
+      auto c = localToCell(reachable->geometry, p);
+      if (!c || (*reachable)(c->row, c->col) == 0) return false;
+    }
+    for (const auto& t : taken)
+      if ((t - p).norm() < safety) return false;
+    return true;
+  };
+  if (ok(want)) return want;
+  const double step = 0.25;
+  for (double r = step; r <= reach + 1e-9; r += step) {
+    const int n = std::max(8, static_cast<int>(std::ceil(2 * M_PI * r / step)));
+    for (int i = 0; i < n; ++i) {
+      const double a = 2 * M_PI * i / n;
+      const Eigen::Vector2d p = want + r * Eigen::Vector2d(std::cos(a), std::sin(a));
+      if (ok(p)) return p;
+    }
+  }
+  return std::nullopt;
+}
+
+std::vector<Pose> formationStarts(const terrain::Dem& dem, const TeamMissionParams& params,
+                                  const Eigen::Vector2d& centre, int n) {
+  params.validate();
+  if (n < 1 || n > 64) throw Error(ErrorCode::InvalidInput, "rovers", "between 1 and 64 rovers are supported");
+  const terrain::Traversability trav = terrain::traversability(dem, params.traversability);
+  return formationStarts(dem, trav.classes, params, centre, n);
+}
+
+std::vector<Pose> formationStarts(const terrain::Dem& dem, const Raster<std::uint8_t>& classes,
+                                  const TeamMissionParams& params, const Eigen::Vector2d& centre,
+                                  int n) {
+  params.validate();
+  if (n < 1 || n > 64) throw Error(ErrorCode::InvalidInput, "rovers", "between 1 and 64 rovers are supported");
+  const TerrainEdgeModel model = wholeMapModel(dem, classes, params.coordination.rrt);
+  std::vector<Pose> out;
+  std::vector<Eigen::Vector2d> taken;
+  for (const auto& slot : formationSlots(n, params.footprint)) {
+    auto p = nearestValid(model, centre + slot, params.footprint,
+                          params.coordination.safetyDistance, taken);
+    if (!p)
+      throw Error(ErrorCode::InvalidInput, "rovers",
+                  "no room for the rovers' formation near the start: give the starts explicitly");
+    taken.push_back(*p);
+    out.push_back({p->x(), p->y(), 0.0});
+  }
+  return out;
+}
+
+}  // namespace rover::team

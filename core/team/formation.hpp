@@ -1,0 +1,44 @@
+#pragma once
+// Where the rovers stand: the formation slots inside the team footprint, the nearest ground a
+// rover may stop on near a wanted point, and formation starts around a centre (SPEC §3.2: "the
+// rovers spread across the 5 m footprint").
+#include <Eigen/Core>
+#include <cstdint>
+#include <optional>
+#include <vector>
+
+#include "core/grid/raster.hpp"
+#include "core/team/mission_params.hpp"
+#include "core/team/terrain_rrt.hpp"
+#include "core/terrain/dem.hpp"
+
+namespace rover::team {
+
+// Where each rover stands inside the footprint, as offsets from its centre (ours: the paper says
+// the rovers spread across the footprint). The points of a ⌈√n⌉ × ⌈√n⌉ lattice of spacing
+// footprint / ⌈√n⌉, taken in farthest-point order from the centre: for five rovers, the centre
+// and the four corners 1.67 m out.
+std::vector<Eigen::Vector2d> formationSlots(int rovers, double footprint);
+
+// The rover's validity rules on the whole map (the RRT*'s attitude limit and edge resolution).
+TerrainEdgeModel wholeMapModel(const terrain::Dem& dem, const Raster<std::uint8_t>& classes,
+                               const RrtParams& rrt);
+
+// The nearest point to `want` (rings of a quarter metre, up to `reach`) that RRT* accepts as a
+// goal (turnValid), keeps `safety` from every point of `taken` and, with `reachable`, lies on a
+// cell marked 1 there; nullopt when there is none.
+std::optional<Eigen::Vector2d> nearestValid(const TerrainEdgeModel& model, Eigen::Vector2d want,
+                                            double reach, double safety,
+                                            const std::vector<Eigen::Vector2d>& taken,
+                                            const Raster<std::uint8_t>* reachable = nullptr);
+
+// Starts for `n` rovers in formation around `centre` (the slots, each moved to the nearest valid
+// point as for a target, up to a footprint away), heading east. Throws InvalidInput "rovers"
+// when there is no room. The first form computes the traversability classes itself.
+std::vector<Pose> formationStarts(const terrain::Dem& dem, const TeamMissionParams& params,
+                                  const Eigen::Vector2d& centre, int n);
+std::vector<Pose> formationStarts(const terrain::Dem& dem, const Raster<std::uint8_t>& classes,
+                                  const TeamMissionParams& params, const Eigen::Vector2d& centre,
+                                  int n);
+
+}  // namespace rover::team

@@ -1,0 +1,29 @@
+#include "core/team/mission_params.hpp"
+
+#include <cmath>
+
+#include "core/common/error.hpp"
+
+namespace rover::team {
+
+void TeamMissionParams::validate() const {
+  validateRouteParams(route);
+  coordination.validate();
+  if (!std::isfinite(footprint) || !(footprint > 0) || footprint > 1e4)
+    throwInvalidParameter("footprint_m", "must be a number of metres in (0, 10000]");
+  if (!std::isfinite(sensingDiameter) || !(sensingDiameter > 0) || sensingDiameter > footprint)
+    throwInvalidParameter("sensing_diameter_m", "must be > 0 and at most the footprint");
+  const auto& t = traversability;
+  if (!std::isfinite(t.highRiskDeg) || t.highRiskDeg <= 0 || t.highRiskDeg > 90)
+    throwInvalidParameter("high_risk_deg", "must be in (0, 90]");
+  if (!std::isfinite(t.impassableDeg) || t.impassableDeg < t.highRiskDeg || t.impassableDeg > 90)
+    throwInvalidParameter("impassable_deg", "must be in [high_risk_deg, 90]");
+  if (!std::isfinite(exceedanceLimit) || !(exceedanceLimit > 0) || exceedanceLimit > M_PI / 2)
+    throwInvalidParameter("exceedance_limit", "must be in (0, 90] degrees");
+  if (!std::isfinite(hybridCell) || !(hybridCell > 0) || hybridCell > footprint)
+    throwInvalidParameter("hybrid_cell_m", "must be > 0 and at most the footprint");
+  if (!std::isfinite(hybridCoverage) || !(hybridCoverage > 0) || hybridCoverage > 1)
+    throwInvalidParameter("hybrid_coverage", "must be in (0, 1]");
+}
+
+}  // namespace rover::team

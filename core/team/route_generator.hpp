@@ -1,0 +1,69 @@
+#pragma once
+// The route generator stage (SPEC §3.1): the team's targets over the search grid, from the search
+// cell the team starts in. One small class per method over route_search's algorithms, chosen by
+// makeRouteGenerator; the mission composes whichever it is given.
+#include <memory>
+#include <vector>
+
+#include "core/team/rover_sim.hpp"
+#include "core/team/route_search.hpp"
+
+namespace rover::team {
+
+enum class RouteMethod { LhcGwConv, Lhc, Lawnmower };
+const char* routeMethodName(RouteMethod m);
+
+class RouteGenerator {
+ public:
+  virtual ~RouteGenerator() = default;
+  // The route from `start`; impassable search cells are never targets. Throws InvalidInput
+  // "start" outside the grid.
+  virtual Route generate(const SearchGrid& grid, CellIndex start) const = 0;
+};
+
+// LHC_GW_CONV (paper 001 §3.5, Lin & Goodrich 2009): hill climbing over global-warming levels.
+class LhcGwConvRoute final : public RouteGenerator {
+ public:
+  explicit LhcGwConvRoute(RouteParams p) : p_(p) { p_.globalWarming = true; }
+  Route generate(const SearchGrid& grid, CellIndex start) const override {
+    return lhcGwConv(grid, start, p_);
+  }
+
+ private:
+  RouteParams p_;
+};
+
+// Plain hill climbing (k = 0 only): the baseline without global warming.
+class LhcRoute final : public RouteGenerator {
+ public:
+  explicit LhcRoute(RouteParams p) : p_(p) { p_.globalWarming = false; }
+  Route generate(const SearchGrid& grid, CellIndex start) const override {
+    return lhcGwConv(grid, start, p_);
+  }
+
+ private:
+  RouteParams p_;
+};
+
+// Boustrophedon lanes over the rows: the baseline that ignores the PDM.
+class LawnmowerRoute final : public RouteGenerator {
+ public:
+  explicit LawnmowerRoute(int targets) : targets_(targets) {}
+  Route generate(const SearchGrid& grid, CellIndex start) const override {
+    return lawnmower(grid, start, targets_);
+  }
+
+ private:
+  int targets_;
+};
+
+std::unique_ptr<RouteGenerator> makeRouteGenerator(RouteMethod method, const RouteParams& params);
+
+// The search cell the team starts in: the one holding the centroid of the rovers' starts.
+CellIndex teamStartCell(const SearchGrid& grid, const std::vector<Pose>& starts);
+
+// makeRouteGenerator(method, params)->generate(grid, start).
+Route computeRoute(const SearchGrid& grid, CellIndex start, RouteMethod method,
+                   const RouteParams& params);
+
+}  // namespace rover::team

@@ -1,0 +1,175 @@
+#include "core/team/task_builder.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <optional>
+
+#include "core/common/error.hpp"
+#include "core/coverage/coverage_planner.hpp"
+#include "core/team/formation.hpp"
+
+namespace rover::team {
+
+void requireStarts(const std::vector<Pose>& starts) {
+  if (starts.empty() || starts.size() > 64)
+    throw Error(ErrorCode::InvalidInput, "rovers", "between 1 and 64 rovers are supported");
+}
+
+
+namespace {
+
+// Per target, per rover: the slot goal (nullopt when there is none).
+std::vector<std::vector<std::optional<Eigen::Vector2d>>> slotGoals(
+    const terrain::Dem& dem, const Raster<std::uint8_t>& classes, int rovers, const Route& route,
+    const TeamMissionParams& params, const Raster<std::uint8_t>* reachable) {
+  const TerrainEdgeModel model = wholeMapModel(dem, classes, params.coordination.rrt);
+  const auto slots = formationSlots(rovers, params.footprint);
+  std::vector<std::vector<std::optional<Eigen::Vector2d>>> out;
+  for (const auto& centre : route.centres) {
+    std::vector<std::optional<Eigen::Vector2d>> goals;
+    std::vector<Eigen::Vector2d> taken;
+    for (int k = 0; k < rovers; ++k) {
+      auto g = nearestValid(model, centre + slots[k], params.footprint / 2,
+                            params.coordination.safetyDistance, taken, reachable);
+      if (g) taken.push_back(*g);
+      goals.push_back(g);
+    }
+    out.push_back(std::move(goals));
+  }
+  return out;
+}
+
+}  // namespace
+
+std::vector<RoverTask> teamSearchTasks(const terrain::Dem& dem, const Raster<std::uint8_t>& classes,
+                                       const std::vector<Pose>& starts, const Route& route,
+                                       const TeamMissionParams& params,
+                                       const Raster<std::uint8_t>* reachable) {
+  requireStarts(starts);
+  const int n = static_cast<int>(starts.size());
+  const auto goals = slotGoals(dem, classes, n, route, params, reachable);
+  std::vector<RoverTask> tasks(starts.size());
+  for (int k = 0; k < n; ++k) {
+    tasks[k].start = starts[k];
+    for (std::size_t t = 0; t < goals.size(); ++t)
+      if (goals[t][k]) tasks[k].legs.push_back({*goals[t][k], {}, static_cast<int>(t)});
+  }
+  return tasks;
+}
+
+namespace {
+
+// The coverage world of one footprint: cells of `cell` metres over the square centred on
+// `centre`; a cell is an obstacle when it is off the map or more than half of the DEM cells whose
+// centre lies in it are impassable or without data; heights are the mean of the rest.
+coverage::World footprintWorld(const terrain::Dem& dem, const Raster<std::uint8_t>& classes,
+                               const Eigen::Vector2d& origin, int n, double cell) {
+  const GridGeometry& g = dem.geometry();
+  coverage::World w;
+  w.obstacles = Raster<std::uint8_t>(GridGeometry{n, n, cell, cell}, 1);
+  w.heights = Raster<double>(GridGeometry{n, n, cell, cell}, 0.0);
+  std::vector<int> total(static_cast<std::size_t>(n * n), 0), blocked(total.size(), 0);
+  std::vector<double> sum(total.size(), 0.0);
+  const auto impassable = static_cast<std::uint8_t>(terrain::TerrainClass::Impassable);
+  const int c0 = std::max(0, static_cast<int>(std::floor(origin.x() / g.cellWidth)));
+  const int c1 = std::min(g.cols - 1, static_cast<int>(std::ceil((origin.x() + n * cell) / g.cellWidth)));
+  const double top = g.heightMetres();
+  const int r0 = std::max(0, static_cast<int>(std::floor((top - origin.y() - n * cell) / g.cellHeight)));
+  const int r1 = std::min(g.rows - 1, static_cast<int>(std::ceil((top - origin.y()) / g.cellHeight)));
+  for (int r = r0; r <= r1; ++r) {
+    for (int c = c0; c <= c1; ++c) {
+      const Eigen::Vector2d p = cellToLocal(g, {r, c}) - origin;
+      const int fc = static_cast<int>(std::floor(p.x() / cell));
+      const int fromBottom = static_cast<int>(std::floor(p.y() / cell));
+      if (fc < 0 || fc >= n || fromBottom < 0 || fromBottom >= n) continue;
+      const int i = (n - 1 - fromBottom) * n + fc;
+      ++total[i];
+      if (classes(r, c) >= impassable) {
+        ++blocked[i];
+      } else {
+        sum[i] += dem.z(r, c);
+      }
+    }
+  }
+  for (int i = 0; i < n * n; ++i) {
+    if (total[i] == 0 || 2 * blocked[i] > total[i]) continue;
+    w.obstacles.at(i) = 0;
+    w.heights.at(i) = sum[i] / (total[i] - blocked[i]);
+  }
+  return w;
+}
+
+}  // namespace
+
+std::vector<RoverTask> hybridTasks(const terrain::Dem& dem, const Raster<std::uint8_t>& classes,
+                                   const std::vector<Pose>& starts, const Route& route,
+                                   const TeamMissionParams& params, const CancelToken* cancel,
+                                   const Raster<std::uint8_t>* reachable) {
+  requireStarts(starts);
+  const int n = static_cast<int>(starts.size());
+  const auto goals = slotGoals(dem, classes, n, route, params, reachable);
+  const int cells = std::max(1, static_cast<int>(std::lround(params.footprint / params.hybridCell)));
+  const double cell = params.footprint / cells;
+  coverage::CoverageParams cp;
+  cp.mode = params.hybridVoronoi ? coverage::TeamMode::Voronoi : coverage::TeamMode::Overlap;
+  cp.frontier = true;
+  cp.coverage = params.hybridCoverage;
+  cp.coverageCell = cell;
+  std::vector<RoverTask> tasks(starts.size());
+  for (int k = 0; k < n; ++k) tasks[k].start = starts[k];
+  for (std::size_t t = 0; t < goals.size(); ++t) {
+    if (cancel && cancel->cancelled()) break;
+    const Eigen::Vector2d origin = route.centres[t] - Eigen::Vector2d::Constant(params.footprint / 2);
+    coverage::World world = footprintWorld(dem, classes, origin, cells, cell);
+    const GridGeometry& wg = world.geometry();
+    // Coverage starts: the cell of each rover's slot goal (the nearest free one not taken).
+    std::vector<coverage::StartCell> startCells;
+    std::vector<int> rovers;  // rover of each coverage start
+    std::vector<bool> taken(static_cast<std::size_t>(wg.cellCount()), false);
+    for (int k = 0; k < n; ++k) {
+      if (!goals[t][k]) continue;
+      const Eigen::Vector2d p = *goals[t][k] - origin;
+      int best = -1;
+      double bestD = std::numeric_limits<double>::infinity();
+      for (int i = 0; i < wg.cellCount(); ++i) {
+        if (world.isObstacle(i) || taken[i]) continue;
+        const double d = (cellToLocal(wg, wg.cell(i)) - p).norm();
+        if (d < bestD) {
+          bestD = d;
+          best = i;
+        }
+      }
+      tasks[k].legs.push_back({*goals[t][k], {}, static_cast<int>(t)});
+      if (best < 0) continue;
+      taken[best] = true;
+      startCells.push_back({best, 0});
+      rovers.push_back(k);
+    }
+    if (startCells.empty()) continue;
+    cp.maxSteps = 0;
+    coverage::CoverageResult cov = coverage::runCoverage(world, startCells, cp, nullptr, cancel);
+    for (std::size_t j = 0; j < rovers.size(); ++j) {
+      Leg leg;
+      leg.goal = *goals[t][rovers[j]];
+      for (int c : cov.rovers[j].cells) leg.via.push_back(origin + cellToLocal(wg, wg.cell(c)));
+      if (leg.via.size() < 2) continue;  // no moves: nothing to add
+      leg.goal = leg.via.back();
+      tasks[rovers[j]].legs.push_back(std::move(leg));
+    }
+  }
+  return tasks;
+}
+
+std::vector<RoverTask> SlotTasks::build(const std::vector<Pose>& starts, const Route& route,
+                                        const CancelToken* cancel) const {
+  (void)cancel;  // one nearest-point search per slot: nothing worth cancelling
+  return teamSearchTasks(dem_, classes_, starts, route, params_, reachable_);
+}
+
+std::vector<RoverTask> HybridTasks::build(const std::vector<Pose>& starts, const Route& route,
+                                          const CancelToken* cancel) const {
+  return hybridTasks(dem_, classes_, starts, route, params_, cancel, reachable_);
+}
+
+}  // namespace rover::team

@@ -1,0 +1,154 @@
+// A team mission's result in the planner-neutral form: metrics, tracks, overlays, curves and
+// one incident per collision, exceedance episode, leg that did not reach and slot-less target.
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <numbers>
+
+#include "core/team/team_entry.hpp"
+
+namespace rover::team {
+
+namespace {
+
+std::vector<Eigen::Vector2d> decimate(const Trajectory& t, std::size_t every) {
+  std::vector<Eigen::Vector2d> out;
+  for (std::size_t i = 0; i < t.samples.size(); i += every)
+    out.emplace_back(t.samples[i].x, t.samples[i].y);
+  if (!t.samples.empty() && (t.samples.size() - 1) % every != 0)
+    out.emplace_back(t.samples.back().x, t.samples.back().y);
+  return out;
+}
+
+Series curveSeries(std::string key, std::string xLabel, const std::vector<std::pair<double, double>>& c) {
+  Series s{std::move(key), std::move(xLabel), "probability", {}, {}};
+  for (const auto& [x, y] : c) {
+    s.x.push_back(x);
+    s.y.push_back(y);
+  }
+  return s;
+}
+
+}  // namespace
+
+PlanResult toPlanResult(const TeamMissionResult& r, const TeamPlannerParams& p, bool hybrid,
+                        double planWallSeconds) {
+  PlanResult out;
+  out.planner = hybrid ? "hybrid" : "team-search";
+  out.cancelled = r.plan.cancelled;
+  out.stopReason = r.plan.cancelled ? "cancelled" : "mission_complete";
+  const TeamMetrics& m = r.metrics;
+  out.metrics = {
+      {"rovers", static_cast<double>(r.plan.trajectories.size()), "rovers"},
+      {"mean_trajectory_m", m.meanTrajectoryM, "m"},
+      {"mission_time_s", m.missionTimeS, "s"},
+      {"mission_time_min", m.missionTimeS / 60.0, "min"},
+      {"samples", static_cast<double>(m.samples), "samples"},
+      {"exceedances", static_cast<double>(m.exceedances), "samples"},
+      {"exceedance_fraction", m.exceedanceFraction, ""},
+      {"max_roll_deg", m.maxRollDeg, "deg"},
+      {"max_pitch_deg", m.maxPitchDeg, "deg"},
+      {"collisions", static_cast<double>(m.collisions), "episodes"},
+      {"min_separation_m", m.minSeparationM, "m"},
+      {"accumulated_probability", m.accumulatedProbability, ""},
+      {"single_rover_probability", m.singleRoverProbability, ""},
+      {"route_score", m.routeScore, ""},
+      {"targets", static_cast<double>(m.targets), "targets"},
+      {"targets_reached", static_cast<double>(m.targetsReached), "legs"},
+      {"targets_skipped", static_cast<double>(m.targetsSkipped), "legs"},
+      {"targets_short", static_cast<double>(m.targetsShort), "legs"},
+      {"targets_no_slot", static_cast<double>(m.targetsNoSlot), "legs"},
+      {"unreachable_area_m2", r.reachability.unreachableAreaM2, "m2"},
+      {"unreachable_search_cells", static_cast<double>(r.reachability.unreachableSearchCells), "cells"},
+      {"unreachable_probability", r.reachability.unreachableMass, ""},
+      {"replans", static_cast<double>(m.replans), "plans"},
+      {"waits", static_cast<double>(m.waits), "waits"},
+      {"rrt_calls", static_cast<double>(m.rrtCalls), "plans"},
+      {"plan_wall_s", planWallSeconds, "s"},
+  };
+  out.warnings = missionWarnings(r);
+  out.metrics.push_back({"warnings", static_cast<double>(out.warnings.size()), "warnings"});
+  const double period = p.mission.coordination.controller.samplePeriod;
+  const auto every = static_cast<std::size_t>(std::max(1L, std::lround(1.0 / period)));
+  for (std::size_t k = 0; k < r.plan.trajectories.size(); ++k) {
+    const Trajectory& t = r.plan.trajectories[k];
+    const AttitudeExceedance e = attitudeExceedance(t, p.mission.exceedanceLimit);
+    int reached = 0, skipped = 0, shortLegs = 0, replans = 0, waits = 0;
+    for (const auto& leg : r.plan.legs) {
+      if (leg.rover != static_cast<int>(k)) continue;
+      replans += leg.replans;
+      waits += leg.waits;
+      if (leg.target < 0) continue;
+      reached += leg.status == LegStatus::Reached;
+      skipped += leg.status == LegStatus::Skipped;
+      shortLegs += leg.status == LegStatus::Short;
+    }
+    Track track;
+    track.rover = static_cast<int>(k);
+    track.points = decimate(t, every);  // one point a second of the 10 Hz trajectory
+    track.metrics = {{"trajectory_m", trajectoryLength(t), "m"},
+                     {"time_s", t.samples.empty() ? 0.0 : t.samples.back().time, "s"},
+                     {"samples", static_cast<double>(e.samples), "samples"},
+                     {"exceedances", static_cast<double>(e.count), "samples"},
+                     {"targets_reached", static_cast<double>(reached), "legs"},
+                     {"targets_skipped", static_cast<double>(skipped), "legs"},
+                     {"targets_short", static_cast<double>(shortLegs), "legs"},
+                     {"replans", static_cast<double>(replans), "plans"},
+                     {"waits", static_cast<double>(waits), "waits"}};
+    out.tracks.push_back(std::move(track));
+    out.overlays.push_back({"path", static_cast<int>(k), r.plan.paths[k]});
+  }
+  Polyline route{"route", -1, {r.route.startCentre}};
+  route.points.insert(route.points.end(), r.route.centres.begin(), r.route.centres.end());
+  out.overlays.insert(out.overlays.begin(), std::move(route));
+  out.series.push_back(curveSeries("probability_vs_distance_team", "mean distance per rover (m)", r.curves.team));
+  out.series.push_back(curveSeries("probability_vs_distance_single", "distance (m)", r.curves.single));
+  out.series.push_back(curveSeries("probability_vs_distance_route", "route distance (m)", r.routeCurve));
+  for (const Conflict& c : r.plan.conflicts) {
+    char note[120];
+    std::snprintf(note, sizeof note, "rovers %d and %d within %.2f m for %.1f s", c.other, c.rover,
+                  c.distance, c.duration);
+    out.incidents.push_back({"collision", c.rover, c.other, c.time, c.position, c.distance, note});
+  }
+  // Exceedance episodes: consecutive samples over the limit, reported once with the worst angle.
+  const double limit = p.mission.exceedanceLimit;
+  for (std::size_t k = 0; k < r.plan.trajectories.size(); ++k) {
+    const auto& samples = r.plan.trajectories[k].samples;
+    for (std::size_t i = 0; i < samples.size();) {
+      auto over = [&](std::size_t j) {
+        return std::max(std::abs(samples[j].roll), std::abs(samples[j].pitch));
+      };
+      if (over(i) <= limit) {
+        ++i;
+        continue;
+      }
+      std::size_t j = i;
+      double worst = 0;
+      for (; j < samples.size() && over(j) > limit; ++j) worst = std::max(worst, over(j));
+      char note[120];
+      std::snprintf(note, sizeof note, "|roll| or |pitch| up to %.2f° for %zu samples",
+                    worst * 180.0 / std::numbers::pi, j - i);
+      out.incidents.push_back({"exceedance", static_cast<int>(k), -1, samples[i].time,
+                               {samples[i].x, samples[i].y}, worst * 180.0 / std::numbers::pi, note});
+      i = j;
+    }
+  }
+  for (const LegRecord& leg : r.plan.legs) {
+    if (leg.status == LegStatus::Reached) continue;
+    const Trajectory& t = r.plan.trajectories[leg.rover];
+    const std::size_t i = std::min(t.samples.size() - 1,
+                                   static_cast<std::size_t>(std::lround(leg.endTime / period)));
+    out.incidents.push_back({legStatusName(leg.status), leg.rover, -1, leg.endTime,
+                             {t.samples[i].x, t.samples[i].y}, static_cast<double>(leg.target),
+                             "target " + std::to_string(leg.target) + ": " + leg.note});
+  }
+  for (const auto& [rover, target] : r.noSlot) {
+    const Eigen::Vector2d at = r.route.centres[static_cast<std::size_t>(target)];
+    out.incidents.push_back({"no_slot", rover, -1, 0.0, at, static_cast<double>(target),
+                             "target " + std::to_string(target) +
+                                 ": no valid ground for the rover's slot within half a footprint"});
+  }
+  return out;
+}
+
+}  // namespace rover::team

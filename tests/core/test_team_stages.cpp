@@ -1,0 +1,319 @@
+// The team planner's stages, each alone (issue 10): the route generator on a literal search grid,
+// the task builder and the leg planner on DEMs drawn as pictures, the rover simulator, and the
+// coordinator driven by a fake leg planner and a fake rover. Pictures: one character is one metre
+// (4 × 4 cells of 0.25 m), '#' a 1 m high block (a vertical step, so impassable), '.' flat ground.
+#include <doctest/doctest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "core/common/error.hpp"
+#include "core/team/coordinator.hpp"
+#include "core/team/formation.hpp"
+#include "core/team/leg_planner.hpp"
+#include "core/team/leg_simulator.hpp"
+#include "core/team/route_generator.hpp"
+#include "core/team/task_builder.hpp"
+#include "core/terrain/layers.hpp"
+#include "dem_literals.hpp"
+
+using namespace rover;
+using namespace rover::team;
+
+namespace {
+
+// Row 0 of the picture is the north edge (SPEC §0: y north).
+terrain::Dem demFromPicture(const std::vector<std::string>& picture) {
+  const int rows = static_cast<int>(picture.size()), cols = static_cast<int>(picture[0].size());
+  return test::demFrom(rows * 4, cols * 4, 0.25, [&](double x, double y) {
+    const int c = std::clamp(static_cast<int>(std::floor(x)), 0, cols - 1);
+    const int r = std::clamp(rows - 1 - static_cast<int>(std::floor(y)), 0, rows - 1);
+    return picture[r][c] == '#' ? 1.0 : 0.0;
+  });
+}
+
+// A search grid of 1 m cells from a picture: a digit is the cell's mass, '#' impassable, 'S' the
+// start (mass 0).
+SearchGrid searchGridFrom(const std::vector<std::string>& picture) {
+  const GridGeometry g{static_cast<int>(picture.size()), static_cast<int>(picture[0].size()), 1, 1};
+  Raster<float> pdm(g, 0.0f);
+  Raster<std::uint8_t> classes(g, 0);
+  for (int r = 0; r < g.rows; ++r)
+    for (int c = 0; c < g.cols; ++c) {
+      const char ch = picture[r][c];
+      if (ch == '#') classes(r, c) = static_cast<std::uint8_t>(terrain::TerrainClass::Impassable);
+      if (ch >= '0' && ch <= '9') pdm(r, c) = static_cast<float>(ch - '0');
+    }
+  return makeSearchGrid(pdm, classes, 1.0);
+}
+
+std::vector<CellIndex> cells(std::initializer_list<std::pair<int, int>> rc) {
+  std::vector<CellIndex> out;
+  for (auto [r, c] : rc) out.push_back({r, c});
+  return out;
+}
+
+Route routeThrough(const std::vector<Eigen::Vector2d>& centres) {
+  Route r;
+  r.centres = centres;
+  for (std::size_t i = 0; i < centres.size(); ++i) r.cells.push_back({0, static_cast<int>(i)});
+  return r;
+}
+
+// A fake leg planner: a straight line to the goal whatever the ground and the keep-out zones,
+// except for goals it is told are invalid or cannot be reached.
+class StraightLinePlanner final : public LegPlanner {
+ public:
+  std::vector<Eigen::Vector2d> invalidGoals, unreachableGoals;
+  PathResult plan(const Eigen::Vector2d& from, double, const Eigen::Vector2d& goal, std::uint64_t,
+                  const std::vector<KeepOutZone>&, const CancelToken*) const override {
+    PathResult r;
+    auto near = [&](const std::vector<Eigen::Vector2d>& v) {
+      return std::any_of(v.begin(), v.end(), [&](const auto& p) { return (p - goal).norm() < 1e-9; });
+    };
+    if (near(invalidGoals)) {
+      r.status = PathStatus::InvalidGoal;
+    } else if (near(unreachableGoals)) {
+      r.status = PathStatus::NoSolution;
+    } else {
+      r.status = PathStatus::Exact;
+      r.waypoints = {from, goal};
+    }
+    return r;
+  }
+  bool edgeValid(const Eigen::Vector2d&, const Eigen::Vector2d&) const override { return true; }
+  bool canStop(const Eigen::Vector2d&) const override { return true; }
+};
+
+// A fake rover: drives the waypoints in straight lines at 0.5 m/s, sampled at 10 Hz.
+class StraightLineRover final : public LegSimulator {
+ public:
+  Trajectory drive(const std::vector<Eigen::Vector2d>& waypoints, const Pose& start,
+                   double startTime, std::uint64_t, const CancelToken*) const override {
+    Trajectory t;
+    TrajectorySample s;
+    s.time = startTime;
+    s.x = start.x;
+    s.y = start.y;
+    s.heading = start.heading;
+    t.samples.push_back(s);
+    for (const Eigen::Vector2d& w : waypoints) {
+      const Eigen::Vector2d a(s.x, s.y);
+      const double len = (w - a).norm();
+      const int steps = static_cast<int>(std::ceil(len / 0.05));
+      for (int i = 1; i <= steps; ++i) {
+        const Eigen::Vector2d p = a + (w - a) * (static_cast<double>(i) / steps);
+        s.distance += (p - Eigen::Vector2d(s.x, s.y)).norm();
+        s.time += 0.1;
+        s.x = p.x();
+        s.y = p.y();
+        s.heading = std::atan2(w.y() - a.y(), w.x() - a.x());
+        s.speed = 0.5;
+        t.samples.push_back(s);
+      }
+    }
+    t.waypointsReached = waypoints.size();
+    return t;
+  }
+};
+
+// Rover 0 drives east along y = 5, rover 1 north along x = 5: both reach (5, 5) at 10 s.
+std::vector<RoverTask> crossingTasks() {
+  std::vector<RoverTask> tasks(2);
+  tasks[0].start = {0, 5, 0};
+  tasks[0].legs.push_back({{10, 5}, {}, 0});
+  tasks[1].start = {5, 0, M_PI / 2};
+  tasks[1].legs.push_back({{5, 10}, {}, 0});
+  return tasks;
+}
+
+Eigen::Vector2d endOf(const Trajectory& t) { return {t.samples.back().x, t.samples.back().y}; }
+
+}  // namespace
+
+TEST_CASE("stages: the route generators climb the masses, skip the walled cell, mow the rows") {
+  // The team starts at S; the hill climb takes the highest neighbour each time (9, 6, 5, 4, 3, 2,
+  // 1) and never enters '#'; the lawnmower runs the start row east, then the rows above
+  // alternately west and east.
+  const SearchGrid grid = searchGridFrom({
+      "234",
+      "1#5",
+      "S96",
+  });
+  const CellIndex start{2, 0};
+  const auto climb = cells({{2, 1}, {2, 2}, {1, 2}, {0, 2}, {0, 1}, {0, 0}, {1, 0}});
+  RouteParams p;
+  p.targets = 7;
+  CHECK(LhcRoute(p).generate(grid, start).cells == climb);
+  CHECK(LhcGwConvRoute(p).generate(grid, start).cells == climb);
+  CHECK(makeRouteGenerator(RouteMethod::Lhc, p)->generate(grid, start).cells == climb);
+  CHECK(LawnmowerRoute(7).generate(grid, start).cells ==
+        cells({{2, 1}, {2, 2}, {1, 2}, {1, 0}, {0, 0}, {0, 1}, {0, 2}}));
+  // The start cell is the one holding the rovers' centroid.
+  CHECK(teamStartCell(grid, {{0.2, 0.3, 0}, {0.6, 0.5, 0}}).row == 2);
+  CHECK(grid.cellAt({2.5, 2.5}).col == 2);
+  CHECK(grid.cellAt({2.5, 2.5}).row == 0);
+}
+
+TEST_CASE("stages: the slot task builder moves a goal off a wall and leaves a walled target out") {
+  // Target 0 (7, 3.5) lies on the west step of the block at x 7..9, y 3..4: its goal moves to the
+  // nearest ground a rover may stop on. Target 1 (2.5, 4) lies on the plateau in the west, which
+  // the team cannot reach (marked so below): nothing valid and reachable within half a
+  // footprint, so the rover gets no leg there.
+  const terrain::Dem dem = demFromPicture({
+      "#####.......",  // y 7
+      "#####.......",
+      "#####.......",
+      "#####..##...",  // y 4
+      "#####..##...",  // y 3
+      "#####.......",
+      "#####.......",
+      "#####.......",  // y 0
+  });
+  const auto classes = terrain::traversability(dem).classes;
+  TeamMissionParams p;
+  const Route route = routeThrough({{7, 3.5}, {2.5, 4}});
+  const std::vector<Pose> starts{{10, 1, 0}};
+  Raster<std::uint8_t> reachable(dem.geometry(), 1);
+  for (int i = 0; i < reachable.geometry.cellCount(); ++i)
+    if (cellToLocal(reachable.geometry, reachable.geometry.cell(i)).x() < 5) reachable.at(i) = 0;
+  const std::vector<RoverTask> tasks =
+      SlotTasks(dem, classes, p, &reachable).build(starts, route, nullptr);
+  REQUIRE(tasks.size() == 1);
+  REQUIRE(tasks[0].legs.size() == 1);
+  const Leg& leg = tasks[0].legs[0];
+  CHECK(leg.target == 0);
+  CHECK((leg.goal - Eigen::Vector2d(7, 3.5)).norm() <= p.footprint / 2);
+  CHECK((leg.goal - Eigen::Vector2d(7, 3.5)).norm() > 0.1);
+  CHECK(wholeMapModel(dem, classes, p.coordination.rrt).turnValid(leg.goal));
+  // The free function is the same builder.
+  CHECK(teamSearchTasks(dem, classes, starts, route, p, &reachable)[0].legs[0].goal == leg.goal);
+  // Without the reachability mask the plateau top is ground a rover may stop on.
+  CHECK(SlotTasks(dem, classes, p, nullptr).build(starts, route, nullptr)[0].legs.size() == 2);
+}
+
+TEST_CASE("stages: the hybrid task builder adds coverage moves inside the footprint") {
+  const terrain::Dem dem = demFromPicture(std::vector<std::string>(12, std::string(12, '.')));
+  const auto classes = terrain::traversability(dem).classes;
+  TeamMissionParams p;
+  const Route route = routeThrough({{6, 6}});
+  const std::vector<RoverTask> tasks =
+      HybridTasks(dem, classes, p, nullptr).build({{1, 1, 0}, {2.5, 1, 0}}, route, nullptr);
+  REQUIRE(tasks.size() == 2);
+  for (const RoverTask& t : tasks) {
+    REQUIRE(t.legs.size() == 2);  // the slot leg, then the coverage moves
+    CHECK(t.legs[0].via.empty());
+    REQUIRE(t.legs[1].via.size() >= 2);
+    CHECK(t.legs[1].goal == t.legs[1].via.back());
+    for (const auto& v : t.legs[1].via) CHECK((v - Eigen::Vector2d(6, 6)).cwiseAbs().maxCoeff() < 2.5);
+  }
+}
+
+TEST_CASE("stages: the guided leg planner goes round a wall the boxed planner cannot") {
+  // A 6 m wall between start (2, 5) and goal (7, 5): the start/goal box grown by 2 m (y 3..7)
+  // lies inside its span (y 2..8), so the boxed RRT* cannot get round; the guide finds the way.
+  const terrain::Dem dem = demFromPicture({
+      "..........",  // y 9
+      "..........",
+      "....#.....",  // y 7
+      "....#.....",
+      "....#.....",
+      "....#.....",
+      "....#.....",
+      "....#.....",  // y 2
+      "..........",
+      "..........",  // y 0
+  });
+  const auto classes = terrain::traversability(dem).classes;
+  const CoordinationParams cp;
+  const BoxedRrtPlanner boxed(dem, classes, cp.rrt, cp.weights);
+  CHECK(boxed.plan({2, 5}, 0, {7, 5}, 3, {}, nullptr).status != PathStatus::Exact);
+  const TraversalLattice lattice = makeLattice(dem, classes, cp);
+  const GuidedRrtPlanner guided(dem, classes, lattice, cp.rrt, cp.weights, cp.corridorRadius);
+  const PathResult r = guided.plan({2, 5}, 0, {7, 5}, 3, {}, nullptr);
+  REQUIRE(r.status == PathStatus::Exact);
+  CHECK((r.waypoints.back() - Eigen::Vector2d(7, 5)).norm() < 1e-9);
+  for (std::size_t i = 0; i + 1 < r.waypoints.size(); ++i)
+    CHECK(guided.edgeValid(r.waypoints[i], r.waypoints[i + 1]));
+  CHECK_FALSE(guided.canStop({4.0, 5}));  // on the wall's step
+  CHECK(guided.canStop({2, 5}));
+}
+
+TEST_CASE("stages: the rover simulator drives to a waypoint at 10 Hz") {
+  const terrain::Dem dem = demFromPicture(std::vector<std::string>(6, std::string(8, '.')));
+  const CoordinationParams cp;
+  const RoverSimulator sim(dem, cp.model, cp.controller, cp.slip);
+  const Trajectory t = sim.drive({{6, 3}}, {1, 3, 0}, 2.0, 1, nullptr);
+  CHECK(t.status == SimStatus::Reached);
+  CHECK((endOf(t) - Eigen::Vector2d(6, 3)).norm() <= cp.controller.acceptanceRadius);
+  CHECK(t.samples.front().time == doctest::Approx(2.0));
+  for (std::size_t i = 1; i < t.samples.size(); ++i)
+    CHECK(t.samples[i].time - t.samples[i - 1].time == doctest::Approx(0.1));
+  CHECK_THROWS_AS(sim.drive({{6, 3}}, {-3, 3, 0}, 0.0, 1, nullptr), Error);
+}
+
+TEST_CASE("stages: the coordinator with a fake planner and rover: the policy decides a crossing") {
+  const std::vector<RoverTask> tasks = crossingTasks();
+  const StraightLinePlanner planner;
+  const StraightLineRover rover;
+  CoordinationParams p;
+  // Timed: the same try started later clears the crossing; nothing is planned again.
+  const CoordinationResult timed = coordinateWith(tasks, planner, rover, timedPolicy(p), p, 1);
+  REQUIRE(timed.legs.size() == 2);
+  CHECK(timed.legs[0].waits == 0);  // the first rover is never disturbed
+  CHECK(timed.legs[1].status == LegStatus::Reached);
+  CHECK(timed.legs[1].replans == 0);
+  CHECK(timed.legs[1].waits == 1);
+  CHECK(timed.legs[1].waitTime > 0);
+  CHECK(timed.rrtCalls == 2);
+  CHECK(timed.conflicts.empty());
+  // Paper: every re-plan (the fake ignores keep-out zones) meets rover 0 again, so after
+  // max_replans tries the rover waits one wait step and goes.
+  const CoordinationResult paper = coordinateWith(tasks, planner, rover, paperPolicy(p), p, 1);
+  REQUIRE(paper.legs.size() == 2);
+  CHECK(paper.legs[1].status == LegStatus::Reached);
+  CHECK(paper.legs[1].replans == p.maxReplans);
+  CHECK(paper.legs[1].waits == 1);
+  CHECK(paper.conflicts.empty());
+  for (const CoordinationResult* r : {&timed, &paper}) {
+    CHECK(checkSeparation(r->trajectories, p.safetyDistance).minimumDistance >= p.safetyDistance);
+    CHECK((endOf(r->trajectories[0]) - Eigen::Vector2d(10, 5)).norm() < 1e-9);
+    CHECK((endOf(r->trajectories[1]) - Eigen::Vector2d(5, 10)).norm() < 1e-9);
+  }
+  // Without delays, waits or re-plans the leg is skipped and the conflict named.
+  CoordinationParams none = p;
+  none.maxReplans = 0;
+  none.maxWaits = 0;
+  const CoordinationResult skipped = coordinateWith(tasks, planner, rover, timedPolicy(none), none, 1);
+  CHECK(skipped.legs[1].status == LegStatus::Skipped);
+  CHECK(skipped.legs[1].reason == LegReason::Conflict);
+  CHECK(skipped.legs[1].note.find("of rover 0") != std::string::npos);
+}
+
+TEST_CASE("stages: the coordinator reports an invalid and an unreachable goal and goes on") {
+  std::vector<RoverTask> tasks(1);
+  tasks[0].start = {0, 0, 0};
+  tasks[0].legs = {{{3, 0}, {}, 0}, {{3, 3}, {}, 1}, {{0, 3}, {}, 2}};
+  StraightLinePlanner planner;
+  planner.invalidGoals = {{3, 0}};
+  planner.unreachableGoals = {{3, 3}};
+  const StraightLineRover rover;
+  const CoordinationParams p;
+  for (const ConflictPolicy& policy : {timedPolicy(p), paperPolicy(p)}) {
+    const CoordinationResult r = coordinateWith(tasks, planner, rover, policy, p, 1);
+    REQUIRE(r.legs.size() == 3);
+    CHECK(r.legs[0].status == LegStatus::Skipped);
+    CHECK(r.legs[0].reason == LegReason::InvalidGoal);
+    CHECK(r.legs[1].status == LegStatus::Short);
+    CHECK(r.legs[1].reason == LegReason::NoPath);
+    CHECK(r.legs[2].status == LegStatus::Reached);
+    CHECK((endOf(r.trajectories[0]) - Eigen::Vector2d(0, 3)).norm() < 1e-9);
+  }
+  // A policy that never starts a try at once is refused.
+  ConflictPolicy bad = timedPolicy(p);
+  bad.startDelays = {5};
+  CHECK_THROWS_WITH_AS(coordinateWith(tasks, planner, rover, bad, p, 1),
+                       "coordination: a policy starts each try without delay first", Error);
+}
