@@ -36,6 +36,14 @@ struct Progress {
   double fraction = 0;  // 0..1 towards the run's goal
   double coverage = 0;  // fraction of free cells visited so far
   std::int64_t moves = 0;
+  // Team missions (paper 001) run in two phases an operator wants told apart: planning, counted
+  // in legs, then the replay of the plan, on the mission clock. Empty phase: a coverage run.
+  enum class Phase { None, Planning, Replay };
+  Phase phase = Phase::None;
+  int legsDone = 0, legsTotal = 0;
+  int replans = 0, waits = 0;        // so far, over all legs
+  double missionTime = 0;            // s: the replay's clock
+  double missionEnd = 0;             // s: when the last rover is done
 };
 
 // A point of an overlay polyline (local frame, metres).

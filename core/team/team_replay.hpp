@@ -36,11 +36,17 @@ class SinkObserver final : public TeamObserver {
     if (!pts.empty()) sink_.overlay("path", rover, pts);
   }
   void legDone(const LegRecord& leg, int done, int total) override {
-    (void)leg;
+    replans_ += leg.replans;
+    waits_ += leg.waits;
     Progress p;
     p.step = done;
     p.moves = done;
     p.fraction = total > 0 ? 0.9 * done / total : 0.9;
+    p.phase = Progress::Phase::Planning;
+    p.legsDone = done;
+    p.legsTotal = total;
+    p.replans = replans_;
+    p.waits = waits_;
     sink_.progress(p);
   }
 
@@ -60,6 +66,9 @@ class SinkObserver final : public TeamObserver {
     std::vector<RoverPose> poses(traj.size());
     std::vector<CellUpdate> changed;
     std::int64_t step = 0;
+    double missionEnd = 0;
+    for (const auto& t : traj)
+      if (!t.samples.empty()) missionEnd = std::max(missionEnd, t.samples.back().time);
     for (std::size_t i = 0;; i = std::min(i + every, end - 1)) {
       if (cancel && cancel->cancelled()) return;
       changed.clear();
@@ -80,6 +89,11 @@ class SinkObserver final : public TeamObserver {
       p.moves = static_cast<std::int64_t>(i);
       p.fraction = 0.9 + 0.1 * static_cast<double>(i + 1) / static_cast<double>(end);
       p.coverage = passable > 0 ? static_cast<double>(seen) / passable : 0.0;
+      p.phase = Progress::Phase::Replay;
+      p.replans = replans_;
+      p.waits = waits_;
+      p.missionTime = std::min(missionEnd, static_cast<double>(i) * period);
+      p.missionEnd = missionEnd;
       sink_.progress(p);
       if (i + 1 >= end) break;
     }
@@ -87,6 +101,7 @@ class SinkObserver final : public TeamObserver {
 
  private:
   EventSink& sink_;
+  int replans_ = 0, waits_ = 0;
 };
 
 }  // namespace rover::team

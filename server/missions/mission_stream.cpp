@@ -296,6 +296,19 @@ void MissionStream::progress(const Progress& p) {
   {
     std::lock_guard lock(mutex_);
     progress_ = {{"step", p.step}, {"fraction", p.fraction}, {"coverage", p.coverage}, {"moves", p.moves}};
+    if (p.phase == Progress::Phase::Planning) {
+      progress_["phase"] = "planning";
+      progress_["legs_done"] = p.legsDone;
+      progress_["legs_total"] = p.legsTotal;
+    } else if (p.phase == Progress::Phase::Replay) {
+      progress_["phase"] = "replay";
+      progress_["mission_time_s"] = p.missionTime;
+      progress_["mission_end_s"] = p.missionEnd;
+    }
+    if (p.phase != Progress::Phase::None) {
+      progress_["replans"] = p.replans;
+      progress_["waits"] = p.waits;
+    }
     ++progressVersion_;
     ++stateVersion_;
   }

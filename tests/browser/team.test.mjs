@@ -40,7 +40,15 @@ describe('team mission', { skip: missing || false, timeout: 240000 }, () => {
     }
     await page.fill('#m-pace', '0');
     await page.click('#m-launch');
+    // Planning reads in legs and the replay on the mission clock, not "step 160 · moves 160".
+    const seen = new Set();
+    const words = setInterval(() => page.textContent('#live-counters').then((t) => seen.add(t.split(/grid:/)[0].trim())).catch(() => {}), 50);
     await page.waitForFunction(() => window.__roverplan.doneFrames > 0, null, { timeout: 180000 });
+    clearInterval(words);
+    const lines = [...seen].filter(Boolean);
+    console.log(`progress lines seen: ${lines.slice(0, 3).join(' | ')} … ${lines.slice(-1)}`);
+    assert.ok(lines.some((t) => /^(planning: leg \d+ of \d+|replay: [\d.]+ of [\d.]+ min)/.test(t)), lines.join(' | '));
+    assert.ok(!lines.some((t) => /^step /.test(t)), lines.join(' | '));
     const status = await page.evaluate(() => window.__roverplan.missionStatus);
     console.log(`team mission (${teamPlanner}): ${status}`);
     // A team mission may end with warnings (a leg skipped, ground out of reach): the page says so

@@ -533,12 +533,22 @@ TEST_CASE("api: a team-search mission with a PDM streams the route and paths, an
   CHECK(m["metrics"]["targets"] == 4);
   CHECK(m["metrics"]["accumulated_probability"].get<double>() > 0);
   bool sawRoute = false, sawPath = false, sawGrid = false;
+  json lastReplay;
   for (const auto& f : frames) {
     if (f.binary) {
       sawGrid = true;
       continue;
     }
     json j = json::parse(f.data);
+    // Team progress in words (issue 13): planning counted in legs, the replay on the mission clock.
+    if (j["type"] == "progress" && j.value("phase", "") == "planning") {
+      CHECK(j["legs_done"].get<int>() <= j["legs_total"].get<int>());
+      CHECK(j["legs_total"] == 8);  // 2 rovers × 4 targets
+    }
+    if (j["type"] == "progress" && j.value("phase", "") == "replay") {
+      CHECK(j["mission_time_s"].get<double>() <= j["mission_end_s"].get<double>());
+      lastReplay = j;
+    }
     if (j["type"] == "overlay") {
       sawRoute |= j.contains("route") && j["route"].size() == 5;
       sawPath |= !j["paths"].empty();
@@ -548,6 +558,10 @@ TEST_CASE("api: a team-search mission with a PDM streams the route and paths, an
   CHECK(sawRoute);
   CHECK(sawPath);
   CHECK(sawGrid);
+  REQUIRE(lastReplay.is_object());
+  CHECK(lastReplay["mission_time_s"].get<double>() == doctest::Approx(lastReplay["mission_end_s"].get<double>()).epsilon(0.01));
+  CHECK(lastReplay["mission_end_s"].get<double>() / 60 ==
+        doctest::Approx(m["metrics"]["mission_time_min"].get<double>()).epsilon(0.02));
   // The search grid of 5 m cells over the 150 m map.
   json first = json::parse(frames.front().data);
   REQUIRE(first["grid"].is_object());

@@ -50,6 +50,18 @@ const SHOWN_METRICS = [
   ['plan_wall_s', 'planning', (v) => `${v.toFixed(1)} s`],
 ];
 
+// A progress frame as an operator reads it: a coverage run in steps and moves; a team mission's
+// planning in legs (with the re-plans and waits so far), then its replay on the mission clock.
+function progressInWords(p) {
+  const extras = () => [p.replans ? `${fmt(p.replans)} re-plans` : '', p.waits ? `${fmt(p.waits)} waits` : ''].filter(Boolean).map((t) => ` · ${t}`).join('');
+  if (p.phase === 'planning') return `planning: leg ${fmt(p.legs_done)} of ${fmt(p.legs_total)}${extras()}`;
+  if (p.phase === 'replay') {
+    const min = (s) => (s / 60).toFixed(1);
+    return `replay: ${min(p.mission_time_s)} of ${min(p.mission_end_s)} min · search cells ${(100 * (p.coverage || 0)).toFixed(1)} %${extras()}`;
+  }
+  return `step ${fmt(p.step)} · moves ${fmt(p.moves)} · coverage ${(100 * (p.coverage || 0)).toFixed(1)} %`;
+}
+
 export class MissionView {
   constructor({ view, layers, statusLine, selectMap, onFinished, onShown }) {
     this.view = view;
@@ -229,7 +241,7 @@ export class MissionView {
   onProgress(p) {
     this.lastProgress = p;
     this.setProgress(p.fraction ?? 0);
-    if (Number.isFinite(p.moves) && Number.isFinite(p.coverage)) {
+    if (!p.phase && Number.isFinite(p.moves) && Number.isFinite(p.coverage)) {  // coverage runs
       const c = this.progressCurve;
       if (c.x.length === 0 || p.moves >= c.x[c.x.length - 1]) {
         c.x.push(p.moves);
@@ -243,7 +255,7 @@ export class MissionView {
         }, 200);
       }
     }
-    this.progressText = `step ${fmt(p.step)} · moves ${fmt(p.moves)} · coverage ${(100 * (p.coverage || 0)).toFixed(1)} %`;
+    this.progressText = progressInWords(p);
     this.renderCounters();
   }
 
