@@ -20,6 +20,28 @@ std::vector<Eigen::Vector2d> decimate(const Trajectory& t, std::size_t every) {
   return out;
 }
 
+// Pitch and roll against mission time, one point a second of the 10 Hz trajectory: the sample of
+// largest magnitude in each second, so no excursion over the attitude limit is averaged away.
+void attitudeSeries(const Trajectory& t, std::size_t every, int rover, std::vector<Series>& out) {
+  Series pitch{"pitch_deg_rover_" + std::to_string(rover), "time (s)", "pitch_deg", {}, {}};
+  Series roll{"roll_deg_rover_" + std::to_string(rover), "time (s)", "roll_deg", {}, {}};
+  const double deg = 180.0 / std::numbers::pi;
+  for (std::size_t i = 0; i < t.samples.size(); i += every) {
+    const std::size_t end = std::min(t.samples.size(), i + every);
+    std::size_t p = i, q = i;
+    for (std::size_t j = i; j < end; ++j) {
+      if (std::abs(t.samples[j].pitch) > std::abs(t.samples[p].pitch)) p = j;
+      if (std::abs(t.samples[j].roll) > std::abs(t.samples[q].roll)) q = j;
+    }
+    pitch.x.push_back(t.samples[i].time);
+    pitch.y.push_back(t.samples[p].pitch * deg);
+    roll.x.push_back(t.samples[i].time);
+    roll.y.push_back(t.samples[q].roll * deg);
+  }
+  out.push_back(std::move(pitch));
+  out.push_back(std::move(roll));
+}
+
 Series curveSeries(std::string key, std::string xLabel, const std::vector<std::pair<double, double>>& c) {
   Series s{std::move(key), std::move(xLabel), "probability", {}, {}};
   for (const auto& [x, y] : c) {
@@ -97,10 +119,12 @@ PlanResult toPlanResult(const TeamMissionResult& r, const TeamPlannerParams& p, 
                      {"waits", static_cast<double>(waits), "waits"}};
     out.tracks.push_back(std::move(track));
     out.overlays.push_back({"path", static_cast<int>(k), r.plan.paths[k]});
+    attitudeSeries(t, every, static_cast<int>(k), out.series);
   }
   Polyline route{"route", -1, {r.route.startCentre}};
   route.points.insert(route.points.end(), r.route.centres.begin(), r.route.centres.end());
   out.overlays.insert(out.overlays.begin(), std::move(route));
+  out.metrics.push_back({"attitude_limit_deg", p.mission.exceedanceLimit * 180.0 / std::numbers::pi, "deg"});
   out.series.push_back(curveSeries("probability_vs_distance_team", "mean distance per rover (m)", r.curves.team));
   out.series.push_back(curveSeries("probability_vs_distance_single", "distance (m)", r.curves.single));
   out.series.push_back(curveSeries("probability_vs_distance_route", "route distance (m)", r.routeCurve));

@@ -58,6 +58,9 @@ describe('team mission', { skip: missing || false, timeout: 240000 }, () => {
       assert.equal(await page.textContent('#live-status'), 'completed with warnings');
       assert.match(await page.textContent('#live-message'), /\S/);
     }
+    await page.waitForFunction(() => !document.getElementById('replay-slider').disabled, null, { timeout: 30000 });
+    await page.waitForTimeout(200);
+    assert.match(await page.textContent('#chart-pitch + *, figure:nth-child(2) figcaption'), /pitch \(deg\) per second, ±15°/);
     await screenshot(page, 'team-mission');
     assert.deepEqual(errors, []);
     await context.close();

@@ -569,6 +569,14 @@ TEST_CASE("api: a team-search mission with a PDM streams the route and paths, an
   auto res = s.get("/api/missions/" + id + "/result.json").json();
   CHECK(res["rovers"].size() == 2);
   CHECK(res["overlays"][0]["key"] == "route");
+  // Attitude against mission time, per rover, with the mission's own limit.
+  REQUIRE(res["series"].contains("pitch_deg_rover_1"));
+  const json& pitch = res["series"]["pitch_deg_rover_1"];
+  CHECK(pitch["x_label"] == "time (s)");
+  CHECK(pitch["x"].size() == pitch["y"].size());
+  CHECK(pitch["x"].size() > 10);
+  CHECK(res["series"].contains("roll_deg_rover_0"));
+  CHECK(res["metrics"]["attitude_limit_deg"].get<double>() == doctest::Approx(15));
   CHECK(res["incidents"].is_array());
   CHECK(s.get("/api/missions/" + id + "/result.geojson").json()["features"].size() == 2);
   // A late joiner gets the overlays in its snapshot.

@@ -444,8 +444,12 @@ export class MissionView {
         if (m) pitch.push({ x: s.x, y: s.y, colour: roverColour(Number(m[1])), width: 1, label: `rover ${Number(m[1]) + 1}` });
       }
     }
+    // The limit lines are the mission's own attitude limit (team missions report it); a team's
+    // series run on the mission clock (s), one point a second, as its replay does.
+    const limit = Number(r?.metrics?.attitude_limit_deg ?? 15);
+    caption('chart-pitch', `pitch (deg) per ${team ? 'second' : 'move'}, ±${fmt(Number(limit.toPrecision(4)))}°`);
     lineChart($('chart-pitch'), pitch, {
-      refLines: [{ y: 15, label: '+15°' }, { y: -15, label: '−15°' }], legend: true, cursorX: cursorStep,
+      refLines: [{ y: limit, label: `+${fmt(Number(limit.toPrecision(4)))}°` }, { y: -limit, label: `−${fmt(Number(limit.toPrecision(4)))}°` }], legend: true, cursorX: cursorStep,
       empty: r ? 'no pitch series' : 'after the run (result.json)',
     });
     const bars = r ? r.rovers.map((rv, k) => ({ label: `rover ${k + 1}`, value: rv.metrics?.energy_j ?? rv.metrics?.trajectory_m ?? 0, colour: roverColour(k) })) : [];
