@@ -7,17 +7,10 @@ import { mkdtempSync, readFileSync, rmSync } from 'node:fs';
 import { tmpdir } from 'node:os';
 import { join } from 'node:path';
 import { after, before, describe, test } from 'node:test';
-import { generatedDem, launchBrowser, missingPrerequisite, openPage, screenshot, startServer, waitForMap } from './lib/harness.mjs';
+import { generatedDem, launchBrowser, postJson, missingPrerequisite, openPage, screenshot, startServer, waitForMap } from './lib/harness.mjs';
 
 const missing = missingPrerequisite();
 if (missing) console.log(`# browser tests skipped: ${missing}`);
-
-async function postJson(url, body) {
-  const r = await fetch(url, { method: 'POST', headers: { 'Content-Type': 'application/json' }, body: JSON.stringify(body) });
-  const j = await r.json();
-  assert.ok(r.ok, JSON.stringify(j));
-  return j;
-}
 
 // Rectangles overlap when they share more than a pixel in both directions.
 const overlaps = (a, b) => a.x < b.x + b.width - 1 && b.x < a.x + a.width - 1 && a.y < b.y + b.height - 1 && b.y < a.y + a.height - 1;

@@ -5,26 +5,10 @@ import { readFileSync, rmSync, writeFileSync } from 'node:fs';
 import { tmpdir } from 'node:os';
 import { join } from 'node:path';
 import { after, before, describe, test } from 'node:test';
-import { launchBrowser, missingPrerequisite, openPage, screenshot, startServer, waitForMap } from './lib/harness.mjs';
+import { launchBrowser, missingPrerequisite, openPage, postJson, screenshot, startServer, waitEnded, waitForMap } from './lib/harness.mjs';
 
 const missing = missingPrerequisite();
 if (missing) console.log(`# browser tests skipped: ${missing}`);
-
-async function postJson(url, body) {
-  const r = await fetch(url, { method: 'POST', headers: { 'Content-Type': 'application/json' }, body: JSON.stringify(body) });
-  const j = await r.json();
-  assert.ok(r.ok, JSON.stringify(j));
-  return j;
-}
-
-async function waitEnded(url, id) {
-  for (let i = 0; i < 600; i++) {
-    const m = await (await fetch(`${url}/api/missions/${id}`)).json();
-    if (!['queued', 'running'].includes(m.status)) return m;
-    await new Promise((r) => setTimeout(r, 100));
-  }
-  throw new Error(`mission ${id} did not end`);
-}
 
 describe('runs', { skip: missing || false, timeout: 240000 }, () => {
   let server, browser;

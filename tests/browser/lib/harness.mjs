@@ -137,6 +137,24 @@ export function generatedDem(dir, size = 128) {
   return out;
 }
 
+// POSTs JSON to the server; the answer's body, or a thrown Error with the server's error.
+export async function postJson(url, body) {
+  const r = await fetch(url, { method: 'POST', headers: { 'Content-Type': 'application/json' }, body: JSON.stringify(body) });
+  const j = await r.json();
+  if (!r.ok) throw new Error(`POST ${url}: ${r.status} ${JSON.stringify(j)}`);
+  return j;
+}
+
+// Polls a mission until it is no longer queued or running (at most 60 s); its last state.
+export async function waitEnded(url, id) {
+  for (let i = 0; i < 600; i++) {
+    const m = await (await fetch(`${url}/api/missions/${id}`)).json();
+    if (!['queued', 'running'].includes(m.status)) return m;
+    await sleep(100);
+  }
+  throw new Error(`mission ${id} did not end within 60 s`);
+}
+
 export { sleep };
 
 // A describe() block with its own server and browser, started before its tests and stopped after:
