@@ -21,10 +21,11 @@ class RouteGenerator {
   virtual Route generate(const SearchGrid& grid, CellIndex start) const = 0;
 };
 
-// LHC_GW_CONV (paper 001 §3.5, Lin & Goodrich 2009): hill climbing over global-warming levels.
-class LhcGwConvRoute final : public RouteGenerator {
+// Local hill climbing over the search cells (paper 001 §3.5, Lin & Goodrich 2009), with or
+// without global warming.
+class HillClimbRoute : public RouteGenerator {
  public:
-  explicit LhcGwConvRoute(RouteParams p) : p_(p) { p_.globalWarming = true; }
+  HillClimbRoute(RouteParams p, bool globalWarming) : p_(p) { p_.globalWarming = globalWarming; }
   Route generate(const SearchGrid& grid, CellIndex start) const override {
     return lhcGwConv(grid, start, p_);
   }
@@ -33,16 +34,16 @@ class LhcGwConvRoute final : public RouteGenerator {
   RouteParams p_;
 };
 
-// Plain hill climbing (k = 0 only): the baseline without global warming.
-class LhcRoute final : public RouteGenerator {
+// LHC_GW_CONV: the climb over every global-warming level, the best kept (eq. 8).
+class LhcGwConvRoute final : public HillClimbRoute {
  public:
-  explicit LhcRoute(RouteParams p) : p_(p) { p_.globalWarming = false; }
-  Route generate(const SearchGrid& grid, CellIndex start) const override {
-    return lhcGwConv(grid, start, p_);
-  }
+  explicit LhcGwConvRoute(const RouteParams& p) : HillClimbRoute(p, true) {}
+};
 
- private:
-  RouteParams p_;
+// Plain hill climbing (k = 0 only): the baseline without global warming.
+class LhcRoute final : public HillClimbRoute {
+ public:
+  explicit LhcRoute(const RouteParams& p) : HillClimbRoute(p, false) {}
 };
 
 // Boustrophedon lanes over the rows: the baseline that ignores the PDM.

@@ -20,15 +20,7 @@ using namespace rover::team;
 
 namespace {
 
-// Row 0 of the picture is the north edge (SPEC §0: y north).
-terrain::Dem demFromPicture(const std::vector<std::string>& picture) {
-  const int rows = static_cast<int>(picture.size()), cols = static_cast<int>(picture[0].size());
-  return test::demFrom(rows * 4, cols * 4, 0.25, [&](double x, double y) {
-    const int c = std::clamp(static_cast<int>(std::floor(x)), 0, cols - 1);
-    const int r = std::clamp(rows - 1 - static_cast<int>(std::floor(y)), 0, rows - 1);
-    return picture[r][c] == '#' ? 1.0 : 0.0;
-  });
-}
+using test::demFromPicture;
 
 // A crater ringed by a wall on a 24 × 24 m site: its floor (x 13..21, y 8..16) holds most of the
 // probability but cannot be reached from the south-west where the team starts.
