@@ -18,8 +18,8 @@ json missionFile(const store::MissionRecord& m, const std::string& demSha256,
          {"rovers", spec.value("rovers", json::array())},
          {"params", spec.value("params", json::object())}};
   if (spec.contains("pace")) f["pace"] = spec["pace"];
-  const std::string name = !m.label.empty() ? m.label : spec.value("name", std::string());
-  if (!name.empty()) f["name"] = name;
+  // The run's current label (its request's name until renamed; a cleared label clears it).
+  if (!m.label.empty()) f["name"] = m.label;
   return f;
 }
 

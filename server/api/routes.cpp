@@ -555,7 +555,9 @@ void addApiRoutes(http::Router& router, ApiContext& ctx) {
     // files are half gone. A mission that is still finishing cannot be deleted yet.
     if (!store::isFinal(m->status))
       throw ApiError(409, "not_finished", "mission " + id + " is " + m->status + ": try again when it has ended", "id");
-    ctx.db.deleteMission(id);
+    // Only the request whose delete removed the row says so; a concurrent one finds nothing.
+    if (!ctx.db.deleteMission(id)) throw ApiError(404, "not_found", "no mission '" + id + "'", "id");
+    ctx.missions.forget(id);
     store::DataDir::removeTree(ctx.dir.missionDir(id));
     return Response::json(200, {{"deleted", id}});
   }), doc("Cancel a queued or running mission (202; the planner stops within one step), or delete "
@@ -572,9 +574,10 @@ void addApiRoutes(http::Router& router, ApiContext& ctx) {
     if (label == body.end() || !label->is_string())
       throw ApiError(400, "invalid_field", "label must be a string", "label");
     rj::checkName(label->get<std::string>(), "label");
-    if (!ctx.db.setMissionLabel(id, label->get<std::string>()))
-      throw ApiError(404, "not_found", "no mission '" + id + "'", "id");
-    return Response::json(200, missionJson(*ctx.db.getMission(id)));
+    // A DELETE may land between the update and the read back: then it is gone (404).
+    auto m = ctx.db.setMissionLabel(id, label->get<std::string>()) ? ctx.db.getMission(id) : std::nullopt;
+    if (!m) throw ApiError(404, "not_found", "no mission '" + id + "'", "id");
+    return Response::json(200, missionJson(*m));
   }), doc("Rename a run: {\"label\": \"...\"} (at most 200 characters, no control characters)."));
 
   router.add("GET", "/api/missions/{id}/{file}", guarded([&ctx](const Request& req) {

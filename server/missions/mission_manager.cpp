@@ -1,5 +1,7 @@
 #include "server/missions/mission_manager.hpp"
 
+#include <algorithm>
+
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -144,6 +146,12 @@ bool MissionManager::cancel(const std::string& id) {
     rememberFinished(id, stream);
   }
   return true;
+}
+
+void MissionManager::forget(const std::string& id) {
+  std::lock_guard lock(mutex_);
+  finished_.erase(id);
+  finishedOrder_.erase(std::remove(finishedOrder_.begin(), finishedOrder_.end(), id), finishedOrder_.end());
 }
 
 std::shared_ptr<MissionStream> MissionManager::stream(const std::string& id) {

@@ -62,6 +62,8 @@ class MissionManager {
   void submit(MissionJob job);
   // Cancels a queued or running mission; false if it is not (or no longer) active.
   bool cancel(const std::string& id);
+  // A deleted mission: its finished stream is dropped, so no subscriber replays it.
+  void forget(const std::string& id);
   // The stream of a live or finished mission (finished ones rebuilt from disk); null if unknown.
   std::shared_ptr<MissionStream> stream(const std::string& id);
   std::size_t running() const;

@@ -267,10 +267,15 @@ TEST_CASE("api: runs carry their map and PDM names and a label; an ended run can
 
   // DELETE on an ended run removes it and its files; a second DELETE finds nothing.
   REQUIRE(fs::exists(s.dir.missionDir(id)));
+  REQUIRE(s.manager.stream(id) != nullptr);  // finished, kept for late subscribers
+  // A label cleared is cleared in the mission file too.
+  CHECK(request(s.port(), "PATCH", "/api/missions/" + id, R"({"label":""})", "application/json").status == 200);
+  CHECK_FALSE(s.get("/api/missions/" + id + "/mission.json").json().contains("name"));
   auto d = request(s.port(), "DELETE", "/api/missions/" + id);
   CHECK(d.status == 200);
   CHECK(d.json()["deleted"] == id);
   CHECK_FALSE(fs::exists(s.dir.missionDir(id)));
+  CHECK(s.manager.stream(id) == nullptr);  // no WebSocket replays a deleted run
   checkError(s.get("/api/missions/" + id), 404, "id");
   checkError(s.get("/api/missions/" + id + "/result.json"), 404, "id");
   CHECK(s.get("/api/missions").json().empty());
