@@ -48,7 +48,8 @@ void motionSeries(const Trajectory& t, std::size_t every, int rover, const Rover
     speed.y.push_back(sum / static_cast<double>(end - i));
     energy.x.push_back(s[i].time);
     energy.y.push_back(used);
-    for (std::size_t j = std::max<std::size_t>(i, 1); j < end; ++j) used += stepEnergy(m, s[j - 1], s[j]);
+    // On to the next second's first sample (or the last sample).
+    for (std::size_t j = i + 1; j <= std::min(end, s.size() - 1); ++j) used += stepEnergy(m, s[j - 1], s[j]);
   }
   // The loop summed every step: the whole trajectory's energy, at its last sample (when that is
   // not a second's first).
