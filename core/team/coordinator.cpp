@@ -153,8 +153,7 @@ class Coordinator {
       }
     }
     // A via leg (hybrid) whose fixed points a rover may drive is not planned; one that it may not
-    // is planned here too, not later one after another (on the default map, a third of a hybrid
-    // mission's wall time went to planning those legs in sequence).
+    // is planned here too, in parallel, instead of one after another while coordinating.
     std::vector<char> planned(jobs.size(), 0);
     parallelFor(jobs.size(), p_.threads, [&](std::size_t j) {
       const Job& job = jobs[j];
