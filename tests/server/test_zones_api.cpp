@@ -3,6 +3,7 @@
 // map and on a real DEM from ../shared/dems.
 #include <doctest/doctest.h>
 
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 
@@ -142,7 +143,8 @@ TEST_CASE("zones api: ?crs=map imports a zone in the map's CRS into the local fr
   checkError(put(s, "/api/maps/" + map + "/zones", [&] { json j = inCrs; j["crs"] = "x"; return j; }()), 400, "zones.crs");
   auto r = put(s, "/api/maps/" + map + "/zones?crs=map", inCrs);
   REQUIRE(r.status == 200);
-  const json& c = r.json()["features"][0]["geometry"]["coordinates"][0];
+  const json stored = r.json();
+  const json& c = stored["features"][0]["geometry"]["coordinates"][0];
   CHECK(c[0][0].get<double>() == doctest::Approx(10));
   CHECK(c[0][1].get<double>() == doctest::Approx(10));
   CHECK(c[2][0].get<double>() == doctest::Approx(20));
@@ -184,7 +186,10 @@ TEST_CASE("zones api: coverage and team missions with keep_out never enter the z
 }
 
 TEST_CASE("zones api: missions with keep_out on the HiRISE Gale DEM never enter the zone") {
-  const fs::path dem = fs::path(ROVER_SOURCE_DIR) / ".." / "shared" / "dems" / "mars_gale_hirise_1m" / "missionDEM.tif";
+  // ../shared/dems beside the checkout (a worktree elsewhere may name it in ROVERPLAN_SHARED_DEMS).
+  const char* env = std::getenv("ROVERPLAN_SHARED_DEMS");
+  const fs::path dems = env ? fs::path(env) : fs::path(ROVER_SOURCE_DIR) / ".." / "shared" / "dems";
+  const fs::path dem = dems / "mars_gale_hirise_1m" / "missionDEM.tif";
   if (!fs::exists(dem)) {
     MESSAGE("SKIPPED: ../shared/dems absent");
     return;
