@@ -90,6 +90,7 @@ describe('keep-out zones', { skip: missing || false, timeout: 300000 }, () => {
     await page.mouse.down();
     await page.mouse.move(c2.x, c2.y, { steps: 4 });
     await page.mouse.up();
+    await shot(page, 'editing');  // corner handles while the tool is on
     await page.click('#zones-save');
     await page.waitForFunction(() => /saved 1 zone/.test(document.getElementById('zones-status').textContent), null, { timeout: 10000 });
     const saved = await (await fetch(`${server.url}/api/maps/${mapId}/zones`)).json();
@@ -121,6 +122,31 @@ describe('keep-out zones', { skip: missing || false, timeout: 300000 }, () => {
     assert.ok(cov.result.metrics.keep_out_cells > 100, `keep_out_cells ${cov.result.metrics.keep_out_cells}`);
     await page.waitForTimeout(300);
     await shot(page, 'coverage');
+
+    // Import the zone again from a file in the map's CRS, as an export is written: the coverage
+    // run's result.geojson gives the CRS (its "crs" member) and the local -> CRS mapping (its
+    // track's points are result.json's path); its LineString is skipped, the Polygon replaces
+    // the saved zone.
+    const exported = await (await fetch(`${server.url}/api/missions/${cov.id}/result.geojson`)).json();
+    const local = cov.result.rovers[0].path, crsLine = exported.features[0].geometry.coordinates;
+    const [a, b] = [0, local.length - 1];
+    const sx = (crsLine[b][0] - crsLine[a][0]) / (local[b][0] - local[a][0]);
+    const sy = (crsLine[b][1] - crsLine[a][1]) / (local[b][1] - local[a][1]);
+    const toCrs = ([x, y]) => [crsLine[a][0] + (x - local[a][0]) * sx, crsLine[a][1] + (y - local[a][1]) * sy];
+    const inCrs = {
+      type: 'FeatureCollection', crs: exported.crs,
+      features: [exported.features[0], { type: 'Feature', properties: { name: 'imported' },
+        geometry: { type: 'Polygon', coordinates: [[...zone, zone[0]].map(toCrs)] } }],
+    };
+    await page.click('#tab-maps');
+    await page.setInputFiles('#zones-import', { name: 'zones-map-crs.geojson', mimeType: 'application/geo+json', buffer: Buffer.from(JSON.stringify(inCrs)) });
+    await page.waitForFunction(() => /imported 1 zone \(map's CRS\), skipped 1 other/.test(document.getElementById('zones-status').textContent), null, { timeout: 10000 });
+    const imported = (await (await fetch(`${server.url}/api/maps/${mapId}/zones`)).json()).features;
+    assert.equal(imported.length, 1);
+    assert.equal(imported[0].properties.name, 'imported');
+    imported[0].geometry.coordinates[0].slice(0, -1).forEach(([x, y], k) =>
+      assert.ok(Math.hypot(x - zone[k][0], y - zone[k][1]) < 1e-3, `imported corner ${k}: ${x}, ${y} vs ${zone[k]}`));
+    await page.click('#tab-mission');
 
     // A small team mission: two rovers, four targets, west of the zone.
     await page.selectOption('#m-planner', 'team-search');

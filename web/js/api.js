@@ -96,7 +96,7 @@ export const api = {
   createPdm: (mapId, body) => sendJson('POST', `/api/maps/${mapId}/pdms`, body),
   deletePdm: (mapId, pdmId) => sendJson('DELETE', `/api/maps/${mapId}/pdms/${pdmId}`),
   zones: (mapId) => getJson(`/api/maps/${mapId}/zones`),
-  saveZones: (mapId, fc) => sendJson('PUT', `/api/maps/${mapId}/zones`, fc),
+  saveZones: (mapId, fc, crs = 'local') => sendJson('PUT', `/api/maps/${mapId}/zones${crs === 'map' ? '?crs=map' : ''}`, fc),
   missions: () => getAllPages('/api/missions'),
   mission: (id) => getJson(`/api/missions/${id}`),
   launch: (body) => sendJson('POST', '/api/missions', body),

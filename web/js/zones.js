@@ -96,6 +96,7 @@ export class ZoneEditor {
     $('zones-finish').addEventListener('click', () => this.finish());
     $('zones-delete').addEventListener('click', () => this.removeSelected());
     $('zones-save').addEventListener('click', () => this.save());
+    $('zones-import').addEventListener('change', (e) => this.importFile(e.target));
     view.canvas.addEventListener('keydown', (e) => {
       if (state.tool !== 'zones') return;
       if (e.key === 'Enter') this.finish();
@@ -240,6 +241,34 @@ export class ZoneEditor {
       button.disabled = false;
       this.changed();
     }
+  }
+
+  // A GeoJSON file: its Polygon features (other geometries, e.g. an export's tracks, are skipped)
+  // replace the saved zones; a file that names a CRS (a "crs" member, as our result.geojson
+  // exports write) is taken as being in the map's CRS and converted by the server (?crs=map).
+  async importFile(input) {
+    const m = state.map, file = input.files[0];
+    input.value = '';
+    if (!m || !file) return;
+    showError($('zones-error'), null);
+    try {
+      const fc = JSON.parse(await file.text());
+      const all = Array.isArray(fc.features) ? fc.features : [];
+      const polygons = all.filter((f) => f && f.geometry && f.geometry.type === 'Polygon');
+      const crs = fc.crs ? 'map' : 'local';
+      const body = { type: 'FeatureCollection', features: polygons };
+      if (fc.crs) body.crs = fc.crs;
+      state.zones = await api.saveZones(m.id, body, crs);
+      this.zones = zonesFromGeoJson(state.zones);
+      this.dirty = false;
+      this.selected = -1;
+      $('zones-status').textContent = `imported ${polygons.length} zone${polygons.length === 1 ? '' : 's'} (${crs === 'map' ? "map's CRS" : 'local metres'})` +
+        (all.length > polygons.length ? `, skipped ${all.length - polygons.length} other features` : '');
+      state.emit('zones', state.zones);
+    } catch (err) {
+      showError($('zones-error'), `import refused: ${err.message}${err.field ? ` (field: ${err.field})` : ''}`);
+    }
+    this.changed();
   }
 
   changed(edited = false) {
