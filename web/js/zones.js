@@ -289,7 +289,8 @@ export class ZoneEditor {
     $('zones-finish').disabled = !this.drawing;
     $('zones-delete').disabled = this.selected < 0;
     const saved = state.zones?.features?.length ?? 0;
-    $('zones-summary').textContent = this.dirty ? `${this.zones.length} zones, not saved (missions use the ${saved} saved)` : `${saved} saved`;
+    const n = this.zones.length;
+    $('zones-summary').textContent = this.dirty ? `${n} zone${n === 1 ? '' : 's'}, not saved (missions use the ${saved} saved)` : `${saved} saved`;
   }
 
   legend() {
