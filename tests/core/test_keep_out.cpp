@@ -119,13 +119,15 @@ namespace {
 
 // 20 × 12 m of flat ground with two rovers west of a zone.
 team::TeamMissionResult wallMission(const terrain::Dem& dem, const KeepOut& zones, int targets,
-                                    const Raster<float>& pdm) {
+                                    const Raster<float>& pdm, bool hybrid = false,
+                                    team::CoordinationMode mode = team::CoordinationMode::Timed) {
   team::TeamMissionParams p;
+  p.coordination.mode = mode;
   p.route.targets = targets;
   p.coordination.threads = 2;
   p.keepOut = zones;
   const std::vector<team::Pose> starts{{3, 6, 0}, {3, 8, 0}};
-  return team::runTeamMission(dem, pdm, starts, p, false);
+  return team::runTeamMission(dem, pdm, starts, p, hybrid);
 }
 
 }  // namespace
@@ -186,6 +188,26 @@ TEST_CASE("keep-out: no team sample enters a zone, and a target in a zone is nev
   CHECK_THROWS_WITH_AS(planner->validate(problem, {}),
                        "rovers[0]: start is on a map cell keep-out zone 0 overlaps (a rover never stands on one)",
                        Error);
+}
+
+TEST_CASE("keep-out: the hybrid mission and paper coordination keep out too") {
+  const terrain::Dem dem = test::demFrom(48, 80, 0.25, [](double, double) { return 0.0; });
+  KeepOut zones;
+  zones.zones = {box(7.1, 3, 12.9, 13)};
+  for (const bool hybrid : {false, true}) {
+    const auto mode = hybrid ? team::CoordinationMode::Timed : team::CoordinationMode::Paper;
+    const team::TeamMissionResult r = wallMission(dem, zones, 3, Raster<float>{}, hybrid, mode);
+    int samples = 0;
+    for (const auto& t : r.plan.trajectories)
+      for (const auto& s : t.samples) {
+        ++samples;
+        CHECK(zones.zoneOverlapping(dem.geometry(), *localToCell(dem.geometry(), {s.x, s.y})) < 0);
+      }
+    MESSAGE(std::string(hybrid ? "hybrid" : "paper") << ": " << samples << " samples, legs reached "
+                                          << r.metrics.targetsReached << ", short " << r.metrics.targetsShort);
+    CHECK(samples > 50);
+    for (const auto& c : r.route.centres) CHECK(zones.zoneAt(c) < 0);
+  }
 }
 
 TEST_CASE("keep-out: the classes mark the zone KeepOut and its margin Impassable") {

@@ -179,9 +179,16 @@ TEST_CASE("zones api: coverage and team missions with keep_out never enter the z
       CHECK(result["metrics"]["keep_out_search_cells"].get<double>() >= 1);
       CHECK(result["metrics"]["collisions"] == 0);
     }
-    // The mission file carries the zones: the re-run keeps out too.
+    // The mission file carries the zones: the re-run keeps out too, with the same result.
     const json file = s.get("/api/missions/" + ids[k] + "/mission.json").json();
     CHECK(file["keep_out"] == zones);
+    if (k == 0) {
+      auto again = s.postJson("/api/missions", file);
+      REQUIRE(again.status == 202);
+      const std::string id2 = again.json()["id"];
+      REQUIRE(s.waitFinished(id2, 180)["status"] == "succeeded");
+      CHECK(s.get("/api/missions/" + id2 + "/result.json").json()["rovers"] == result["rovers"]);
+    }
   }
 }
 
