@@ -40,6 +40,11 @@ class LegPlanner {
   virtual bool edgeValid(const Eigen::Vector2d& a, const Eigen::Vector2d& b) const = 0;
   // A point where the rover may stop and turn in place (a parking spot).
   virtual bool canStop(const Eigen::Vector2d& p) const = 0;
+  // A point no simulated sample may reach: a cell of an operator's keep-out zone.
+  virtual bool forbidden(const Eigen::Vector2d& p) const {
+    (void)p;
+    return false;
+  }
 };
 
 // The validity checks both terrain planners share: the rover's rules on the whole map.
@@ -52,6 +57,7 @@ class TerrainLegPlanner : public LegPlanner {
     return wholeMap_.edgeValid(a, b);
   }
   bool canStop(const Eigen::Vector2d& p) const override { return wholeMap_.turnValid(p); }
+  bool forbidden(const Eigen::Vector2d& p) const override { return wholeMap_.inZone(p); }
 
  protected:
   // planPath in the start/goal box.

@@ -73,6 +73,8 @@ ParamTable<P> buildTable() {
           [](auto& p) -> auto& { return p.mission.traversability.highRiskDeg; });
   addReal(t, realParam("impassable_deg", 0.1, 90, "deg", "Traversability: slope from which a cell is impassable (never a target, never entered)."),
           [](auto& p) -> auto& { return p.mission.traversability.impassableDeg; });
+  addReal(t, realParam("keep_out_margin", 0, 10, "m", "Planned paths keep this far (along x and y) from the mission's keep-out zones; no sample ever enters a zone's cells."),
+          [](auto& p) -> auto& { return p.mission.keepOutMargin; });
   // Coordination (SPEC §3.4).
   t.add(choiceParam("coordination", {"timed", "paper"},
                     "timed (ours): RRT* in a corridor round a guide path on the whole map, conflicts "

@@ -19,6 +19,8 @@
 #include "server/json/mission_request.hpp"
 #include "server/json/pdm_json.hpp"
 #include "server/json/plan_json.hpp"
+#include "server/json/zones_json.hpp"
+#include "server/api/zone_routes.hpp"
 
 namespace rover::api {
 
@@ -212,6 +214,7 @@ missions::MissionJob buildMission(ApiContext& ctx, const json& body) {
   job.record.label = request.name;
   job.params = std::move(request.params);
   job.problem.rovers = std::move(request.rovers);
+  job.problem.keepOut = std::move(request.keepOut);
   if (request.pace) job.pace = *request.pace;
   const Planner* planner = &ctx.planners.get(job.record.planner);
   if (!ctx.db.getMap(job.record.mapId))
@@ -233,6 +236,7 @@ missions::MissionJob buildMission(ApiContext& ctx, const json& body) {
   // it is built once to validate and dropped: a queued mission holds only its request, and a
   // worker builds the world again when it starts the mission (MissionJob::build).
   const GridGeometry mapGeometry = ctx.maps.get(job.record.mapId)->dem.geometry();
+  rj::checkZonesOnMap(job.problem.keepOut, mapGeometry, "keep_out");
   const int roverCount = static_cast<int>(job.problem.rovers.size());
   problems::MapGround ground;
   try {
@@ -258,6 +262,7 @@ missions::MissionJob buildMission(ApiContext& ctx, const json& body) {
       pdm = std::make_shared<Raster<float>>(maps.pdmMass(j.record.pdmId));
     PlanningProblem built = problems::problemOnMap(ground, dem, std::move(pdm));
     built.rovers = std::move(j.problem.rovers);  // the request's, kept
+    built.keepOut = std::move(j.problem.keepOut);
     built.threads = j.problem.threads;
     j.problem = std::move(built);
     j.geo = dem->z.geo;
@@ -427,6 +432,8 @@ void addApiRoutes(http::Router& router, ApiContext& ctx) {
     return r;
   }), doc("A layer (elevation|hillshade|slope|traversability|pdm) as .png (?max= overview), "
                    ".tif (GeoTIFF) or .f32 (raw little-endian float32, size in X-Rows/X-Cols); ?pdm=ID for pdm.", onPool));
+
+  addZoneRoutes(router, ctx);  // GET|PUT /api/maps/{id}/zones
 
   // --- PDMs ---
   router.add("GET", "/api/maps/{id}/pdms", guarded([&ctx](const Request& req) {
@@ -614,6 +621,8 @@ void addApiRoutes(http::Router& router, ApiContext& ctx) {
     return s->subscribe(std::move(c));
   }, ws);
 }
+
+http::Handler guardedRoute(http::Handler handler) { return guarded(std::move(handler)); }
 
 json openApiDocument(const http::Router& router, const std::string& version) {
   json paths = json::object();

@@ -50,6 +50,9 @@ struct ApiContext {
 
 // Registers every /api route on `router`.
 void addApiRoutes(http::Router& router, ApiContext& ctx);
+// `handler` with the API's error mapping (core Error -> 400 naming its field, JSON type errors ->
+// 400, anything else -> 500 without details), for routes registered outside routes.cpp.
+http::Handler guardedRoute(http::Handler handler);
 // The OpenAPI 3 document of the router's routes.
 nlohmann::json openApiDocument(const http::Router& router, const std::string& version);
 

@@ -30,6 +30,7 @@ void addMissionOptions(ArgParser& a) {
   a.option("start", "X,Y,DEG[;X,Y,DEG...]", "formation",
            "Rover starts in the local frame (metres from the lower-left corner) and headings "
            "(degrees counter-clockwise from east); overrides --rovers.");
+  addKeepOutOption(a);
   addParamOptions(a, team::teamParamTable().infos());
 }
 
@@ -63,6 +64,7 @@ MissionSetup readMissionOptions(const ArgParser& a) {
   s.problem = problems::problemOnMap(problems::groundOnMap(s.plannerName, dem->geometry(), s.params), dem,
                                      pdm.empty() ? nullptr : std::make_shared<Raster<float>>(std::move(pdm)));
 
+  s.problem.keepOut = readKeepOutOption(a, dem->geometry());
   std::vector<RoverStart> starts = readStartOption(a);
   if (starts.empty()) {
     const int n = static_cast<int>(a.integer("rovers", 5, 1, 64));

@@ -8,6 +8,7 @@
 #include "server/http/http_types.hpp"
 #include "server/json/json_edge.hpp"
 #include "server/json/plan_json.hpp"
+#include "server/json/zones_json.hpp"
 
 namespace rover::json {
 
@@ -72,7 +73,8 @@ MissionRequest parseMissionRequest(const json& body, const PlannerRegistry& plan
   if (!body.is_object()) throw ApiError(400, "bad_json", "the request body must be a JSON object", "body");
   static const std::vector<std::string> known{"map",     "pdm",       "planner",    "rovers",
                                               "params",  "pace",      "name",       "format",
-                                              "version", "roverplan", "dem_sha256", "map_name"};
+                                              "version", "roverplan", "dem_sha256", "map_name",
+                                              "keep_out"};
   for (const auto& item : body.items())
     if (std::find(known.begin(), known.end(), item.key()) == known.end())
       throw ApiError(400, "unknown_field", "unknown field '" + shown(item.key()) + "'", shown(item.key()));
@@ -129,6 +131,8 @@ MissionRequest parseMissionRequest(const json& body, const PlannerRegistry& plan
                               "a number of degrees in [-360, 360]");
     req.rovers.push_back({{x, y}, heading * std::numbers::pi / 180.0});
   }
+  if (auto k = body.find("keep_out"); k != body.end() && !k->is_null())
+    req.keepOut = zonesFromJson(*k, "keep_out");
   if (auto pace = body.find("pace"); pace != body.end())
     req.pace = boundedNumber(*pace, "pace", 0, kMaxPace, "a number of steps per second in [0, 1e6]");
 
