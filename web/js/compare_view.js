@@ -47,6 +47,14 @@ function ratio(a, b) {
   return `×${fmt(b / a)}`;
 }
 
+// The unit after a metric's name, unless the name already ends with it (max_pitch_deg, distance_m).
+function unitNote(key, unit) {
+  if (!unit) return null;
+  const tail = unit.replace('²', '2').replace('/', '_');
+  if (key.endsWith(`_${tail}`) || key.endsWith(`_${unit}`)) return null;
+  return el('span', { class: 'unit' }, ` (${unit})`);
+}
+
 export class CompareView {
   constructor({ missionView }) {
     this.missionView = missionView;
@@ -69,6 +77,8 @@ export class CompareView {
     this.images = [null, null];
     this.render();
     this.box.hidden = false;
+    // Charts are sized to their boxes, which exist only once the panel is shown.
+    requestAnimationFrame(() => this.drawCharts());
     await this.toggle(0);
   }
 
@@ -91,7 +101,7 @@ export class CompareView {
         ? (better === 'min' ? Math.min(va, vb) : Math.max(va, vb)) : null;
       const cell = (v) => el('td', { class: best !== null && v === best ? 'better' : '', title: String(v ?? '') }, fmt(v));
       return el('tr', { dataset: { metric: k } },
-        el('th', { scope: 'row' }, k.replace(/_/g, ' '), units[k] ? el('span', { class: 'muted' }, ` ${units[k]}`) : null),
+        el('th', { scope: 'row' }, k.replace(/_/g, ' '), unitNote(k, units[k])),
         cell(va), cell(vb), el('td', { class: 'diff' }, difference(va, vb)), el('td', { class: 'ratio' }, ratio(va, vb)));
     });
     const name = (m) => m.label || `${m.planner} · ${m.id}`;
@@ -119,13 +129,12 @@ export class CompareView {
           el('table', { id: 'compare-metrics' },
             el('thead', {}, el('tr', {}, el('th', {}, 'metric'), el('th', { class: 'run-a' }, 'A'), el('th', { class: 'run-b' }, 'B'), el('th', {}, 'B − A'), el('th', {}, 'B / A'))),
             el('tbody', {}, ...rows))),
+        el('figure', { class: 'compare-map' },
+          el('figcaption', { id: 'compare-map-caption' }, ''),
+          el('img', { id: 'compare-map-img', alt: 'map of the shown run' })),
         el('div', { class: 'compare-side' },
-          el('figure', { class: 'compare-map' },
-            el('figcaption', { id: 'compare-map-caption' }, ''),
-            el('img', { id: 'compare-map-img', alt: 'map of the shown run' })),
           el('div', { class: 'compare-charts' }, ...this.charts.map((c) => c.node)),
           this.charts.length ? el('div', { class: 'muted small' }, 'A solid (blue), B dashed (orange); one line per rover where the curve is per rover') : null)));
-    this.drawCharts();
   }
 
   drawCharts() {
