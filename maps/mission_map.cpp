@@ -113,6 +113,16 @@ std::string metres(double m) {
   return buf;
 }
 
+// `src` enlarged k× (nearest) and blended onto `dst` with its top-left at (x0, y0).
+void enlargeInto(Image& dst, const Image& src, int x0, int y0, int k) {
+  Painter p(dst);
+  for (int y = 0; y < src.height * k; ++y)
+    for (int x = 0; x < src.width * k; ++x) {
+      const std::uint8_t* s = &src.rgba[(std::size_t(y / k) * src.width + x / k) * 4];
+      if (s[3] > 0) p.blend(x0 + x, y0 + y, {s[0], s[1], s[2], s[3]});
+    }
+}
+
 struct LegendItem {
   enum class Mark { Box, Line, Dot, Cross } mark;
   Colour colour;
@@ -132,7 +142,9 @@ MissionMap renderMissionMap(const MissionMapInput& in) {
   ri.dem = in.dem;
   ri.hillshade = &shade;
   MissionMap out;
-  Image base = renderLayer(RenderLayer::Elevation, ri, {0, true});  // map, then its ramp legend
+  // Legends and the scale bar are drawn at 1/k and enlarged k×: legible on a 4096 px picture.
+  const int k = std::max(1, static_cast<int>(std::lround(std::max(g.rows, g.cols) / 1000.0)));
+  Image base = renderLayer(RenderLayer::Elevation, ri, {0, true, k});  // map, then its ramp legend
   out.mapWidth = g.cols;
   out.mapHeight = g.rows;
   const double widthM = g.widthMetres(), heightM = g.heightMetres();
@@ -199,17 +211,20 @@ MissionMap renderMissionMap(const MissionMapInput& in) {
   // Scale bar, bottom-left of the map: about a fifth of its width, on a white box.
   {
     const double len = niceLength(widthM / 5);
-    const int barPx = std::max(1, static_cast<int>(std::lround(len / widthM * g.cols)));
+    const int barPx = std::max(1, static_cast<int>(std::lround(len / widthM * g.cols / k)));
     const std::string label = metres(len);
-    const int boxW = std::max(barPx, font::textWidth(label)) + 8, boxH = 22;
-    const int x0 = 6, y0 = g.rows - boxH - 6;
-    if (y0 > 0 && x0 + boxW < g.cols) {
-      paint.rect(x0, y0, boxW, boxH, {255, 255, 255, 200});
-      paint.rect(x0 + 4, y0 + 13, barPx, 4, kInk);
-      paint.rect(x0 + 4, y0 + 10, 1, 7, kInk);
-      paint.rect(x0 + 4 + barPx - 1, y0 + 10, 1, 7, kInk);
-      paint.text(label, x0 + 4, y0 + 2);
-    }
+    Image bar;
+    bar.width = std::max(barPx, font::textWidth(label)) + 8;
+    bar.height = 22;
+    bar.rgba.assign(std::size_t(bar.width) * bar.height * 4, 0);
+    Painter bp(bar);
+    bp.rect(0, 0, bar.width, bar.height, {255, 255, 255, 200});
+    bp.rect(4, 13, barPx, 4, kInk);
+    bp.rect(4, 10, 1, 7, kInk);
+    bp.rect(4 + barPx - 1, 10, 1, 7, kInk);
+    bp.text(label, 4, 2);
+    const int x0 = 6 * k, y0 = g.rows - (bar.height + 6) * k;
+    if (y0 > 0 && x0 + bar.width * k < g.cols) enlargeInto(base, bar, x0, y0, k);
   }
 
   // Legend of what is drawn, below the elevation ramp.
@@ -227,34 +242,30 @@ MissionMap renderMissionMap(const MissionMapInput& in) {
   }
   if (!in.zones.empty()) items.push_back({LegendItem::Mark::Box, kZoneEdge, "keep-out zone"});
   if (!in.incidents.empty()) items.push_back({LegendItem::Mark::Cross, kIncident, "incident"});
-  const int width = base.width;
+  const int width = base.width, stripWidth = width / k;
   int x = 3, y = 14;
   std::vector<std::pair<int, int>> pos;
   for (const auto& it : items) {
     const int w = 14 + font::textWidth(it.label);
-    if (x > 3 && x + w > width - 3) {
+    if (x > 3 && x + w > stripWidth - 3) {
       x = 3;
       y += 11;
     }
     pos.emplace_back(x, y);
     x += w + 10;
   }
-  const int legendH = y + 12;
-  out.image.width = width;
-  out.image.height = base.height + legendH;
-  out.image.rgba = std::move(base.rgba);
-  out.image.rgba.resize(std::size_t(out.image.width) * out.image.height * 4, 0);
-  Painter lp(out.image);
-  const int y0 = out.image.height - legendH;
-  lp.rect(0, y0, width, legendH, kPaper);
-  lp.text(in.title.empty() ? std::string("mission") : in.title, 3, y0 + 3);
+  Image strip;
+  strip.width = stripWidth;
+  strip.height = y + 12;
+  strip.rgba.assign(std::size_t(strip.width) * strip.height * 4, 0);
+  Painter lp(strip);
+  lp.rect(0, 0, strip.width, strip.height, kPaper);
+  lp.text(in.title.empty() ? std::string("mission") : in.title, 3, 3);
   for (std::size_t i = 0; i < items.size(); ++i) {
     const auto [ix, iy] = pos[i];
-    const int cy = y0 + iy + 3;
+    const int cy = iy + 3;
     switch (items[i].mark) {
-      case LegendItem::Mark::Box:
-        lp.rect(ix, cy - 3, 10, 7, items[i].colour);
-        break;
+      case LegendItem::Mark::Box: lp.rect(ix, cy - 3, 10, 7, items[i].colour); break;
       case LegendItem::Mark::Line: lp.rect(ix, cy - 1, 10, 3, items[i].colour); break;
       case LegendItem::Mark::Dot:
         lp.disc(ix + 5, cy + 0.5, 4, kInk);
@@ -265,8 +276,15 @@ MissionMap renderMissionMap(const MissionMapInput& in) {
         lp.line(ix + 2, cy + 3, ix + 8, cy - 3, 1.2, items[i].colour);
         break;
     }
-    lp.text(items[i].label, ix + 14, y0 + iy);
+    lp.text(items[i].label, ix + 14, iy);
   }
+  out.image.width = width;
+  out.image.height = base.height + strip.height * k;
+  out.image.rgba = std::move(base.rgba);
+  out.image.rgba.resize(std::size_t(out.image.width) * out.image.height * 4, 0);
+  // The strip's background is opaque: fill the k leftover columns too.
+  Painter(out.image).rect(0, base.height, width, strip.height * k, kPaper);
+  enlargeInto(out.image, strip, 0, base.height, k);
   return out;
 }
 
