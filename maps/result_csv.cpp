@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <numbers>
+#include <string_view>
 
 #include "core/planning/ground_sample.hpp"
 #include "maps/gdal_env.hpp"
@@ -22,7 +23,9 @@ void put(std::string& out, double v, int decimals) {
   if (!std::isfinite(v)) return;
   char buf[48];
   std::snprintf(buf, sizeof buf, "%.*f", decimals, v);
-  out += buf;
+  // A tiny negative value rounds to "-0.00": written as 0.
+  const bool zero = std::string_view(buf).find_first_not_of("-0.") == std::string_view::npos;
+  out += zero && buf[0] == '-' ? buf + 1 : buf;
 }
 
 }  // namespace
