@@ -10,6 +10,7 @@ TMP=$(mktemp -d "${TMPDIR:-/tmp}/roverplan_exports_test.XXXXXX")
 PID=""
 cleanup() { [ -n "$PID" ] && kill -9 "$PID" 2>/dev/null; rm -rf "$TMP"; }
 trap cleanup EXIT
+# KEEP=1: leave the downloads in $TMP to look at (the server is still stopped).
 [ -n "${KEEP:-}" ] && trap '[ -n "$PID" ] && kill -9 "$PID"' EXIT
 passed=0
 fail() { echo "FAIL: $*" >&2; echo "--- server log:" >&2; tail -20 "$TMP/log" >&2; echo "$passed passed, 1 failed"; exit 1; }

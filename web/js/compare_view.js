@@ -23,14 +23,14 @@ const BETTER = {
 };
 
 // The curves drawn for both runs: [series key or key prefix, chart title]. A prefix
-// (pitch_deg_rover_) draws every rover's series.
+// (pitch_deg_rover_) draws every rover's series, titled with its own x axis (time or move).
 const CURVES = [
   ['coverage_vs_moves', 'coverage vs moves'],
   ['true_coverage_vs_moves', 'true coverage vs moves'],
   ['probability_vs_distance_team', 'probability vs mean distance per rover (m)'],
   ['probability_vs_distance_route', 'probability vs route distance (m)'],
-  ['pitch_deg_rover_', 'pitch (°) vs time (s)'],
-  ['roll_deg_rover_', 'roll (°) vs time (s)'],
+  ['pitch_deg_rover_', 'pitch (°)'],
+  ['roll_deg_rover_', 'roll (°)'],
 ];
 
 const A_COLOUR = '#3ad6ff';
@@ -50,8 +50,8 @@ function ratio(a, b) {
 // The unit after a metric's name, unless the name already ends with it (max_pitch_deg, distance_m).
 function unitNote(key, unit) {
   if (!unit) return null;
-  const tail = unit.replace('²', '2').replace('/', '_');
-  if (key.endsWith(`_${tail}`) || key.endsWith(`_${unit}`)) return null;
+  const tail = unit.replace('²', '2').replace('/', '_').toLowerCase();
+  if (key === tail || key.endsWith(`_${tail}`)) return null;
   return el('span', { class: 'unit' }, ` (${unit})`);
 }
 
@@ -115,7 +115,9 @@ export class CompareView {
       const has = (r) => Object.keys(r.series || {}).some((s) => (key.endsWith('_') ? s.startsWith(key) : s === key));
       if (!has(a) && !has(b)) return null;
       const canvas = el('canvas', { dataset: { curve: key } });
-      return { key, canvas, node: el('figure', {}, el('figcaption', {}, title), canvas) };
+      const first = [a, b].flatMap((r) => Object.entries(r.series || {})).find(([s]) => s.startsWith(key))?.[1];
+      const caption = key.endsWith('_') && first?.x_label ? `${title} vs ${first.x_label}` : title;
+      return { key, canvas, node: el('figure', {}, el('figcaption', {}, caption), canvas) };
     }).filter(Boolean);
     this.box.replaceChildren(
       el('div', { class: 'compare-head' },
