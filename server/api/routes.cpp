@@ -13,6 +13,7 @@
 #include "maps/dem_digest.hpp"
 #include "maps/georef.hpp"
 #include "server/api/mission_file.hpp"
+#include "server/api/mission_map_file.hpp"
 #include "server/api/multipart.hpp"
 #include "server/problems/problem_builder.hpp"
 #include "server/json/json_edge.hpp"
@@ -94,7 +95,9 @@ json missionJson(const store::MissionRecord& m) {
            {{"stream", "/api/missions/" + m.id + "/stream"},
             {"result_json", "/api/missions/" + m.id + "/result.json"},
             {"result_geojson", "/api/missions/" + m.id + "/result.geojson"},
-            {"result_csv", "/api/missions/" + m.id + "/result.csv"}}}};
+            {"result_csv", "/api/missions/" + m.id + "/result.csv"},
+            {"map_png", "/api/missions/" + m.id + "/map.png"},
+            {"map_tif", "/api/missions/" + m.id + "/map.tif"}}}};
 }
 
 double queryNumber(const Request& req, const std::string& key, double fallback) {
@@ -597,12 +600,19 @@ void addApiRoutes(http::Router& router, ApiContext& ctx) {
       r.headers.emplace_back("Content-Disposition", "attachment; filename=\"mission-" + id + ".json\"");
       return r;
     }
+    if (file == "map.png" || file == "map.tif") {
+      Response r = fileResponse(missionMapFile(ctx, *m, file.substr(4)), file == "map.png" ? "image/png" : "image/tiff");
+      r.headers.emplace_back("Content-Disposition", "attachment; filename=\"mission-" + id + "-" + file + "\"");
+      return r;
+    }
     static const std::map<std::string, std::string> types{{"result.json", "application/json"},
                                                           {"result.geojson", "application/geo+json"},
                                                           {"result.csv", "text/csv"}};
     auto t = types.find(file);
     if (t == types.end())
-      throw ApiError(404, "not_found", "no file '" + file + "' (mission.json, result.json, result.geojson, result.csv)", "file");
+      throw ApiError(404, "not_found",
+                     "no file '" + file + "' (mission.json, result.json, result.geojson, result.csv, map.png, map.tif)",
+                     "file");
     const fs::path path = fs::path(ctx.dir.missionDir(id)) / file;
     if (!fs::exists(path))
       throw ApiError(409, "not_ready", "mission " + id + " is " + m->status + ": no result yet", "id");
@@ -610,7 +620,10 @@ void addApiRoutes(http::Router& router, ApiContext& ctx) {
     r.headers.emplace_back("Content-Disposition", "attachment; filename=\"mission-" + id + "-" + file + "\"");
     return r;
   }), doc("A mission's file (mission.json: everything to run it again, POST it to /api/missions), or "
-          "a finished mission's result: result.json, result.geojson (map CRS), result.csv.", onPool));
+          "a finished mission's result: result.json, result.geojson (map CRS: tracks, route, targets, "
+          "zones, incidents), result.csv (every sample, both frames), map.png (the map with its "
+          "legend and scale bar, at most 4096 px a side), map.tif (the same map as a GeoTIFF in the "
+          "map's CRS).", onPool));
 
   http::RouteOptions ws;
   ws.summary = "WebSocket: a snapshot, then live events (binary grid frames, JSON poses/progress), "
