@@ -2,6 +2,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -181,16 +182,17 @@ std::optional<RunRow> StudyRunner::runOne(std::size_t runIndex, const CancelToke
       const double reachable = free - metricOr(r, "unreachable_cells", 0);
       const double cells = metricOr(r, "cells", 1);
       for (double level : spec_.levels) {
-        // As coverage::movesToReach: the first move with ceil(level · reachable) cells visited.
+        // As coverage::movesToReach: the first move with ceil(level · reachable) cells visited;
+        // the curve's coverage (visited / free) never falls, so a binary search finds it.
         const double needed = std::ceil(level * reachable - 1e-9);
-        double ratio = std::numeric_limits<double>::quiet_NaN();
-        for (std::size_t i = 0; i < curve->x.size(); ++i)
-          if (std::round(curve->y[i] * free) >= needed) {
-            ratio = curve->x[i] / cells;
-            break;
-          }
+        const auto it = std::partition_point(curve->y.begin(), curve->y.end(),
+                                             [&](double y) { return std::round(y * free) < needed; });
+        const double ratio = it == curve->y.end() ? std::numeric_limits<double>::quiet_NaN()
+                                                  : curve->x[static_cast<std::size_t>(it - curve->y.begin())] / cells;
         row.metrics.push_back({"path_length_ratio@" + levelLabel(level), ratio});
       }
+      // Paper 002's runs end at the goal; one that hit the 20·n step budget is counted.
+      row.metrics.push_back({"stopped_by_budget", r.stopReason == "step_budget" ? 1.0 : 0.0});
       row.curves.push_back(sampled(*curve, spec_.curvePoints));
     }
   }
