@@ -165,6 +165,7 @@ std::optional<RunRow> StudyRunner::runOne(std::size_t runIndex, const CancelToke
     problem.rovers = problems::randomValidStarts(planner, problem, params, c.rovers, row.seed);
   }
   problem.threads = spec_.missionThreads;
+  problem.metricsOnly = true;  // a study keeps metrics and sampled curves, never tracks
 
   const auto w0 = std::chrono::steady_clock::now();
   const double c0 = threadCpuSeconds();
