@@ -199,10 +199,10 @@ void StudyDb::attach(const StudySpec& spec) {
   }
 }
 
-std::set<std::int64_t> StudyDb::doneRuns() const {
-  std::set<std::int64_t> out;
-  Stmt s(db_, "SELECT run_index FROM runs");
-  while (s.step()) out.insert(s.integer(0));
+std::vector<std::int64_t> StudyDb::doneRuns() const {
+  std::vector<std::int64_t> out;
+  Stmt s(db_, "SELECT run_index FROM runs ORDER BY run_index");
+  while (s.step()) out.push_back(s.integer(0));
   return out;
 }
 

@@ -79,7 +79,7 @@ class StudyDb {
   bool hasSpec() const;
   nlohmann::json specJson() const;  // throws when the database holds no study
 
-  std::set<std::int64_t> doneRuns() const;
+  std::vector<std::int64_t> doneRuns() const;  // ascending
   std::size_t runCount() const;
   // One transaction for the whole batch; a run already stored is left as it is.
   void insert(const std::vector<RunRow>& rows);
