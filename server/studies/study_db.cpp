@@ -313,7 +313,7 @@ void StudyDb::mergeFrom(const std::string& path) {
   exec(db_, "DETACH DATABASE src");
 }
 
-StudySummary StudyDb::summary() const {
+StudySummary StudyDb::summary(bool timing) const {
   StudySummary out;
   const StudySpec spec = parseStudySpec(specJson());
   out.name = spec.name;
@@ -350,6 +350,7 @@ StudySummary StudyDb::summary() const {
       if (!present[c][k] && keys[k].find('@') == std::string::npos && keys[k].rfind("p_at_", 0) != 0) continue;
       out.rows.push_back({name, keys[k], runs[c], summarize(values[c][k])});
     }
+    if (!timing) continue;
     out.rows.push_back({name, "wall_s", runs[c], summarize(values[c][keys.size()])});
     out.rows.push_back({name, "cpu_s", runs[c], summarize(values[c][keys.size() + 1])});
   }

@@ -86,7 +86,9 @@ class StudyDb {
   // Adds every run of another study database holding the same spec (shards of one study).
   void mergeFrom(const std::string& path);
 
-  StudySummary summary() const;
+  // With `timing`, each configuration also gets wall_s and cpu_s rows (they differ between runs
+  // of the same rows: leave them out to compare summaries).
+  StudySummary summary(bool timing = true) const;
   // runs as CSV: run_index,config,replicate,seed,status,wall_s,cpu_s,host,rank,<metrics...>
   std::string runsCsv() const;
   // The rows that must be identical in every execution mode (no timing, host or rank), in run
