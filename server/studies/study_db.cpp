@@ -358,8 +358,13 @@ StudySummary StudyDb::summary(bool timing) const {
 }
 
 std::string StudyDb::runsCsv() const {
-  const std::vector<std::string> keys = metricKeys();
   std::ostringstream out;
+  runsCsv(out);
+  return out.str();
+}
+
+void StudyDb::runsCsv(std::ostream& out) const {
+  const std::vector<std::string> keys = metricKeys();
   out << "run_index,config_id,config,replicate,seed,status,wall_s,cpu_s,host,rank,version";
   std::string cols = "r.run_index, r.config_id, c.name, r.replicate, r.seed, r.status, r.wall_s, r.cpu_s, r.host, r.rank, r.version";
   for (const auto& k : keys) {
@@ -384,7 +389,6 @@ std::string StudyDb::runsCsv() const {
     }
     out << "\n";
   }
-  return out.str();
 }
 
 void StudyDb::dump(std::ostream& out) const {

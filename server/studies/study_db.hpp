@@ -91,6 +91,7 @@ class StudyDb {
   StudySummary summary(bool timing = true) const;
   // runs as CSV: run_index,config,replicate,seed,status,wall_s,cpu_s,host,rank,<metrics...>
   std::string runsCsv() const;
+  void runsCsv(std::ostream& out) const;  // streamed: a big study's CSV need not fit in memory
   // The rows that must be identical in every execution mode (no timing, host or rank), in run
   // order, metrics sorted by key, numbers printed exactly: for identity checks.
   void dump(std::ostream& out) const;
