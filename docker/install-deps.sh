@@ -15,6 +15,7 @@ build_pkgs=(
   libboost-program-options-dev
   nlohmann-json3-dev libgdal-dev libsqlite3-dev doctest-dev
   libssl-dev   # SHA-256 of a map's grid (maps/dem_digest)
+  libopenmpi-dev openmpi-bin   # `mpirun -np N roverplan study run` (server/studies/study_mpi.cpp)
 )
 test_pkgs=(
   gdal-bin   # gdaldem/gdalinfo/ogrinfo: reference outputs the tests compare against
@@ -23,7 +24,7 @@ test_pkgs=(
   curl python3
   clang libclang-rt-14-dev   # libFuzzer harnesses (tests/fuzz/run.sh)
 )
-runtime_pkgs=(libompl16 libgdal32 libsqlite3-0 libssl3 gdal-data curl ca-certificates)  # curl: HEALTHCHECK
+runtime_pkgs=(libompl16 libgdal32 libsqlite3-0 libssl3 libopenmpi3 gdal-data curl ca-certificates)  # curl: HEALTHCHECK
 bench_pkgs=(wrk nginx-light time curl)  # tests/bench/*: load generator and the nginx baseline
 
 mode=${1:-all}

@@ -20,6 +20,8 @@ const char* kUsage =
     "(paper 001)\n"
     "  sweep      many seeded runs on all cores, summarised (--preset "
     "laine-fig6|laine-fig8|frontier|swinton)\n"
+    "  study      studies into one SQLite database: run (threads, --shard K/N, mpirun), merge, "
+    "summary, dump\n"
     "  bench      benchmarks that print their figures (bench coverage|mission|localisation)\n"
     "  terrain    synthetic moon/mars terrain as a GeoTIFF (the default map)\n"
     "  traversability  traversability classes and their shares from any DEM GDAL reads\n"
@@ -46,6 +48,7 @@ int main(int argc, char** argv) {
     if (command == "coverage") return rover::cli::coverageCommand(args, std::cout);
     if (command == "mission") return rover::cli::missionCommand(args, std::cout);
     if (command == "sweep") return rover::cli::sweepCommand(args, std::cout);
+    if (command == "study") return rover::cli::studyCommand(args, std::cout);
     if (command == "bench") return rover::cli::benchCommand(args, std::cout);
     if (command == "terrain") return rover::cli::terrainCommand(args, std::cout);
     if (command == "traversability") return rover::cli::traversabilityCommand(args, std::cout);

@@ -30,7 +30,7 @@ std::vector<RoverStart> cellsToStarts(const GridGeometry& g, const std::vector<S
   return out;
 }
 
-PlanResult toPlanResult(const CoverageResult& r, const GridGeometry& g) {
+PlanResult toPlanResult(const CoverageResult& r, const GridGeometry& g, bool metricsOnly) {
   PlanResult out;
   out.planner = "coverage";
   out.stopReason = stopReasonName(r.stop);
@@ -90,10 +90,13 @@ PlanResult toPlanResult(const CoverageResult& r, const GridGeometry& g) {
     const RoverTrack& t = r.rovers[k];
     Track track;
     track.rover = static_cast<int>(k);
-    if (m.localisation) {
+    if (metricsOnly) {
+      // no points: nobody draws them
+    } else if (m.localisation) {
       track.points = t.truePoints;
       track.believed = t.believedPoints;
     } else {
+      track.points.reserve(t.cells.size());
       for (int c : t.cells) track.points.push_back(cellToLocal(g, g.cell(c)));
     }
     track.metrics = {{"moves", static_cast<double>(t.moves), "moves"},
@@ -110,11 +113,14 @@ PlanResult toPlanResult(const CoverageResult& r, const GridGeometry& g) {
     out.tracks.push_back(std::move(track));
   }
   Series curve{"coverage_vs_moves", "moves", "coverage", {}, {}};
+  curve.x.reserve(r.curve.size());
+  curve.y.reserve(r.curve.size());
   for (const auto& p : r.curve) {
     curve.x.push_back(static_cast<double>(p.moves));
     curve.y.push_back(static_cast<double>(p.visited) / m.freeCells);
   }
   out.series.push_back(std::move(curve));
+  if (metricsOnly) return out;
   if (m.localisation) {
     Series truth{"true_coverage_vs_moves", "moves", "true_coverage", {}, {}};
     for (const auto& p : r.curve) {
@@ -216,7 +222,7 @@ class CoveragePlanner final : public Planner {
       world = &zoned;
     }
     PlanResult out = toPlanResult(runCoverage(*world, cells, p, sink, cancel),
-                                  problem.world.geometry());
+                                  problem.world.geometry(), problem.metricsOnly);
     out.metrics.push_back({"keep_out_cells", static_cast<double>(keepOutCells), "cells"});
     out.metrics.push_back({"gravity_m_s2", p.energy.gravity, "m/s²"});
     out.metrics.push_back({"coverage_cell_m", problem.world.geometry().cellWidth, "m"});

@@ -19,7 +19,9 @@ std::vector<RoverStart> cellsToStarts(const GridGeometry& g, const std::vector<S
 // gravity. The server shows them per map; the planner resolves the same values when not given.
 ParamSet coverageMapDefaults(const GridGeometry& map, terrain::Body body);
 
-// The planner-neutral view of a coverage result (metric keys as in the CLI's JSON).
-PlanResult toPlanResult(const CoverageResult& r, const GridGeometry& g);
+// The planner-neutral view of a coverage result (metric keys as in the CLI's JSON). metricsOnly
+// (PlanningProblem::metricsOnly): the metrics, incidents and the coverage curve, without the
+// tracks' points and the per-move series.
+PlanResult toPlanResult(const CoverageResult& r, const GridGeometry& g, bool metricsOnly = false);
 
 }  // namespace rover::coverage

@@ -37,6 +37,9 @@ struct PlanningProblem {
   // Threads the caller grants this run (a server's worker: 1, so missions in parallel do not
   // oversubscribe the machine; the CLI: all cores). 0 = all cores.
   unsigned threads = 1;
+  // A caller that keeps only metrics and curves (a study's thousands of runs): the planner may
+  // leave out what only a viewer reads (per-move track points, per-step attitude series).
+  bool metricsOnly = false;
 };
 
 class Planner {

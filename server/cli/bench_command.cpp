@@ -10,7 +10,6 @@
 #include "server/cli/arg_parser.hpp"
 #include "server/cli/commands.hpp"
 #include "server/cli/localisation_bench.hpp"
-#include "server/cli/sweep.hpp"
 
 namespace rover::cli {
 

@@ -10,6 +10,8 @@ namespace rover::cli {
 int coverageCommand(const std::vector<std::string>& args, std::ostream& out);
 int missionCommand(const std::vector<std::string>& args, std::ostream& out);
 int sweepCommand(const std::vector<std::string>& args, std::ostream& out);
+// `study run | merge | summary | dump` (server/studies).
+int studyCommand(const std::vector<std::string>& args, std::ostream& out);
 int benchCommand(const std::vector<std::string>& args, std::ostream& out);
 int terrainCommand(const std::vector<std::string>& args, std::ostream& out);
 int traversabilityCommand(const std::vector<std::string>& args, std::ostream& out);
