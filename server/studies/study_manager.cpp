@@ -214,6 +214,13 @@ std::shared_ptr<http::WsSource> StudyStream::subscribe(std::shared_ptr<http::WsC
 StudyManager::StudyManager(store::DataDir& dir, std::function<bool()> missionsBusy, std::vector<std::string> launcher,
                            std::string selfExe)
     : dir_(dir), missionsBusy_(std::move(missionsBusy)), launcher_(std::move(launcher)), selfExe_(std::move(selfExe)) {
+  // The launcher runs this binary by its real path (a child of mpirun reading /proc/self/exe
+  // would find mpirun); on a cluster that path must be the same on every host (a shared install).
+  if (selfExe_ == "/proc/self/exe") {
+    std::error_code ec;
+    const fs::path real = fs::read_symlink(selfExe_, ec);
+    if (!ec) selfExe_ = real.string();
+  }
   fs::create_directories(fs::path(dir_.root()) / "studies");
   loadStored();
   worker_ = std::thread([this] { work(); });

@@ -207,7 +207,7 @@ TEST_CASE("studies API: cancelling a running study keeps the runs done") {
 
 TEST_CASE("studies API: a restart resumes an unfinished study with only its missing runs") {
   TempDir tmp;
-  const json spec = tinySpec(3000);
+  const json spec = tinySpec(1500);
   std::string id;
   std::size_t doneAtStop = 0;
   {
@@ -221,14 +221,14 @@ TEST_CASE("studies API: a restart resumes an unfinished study with only its miss
     doneAtStop = db.runCount();
   }
   CHECK(doneAtStop > 0);
-  if (doneAtStop >= 6000) MESSAGE("the study finished before the stop: the resume is not exercised");
+  if (doneAtStop >= 3000) MESSAGE("the study finished before the stop: the resume is not exercised");
   StudyServer again(tmp.str("data"));
   const json e = again.waitEnded(id);
   CHECK(e["status"] == "succeeded");
-  CHECK(e["runs_done"] == 6000);
+  CHECK(e["runs_done"] == 3000);
   const std::string csv = again.api.get("/api/studies/" + id + "/runs.csv").body;
-  CHECK(csvLines(csv).size() == 6001);  // no run twice
-  CHECK(runIndices(csv).size() == 6000);
+  CHECK(csvLines(csv).size() == 3001);  // no run twice
+  CHECK(runIndices(csv).size() == 3000);
 
   // The rows are those of one uninterrupted run of the same spec.
   studies::StudyDb resumed = studies::StudyDb::open(tmp.str("data/studies/" + id + "/study.sqlite"));
