@@ -48,6 +48,19 @@ describe('studies', { skip: missing || false, timeout: 240000 }, () => {
     assert.equal(await page.locator('#st-runs-table tr.run-row').count(), 16);
     await shot(page, 'studies-fig6');
 
+    // Fig. 8: makespan box plots per team size, faceted by grid size (laine-fig8, 1 run each).
+    await page.selectOption('#st-source', 'laine-fig8');
+    await page.fill('#st-runs', '1');
+    await page.click('#st-launch');
+    await page.waitForFunction(() => document.querySelector('#study-title')?.textContent.startsWith('laine-fig8')
+      && document.querySelector('#st-status')?.textContent === 'succeeded', null, { timeout: 60000 });
+    await page.waitForSelector('figure[data-plot="fig8"] svg g[aria-label="bar"] rect', { state: 'attached' });
+    assert.equal(await page.locator('figure[data-plot="fig8"] svg g[aria-label="bar"] rect').count(), 18, 'a box per world × team size × variant');
+    await shot(page, 'studies-fig8');
+    await page.click('#st-list li:nth-child(2) button.name');
+    await page.waitForFunction(() => document.querySelector('#study-title')?.textContent.startsWith('laine-fig6'));
+    await page.waitForSelector('#st-runs-table tr.run-row[data-run="3"]');
+
     // A grid-world run cannot be a mission: the page says so.
     await page.click('#st-runs-table tr.run-row[data-run="3"]');
     await page.waitForSelector('#st-run .notice', { state: 'attached' });

@@ -224,20 +224,25 @@ export class StudiesPanel {
       report(err);
       return;
     }
-    $('st-list').replaceChildren(...this.studies.map((s) => el('li', { class: this.current?.id === s.id ? 'selected' : '' },
+    this.renderList();
+    if (!this.current && this.studies.length) await this.show(this.studies[0].id);
+  }
+
+  renderList() {
+    $('st-list').replaceChildren(...this.studies.map((s) => el('li', { class: this.current?.id === s.id ? 'selected' : '', 'data-study': s.id },
       el('button', { class: 'name', title: `show study ${s.id}`, onclick: () => this.show(s.id) }, `${s.name} · ${s.id.slice(0, 6)}`),
       el('span', { class: `badge ${s.status}` }, s.status),
       el('span', { class: 'muted small' }, ` ${s.runs_done}/${s.runs_total}`),
       el('button', { title: s.status === 'running' || s.status === 'queued' ? 'cancel' : 'delete the study and its database',
         onclick: async () => { try { await sendJson('DELETE', `/api/studies/${s.id}`); } catch (err) { report(err); } this.reload(); } },
       s.status === 'running' || s.status === 'queued' ? 'cancel' : 'delete'))));
-    if (!this.current && this.studies.length) await this.show(this.studies[0].id);
   }
 
   async show(id) {
     if (this.ws) this.ws.close();
     this.lastPlotted = -1;
     this.current = await getJson(`/api/studies/${id}`);
+    this.renderList();
     $('study-title').textContent = `${this.current.name} · ${id}`;
     $('st-downloads').replaceChildren(
       el('button', { onclick: () => downloadWithToken(`/api/studies/${id}/runs.csv`, `study-${id}-runs.csv`) }, 'runs.csv'),
@@ -306,7 +311,8 @@ export class StudiesPanel {
     const keep = sel.value;
     if ([...sel.options].map((o) => o.value).join() !== keys.join())
       sel.replaceChildren(...keys.map((k) => el('option', { value: k }, k)));
-    sel.value = keys.includes(keep) ? keep : keys.includes('path_length_ratio') ? 'path_length_ratio' : keys[0] || '';
+    const preferred = ['path_length_ratio', 'makespan', ...keys.filter((k) => k.startsWith('p_at_')).reverse(), 'legs_reached_pct'];
+    sel.value = keys.includes(keep) ? keep : preferred.find((k) => keys.includes(k)) || keys[0] || '';
   }
 
   renderRunsTable() {
@@ -364,7 +370,7 @@ export class StudiesPanel {
           if (s) data.push({ variant, coverage_pct: Number(k.split('@')[1].replace('%', '')), mean: s.mean, std: s.std, lo: s.mean - s.std, hi: s.mean + s.std, n: s.n });
         }
       figures.push(['fig6', 'Path length ratio vs coverage % (mean ± std per variant; paper 002 fig. 6)', data, Plot.plot({
-        width: 560, height: 300, marginLeft: 50, color: { legend: true }, x: { label: 'coverage %' }, y: { label: 'path length ratio', grid: true },
+        width: 420, height: 300, marginLeft: 50, color: { legend: true }, x: { label: 'coverage %' }, y: { label: 'path length ratio', grid: true },
         marks: [
           Plot.areaY(data, { x: 'coverage_pct', y1: 'lo', y2: 'hi', fill: 'variant', fillOpacity: 0.15 }),
           Plot.lineY(data, { x: 'coverage_pct', y: 'mean', stroke: 'variant', marker: 'circle' }),
@@ -380,7 +386,8 @@ export class StudiesPanel {
       const refs = data.some((d) => d.rovers === '4')
         ? REFERENCE.fig8.map((d, k) => ({ ...d, world: refWorld, key: `4 · ${k === 0 ? 'overlap' : 'voronoi'}` })) : [];
       figures.push(['fig8', 'Makespan per team size (box plots per variant; paper 002 fig. 8; ◆ paper 002 fig. 7)', data, Plot.plot({
-        width: 560, height: 320, marginLeft: 50, marginBottom: 70, color: { legend: true }, fx: { label: 'world' },
+        width: 860, height: 320, marginLeft: 50, marginBottom: 70, color: { legend: true },
+        fx: { label: 'world', domain: [...new Set(this.current.configurations.map((c) => c.world))] },
         x: { label: 'rovers · variant', tickRotate: -30 }, y: { label: 'makespan (steps)', grid: true },
         marks: [
           Plot.boxY(data, { fx: 'world', x: key, y: 'makespan', fill: 'variant' }),
@@ -397,7 +404,7 @@ export class StudiesPanel {
           if (s) data.push({ method: variant, distance_m: Number(k.slice(5, -1)), mean: s.mean, std: s.std, lo: s.mean - s.std, hi: s.mean + s.std, n: s.n });
         }
       figures.push(['p-distance', 'Accumulated probability vs distance per route method (mean ± std; paper 001 — it gives no numbers in its text)', data, Plot.plot({
-        width: 560, height: 300, marginLeft: 50, color: { legend: true }, x: { label: 'distance (m)' }, y: { label: 'accumulated probability', grid: true },
+        width: 420, height: 300, marginLeft: 50, color: { legend: true }, x: { label: 'distance (m)' }, y: { label: 'accumulated probability', grid: true },
         marks: [
           Plot.areaY(data, { x: 'distance_m', y1: 'lo', y2: 'hi', fill: 'method', fillOpacity: 0.15 }),
           Plot.lineY(data, { x: 'distance_m', y: 'mean', stroke: 'method', marker: 'circle' }),
@@ -408,8 +415,9 @@ export class StudiesPanel {
     if (metric) {
       const by = { config: (r) => r.config, variant: (r) => this.variant(r._c), world: (r) => r._c.world, rovers: (r) => `${r._c.rovers} rovers` }[group];
       const data = rows.filter((r) => Number.isFinite(r[metric])).map((r) => ({ group: by(r), [metric]: r[metric] }));
+      const groups = new Set(data.map((d) => d.group)).size;
       figures.push(['box', `${metric} per ${group} (box plots)`, data, Plot.plot({
-        width: 560, height: 300, marginLeft: 60, marginBottom: 60, x: { label: group, tickRotate: -30 }, y: { label: metric, grid: true },
+        width: groups > 6 ? 860 : 420, height: 300, marginLeft: 60, marginBottom: 60, x: { label: group, tickRotate: -30 }, y: { label: metric, grid: true },
         marks: [Plot.boxY(data, { x: 'group', y: metric, fill: '#3ad6ff', stroke: '#ccc' })] })]);
     }
     const name = this.current ? `study-${this.current.id}` : 'study';
