@@ -21,6 +21,8 @@
 //   db.runsCsv()   -> runs.csv;  the file at `path` is the downloadable study.sqlite
 //   db.specJson()  -> the spec as stored;  db.runCount() -> runs done
 //
+// The progress callback runs on run()'s calling thread right after a commit, so it may read
+// db.summary() for a partial summary (cost: one pass over the runs table).
 // Threading: StudyRunner::run blocks its caller; the caller's thread is the only one touching the
 // StudyDb (commits, progress callback), the workers only run planners. A server should run it on
 // a thread of its own, with o.threads = the share of cores it grants studies, and may read the

@@ -199,10 +199,10 @@ void StudyDb::attach(const StudySpec& spec) {
   }
 }
 
-std::set<std::int64_t> StudyDb::doneRuns() const {
-  std::set<std::int64_t> out;
-  Stmt s(db_, "SELECT run_index FROM runs");
-  while (s.step()) out.insert(s.integer(0));
+std::vector<std::int64_t> StudyDb::doneRuns() const {
+  std::vector<std::int64_t> out;
+  Stmt s(db_, "SELECT run_index FROM runs ORDER BY run_index");
+  while (s.step()) out.push_back(s.integer(0));
   return out;
 }
 
@@ -313,7 +313,7 @@ void StudyDb::mergeFrom(const std::string& path) {
   exec(db_, "DETACH DATABASE src");
 }
 
-StudySummary StudyDb::summary() const {
+StudySummary StudyDb::summary(bool timing) const {
   StudySummary out;
   const StudySpec spec = parseStudySpec(specJson());
   out.name = spec.name;
@@ -350,6 +350,7 @@ StudySummary StudyDb::summary() const {
       if (!present[c][k] && keys[k].find('@') == std::string::npos && keys[k].rfind("p_at_", 0) != 0) continue;
       out.rows.push_back({name, keys[k], runs[c], summarize(values[c][k])});
     }
+    if (!timing) continue;
     out.rows.push_back({name, "wall_s", runs[c], summarize(values[c][keys.size()])});
     out.rows.push_back({name, "cpu_s", runs[c], summarize(values[c][keys.size() + 1])});
   }
@@ -357,8 +358,13 @@ StudySummary StudyDb::summary() const {
 }
 
 std::string StudyDb::runsCsv() const {
-  const std::vector<std::string> keys = metricKeys();
   std::ostringstream out;
+  runsCsv(out);
+  return out.str();
+}
+
+void StudyDb::runsCsv(std::ostream& out) const {
+  const std::vector<std::string> keys = metricKeys();
   out << "run_index,config_id,config,replicate,seed,status,wall_s,cpu_s,host,rank,version";
   std::string cols = "r.run_index, r.config_id, c.name, r.replicate, r.seed, r.status, r.wall_s, r.cpu_s, r.host, r.rank, r.version";
   for (const auto& k : keys) {
@@ -383,7 +389,6 @@ std::string StudyDb::runsCsv() const {
     }
     out << "\n";
   }
-  return out.str();
 }
 
 void StudyDb::dump(std::ostream& out) const {

@@ -79,16 +79,19 @@ class StudyDb {
   bool hasSpec() const;
   nlohmann::json specJson() const;  // throws when the database holds no study
 
-  std::set<std::int64_t> doneRuns() const;
+  std::vector<std::int64_t> doneRuns() const;  // ascending
   std::size_t runCount() const;
   // One transaction for the whole batch; a run already stored is left as it is.
   void insert(const std::vector<RunRow>& rows);
   // Adds every run of another study database holding the same spec (shards of one study).
   void mergeFrom(const std::string& path);
 
-  StudySummary summary() const;
+  // With `timing`, each configuration also gets wall_s and cpu_s rows (they differ between runs
+  // of the same rows: leave them out to compare summaries).
+  StudySummary summary(bool timing = true) const;
   // runs as CSV: run_index,config,replicate,seed,status,wall_s,cpu_s,host,rank,<metrics...>
   std::string runsCsv() const;
+  void runsCsv(std::ostream& out) const;  // streamed: a big study's CSV need not fit in memory
   // The rows that must be identical in every execution mode (no timing, host or rank), in run
   // order, metrics sorted by key, numbers printed exactly: for identity checks.
   void dump(std::ostream& out) const;

@@ -220,10 +220,13 @@ std::optional<RunRow> StudyRunner::runOne(std::size_t runIndex, const CancelToke
 }
 
 std::vector<std::size_t> StudyRunner::pending(const StudyDb& db, int shardIndex, int shardCount) const {
-  const std::set<std::int64_t> done = db.doneRuns();
+  const std::vector<std::int64_t> done = db.doneRuns();  // ascending: walked beside the indices
   std::vector<std::size_t> out;
-  for (std::size_t i = static_cast<std::size_t>(shardIndex); i < spec_.runCount(); i += static_cast<std::size_t>(shardCount))
-    if (!done.count(static_cast<std::int64_t>(i))) out.push_back(i);
+  auto d = done.begin();
+  for (std::size_t i = static_cast<std::size_t>(shardIndex); i < spec_.runCount(); i += static_cast<std::size_t>(shardCount)) {
+    while (d != done.end() && *d < static_cast<std::int64_t>(i)) ++d;
+    if (d == done.end() || *d != static_cast<std::int64_t>(i)) out.push_back(i);
+  }
   return out;
 }
 

@@ -333,7 +333,8 @@ StudySpec parseStudySpec(const json& spec) {
         c.name = name;
         s.configurations.push_back(std::move(c));
       }
-  if (s.runCount() > 100'000'000ull) bad("runs", "the study would hold more than 100 000 000 runs");
+  // Memory: the runner keeps one index per pending run (8 bytes).
+  if (s.runCount() > kMaxStudyRuns) bad("runs", "the study would hold more than " + std::to_string(kMaxStudyRuns) + " runs");
   return s;
 }
 

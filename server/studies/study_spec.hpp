@@ -102,6 +102,7 @@ std::uint64_t runSeed(std::uint64_t masterSeed, std::uint64_t replicate);
 // Limits that keep a spec's memory bounded.
 constexpr int kMaxRuns = 10'000'000;
 constexpr std::size_t kMaxConfigurations = 10'000;
+constexpr std::size_t kMaxStudyRuns = 10'000'000;  // configurations × runs
 
 // Validates `spec` (see above); throws rover::Error with the offending field's JSON path.
 StudySpec parseStudySpec(const nlohmann::json& spec);

@@ -12,12 +12,17 @@ RUNS=${RUNS:-750}
 TMP=$(mktemp -d)
 trap 'rm -rf "$TMP"' EXIT
 wall() { /usr/bin/time -f %e -o "$TMP/t" "$@" >"$TMP/out" 2>&1; cat "$TMP/t"; }
+# "W s wall, C s CPU": on a loaded machine the CPU seconds compare better than the wall.
+cost() { /usr/bin/time -f "%e %U %S" -o "$TMP/t" "$@" >"$TMP/out" 2>&1; read -r w u s <"$TMP/t"; echo "$w s wall, $(python3 -c "print(round($u + $s, 2))") s CPU"; }
 echo "load: $(uptime)"
 if [ -n "${OLD_BIN:-}" ]; then
-  echo "old sweep laine-fig6 (12000 runs, all cores):  $(wall "$OLD_BIN" sweep --preset laine-fig6) s wall"
+  echo "old sweep laine-fig6 (12000 runs, all cores):  $(cost "$OLD_BIN" sweep --preset laine-fig6)"
 fi
-echo "study laine-fig6 (12000 runs, all cores):       $(wall "$BIN" study run --preset laine-fig6 --quiet --out "$TMP/fig6.sqlite") s wall"
-echo "sweep laine-fig6 (12000 runs, all cores):       $(wall "$BIN" sweep --preset laine-fig6) s wall"
+echo "study laine-fig6 (12000 runs, all cores):       $(cost "$BIN" study run --preset laine-fig6 --quiet --out "$TMP/fig6.sqlite")"
+echo "sweep laine-fig6 (12000 runs, all cores):       $(cost "$BIN" sweep --preset laine-fig6)"
+if [ -n "${OLD_BIN:-}" ]; then
+  echo "old sweep laine-fig6 again:                     $(cost "$OLD_BIN" sweep --preset laine-fig6)"
+fi
 total=$((RUNS * 4))
 one=$(wall "$BIN" study run --preset laine-fig6 --runs "$RUNS" --threads 1 --quiet --out "$TMP/one.sqlite")
 MPIRUN=(mpirun --oversubscribe)

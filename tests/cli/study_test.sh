@@ -95,8 +95,8 @@ fi
 
 # --- resume after kill -9 ------------------------------------------------------------------------
 cat >"$TMP/long.json" <<'EOF'
-{"name": "long", "planner": "coverage", "runs": 2000, "master_seed": 5,
- "worlds": [{"grid": {"rows": 40, "cols": 40}}], "params": {"coverage": 0.95},
+{"name": "long", "planner": "coverage", "runs": 2500, "master_seed": 5,
+ "worlds": [{"grid": {"rows": 50, "cols": 50}}], "params": {"coverage": 0.95},
  "grid": {"pattern": ["spiral", "boustrophedon"]}, "curve_points": 4}
 EOF
 "$BIN" study run --spec "$TMP/long.json" --threads 1 --out "$TMP/killed.sqlite" >"$OUT" 2>"$ERR" &
@@ -112,7 +112,7 @@ kill -9 "$BG" 2>/dev/null
 wait "$BG" 2>/dev/null
 BG=""
 [ "$done_runs" -gt 0 ] || fail "kill -9: the study committed nothing in 30 s"
-[ "$done_runs" -lt 4000 ] || fail "kill -9: the study finished before it was killed (make it longer)"
+[ "$done_runs" -lt 5000 ] || fail "kill -9: the study finished before it was killed (make it longer)"
 run study run --spec "$TMP/long.json" --threads 2 --out "$TMP/killed.sqlite"
 expect_status 0 "study run after kill -9"
 grep -Eq "already in" "$OUT" || fail "resume: no 'already in' count"
@@ -120,7 +120,7 @@ already=$(sed -n 's/.*(\([0-9]*\) already in.*/\1/p' "$OUT")
 [ "${already:-0}" -gt 0 ] || fail "resume: ran everything again (already = ${already:-none})"
 run study run --spec "$TMP/long.json" --threads 2 --out "$TMP/clean.sqlite"
 expect_status 0 "clean study run"
-RUNS=4000
+RUNS=5000
 same_rows "$TMP/clean.sqlite" "$TMP/killed.sqlite" "killed + resumed vs clean"
 pass "a study killed with kill -9 after $done_runs runs resumes with only the missing ones (same rows, no duplicates)"
 

@@ -400,13 +400,13 @@ TEST_CASE("sweep results do not depend on the thread count") {
   json a = json::parse(readFile(one.path / "summary.json"));
   json b = json::parse(readFile(two.path / "summary.json"));
   CHECK(a["rows"] == b["rows"]);
-  CHECK(a["first_seed"] == 7);
+  CHECK(a["master_seed"] == 7);
 }
 
 TEST_CASE("sweep usage errors") {
   std::ostringstream out;
   CHECK_THROWS_WITH_AS(rover::cli::sweepCommand({"--preset", "nope", "--runs", "1"}, out),
-                       "unknown preset 'nope' (laine-fig6, laine-fig8, frontier)", UsageError);
+                       "unknown preset 'nope' (laine-fig6, laine-fig8, frontier, swinton)", UsageError);
   try {
     rover::cli::sweepCommand({"--runs", "1"}, out);
     FAIL("sweep without --preset ran");
