@@ -164,7 +164,7 @@ void addStudyRoutes(http::Router& router, ApiContext& ctx) {
     const studies::StudyState s = studyOr404(ctx, req.params.at("id"));
     Response r;
     r.contentType = "text/csv";
-    r.body = ctx.studies->runsCsv(s.id);
+    r.file = ctx.studies->runsCsvFile(s.id);
     r.headers.emplace_back("Content-Disposition", "attachment; filename=\"study-" + s.id + "-runs.csv\"");
     return r;
   }), routeDoc("The study's runs as CSV: run_index, config, replicate, seed, status, wall_s, cpu_s, host, "

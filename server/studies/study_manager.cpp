@@ -364,11 +364,28 @@ json StudyManager::summary(const std::string& id) const {
   return toJson(db.summary());
 }
 
-std::string StudyManager::runsCsv(const std::string& id) const {
-  const std::string path = databasePath(id);
-  if (path.empty()) return {};
-  StudyDb db = StudyDb::open(path);
-  return db.hasSpec() ? db.runsCsv() : std::string();
+std::string StudyManager::runsCsvFile(const std::string& id) const {
+  // Streamed from the database into a file of the study's folder (temp + rename, so a download
+  // in progress keeps its own copy): memory stays small however many runs the study has.
+  const fs::path out = fs::path(folder(id)) / "runs.csv";
+  const fs::path temp = fs::path(folder(id)) / ("runs.csv." + store::DataDir::newId());
+  {
+    std::ofstream f(temp, std::ios::binary);
+    if (!f) throw std::runtime_error("cannot write " + temp.string());
+    const std::string path = databasePath(id);
+    if (!path.empty()) {
+      StudyDb db = StudyDb::open(path);
+      if (db.hasSpec()) db.runsCsv(f);
+    }
+    f.flush();
+    if (!f) {
+      std::error_code ec;
+      fs::remove(temp, ec);
+      throw store::StorageFull("the study's runs.csv");
+    }
+  }
+  fs::rename(temp, out);
+  return out.string();
 }
 
 std::shared_ptr<StudyStream> StudyManager::stream(const std::string& id) const {

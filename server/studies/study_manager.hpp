@@ -5,8 +5,9 @@
 //
 // Where a study lives: DATA/studies/ID/ holds spec.json (the study document as accepted),
 // state.json (status, times, message: rewritten atomically at each change), study.sqlite (the
-// engine's study database) and, with a launcher, launcher.log. Never a client-chosen path: the id
-// is the server's (DataDir::newId), and specs naming DEM files are refused.
+// engine's study database), runs.csv (the last download) and, with a launcher, launcher.log.
+// Never a client-chosen path: the id is the server's (DataDir::newId), and specs naming DEM files
+// are refused.
 //
 // Priority: a study runs on one thread of its own, one run at a time, and takes its next run only
 // when no mission is waiting and the missions leave a core free (`missionsBusy`), so a mission
@@ -101,7 +102,8 @@ class StudyManager {
   nlohmann::json specJson(const std::string& id) const;
   // The study database's summary (partial while it runs); null when it holds no run yet.
   nlohmann::json summary(const std::string& id) const;
-  std::string runsCsv(const std::string& id) const;
+  // runs.csv written (streamed) into the study's folder; returns its path.
+  std::string runsCsvFile(const std::string& id) const;
   std::string databasePath(const std::string& id) const;  // empty when there is none yet
   std::shared_ptr<StudyStream> stream(const std::string& id) const;
 

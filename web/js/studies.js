@@ -417,7 +417,7 @@ export class StudiesPanel {
       const data = rows.filter((r) => Number.isFinite(r[metric])).map((r) => ({ group: by(r), [metric]: r[metric] }));
       const groups = new Set(data.map((d) => d.group)).size;
       figures.push(['box', `${metric} per ${group} (box plots)`, data, Plot.plot({
-        width: groups > 6 ? 860 : 420, height: 300, marginLeft: 60, marginBottom: 60, x: { label: group, tickRotate: -30 }, y: { label: metric, grid: true },
+        width: groups > 6 ? 860 : 420, height: 300, marginLeft: 80, marginBottom: 70, x: { label: group, tickRotate: -30 }, y: { label: metric, grid: true },
         marks: [Plot.boxY(data, { x: 'group', y: metric, fill: '#3ad6ff', stroke: '#ccc' })] })]);
     }
     const name = this.current ? `study-${this.current.id}` : 'study';
