@@ -306,6 +306,17 @@ Response fileResponse(const std::string& path, const std::string& type) {
 
 }  // namespace
 
+
+Response submitMission(ApiContext& ctx, const json& body) {
+  missions::MissionJob job = buildMission(ctx, body);
+  job.record.id = store::DataDir::newId();
+  job.record.createdAt = store::nowIso();
+  const std::string id = job.record.id;
+  ctx.missions.submit(std::move(job));
+  return Response::json(202, missionJson(*ctx.db.getMission(id)));
+}
+http::RouteOptions routeDoc(const std::string& summary, bool blocking) { return doc(summary, blocking); }
+
 void addApiRoutes(http::Router& router, ApiContext& ctx) {
   http::RouteOptions open;
   open.requireAuth = false;
@@ -527,13 +538,7 @@ void addApiRoutes(http::Router& router, ApiContext& ctx) {
 
   // --- missions ---
   router.add("POST", "/api/missions", guarded([&ctx](const Request& req) {
-    json body = rj::parseJsonLimited(req.body, rj::kMissionJsonLimits);
-    missions::MissionJob job = buildMission(ctx, body);
-    job.record.id = store::DataDir::newId();
-    job.record.createdAt = store::nowIso();
-    const std::string id = job.record.id;
-    ctx.missions.submit(std::move(job));
-    return Response::json(202, missionJson(*ctx.db.getMission(id)));
+    return submitMission(ctx, rj::parseJsonLimited(req.body, rj::kMissionJsonLimits));
   }), doc("Launch a mission {map, pdm?, planner, rovers:[{x,y,heading}], params:{...}, pace?}; "
                    "validated fully, then queued (202).", onPool));
 
@@ -633,6 +638,8 @@ void addApiRoutes(http::Router& router, ApiContext& ctx) {
     if (!s) throw ApiError(404, "not_found", "no mission '" + req.params.at("id") + "'", "id");
     return s->subscribe(std::move(c));
   }, ws);
+
+  if (ctx.studies) addStudyRoutes(router, ctx);
 }
 
 http::Handler guardedRoute(http::Handler handler) { return guarded(std::move(handler)); }

@@ -9,6 +9,7 @@
 #include "server/api/map_catalog.hpp"
 #include "server/http/router.hpp"
 #include "server/missions/mission_manager.hpp"
+#include "server/studies/study_manager.hpp"
 
 namespace rover::api {
 
@@ -21,6 +22,7 @@ struct ApiContext {
   MapCatalog& maps;
   missions::MissionManager& missions;
   const PlannerRegistry& planners;
+  studies::StudyManager* studies = nullptr;  // null: no /api/studies routes
   std::string version = "0.1.0";
 
   // Serialized GET /api/maps/{id} bodies: the hottest read, changed only by the writes below.
@@ -48,11 +50,16 @@ struct ApiContext {
   }
 };
 
-// Registers every /api route on `router`.
+// Registers every /api route on `router` (the study routes too when ctx.studies is set).
 void addApiRoutes(http::Router& router, ApiContext& ctx);
 // `handler` with the API's error mapping (core Error -> 400 naming its field, JSON type errors ->
 // 400, anything else -> 500 without details), for routes registered outside routes.cpp.
 http::Handler guardedRoute(http::Handler handler);
+// /api/studies (study_routes.cpp), with the handler wrapper and doc() of routes.cpp.
+void addStudyRoutes(http::Router& router, ApiContext& ctx);
+http::RouteOptions routeDoc(const std::string& summary, bool blocking = false);
+// POST /api/missions with a parsed body: validated, queued, answered 202 (throws ApiError).
+http::Response submitMission(ApiContext& ctx, const nlohmann::json& body);
 // The OpenAPI 3 document of the router's routes.
 nlohmann::json openApiDocument(const http::Router& router, const std::string& version);
 

@@ -59,6 +59,9 @@ int serveCommand(const std::vector<std::string>& argv, std::ostream& out) {
   a.option("min-upload-kibps", "K", "16",
            "Slowest accepted request body: K KiB/s averaged over any 10 s (slower: 408).");
   a.option("cors", "ORIGIN", "", "Allow cross-origin requests from ORIGIN (off by default).");
+  a.option("study-launcher", "CMD", "",
+           "Run each study as CMD + `roverplan study run --spec F --out DB` (e.g. \"mpirun -np 16 "
+           "--hostfile H\"; split into words like a shell, run without one); default: in the server.");
   a.flag("quiet", "Do not log one line per request.");
   if (!a.parse(argv)) {
     out << a.help();
@@ -116,8 +119,20 @@ int serveCommand(const std::vector<std::string>& argv, std::ostream& out) {
   if (dir.startedFull() && fullDisk.empty()) fullDisk = "the data directory's disk is full";
   PlannerRegistry planners = makeBuiltinRegistry();
   missions::MissionManager manager(db, dir, planners, workers, queue, missionMemory);
+  std::vector<std::string> launcher;
+  try {
+    launcher = studies::splitCommandLine(a.str("study-launcher", ""));
+  } catch (const std::exception& e) {
+    throw UsageError(std::string("--study-launcher: ") + e.what());
+  }
+  // Studies run below the missions: a study takes its next run only when no mission waits and the
+  // running missions leave a core free.
+  const unsigned cores = hardwareThreads();
+  studies::StudyManager studyManager(
+      dir, [&manager, cores] { return manager.queued() > 0 || manager.running() >= cores; }, launcher);
   http::Router router;
   api::ApiContext ctx{db, dir, maps, manager, planners};
+  ctx.studies = &studyManager;
   api::addApiRoutes(router, ctx);
   http::HttpServer server(config, router);
   try {
@@ -129,7 +144,8 @@ int serveCommand(const std::vector<std::string>& argv, std::ostream& out) {
   out << "roverplan serving on http://" << shownHost << ":" << server.port() << "/  (data: "
       << std::filesystem::absolute(dir.root()).string() << ", " << workers << " workers, "
       << missions::formatBytes(missionMemory) << " mission memory"
-      << (config.token.empty() ? "" : ", token required") << ")" << std::endl;
+      << (config.token.empty() ? "" : ", token required")
+      << (launcher.empty() ? "" : ", studies launched by " + launcher[0]) << ")" << std::endl;
   if (config.webRoot.empty())
     out << "warning: no web page found (pass --web DIR); serving the API only" << std::endl;
   if (!fullDisk.empty()) out << "warning: " << fullDisk << std::endl;
@@ -140,6 +156,7 @@ int serveCommand(const std::vector<std::string>& argv, std::ostream& out) {
   sigwait(&stopSignals, &sig);
   out << "stopping (" << (sig == SIGINT ? "SIGINT" : "SIGTERM") << ")..." << std::endl;
   server.stop();
+  studyManager.stop();  // an unfinished study resumes at the next start
   manager.stop();
   out << "stopped" << std::endl;
   return 0;

@@ -8,6 +8,7 @@ import { MissionForm } from './mission_form.js';
 import { MissionView } from './mission_view.js';
 import { PdmEditor } from './pdm_editor.js';
 import { RunsPanel } from './runs.js';
+import { StudiesPanel } from './studies.js';
 import { counters, state } from './state.js';
 import { $, report, setErrorReporter } from './util.js';
 import { View3D } from './view3d.js';
@@ -55,8 +56,14 @@ const runs = new RunsPanel({
     showTab('mission');
   },
 });
+const studies = new StudiesPanel({
+  onMission: async (mission) => {
+    showTab('runs');
+    await launched(mission);
+  },
+});
 const view3d = new View3D({ container: $('view3d'), message: $('view3d-message'), layers, missionView });
-window.__roverplanApp = { view, layers, missionView, pdmEditor, missionForm, mapsPanel, zoneEditor, runs, view3d, state };
+window.__roverplanApp = { view, layers, missionView, pdmEditor, missionForm, mapsPanel, zoneEditor, runs, studies, view3d, state };
 
 async function selectMap(id) {
   if (!id) {
@@ -166,7 +173,7 @@ state.on('tool', (tool) => {
 });
 state.on('pdm-selected', (id) => layers.setPdm(id));
 
-const TABS = ['maps', 'pdm', 'mission', 'runs'];
+const TABS = ['maps', 'pdm', 'mission', 'runs', 'studies'];
 function showTab(name) {
   for (const t of TABS) {
     const active = t === name;
@@ -181,6 +188,9 @@ function showTab(name) {
   else state.setTool('pan');
   if (name === 'mission' && !missionForm.placing) state.setTool('pan');
   if (name === 'runs') runs.reload();
+  // The study view covers the map and the dock while the Studies tab is open.
+  $('studies-view').hidden = name !== 'studies';
+  if (name === 'studies') studies.activate(state.planners).catch(report);
   view.invalidate();
 }
 for (const t of TABS) {

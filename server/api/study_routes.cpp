@@ -1,0 +1,227 @@
+// /api/studies (issue 12): launch, list, watch, download and cancel studies; a run opened as a
+// mission. The studies themselves are run by studies::StudyManager.
+#include <cmath>
+
+#include "core/common/error.hpp"
+#include "server/api/routes.hpp"
+#include "server/json/json_edge.hpp"
+#include "server/json/pdm_json.hpp"
+#include "server/json/plan_json.hpp"
+#include "server/problems/problem_builder.hpp"
+#include "server/studies/studies.hpp"
+
+namespace rover::api {
+
+using http::ApiError;
+using http::Request;
+using http::Response;
+using nlohmann::json;
+namespace rj = rover::json;
+
+namespace {
+
+// A study document is small (a grid of parameter values); 64 KiB as a mission request.
+constexpr rj::JsonLimits kStudyJsonLimits{std::size_t{64} << 10, 64};
+
+studies::StudyState studyOr404(ApiContext& ctx, const std::string& id) {
+  auto s = ctx.studies->get(id);
+  if (!s) throw ApiError(404, "not_found", "no study '" + id + "'", "id");
+  return *s;
+}
+
+bool sameTerrain(const maps::SyntheticTerrainParams& a, const maps::SyntheticTerrainParams& b) {
+  return a.preset == b.preset && a.size == b.size && a.cellSize == b.cellSize && a.seed == b.seed &&
+         a.craterDensity == b.craterDensity && a.rockDensity == b.rockDensity && a.relief == b.relief;
+}
+
+// The mission a run was, for POST /api/missions, or why there is none. A run on the synthetic Mars
+// world of the default map (mars, 600 cells of 0.25 m, seed 1: the map `serve` creates) is a
+// mission on that map: the same parameters, the run's seed, the same starts (team: the formation;
+// coverage: the random valid starts of the run's seed on the same grid world) and, for a team run,
+// its random PDM (G components of the run's seed: pdm::randomGaussians discretised on the cells
+// with data, as the study's problem builder does). Grid worlds are random obstacle grids drawn per
+// run: no stored map holds one.
+json runMission(ApiContext& ctx, const studies::StudySpec& spec, std::size_t runIndex) {
+  const studies::Configuration& c = spec.configOf(runIndex);
+  const studies::WorldSpec& world = spec.worlds[c.world];
+  const std::uint64_t seed = studies::runSeed(spec.masterSeed, spec.replicateOf(runIndex));
+  const bool team = c.point.planner == "team-search" || c.point.planner == "hybrid";
+  json out{{"run_index", runIndex}, {"config", c.name}, {"planner", c.point.planner}, {"world", world.name},
+           {"rovers", c.rovers}, {"seed", seed}, {"replicate", spec.replicateOf(runIndex)}};
+  json params = json::object();
+  for (const auto& [k, v] : c.point.params) params[k] = rj::toJson(v);
+  out["params"] = params;
+  const auto unavailable = [&](const std::string& why) {
+    out["mission"] = nullptr;
+    out["mission_unavailable"] = why;
+    return out;
+  };
+  if (world.kind == studies::WorldSpec::Kind::Grid)
+    return unavailable("this run's world is a random obstacle grid (" + world.name +
+                       ", drawn from the run's seed); missions run on stored maps, so it cannot be opened as one");
+  if (world.kind != studies::WorldSpec::Kind::Terrain || !sameTerrain(world.terrain, maps::SyntheticTerrainParams{}))
+    return unavailable("only runs on the synthetic Mars world of the default map (mars, 600 cells of 0.25 m, "
+                       "seed 1) can be opened as missions");
+  std::string mapId;
+  for (const auto& m : ctx.db.listMaps())
+    if (m.name.rfind("Default: synthetic Mars", 0) == 0) mapId = m.id;
+  if (mapId.empty()) return unavailable("the server's default map (synthetic Mars, seed 1) was deleted");
+  ParamSet runParams = c.point.params;
+  const Planner& planner = ctx.planners.get(c.point.planner);
+  auto dem = ctx.maps.demAtCell(mapId, 0);
+  std::vector<RoverStart> starts;
+  if (team) {
+    runParams["seed"] = static_cast<std::int64_t>(seed);
+    params["seed"] = seed;
+    starts = problems::formationStarts(*dem, runParams, c.rovers);
+  } else {
+    const PlanningProblem problem =
+        problems::problemOnMap(problems::groundOnMap(c.point.planner, dem->geometry(), runParams), dem);
+    starts = problems::randomValidStarts(planner, problem, runParams, c.rovers, seed);
+  }
+  json rovers = json::array();
+  for (const auto& r : starts)
+    rovers.push_back({{"x", r.position.x()}, {"y", r.position.y()}, {"heading", r.heading * 180.0 / M_PI}});
+  out["mission"] = {{"map", mapId}, {"planner", c.point.planner}, {"rovers", rovers}, {"params", params},
+                    {"name", spec.name + " · " + c.name + " · run " + std::to_string(runIndex)}};
+  if (team && spec.pdmComponents > 0) out["pdm_random"] = {{"components", spec.pdmComponents}, {"seed", seed}};
+  return out;
+}
+
+std::size_t runIndexOf(const Request& req, const studies::StudySpec& spec) {
+  const std::string& text = req.params.at("run");
+  char* end = nullptr;
+  const double v = std::strtod(text.c_str(), &end);
+  if (text.empty() || *end != '\0' || !(v >= 0) || v >= static_cast<double>(spec.runCount()) || std::trunc(v) != v)
+    throw ApiError(404, "not_found", "run must be an index in [0, " + std::to_string(spec.runCount()) + ")", "run");
+  return static_cast<std::size_t>(v);
+}
+
+json configurationsJson(const studies::StudySpec& spec) {
+  json out = json::array();
+  for (const auto& c : spec.configurations) {
+    json params = json::object();
+    for (const auto& [k, v] : c.point.params) params[k] = rj::toJson(v);
+    out.push_back({{"id", c.id}, {"name", c.name}, {"planner", c.point.planner},
+                   {"world", spec.worlds[c.world].name}, {"rovers", c.rovers}, {"params", params}});
+  }
+  return out;
+}
+
+}  // namespace
+
+void addStudyRoutes(http::Router& router, ApiContext& ctx) {
+  router.add("GET", "/api/studies/presets", guardedRoute([](const Request&) {
+    json out = json::array();
+    for (const auto& name : studies::presetNames()) {
+      studies::PresetOptions o;
+      o.hirisePath = "";  // the server reads no DEM file a request names
+      json spec = studies::presetSpecJson(name, o);
+      out.push_back({{"name", name}, {"spec", spec}});
+    }
+    return Response::json(200, out);
+  }), routeDoc("Study presets (laine-fig6, laine-fig8, frontier, swinton) as study documents."));
+
+  router.add("POST", "/api/studies", guardedRoute([&ctx](const Request& req) {
+    const json body = rj::parseJsonLimited(req.body, kStudyJsonLimits);
+    const studies::StudyState s = ctx.studies->submit(body);
+    return Response::json(202, studies::toJson(s));
+  }), routeDoc("Launch a study: a study document (see README \"Studies\") or {\"preset\": NAME, \"runs\": N, "
+               "\"master_seed\"?}; validated (400 naming the field), stored and queued (202). At most " +
+               std::to_string(studies::kMaxServerRuns) + " runs per study, " + std::to_string(studies::kMaxActive) +
+               " studies queued or running, " + std::to_string(studies::kMaxStored) + " kept (429).", true));
+
+  router.add("GET", "/api/studies", guardedRoute([&ctx](const Request&) {
+    json out = json::array();
+    for (const auto& s : ctx.studies->list()) out.push_back(studies::toJson(s));
+    return Response::json(200, out);
+  }), routeDoc("List studies, newest first: status, runs done/total, ETA."));
+
+  router.add("GET", "/api/studies/{id}", guardedRoute([&ctx](const Request& req) {
+    const studies::StudyState s = studyOr404(ctx, req.params.at("id"));
+    json j = studies::toJson(s);
+    const json spec = ctx.studies->specJson(s.id);
+    j["spec"] = spec;
+    j["configurations"] = configurationsJson(studies::parseStudySpec(spec));
+    j["summary"] = ctx.studies->summary(s.id);
+    return Response::json(200, j);
+  }), routeDoc("One study: its document, configurations, status and summary table (mean, std, quartiles "
+               "per configuration and metric; partial while it runs).", true));
+
+  router.add("DELETE", "/api/studies/{id}", guardedRoute([&ctx](const Request& req) {
+    const std::string id = req.params.at("id");
+    switch (ctx.studies->remove(id)) {
+      case studies::StudyManager::Removal::NotFound: throw ApiError(404, "not_found", "no study '" + id + "'", "id");
+      case studies::StudyManager::Removal::Cancelling:
+        return Response::json(202, {{"id", id}, {"status", "cancelling"}});
+      case studies::StudyManager::Removal::Deleted: break;
+    }
+    return Response::json(200, {{"deleted", id}});
+  }), routeDoc("Cancel a queued or running study (202; the runs done are kept), or delete an ended one with "
+               "its database (200).", true));
+
+  router.add("GET", "/api/studies/{id}/runs.csv", guardedRoute([&ctx](const Request& req) {
+    const studies::StudyState s = studyOr404(ctx, req.params.at("id"));
+    Response r;
+    r.contentType = "text/csv";
+    r.file = ctx.studies->runsCsvFile(s.id);
+    r.headers.emplace_back("Content-Disposition", "attachment; filename=\"study-" + s.id + "-runs.csv\"");
+    return r;
+  }), routeDoc("The study's runs as CSV: run_index, config, replicate, seed, status, wall_s, cpu_s, host, "
+               "rank, then one column per metric.", true));
+
+  router.add("GET", "/api/studies/{id}/study.sqlite", guardedRoute([&ctx](const Request& req) {
+    const studies::StudyState s = studyOr404(ctx, req.params.at("id"));
+    const std::string path = ctx.studies->databasePath(s.id);
+    if (path.empty()) throw ApiError(409, "not_ready", "study " + s.id + " has no database yet", "id");
+    Response r;
+    r.file = path;
+    r.contentType = "application/vnd.sqlite3";
+    r.headers.emplace_back("Content-Disposition", "attachment; filename=\"study-" + s.id + ".sqlite\"");
+    return r;
+  }), routeDoc("The study database (SQLite, WAL: complete once the study has ended): spec, configs, runs, "
+               "curves; `roverplan study summary` reads it."));
+
+  router.add("GET", "/api/studies/{id}/runs/{run}", guardedRoute([&ctx](const Request& req) {
+    const studies::StudyState s = studyOr404(ctx, req.params.at("id"));
+    const studies::StudySpec spec = studies::parseStudySpec(ctx.studies->specJson(s.id));
+    return Response::json(200, runMission(ctx, spec, runIndexOf(req, spec)));
+  }), routeDoc("One run: its configuration, parameters, seed and the mission it was (or why it has none: "
+               "mission_unavailable).", true));
+
+  router.add("POST", "/api/studies/{id}/runs/{run}/mission", guardedRoute([&ctx](const Request& req) {
+    const studies::StudyState s = studyOr404(ctx, req.params.at("id"));
+    const studies::StudySpec spec = studies::parseStudySpec(ctx.studies->specJson(s.id));
+    json run = runMission(ctx, spec, runIndexOf(req, spec));
+    if (run["mission"].is_null())
+      throw ApiError(409, "not_a_mission", run["mission_unavailable"].get<std::string>(), "run");
+    json body = run["mission"];
+    if (run.contains("pdm_random")) {
+      // The run's PDM as a PDM of the map, as POST /api/maps/{map}/pdms {random, seed} makes it.
+      const std::string mapId = body["map"].get<std::string>();
+      const int g = run["pdm_random"]["components"].get<int>();
+      const std::uint64_t seed = run["pdm_random"]["seed"].get<std::uint64_t>();
+      auto comps = pdm::randomGaussians(ctx.maps.get(mapId)->dem.geometry(), g, seed);
+      json meta{{"kind", "random"}, {"seed", seed}};
+      meta["components"] = rj::toJson(comps)["components"];
+      const store::PdmRecord p = ctx.maps.createPdm(
+          mapId, "study run " + std::to_string(run["run_index"].get<std::size_t>()) + " (G = " + std::to_string(g) + ")",
+          comps, meta);
+      ctx.invalidateMap(mapId);
+      body["pdm"] = p.id;
+    }
+    return submitMission(ctx, body);
+  }), routeDoc("Open a run as a mission: the same map, planner, parameters, seed, starts (and PDM, created on "
+               "the map) queued as a new mission (202, the mission); 409 not_a_mission when the run's world "
+               "is no stored map.", true));
+
+  http::RouteOptions ws = routeDoc("WebSocket: {\"type\":\"snapshot\"}, then progress frames (runs done/total, "
+                                   "ETA, a partial summary every few seconds), then {\"type\":\"done\"}.");
+  router.addWebSocket("/api/studies/{id}/stream", [&ctx](const Request& req, std::shared_ptr<http::WsConnection> c) {
+    auto s = ctx.studies->stream(req.params.at("id"));
+    if (!s) throw ApiError(404, "not_found", "no study '" + req.params.at("id") + "'", "id");
+    return s->subscribe(std::move(c));
+  }, ws);
+}
+
+}  // namespace rover::api
