@@ -50,7 +50,5 @@ struct ApiContext {
 
 // Registers every /api route on `router`.
 void addApiRoutes(http::Router& router, ApiContext& ctx);
-// The OpenAPI 3 document of the router's routes.
-nlohmann::json openApiDocument(const http::Router& router, const std::string& version);
 
 }  // namespace rover::api

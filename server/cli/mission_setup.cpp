@@ -46,7 +46,8 @@ MissionSetup readMissionOptions(const ArgParser& a) {
     throwAsUsage(e);
   }
   s.demPath = a.str("dem", "");
-  maps::LoadedDem loaded = loadDemOrFail(s.demPath, readDemOptions(a, "cell", 0));
+  const maps::DemImport import = readDemImport(a, "cell");
+  maps::LoadedDem loaded = loadDemOrFail(s.demPath, import.load);
   auto dem = std::make_shared<terrain::Dem>(std::move(loaded.dem));
   const PdmOptionNames names = missionPdmNames();
   Raster<float> pdm = readPdmOptions(a, *dem, names, true);
@@ -61,7 +62,8 @@ MissionSetup readMissionOptions(const ArgParser& a) {
     s.pdmSource = "uniform";
   }
   s.problem = problems::problemOnMap(problems::groundOnMap(s.plannerName, dem->geometry(), s.params), dem,
-                                     pdm.empty() ? nullptr : std::make_shared<Raster<float>>(std::move(pdm)));
+                                     pdm.empty() ? nullptr : std::make_shared<Raster<float>>(std::move(pdm)),
+                                     import.body);
 
   std::vector<RoverStart> starts = readStartOption(a);
   if (starts.empty()) {
