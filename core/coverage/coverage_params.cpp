@@ -102,8 +102,8 @@ ParamTable<P> buildTable() {
           &P::coverage);
   t.group("cost");
   addReal(t,
-          realParam("alpha", 0.0, 1.0, "",
-               "Weight of static + visited cost (paper 000 eq. 3); alpha + beta = 1."),
+          common(realParam("alpha", 0.0, 1.0, "",
+               "Weight of static + visited cost (paper 000 eq. 3); alpha + beta = 1.")),
           &P::alpha);
   addReal(t, common(realParam("beta", 0.0, 1.0, "", "Weight of the height difference |Δh| (paper 000 eq. 3).")),
           &P::beta);
@@ -154,9 +154,9 @@ ParamTable<P> buildTable() {
                             "move; 0 with heading_noise 0 = the rover knows its pose exactly.")),
                   &LocalisationModel::distanceNoisePct);
   addLocalisation(t,
-                  realParam("heading_noise", 0.0, 45.0, "deg",
+                  common(realParam("heading_noise", 0.0, 45.0, "deg",
                             "Odometry drift: std of the heading error each move adds (it "
-                            "accumulates, like the dead-reckoned heading)."),
+                            "accumulates, like the dead-reckoned heading).")),
                   &LocalisationModel::headingNoiseDeg);
   addLocalisation(t,
                   realParam("slip_per_deg", 0.0, 10.0, "%/deg",
