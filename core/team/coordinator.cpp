@@ -147,20 +147,36 @@ class Coordinator {
       double heading = task.start.heading;
       for (int i = 0; i < static_cast<int>(task.legs.size()); ++i) {
         const Eigen::Vector2d goal = legGoal(task.legs[i]);
-        if (task.legs[i].via.empty()) jobs.push_back({k, i, start, heading});
+        jobs.push_back({k, i, start, heading});
         if ((goal - start).norm() > 1e-9) heading = std::atan2(goal.y() - start.y(), goal.x() - start.x());
         start = goal;
       }
     }
+    // A via leg (hybrid) whose fixed points a rover may drive is not planned; one that it may not
+    // is planned here too, in parallel, instead of one after another while coordinating.
+    std::vector<char> planned(jobs.size(), 0);
     parallelFor(jobs.size(), p_.threads, [&](std::size_t j) {
       const Job& job = jobs[j];
+      const Leg& leg = tasks_[job.rover].legs[job.leg];
+      if (!leg.via.empty() && viaValid(job.start, leg)) return;
       Ahead& a = ahead_[job.rover][job.leg];
       a.start = job.start;
-      a.path = planner_.plan(job.start, job.heading, tasks_[job.rover].legs[job.leg].goal,
+      a.path = planner_.plan(job.start, job.heading, legGoal(leg),
                              seedFor(seed_, job.rover, job.leg, 0, 0), {}, cancel_);
       a.planned = true;
+      planned[j] = 1;
     });
-    out_.rrtCalls += static_cast<int>(jobs.size());
+    out_.rrtCalls += static_cast<int>(std::count(planned.begin(), planned.end(), 1));
+  }
+
+  // Every straight move of a via leg's fixed points, from `from`, is one the rover may drive.
+  bool viaValid(const Eigen::Vector2d& from, const Leg& leg) const {
+    Eigen::Vector2d a = from;
+    for (const auto& v : leg.via) {
+      if (!planner_.edgeValid(a, v)) return false;
+      a = v;
+    }
+    return true;
   }
 
   // The path of one try: the fixed points of a via leg (first try, if every edge is valid), the
@@ -169,20 +185,14 @@ class Coordinator {
                      const std::vector<KeepOutZone>& keepOut) {
     const Leg& leg = tasks_[k].legs[i];
     const Eigen::Vector2d from = here(k);
-    if (attempt == 0 && piece == 0 && !leg.via.empty()) {
+    if (attempt == 0 && piece == 0 && !leg.via.empty() && viaValid(from, leg)) {
       PathResult r;
       r.waypoints.push_back(from);
-      bool valid = true;
-      for (const auto& v : leg.via) {
-        valid = valid && planner_.edgeValid(r.waypoints.back(), v);
-        r.waypoints.push_back(v);
-      }
-      if (valid) {
-        r.status = PathStatus::Exact;
-        return r;
-      }
+      r.waypoints.insert(r.waypoints.end(), leg.via.begin(), leg.via.end());
+      r.status = PathStatus::Exact;
+      return r;
     }
-    if (attempt == 0 && piece == 0 && leg.via.empty()) {
+    if (attempt == 0 && piece == 0) {
       const Ahead& a = ahead_[k][i];
       if (a.planned && a.path.hasPath() &&
           (a.start - from).norm() <= p_.controller.acceptanceRadius + 0.05) {
@@ -400,8 +410,12 @@ class Coordinator {
   // The rover stays where its last leg left it for the rest of the mission. If a higher-priority
   // rover still moving would pass too close, it drives out of the way (ours): to the first spot,
   // in rings of growing radius around it, that it can reach and stay at without a conflict.
+  // It also drives off when it stands near a goal or fixed point of a lower-priority rover's
+  // leg: parked there for good, it would block that leg for ever (hybrid missions on the default
+  // map: 14 of 18 skipped legs were the team mates' last coverage moves round the first rover's
+  // end).
   void park(int k) {
-    if (!firstConflict(k, {}, true)) return;
+    if (!firstConflict(k, {}, true) && !blocksLaterGoal(k, here(k))) return;
     const Eigen::Vector2d from = here(k);
     // Candidates: first back along its own trajectory (ground it has driven, so reachable even
     // in a dead end), every 2 m up to 40 m; then rings of growing radius around it.
@@ -414,7 +428,7 @@ class Coordinator {
       spots.emplace_back(it->x, it->y);
       next += 2.0;
     }
-    for (double radius : {1.5, 2.5, 3.5, 5.0, 7.0})
+    for (double radius : {1.5, 2.5, 3.5, 5.0, 7.0, 10.0, 14.0})
       for (int d = 0; d < 8; ++d) {
         const double a = d * std::numbers::pi / 4;
         spots.push_back(from + radius * Eigen::Vector2d(std::cos(a), std::sin(a)));
@@ -425,7 +439,7 @@ class Coordinator {
     for (int pass = 0; pass < 2; ++pass)
       for (const Eigen::Vector2d& spot : spots) {
         if (cancelled()) return;
-        if (!planner_.canStop(spot)) continue;
+        if (!planner_.canStop(spot) || blocksLaterGoal(k, spot)) continue;
         const std::uint64_t seed = seedFor(seed_ ^ 0x9a4cull, k, attempt, 0, 0);
         ++attempt;
         ++out_.rrtCalls;
@@ -446,6 +460,19 @@ class Coordinator {
         out_.legs.push_back(rec);
         return;
       }
+  }
+
+  // `p` is closer than the safety distance plus both acceptance circles to a goal or fixed point
+  // of a lower-priority rover's leg (the spacing the task builder keeps between goals).
+  bool blocksLaterGoal(int k, const Eigen::Vector2d& p) const {
+    const double apart = p_.safetyDistance + 2 * p_.controller.acceptanceRadius;
+    for (std::size_t j = static_cast<std::size_t>(k) + 1; j < tasks_.size(); ++j)
+      for (const Leg& leg : tasks_[j].legs) {
+        if ((leg.goal - p).norm() < apart) return true;
+        for (const auto& v : leg.via)
+          if ((v - p).norm() < apart) return true;
+      }
+    return false;
   }
 
   void runLeg(int k, int i) {

@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <numbers>
 
+#include "core/team/motion_series.hpp"
 #include "core/team/team_entry.hpp"
 
 namespace rover::team {
@@ -92,8 +93,11 @@ PlanResult toPlanResult(const TeamMissionResult& r, const TeamPlannerParams& p, 
   out.metrics.push_back({"warnings", static_cast<double>(out.warnings.size()), "warnings"});
   const double period = p.mission.coordination.controller.samplePeriod;
   const auto every = static_cast<std::size_t>(std::max(1L, std::lround(1.0 / period)));
+  double energy = 0;
   for (std::size_t k = 0; k < r.plan.trajectories.size(); ++k) {
     const Trajectory& t = r.plan.trajectories[k];
+    const double roverEnergy = driveEnergyJ(t, p.mission.coordination.model);
+    energy += roverEnergy;
     const AttitudeExceedance e = attitudeExceedance(t, p.mission.exceedanceLimit);
     int reached = 0, skipped = 0, shortLegs = 0, replans = 0, waits = 0;
     for (const auto& leg : r.plan.legs) {
@@ -110,6 +114,7 @@ PlanResult toPlanResult(const TeamMissionResult& r, const TeamPlannerParams& p, 
     track.points = decimate(t, every);  // one point a second of the 10 Hz trajectory
     track.metrics = {{"trajectory_m", trajectoryLength(t), "m"},
                      {"time_s", t.samples.empty() ? 0.0 : t.samples.back().time, "s"},
+                     {"energy_j", roverEnergy, "J"},
                      {"samples", static_cast<double>(e.samples), "samples"},
                      {"exceedances", static_cast<double>(e.count), "samples"},
                      {"targets_reached", static_cast<double>(reached), "legs"},
@@ -120,10 +125,12 @@ PlanResult toPlanResult(const TeamMissionResult& r, const TeamPlannerParams& p, 
     out.tracks.push_back(std::move(track));
     out.overlays.push_back({"path", static_cast<int>(k), r.plan.paths[k]});
     attitudeSeries(t, every, static_cast<int>(k), out.series);
+    motionSeries(t, every, static_cast<int>(k), p.mission.coordination.model, out.series);
   }
   Polyline route{"route", -1, {r.route.startCentre}};
   route.points.insert(route.points.end(), r.route.centres.begin(), r.route.centres.end());
   out.overlays.insert(out.overlays.begin(), std::move(route));
+  out.metrics.push_back({"energy_j", energy, "J"});  // motion_series.hpp: paper 000 eq. 5
   out.metrics.push_back({"attitude_limit_deg", p.mission.exceedanceLimit * 180.0 / std::numbers::pi, "deg"});
   out.series.push_back(curveSeries("probability_vs_distance_team", "mean distance per rover (m)", r.curves.team));
   out.series.push_back(curveSeries("probability_vs_distance_single", "distance (m)", r.curves.single));

@@ -203,6 +203,60 @@ TEST_CASE("stages: the hybrid task builder adds coverage moves inside the footpr
   }
 }
 
+TEST_CASE("stages: team mates' goals stay apart by the safety distance plus both acceptance circles") {
+  // Five rovers in a 2.5 m footprint: the formation slots are 0.83 m apart, so the builder moves
+  // them. Rovers may stop anywhere in their acceptance circle, so goals only the safety distance
+  // apart could leave two rovers closer than it, and a rover parked there for good would block
+  // its team mate's leg for ever (the old rule gave pairs 1.0–1.5 m apart here).
+  const terrain::Dem dem = demFromPicture(std::vector<std::string>(12, std::string(12, '.')));
+  const auto classes = terrain::traversability(dem).classes;
+  TeamMissionParams p;
+  p.footprint = 2.5;
+  const std::vector<Pose> starts{{1, 0.5, 0}, {3, 0.5, 0}, {5, 0.5, 0}, {7, 0.5, 0}, {9, 0.5, 0}};
+  const std::vector<RoverTask> tasks =
+      SlotTasks(dem, classes, p, nullptr).build(starts, routeThrough({{6, 6}}), nullptr);
+  const double apart = p.coordination.safetyDistance + 2 * p.coordination.controller.acceptanceRadius;
+  std::vector<Eigen::Vector2d> goals;
+  for (const RoverTask& t : tasks)
+    for (const Leg& leg : t.legs) goals.push_back(leg.goal);
+  REQUIRE(goals.size() >= 3);
+  for (std::size_t a = 0; a < goals.size(); ++a)
+    for (std::size_t b = a + 1; b < goals.size(); ++b) CHECK((goals[a] - goals[b]).norm() >= apart - 1e-9);
+}
+
+TEST_CASE("stages: every fixed point of a hybrid leg is ground a rover may stop on") {
+  // Coverage cells are free when most of their DEM cells are: the 1 m blocks in the footprint
+  // round (6, 6) leave cells whose centres sit on a step. Each fixed point moves off it (or is
+  // left out), so a hybrid leg never ends on a goal no rover may stop on.
+  const terrain::Dem dem = demFromPicture({
+      "............",
+      "............",
+      "............",
+      "....#..#....",  // y 8
+      "............",
+      "......#.....",  // y 6
+      "....#...#...",
+      "............",  // y 4
+      "............",
+      "............",
+      "............",
+      "............",
+  });
+  const auto classes = terrain::traversability(dem).classes;
+  TeamMissionParams p;
+  const TerrainEdgeModel model = wholeMapModel(dem, classes, p.coordination.rrt);
+  const std::vector<RoverTask> tasks =
+      HybridTasks(dem, classes, p, nullptr).build({{1, 1, 0}, {2.5, 1, 0}}, routeThrough({{6, 6}}), nullptr);
+  std::size_t fixed = 0;
+  for (const RoverTask& t : tasks)
+    for (const Leg& leg : t.legs) {
+      CHECK(model.turnValid(leg.goal));
+      for (const auto& v : leg.via) CHECK(model.turnValid(v));
+      fixed += leg.via.size();
+    }
+  CHECK(fixed >= 8);
+}
+
 TEST_CASE("stages: the guided leg planner goes round a wall the boxed planner cannot") {
   // A 6 m wall between start (2, 5) and goal (7, 5): the start/goal box grown by 2 m (y 3..7)
   // lies inside its span (y 2..8), so the boxed RRT* cannot get round; the guide finds the way.

@@ -581,6 +581,20 @@ TEST_CASE("api: a team-search mission with a PDM streams the route and paths, an
   CHECK(pitch["x"].size() == pitch["y"].size());
   CHECK(pitch["x"].size() > 10);
   CHECK(res["series"].contains("roll_deg_rover_0"));
+  // Speed and drive energy on the same clock (the page's charts synced to the replay).
+  for (const char* key : {"speed_mps_rover_0", "energy_j_rover_1"}) {
+    REQUIRE(res["series"].contains(key));
+    CHECK(res["series"][key]["x"][1] == pitch["x"][1]);
+  }
+  CHECK(res["series"]["energy_j_rover_1"]["y"].back().get<double>() ==
+        doctest::Approx(res["rovers"][1]["metrics"]["energy_j"].get<double>()));
+  CHECK(res["metrics"]["energy_j"].get<double>() > 0);
+  // Every incident says when and where.
+  for (const auto& i : res["incidents"]) {
+    CHECK(i["time_s"].is_number());
+    CHECK(i["x"].is_number());
+    CHECK(i["y"].is_number());
+  }
   CHECK(res["metrics"]["attitude_limit_deg"].get<double>() == doctest::Approx(15));
   CHECK(res["incidents"].is_array());
   CHECK(s.get("/api/missions/" + id + "/result.geojson").json()["features"].size() == 2);

@@ -39,9 +39,12 @@ function message(ctx, w, h, text) {
   ctx.fillText(text, w / 2, h / 2);
 }
 
-// series: [{x: [], y: [], colour, label, dash}]; opts: {xLabel, yMin, yMax, refLines: [{y, label}], empty}
+// series: [{x: [], y: [], colour, label, dash}]; opts: {xLabel, yMin, yMax, xMin, xMax (a fixed x
+// range, e.g. the whole mission, so charts under one replay cursor line up), refLines: [{y, label}],
+// empty, cursorX}. Leaves the x scale on the canvas for chartXAt (click to seek).
 export function lineChart(canvas, series, opts = {}) {
   const { ctx, w, h } = prepare(canvas);
+  canvas.chartScale = null;
   const pts = series.filter((s) => s.x && s.x.length > 0);
   if (pts.length === 0) return message(ctx, w, h, opts.empty || 'no data yet');
   let xMin = Infinity, xMax = -Infinity, yMin = Infinity, yMax = -Infinity;
@@ -66,11 +69,14 @@ export function lineChart(canvas, series, opts = {}) {
   }
   if (opts.yMin !== undefined) yMin = opts.yMin;
   if (opts.yMax !== undefined) yMax = Math.max(opts.yMax, yMax);
+  if (opts.xMin !== undefined) xMin = opts.xMin;
+  if (opts.xMax !== undefined) xMax = opts.xMax;
   if (!(xMax > xMin)) xMax = xMin + 1;
   if (!(yMax > yMin)) yMax = yMin + 1;
   const L = 40, R = 8, T = 6, B = 18;
   const px = (x) => L + ((x - xMin) / (xMax - xMin)) * (w - L - R);
   const py = (y) => h - B - ((y - yMin) / (yMax - yMin)) * (h - T - B);
+  canvas.chartScale = { left: L, right: w - R, xMin, xMax };
 
   ctx.strokeStyle = GRID;
   ctx.fillStyle = AXIS;
@@ -157,6 +163,15 @@ export function lineChart(canvas, series, opts = {}) {
       y += 12;
     });
   }
+}
+
+// The x value under a client x on a line chart drawn by lineChart, or null (no data drawn).
+export function chartXAt(canvas, clientX) {
+  const s = canvas.chartScale;
+  if (!s) return null;
+  const px = clientX - canvas.getBoundingClientRect().left;
+  const f = Math.max(0, Math.min(1, (px - s.left) / (s.right - s.left)));
+  return s.xMin + f * (s.xMax - s.xMin);
 }
 
 // bars: [{label, value, colour}]

@@ -3,14 +3,15 @@
 // live view counts the frames it renders per second (window.__roverplan.fps, status line).
 
 import { api, downloadWithToken, hasToken } from './api.js';
-import { barChart, lineChart } from './charts.js';
+import { barChart, chartXAt, lineChart } from './charts.js';
 import { CELL_STATE_NAMES, CoverageLayer } from './coverage_layer.js';
 import { LiveStream } from './live_stream.js';
 import { PlanLayer } from './plan_layer.js';
 import { counters, state } from './state.js';
 import { TrailLayer, TrailSet } from './trails.js';
 import { $, el, fmt, report, roverColour } from './util.js';
-import { Replay } from './replay.js';
+import { Incidents } from './incidents.js';
+import { MissionClock } from './mission_clock.js';
 
 // A mission that ran to its end: cleanly, or with warnings (short/skipped legs, unreachable ground…).
 const completed = (status) => status === 'succeeded' || status === 'completed_with_warnings';
@@ -95,10 +96,33 @@ export class MissionView {
     view.addLayer({ id: 'believed', order: 41, draw: (ctx, v) => beliefLayer.visible && this.hasBeliefs() && this.beliefLayer.draw(ctx, v, beliefLayer.opacity, true) });
     view.onRender((t) => this.countFrame(t));
 
-    this.replay = new Replay({
-      slider: $('replay-slider'), play: $('replay-play'), label: $('replay-label'),
-      seek: (step, end) => this.seek(step, end),
+    // Incidents: the dock's list, the clock's strip and a map layer; choosing one seeks there.
+    this.incidents = new Incidents({
+      view, list: $('incident-list'), summary: $('incident-summary'), count: $('incident-count'),
+      onSelect: (it) => {
+        this.replay.pause();
+        this.replay.seek(it.at);
+        this.replay.drawStrip();
+      },
     });
+    const incLayer = layers.addOverlay({ id: 'incidents', label: 'incidents', legendTitle: 'incidents', visible: true, opacity: 1, legend: () => this.incidents.legend() });
+    view.addLayer({ id: 'incidents', order: 45, draw: (ctx, v) => incLayer.visible && this.incidents.draw(ctx, v, incLayer.opacity) });
+    this.bindIncidentClicks(view, incLayer);
+    this.replay = new MissionClock({
+      slider: $('replay-slider'), play: $('replay-play'), speed: $('replay-speed'), label: $('replay-label'), strip: $('replay-strip'),
+      onSeek: (t, end) => this.seek(t, end),
+      marks: () => this.incidents.marks(),
+      onMark: (i) => this.incidents.select(i),
+    });
+    this.bindDockTabs();
+    for (const id of ['chart-roll', 'chart-pitch-t', 'chart-speed', 'chart-energy-t', 'chart-pitch']) {
+      $(id).addEventListener('click', (e) => {
+        const x = chartXAt(e.currentTarget, e.clientX);
+        if (x === null || !this.result || this.replay.slider.disabled) return;
+        this.replay.pause();
+        this.replay.seek(x);
+      });
+    }
     $('live-cancel').addEventListener('click', () => this.cancel());
     for (const id of ['export-geojson', 'export-csv']) {
       $(id).addEventListener('click', (e) => {
@@ -110,7 +134,7 @@ export class MissionView {
         }
       });
     }
-    window.addEventListener('resize', () => this.drawCharts());
+    window.addEventListener('resize', () => this.drawCharts(this.cursor ?? null));
     this.drawCharts();
   }
 
@@ -132,10 +156,12 @@ export class MissionView {
   // No mission shown (another map was chosen): the stream closed, the layers and the dock empty.
   clear() {
     this.stream.close();
-    this.replay.stop();
     this.replay.disable();
+    this.incidents.clear();
     this.mission = null;
     this.result = null;
+    this.cursor = null;
+    this.clockTimes = null;
     this.progressCurve = { x: [], y: [] };
     this.coverage.reset();
     this.plan.clear();
@@ -160,9 +186,12 @@ export class MissionView {
 
   reset(mission) {
     this.stream.close();
-    this.replay.stop();
+    this.replay.pause();
+    this.incidents.clear();
     this.mission = mission;
     this.result = null;
+    this.cursor = null;
+    this.clockTimes = null;
     this.progressCurve = { x: [], y: [] };
     this.coverage.reset();
     this.plan.clear();
@@ -288,7 +317,12 @@ export class MissionView {
         if (this.result.overlays) this.plan.setFromResult(this.result.overlays);
         this.layers.renderLegends();
         this.setExports(m.mission);
-        this.replay.enable(this.trails.longest - 1);
+        // A team mission replays on its clock (s), a coverage run in steps.
+        this.clockTimes = this.missionClockTimes(this.result);
+        const unit = this.clockTimes ? 's' : 'step';
+        this.incidents.set(this.result, unit);
+        this.layers.renderLegends();  // the incidents' kinds
+        this.replay.enable(unit === 's' ? this.result.metrics.mission_time_s : this.trails.longest - 1, unit);
       } catch (err) {
         if (err.status !== 409) report(err);
       }
@@ -311,8 +345,31 @@ export class MissionView {
   }
 
   // --- replay ---
-  seek(step, end) {
+  // The times (s) of a team track's points (one a second from 0, as the pitch series; the longest
+  // rover's: one may never leave its start), or null for a result without a mission clock.
+  missionClockTimes(r) {
+    if (!Number.isFinite(r?.metrics?.mission_time_s)) return null;
+    let best = null;
+    for (const [key, s] of Object.entries(r.series || {}))
+      if (/^pitch_deg_rover_\d+$/.test(key) && s.x_label === 'time (s)' && (!best || s.x.length > best.length)) best = s.x;
+    return best && best.length >= 2 ? best : null;
+  }
+
+  // t: s of mission time (team) or a step (coverage).
+  seek(t, end) {
     if (!this.result) return;
+    this.cursor = end ? null : t;
+    let step = t;
+    if (this.clockTimes) {  // the last point at or before t
+      const x = this.clockTimes;
+      let lo = 0, hi = x.length - 1;
+      while (lo < hi) {
+        const mid = (lo + hi + 1) >> 1;
+        if (x[mid] <= t + 1e-9) lo = mid;
+        else hi = mid - 1;
+      }
+      step = lo;
+    }
     // The grid is the rovers' own map: under localisation error it is rebuilt from the believed paths.
     const paths = this.result.rovers.map((r) => r.believed_path || r.path);
     if (end) {
@@ -325,8 +382,19 @@ export class MissionView {
       this.coverage.replayTo(paths, step);
     }
     counters.replayStep = step;
-    this.drawCharts(end ? null : step);
+    counters.replayTime = this.clockTimes ? t : null;
+    this.scheduleCharts();
     this.view.invalidate();
+  }
+
+  // Charts follow the replay cursor at most ~20 times a second (four time series a frame while
+  // the clock plays would cost more than the map).
+  scheduleCharts() {
+    if (this.chartTimer) return;
+    this.chartTimer = setTimeout(() => {
+      this.chartTimer = null;
+      this.drawCharts(this.cursor ?? null);
+    }, 50);
   }
 
   // --- comparison: other runs' trails on the map ---
@@ -452,8 +520,67 @@ export class MissionView {
       refLines: [{ y: limit, label: `+${fmt(Number(limit.toPrecision(4)))}°` }, { y: -limit, label: `−${fmt(Number(limit.toPrecision(4)))}°` }], legend: true, cursorX: cursorStep,
       empty: r ? 'no pitch series' : 'after the run (result.json)',
     });
-    const bars = r ? r.rovers.map((rv, k) => ({ label: `rover ${k + 1}`, value: rv.metrics?.energy_j ?? rv.metrics?.trajectory_m ?? 0, colour: roverColour(k) })) : [];
+    const bars = r ? r.rovers.map((rv, k) => ({ label: `rover ${k + 1}`, value: (team ? rv.metrics?.trajectory_m : rv.metrics?.energy_j ?? rv.metrics?.trajectory_m) ?? 0, colour: roverColour(k) })) : [];
     barChart($('chart-energy'), bars, { empty: r ? 'no energy metric' : 'after the run' });
+    if (!$('dock-motion').hidden) this.drawMotionCharts(cursorStep, limit);
+  }
+
+  // Roll, pitch (both with the mission's attitude limit), speed and energy of every rover against
+  // mission time, all on the mission's x range so the replay cursor is at the same x in each.
+  drawMotionCharts(cursor, limit) {
+    const r = this.result;
+    const perRover = (name) => Object.entries(r?.series || {}).flatMap(([key, s]) => {
+      const m = new RegExp(`^${name}_rover_(\\d+)$`).exec(key);
+      return m ? [{ x: s.x, y: s.y, colour: roverColour(Number(m[1])), width: 1, label: `rover ${Number(m[1]) + 1}` }] : [];
+    });
+    const clock = Boolean(this.clockTimes);
+    const range = clock ? { xMin: 0, xMax: r.metrics.mission_time_s } : {};
+    const l = fmt(Number(limit.toPrecision(4)));
+    const refLines = [{ y: limit, label: `+${l}°` }, { y: -limit, label: `−${l}°` }];
+    const empty = r ? 'no series (team missions)' : 'after the run (result.json)';
+    const unit = clock ? 's' : 'move';
+    $('chart-roll').previousElementSibling.textContent = `roll (deg) per ${unit === 's' ? 'second' : 'move'}, ±${l}°`;
+    $('chart-pitch-t').previousElementSibling.textContent = `pitch (deg) per ${unit === 's' ? 'second' : 'move'}, ±${l}°`;
+    $('chart-speed').previousElementSibling.textContent = 'speed (m/s), mean of each second';
+    $('chart-energy-t').previousElementSibling.textContent = 'drive energy used (J)';
+    lineChart($('chart-roll'), perRover('roll_deg'), { ...range, refLines, cursorX: cursor, empty });
+    lineChart($('chart-pitch-t'), perRover('pitch_deg'), { ...range, refLines, legend: true, cursorX: cursor, empty });
+    lineChart($('chart-speed'), perRover('speed_mps'), { ...range, yMin: 0, cursorX: cursor, empty });
+    lineChart($('chart-energy-t'), perRover('energy_j'), { ...range, yMin: 0, cursorX: cursor, empty });
+  }
+
+  // The dock's panes: overview charts, the motion charts against time, the incident list.
+  bindDockTabs() {
+    const tabs = ['overview', 'motion', 'incidents'];
+    for (const name of tabs) {
+      $(`dock-tab-${name}`).addEventListener('click', () => {
+        for (const other of tabs) {
+          const on = other === name;
+          $(`dock-tab-${other}`).classList.toggle('active', on);
+          $(`dock-tab-${other}`).setAttribute('aria-selected', String(on));
+          $(`dock-${other}`).hidden = !on;
+        }
+        this.drawCharts(this.cursor ?? null);
+        if (name === 'incidents') this.incidents.rows[this.incidents.selected]?.scrollIntoView({ block: 'nearest' });
+      });
+    }
+  }
+
+  // A click (not a drag) on the map in pan mode selects the incident marker under it.
+  bindIncidentClicks(view, layer) {
+    const canvas = view.canvas;
+    let down = null;
+    canvas.addEventListener('pointerdown', (e) => { down = [e.clientX, e.clientY]; });
+    canvas.addEventListener('click', (e) => {
+      if (!down || Math.hypot(e.clientX - down[0], e.clientY - down[1]) > 3) return;
+      if (view.tool !== 'pan' || !layer.visible || !this.incidents.items.length) return;
+      const r = canvas.getBoundingClientRect();
+      const i = this.incidents.hit(e.clientX - r.left, e.clientY - r.top);
+      if (i >= 0) {
+        this.incidents.select(i, { centre: false });
+        this.replay.drawStrip();
+      }
+    });
   }
 
   // --- frames per second of the live view ---

@@ -52,6 +52,7 @@ export const counters = {
   missionStatus: null,
   finalMetrics: null,
   replayStep: null,
+  replayTime: null,  // s of mission time at the replay cursor (team missions), else null
   view3dReady: false,
   errors: [],
 };
