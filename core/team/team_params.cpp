@@ -152,7 +152,7 @@ ParamTable<P> buildTable() {
           [](auto& p) -> auto& { return p.mission.coordination.slip.gain; });
   addReal(t, realParam("slip_noise", 0, 10, "", "Slip: std of the random drift per unit sin(slope)."),
           [](auto& p) -> auto& { return p.mission.coordination.slip.noise; });
-  addReal(t, realParam("exceedance_limit", 0.1, 90, "deg", "Samples with |roll| or |pitch| above this count as exceedances (paper 001: 15°)."),
+  addReal(t, common(realParam("exceedance_limit", 0.1, 90, "deg", "Samples with |roll| or |pitch| above this count as exceedances (paper 001: 15°).")),
           [](auto& p) -> auto& { return p.mission.exceedanceLimit; }, kDeg);
   addInt(t, common(intParam("seed", 0, 9.0e18, "", "Seed of every RRT* tree, the slip noise and the coverage runs.")),
          [](auto& p) -> auto& { return p.mission.seed; });
