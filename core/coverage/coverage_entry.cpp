@@ -179,6 +179,11 @@ class CoveragePlanner final : public Planner {
   void validate(const PlanningProblem& problem, const ParamSet& params) const override {
     const CoverageParams p = parseCoverageParams(params);
     validateWorld(problem.world);
+    World zoned;  // the grid with the keep-out zones as obstacles, when there are any
+    if (!problem.keepOut.empty()) {
+      zoned = problem.world;
+      addKeepOut(zoned, problem.keepOut);
+    }
     // The one start check of every planner (core/planning/mission_check.hpp): against the map
     // at its own resolution when there is one, then the coverage grid.
     terrain::Traversability trav;
@@ -187,7 +192,8 @@ class CoveragePlanner final : public Planner {
     ground.dem = problem.dem.get();
     ground.classes = problem.dem ? &trav.classes : nullptr;
     ground.impassableDeg = p.impassableDeg;
-    ground.grid = &problem.world;
+    ground.grid = problem.keepOut.empty() ? &problem.world : &zoned;
+    ground.keepOut = &problem.keepOut;
     planning::StartRules rules;
     rules.distinctCells = true;
     planning::checkMissionStarts(ground, problem.rovers, rules);
@@ -200,8 +206,19 @@ class CoveragePlanner final : public Planner {
     if (bodyGravity) p.energy.gravity = terrain::bodyGravity(problem.body);
     p.frontier = frontierByDefault(problem, params);
     auto cells = startsToCells(problem.world.geometry(), problem.rovers);
-    PlanResult out = toPlanResult(runCoverage(problem.world, cells, p, sink, cancel),
+    // Keep-out zones are obstacles of the ground truth (core/planning/keep_out.hpp): the rovers
+    // sense them as they sense rocks, and the coverage counts them out of the free cells.
+    const World* world = &problem.world;
+    World zoned;
+    int keepOutCells = 0;
+    if (!problem.keepOut.empty()) {
+      zoned = problem.world;
+      keepOutCells = addKeepOut(zoned, problem.keepOut);
+      world = &zoned;
+    }
+    PlanResult out = toPlanResult(runCoverage(*world, cells, p, sink, cancel),
                                   problem.world.geometry());
+    out.metrics.push_back({"keep_out_cells", static_cast<double>(keepOutCells), "cells"});
     out.metrics.push_back({"gravity_m_s2", p.energy.gravity, "m/s²"});
     out.metrics.push_back({"coverage_cell_m", problem.world.geometry().cellWidth, "m"});
     out.assumptions.push_back({"body", terrain::bodyName(problem.body)});

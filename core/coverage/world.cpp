@@ -10,6 +10,18 @@
 
 namespace rover::coverage {
 
+int addKeepOut(World& world, const KeepOut& keepOut) {
+  if (keepOut.empty()) return 0;
+  const std::vector<std::uint8_t> cells = keepOut.cells(world.geometry());
+  int added = 0;
+  for (int i = 0; i < world.geometry().cellCount(); ++i)
+    if (cells[static_cast<std::size_t>(i)] && !world.obstacles.at(i)) {
+      world.obstacles.at(i) = 1;
+      ++added;
+    }
+  return added;
+}
+
 int World::obstacleCount() const {
   const auto& v = obstacles.values;
   return static_cast<int>(std::count_if(v.data(), v.data() + v.size(), [](auto o) { return o; }));

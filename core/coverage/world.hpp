@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "core/grid/raster.hpp"
+#include "core/planning/keep_out.hpp"
 
 namespace rover::coverage {
 
@@ -19,6 +20,10 @@ struct World {
   int obstacleCount() const;
   int freeCount() const { return geometry().cellCount() - obstacleCount(); }
 };
+
+// Keep-out zones as obstacles (core/planning/keep_out.hpp): every cell any part of which lies in a
+// zone. Returns how many free cells it turned into obstacles.
+int addKeepOut(World& world, const KeepOut& keepOut);
 
 // Checks that the grid is usable for coverage (square cells, at least 2×2, heights finite and of
 // the same size); throws InvalidInput naming the field otherwise.

@@ -3,7 +3,9 @@
 // Grid: row 0 at the top (north), col 0 at the west. Local frame: x east, y north, in metres from
 // the raster's lower-left (south-west) corner. Positions refer to cell centres.
 #include <Eigen/Core>
+#include <cstdint>
 #include <optional>
+#include <vector>
 
 namespace rover {
 
@@ -34,5 +36,24 @@ Eigen::Vector2d cellToLocal(const GridGeometry& g, CellIndex c);
 // The cell containing a local point; nullopt outside the grid. Points on the east/north edge of the
 // grid belong to the last column/first row.
 std::optional<CellIndex> localToCell(const GridGeometry& g, const Eigen::Vector2d& xy);
+
+// A polygon in the local frame: its rings (the first the outline, any others holes), each an
+// open list of vertices (the closing vertex not repeated). Inside is the even-odd rule over all
+// rings, so a hole is outside and self-intersections need no special case.
+using Ring = std::vector<Eigen::Vector2d>;
+using Polygon = std::vector<Ring>;
+
+// Strictly inside `polygon` (even-odd crossing test, Shimrat 1962 / Haines 1994); a point on an
+// edge may answer either way.
+bool insidePolygon(const Polygon& polygon, const Eigen::Vector2d& p);
+
+// The cells of `g` that overlap any of `polygons` with positive area (the one rasterisation of
+// keep-out zones): a cell is marked when its centre is inside, or when an edge passes through the
+// cell's interior, so a polygon that only touches a cell's border does not mark it. `grow` > 0
+// grows every cell by that many metres on each side first (a square margin: the cells within
+// `grow` of the polygon, measured along x and y). Row-major flags, 1 = marked. Cost: per polygon,
+// O(rows it spans × edges + cells marked).
+std::vector<std::uint8_t> polygonCells(const GridGeometry& g, const std::vector<Polygon>& polygons,
+                                       double grow = 0);
 
 }  // namespace rover

@@ -41,6 +41,20 @@ void checkMissionStarts(const MissionGround& ground, const std::vector<RoverStar
       refuse("start (" + metres(s.position.x()) + ", " + metres(s.position.y()) +
              ") m is outside the map (" + metres(map->widthMetres()) + " × " +
              metres(map->heightMetres()) + " m)");
+    if (ground.keepOut && !ground.keepOut->empty()) {
+      const KeepOut& k = *ground.keepOut;
+      if (int z = k.zoneAt(s.position); z >= 0)
+        refuse("start is inside keep-out zone " + std::to_string(z));
+      if (int z = k.zoneOverlapping(*map, *cell); z >= 0)
+        refuse("start is on a map cell keep-out zone " + std::to_string(z) +
+               " overlaps (a rover never stands on one)");
+      if (ground.grid) {
+        const GridGeometry& g = ground.grid->geometry();
+        if (auto c = localToCell(g, s.position))
+          if (int z = k.zoneOverlapping(g, *c); z >= 0)
+            refuse("start is in a coverage cell keep-out zone " + std::to_string(z) + " overlaps");
+      }
+    }
     if (ground.dem) {
       if (!ground.dem->valid(cell->row, cell->col)) refuse("start is on nodata");
       if (!terrain::surfaceAt(*ground.dem, s.position.x(), s.position.y()))

@@ -8,6 +8,7 @@
 
 #include "core/coverage/world.hpp"
 #include "core/grid/raster.hpp"
+#include "core/planning/keep_out.hpp"
 #include "core/planning/planner.hpp"
 #include "core/terrain/dem.hpp"
 
@@ -21,6 +22,9 @@ struct MissionGround {
   const Raster<std::uint8_t>* classes = nullptr;  // terrain::TerrainClass per DEM cell
   double impassableDeg = 15.0;                    // the threshold the classes used (for messages)
   const coverage::World* grid = nullptr;
+  // The operator's keep-out zones (null or empty: none). A start inside one, or on a map cell or
+  // coverage cell one overlaps, is refused: a rover never stands on a cell a zone touches.
+  const KeepOut* keepOut = nullptr;
 };
 
 struct StartRules {
@@ -32,7 +36,7 @@ struct StartRules {
 
 // Throws for the first start that breaks a rule, naming it rovers[K]; "rovers" for a count
 // outside 1..64. Checks, in order: finite numbers; inside the map; on data, with data all round
-// (the bilinear surface a rover stands on); not impassable; the coverage cell not an obstacle;
+// (the bilinear surface a rover stands on); out of the keep-out zones; not impassable; the coverage cell not an obstacle;
 // apart from every earlier start.
 void checkMissionStarts(const MissionGround& ground, const std::vector<RoverStart>& rovers,
                         const StartRules& rules);

@@ -13,6 +13,7 @@
 #include "core/terrain/body.hpp"
 #include "core/terrain/dem.hpp"
 #include "core/planning/events.hpp"
+#include "core/planning/keep_out.hpp"
 #include "core/planning/plan_result.hpp"
 
 namespace rover {
@@ -30,6 +31,9 @@ struct PlanningProblem {
   std::shared_ptr<const terrain::Dem> dem;  // the map at its planning resolution
   std::shared_ptr<const Raster<float>> pdm;  // PDM masses on the DEM's grid; null = none given
   terrain::Body body = terrain::Body::Unknown;  // the map's body, from its CRS (maps/georef.hpp)
+  // The operator's keep-out zones in the local frame; every planner respects them
+  // (core/planning/keep_out.hpp says where each rule lives).
+  KeepOut keepOut;
   // Threads the caller grants this run (a server's worker: 1, so missions in parallel do not
   // oversubscribe the machine; the CLI: all cores). 0 = all cores.
   unsigned threads = 1;

@@ -62,6 +62,8 @@ const char* legReasonName(LegReason r) {
       return "conflict";
     case LegReason::PiecesExhausted:
       return "pieces_exhausted";
+    case LegReason::KeepOut:
+      return "keep_out";
   }
   return "unknown";
 }

@@ -134,6 +134,7 @@ enum class LegReason {
   Steep,            // every try tilts past the attitude check
   Conflict,         // every try and every delay comes too close to a higher-priority rover
   PiecesExhausted,  // max_pieces RRT* pieces and still short of the goal
+  KeepOut,          // every try's simulated rover entered a keep-out zone's cells
 };
 const char* legReasonName(LegReason r);
 const char* legStatusName(LegStatus s);

@@ -38,6 +38,7 @@ ConflictPolicy timedPolicy(const CoordinationParams& p) {
   c.waitsAfterReplans = 0;
   c.invalidGoalEndsPiece = true;
   c.dwell = std::min(p.dwellCheck, p.safetyDistance / p.controller.nominalSpeed + 1.0);
+  c.quickReplans = true;
   return c;
 }
 
@@ -90,7 +91,7 @@ class Coordinator {
   }
 
  private:
-  enum class Outcome { Accepted, Skipped, NoPath, InvalidGoal, Steep, Cancelled };
+  enum class Outcome { Accepted, Skipped, NoPath, InvalidGoal, Steep, KeepOut, Cancelled };
 
   struct Candidate {
     std::vector<Eigen::Vector2d> path;         // waypoints, the rover's position first
@@ -201,9 +202,11 @@ class Coordinator {
         return r;
       }
     }
+    const std::uint64_t seed = seedFor(seed_, k, i, piece, attempt);
+    if (attempt > 0 && policy_.quickReplans)
+      return planner_.replan(from, last(k).heading, goal, seed, keepOut, cancel_);
     ++out_.rrtCalls;
-    return planner_.plan(from, last(k).heading, goal, seedFor(seed_, k, i, piece, attempt), keepOut,
-                         cancel_);
+    return planner_.plan(from, last(k).heading, goal, seed, keepOut, cancel_);
   }
 
   // Rover k standing where it is for `ticks` samples, appended to `samples`.
@@ -290,6 +293,14 @@ class Coordinator {
     return std::nullopt;
   }
 
+  // The first sample on a keep-out zone's cell, if any: such a try is never committed (the
+  // planned path keeps out, but the simulated rover cuts corners and slips).
+  std::optional<Eigen::Vector2d> firstForbidden(const std::vector<TrajectorySample>& samples) const {
+    for (const auto& s : samples)
+      if (planner_.forbidden(xyOf(s))) return xyOf(s);
+    return std::nullopt;
+  }
+
   void commit(int k, const Candidate& c) {
     auto& t = out_.trajectories[k].samples;
     t.insert(t.end(), c.samples.begin(), c.samples.end());
@@ -328,6 +339,7 @@ class Coordinator {
     std::optional<Candidate> firstTry;  // the first try within the attitude check
     std::optional<Conflict> conflict;
     std::optional<PathStatus> noPath;
+    int zoneTries = 0;  // tries refused for a sample in a keep-out zone
     for (int attempt = 0; attempt <= p_.maxReplans; ++attempt) {
       if (cancelled()) return Outcome::Cancelled;
       if (attempt > 0) {
@@ -350,7 +362,13 @@ class Coordinator {
       }
       const Candidate c0 = simulateTry(k, path.waypoints, 0, slipSeed(0x51ee5ull, k, i, piece, attempt));
       if (cancelled()) return Outcome::Cancelled;
-      const std::optional<Eigen::Vector2d> steep = firstExceedance(c0.samples);
+      std::optional<Eigen::Vector2d> steep = firstExceedance(c0.samples);
+      if (const auto zone = firstForbidden(c0.samples)) {
+        // Into a keep-out zone: refused like a tilted try, whatever the policy.
+        ++zoneTries;
+        keepOutOf(k, goal, {*zone, 0.5}, keepOut);
+        continue;
+      }
       if (steep && !policy_.checkTiltedTries) {
         keepOutOf(k, goal, {*steep, 0.5}, keepOut);
         continue;
@@ -383,6 +401,10 @@ class Coordinator {
                 keepOut);
     }
     if (!firstTry) {
+      if (!noPath && zoneTries > 0) {
+        rec.note = "every try enters a keep-out zone";
+        return Outcome::KeepOut;
+      }
       if (!noPath) {
         rec.note = "every try tilts past the attitude limit";
         return Outcome::Steep;
@@ -395,7 +417,7 @@ class Coordinator {
       const int ticks = static_cast<int>(std::lround(w * p_.waitStep / period_));
       Candidate c = simulateTry(k, firstTry->path, ticks, slipSeed(0x3a17ull, k, i, piece, w));
       conflict = firstConflict(k, c.samples, lastLeg && reachesGoal(c, goal));
-      if (!conflict && !firstExceedance(c.samples)) {
+      if (!conflict && !firstExceedance(c.samples) && !firstForbidden(c.samples)) {
         rec.waits = w;
         out_.waits += w;
         reachedGoal = c.reached && (firstTry->path.back() - goal).norm() < 1e-9;
@@ -446,7 +468,7 @@ class Coordinator {
         PathResult path = planner_.plan(from, last(k).heading, spot, seed, {}, cancel_);
         if (path.status != PathStatus::Exact || path.waypoints.size() < 2) continue;
         Candidate c = simulateTry(k, path.waypoints, 0, seedFor(seed_ ^ 0x9a4dull, k, attempt, 0, 0));
-        if (!c.reached || firstConflict(k, c.samples, true) ||
+        if (!c.reached || firstConflict(k, c.samples, true) || firstForbidden(c.samples) ||
             (pass == 0 && firstExceedance(c.samples)))
           continue;
         commit(k, c);
@@ -508,8 +530,10 @@ class Coordinator {
         rec.reason = LegReason::InvalidGoal;
         break;
       }
-      if (o == Outcome::NoPath || o == Outcome::Steep) {  // Short, with the note
-        rec.reason = o == Outcome::NoPath ? LegReason::NoPath : LegReason::Steep;
+      if (o == Outcome::NoPath || o == Outcome::Steep || o == Outcome::KeepOut) {  // Short
+        rec.reason = o == Outcome::NoPath  ? LegReason::NoPath
+                     : o == Outcome::Steep ? LegReason::Steep
+                                           : LegReason::KeepOut;
         break;
       }
       ++rec.pieces;

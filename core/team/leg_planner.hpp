@@ -29,10 +29,22 @@ class LegPlanner {
   virtual PathResult plan(const Eigen::Vector2d& from, double heading, const Eigen::Vector2d& goal,
                           std::uint64_t seed, const std::vector<KeepOutZone>& keepOut,
                           const CancelToken* cancel) const = 0;
+  // A re-plan after a try that came too close or tilted: by default the same as plan. A planner
+  // may answer it more cheaply, the coordinator's later tries being many and one after another.
+  virtual PathResult replan(const Eigen::Vector2d& from, double heading, const Eigen::Vector2d& goal,
+                            std::uint64_t seed, const std::vector<KeepOutZone>& keepOut,
+                            const CancelToken* cancel) const {
+    return plan(from, heading, goal, seed, keepOut, cancel);
+  }
   // A straight move the rover may drive: the fixed points of a hybrid leg are checked with it.
   virtual bool edgeValid(const Eigen::Vector2d& a, const Eigen::Vector2d& b) const = 0;
   // A point where the rover may stop and turn in place (a parking spot).
   virtual bool canStop(const Eigen::Vector2d& p) const = 0;
+  // A point no simulated sample may reach: a cell of an operator's keep-out zone.
+  virtual bool forbidden(const Eigen::Vector2d& p) const {
+    (void)p;
+    return false;
+  }
 };
 
 // The validity checks both terrain planners share: the rover's rules on the whole map.
@@ -45,6 +57,7 @@ class TerrainLegPlanner : public LegPlanner {
     return wholeMap_.edgeValid(a, b);
   }
   bool canStop(const Eigen::Vector2d& p) const override { return wholeMap_.turnValid(p); }
+  bool forbidden(const Eigen::Vector2d& p) const override { return wholeMap_.inZone(p); }
 
  protected:
   // planPath in the start/goal box.
@@ -77,8 +90,14 @@ class GuidedRrtPlanner final : public TerrainLegPlanner {
   PathResult plan(const Eigen::Vector2d& from, double heading, const Eigen::Vector2d& goal,
                   std::uint64_t seed, const std::vector<KeepOutZone>& keepOut,
                   const CancelToken* cancel) const override;
+  // The guide path alone (valid by construction, an A* on the lattice: milliseconds where an
+  // RRT* of 1250 vertices takes tens), the boxed RRT* when there is none.
+  PathResult replan(const Eigen::Vector2d& from, double heading, const Eigen::Vector2d& goal,
+                    std::uint64_t seed, const std::vector<KeepOutZone>& keepOut,
+                    const CancelToken* cancel) const override;
 
  private:
+  PathResult guideResult(std::vector<Eigen::Vector2d> guide, double heading) const;
   const TraversalLattice& lattice_;
   double corridorRadius_;
 };

@@ -24,6 +24,14 @@ void TeamMissionParams::validate() const {
     throwInvalidParameter("hybrid_cell_m", "must be > 0 and at most the footprint");
   if (!std::isfinite(hybridCoverage) || !(hybridCoverage > 0) || hybridCoverage > 1)
     throwInvalidParameter("hybrid_coverage", "must be in (0, 1]");
+  if (!std::isfinite(keepOutMargin) || keepOutMargin < 0 || keepOutMargin > 10)
+    throwInvalidParameter("keep_out_margin", "must be a number of metres in [0, 10]");
+  for (std::size_t z = 0; z < keepOut.zones.size(); ++z)
+    for (const Ring& ring : keepOut.zones[z])
+      for (const auto& v : ring)
+        if (!v.allFinite())
+          throw Error(ErrorCode::InvalidInput, "keep_out",
+                      "keep_out: zone " + std::to_string(z) + " has a vertex that is not finite");
 }
 
 }  // namespace rover::team

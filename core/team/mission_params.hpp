@@ -3,6 +3,7 @@
 // struct the stages read their part of. The [keys] are the parameter names (team_params.cpp).
 #include <cstdint>
 
+#include "core/planning/keep_out.hpp"
 #include "core/team/coordination.hpp"
 #include "core/team/route_generator.hpp"
 #include "core/terrain/layers.hpp"
@@ -26,6 +27,11 @@ struct TeamMissionParams {
   double hybridCell = 1.0;        // m                                             [hybrid_cell_m]
   double hybridCoverage = 1.0;    // fraction                                    [hybrid_coverage]
   bool hybridVoronoi = true;      //                                             [hybrid_voronoi]
+  // The operator's keep-out zones (core/planning/keep_out.hpp), from the problem, not a table
+  // parameter; planned paths keep `keepOutMargin` metres from them (ours: the simulated rover
+  // cuts corners by up to ~0.3 m, and a try with a sample in a zone's cells is refused).
+  KeepOut keepOut;
+  double keepOutMargin = 0.5;  // m                                          [keep_out_margin]
 
   void validate() const;
 };

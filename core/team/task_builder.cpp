@@ -68,7 +68,9 @@ namespace {
 
 // The coverage world of one footprint: cells of `cell` metres over the square centred on
 // `centre`; a cell is an obstacle when it is off the map or more than half of the DEM cells whose
-// centre lies in it are impassable or without data; heights are the mean of the rest.
+// centre lies in it are impassable or without data, or when one of them lies in a keep-out zone
+// (core/planning/keep_out.hpp: any part of a zone blocks, not a majority); heights are the mean of
+// the rest.
 coverage::World footprintWorld(const terrain::Dem& dem, const Raster<std::uint8_t>& classes,
                                const Eigen::Vector2d& origin, int n, double cell) {
   const GridGeometry& g = dem.geometry();
@@ -76,8 +78,10 @@ coverage::World footprintWorld(const terrain::Dem& dem, const Raster<std::uint8_
   w.obstacles = Raster<std::uint8_t>(GridGeometry{n, n, cell, cell}, 1);
   w.heights = Raster<double>(GridGeometry{n, n, cell, cell}, 0.0);
   std::vector<int> total(static_cast<std::size_t>(n * n), 0), blocked(total.size(), 0);
+  std::vector<std::uint8_t> zoned(total.size(), 0);
   std::vector<double> sum(total.size(), 0.0);
   const auto impassable = static_cast<std::uint8_t>(terrain::TerrainClass::Impassable);
+  const auto keepOut = static_cast<std::uint8_t>(terrain::TerrainClass::KeepOut);
   const int c0 = std::max(0, static_cast<int>(std::floor(origin.x() / g.cellWidth)));
   const int c1 = std::min(g.cols - 1, static_cast<int>(std::ceil((origin.x() + n * cell) / g.cellWidth)));
   const double top = g.heightMetres();
@@ -91,6 +95,7 @@ coverage::World footprintWorld(const terrain::Dem& dem, const Raster<std::uint8_
       if (fc < 0 || fc >= n || fromBottom < 0 || fromBottom >= n) continue;
       const int i = (n - 1 - fromBottom) * n + fc;
       ++total[i];
+      if (classes(r, c) == keepOut) zoned[i] = 1;
       if (classes(r, c) >= impassable) {
         ++blocked[i];
       } else {
@@ -99,7 +104,7 @@ coverage::World footprintWorld(const terrain::Dem& dem, const Raster<std::uint8_
     }
   }
   for (int i = 0; i < n * n; ++i) {
-    if (total[i] == 0 || 2 * blocked[i] > total[i]) continue;
+    if (total[i] == 0 || 2 * blocked[i] > total[i] || zoned[i]) continue;
     w.obstacles.at(i) = 0;
     w.heights.at(i) = sum[i] / (total[i] - blocked[i]);
   }

@@ -45,6 +45,7 @@ class TeamPlanner final : public Planner {
     ground.dem = problem.dem.get();
     ground.classes = classes.get();
     ground.impassableDeg = p.mission.traversability.impassableDeg;
+    ground.keepOut = &problem.keepOut;
     planning::StartRules rules;
     rules.safetyDistance = p.mission.coordination.safetyDistance;
     planning::checkMissionStarts(ground, problem.rovers, rules);
@@ -70,6 +71,7 @@ class TeamPlanner final : public Planner {
     const Raster<float> noPdm;
     TeamMissionParams mission = p.mission;
     mission.coordination.threads = problem.threads;
+    mission.keepOut = problem.keepOut;  // applied to the classes in runTeamMission
     // The simulated rover climbs against the map's body's gravity (issue 11: body-aware defaults);
     // the model's own default (Mars, paper 001's site) when the CRS names no known body.
     if (problem.body != terrain::Body::Unknown) mission.coordination.model.gravity = terrain::bodyGravity(problem.body);

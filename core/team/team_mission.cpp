@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 #include <memory>
+#include <optional>
 
 #include "core/common/error.hpp"
 #include "core/common/random.hpp"
@@ -56,8 +57,16 @@ TeamMissionResult runTeamMission(const terrain::Dem& dem, const Raster<std::uint
   if (classes.geometry.rows != g.rows || classes.geometry.cols != g.cols)
     throw Error(ErrorCode::InvalidInput, "classes", "the classes must have the DEM's rows and columns");
   const Raster<float> pdm = pdmIn.empty() ? uniformPdm(dem) : pdmIn;
+  // The keep-out zones laid on the classes (core/planning/keep_out.hpp): every stage below plans
+  // on `zoned`, so the lattice, its flood, RRT*, the slots and the hybrid's grids all keep out.
+  std::optional<Raster<std::uint8_t>> zonedOwn;
+  if (!params.keepOut.empty()) {
+    zonedOwn = classes;
+    applyKeepOut(*zonedOwn, params.keepOut, params.keepOutMargin);
+  }
+  const Raster<std::uint8_t>& zoned = zonedOwn ? *zonedOwn : classes;
   // The lattice once per mission, on the threads the caller granted.
-  const TraversalLattice lattice = makeLattice(dem, classes, params.coordination);
+  const TraversalLattice lattice = makeLattice(dem, zoned, params.coordination);
   const bool timed = params.coordination.mode == CoordinationMode::Timed;
 
   TeamMissionResult out;
@@ -65,26 +74,48 @@ TeamMissionResult runTeamMission(const terrain::Dem& dem, const Raster<std::uint
   std::vector<Eigen::Vector2d> startPoints;
   for (const auto& s : starts) startPoints.emplace_back(s.x, s.y);
   const Raster<std::uint8_t> reach = lattice.reachable(startPoints);
-  Raster<std::uint8_t> reachClasses = classes;
+  Raster<std::uint8_t> reachClasses = zoned;
   const auto impassable = static_cast<std::uint8_t>(terrain::TerrainClass::Impassable);
+  ReachabilityReport& u = out.reachability;
   for (int i = 0; i < g.cellCount(); ++i) {
-    if (reach.at(i) || classes.at(i) >= impassable) continue;
-    reachClasses.at(i) = impassable;
-    if (std::isnan(dem.z.at(i))) continue;
-    ++out.reachability.unreachableMapCells;
-    if (std::isfinite(pdm.at(i))) out.reachability.unreachableMass += pdm.at(i);
-  }
-  out.reachability.unreachableAreaM2 =
-      static_cast<double>(out.reachability.unreachableMapCells) * g.cellWidth * g.cellHeight;
-  const SearchGrid terrainGrid = makeSearchGrid(pdm, classes, params.footprint);
-  SearchGrid reachGrid = makeSearchGrid(pdm, reachClasses, params.footprint);
-  for (int i = 0; i < reachGrid.geometry().cellCount(); ++i)
-    if (!terrainGrid.impassable.at(i) && reachGrid.impassable.at(i)) {
-      ++out.reachability.unreachableSearchCells;
-      out.reachability.unreachableSearchMass += terrainGrid.mass.at(i);
+    const bool data = !std::isnan(dem.z.at(i));
+    const double mass = std::isfinite(pdm.at(i)) ? pdm.at(i) : 0.0;
+    if (classes.at(i) < impassable && zoned.at(i) >= impassable && data) {
+      ++u.keepOutMapCells;  // the operator's choice: excluded, not unreachable
+      u.keepOutMass += mass;
     }
-  // Paper mode keeps today's route (on the terrain classes alone) so it can be compared.
-  out.grid = timed ? std::move(reachGrid) : terrainGrid;
+    if (reach.at(i) || zoned.at(i) >= impassable) continue;
+    reachClasses.at(i) = impassable;
+    if (!data) continue;
+    ++u.unreachableMapCells;
+    u.unreachableMass += mass;
+  }
+  const double cellArea = g.cellWidth * g.cellHeight;
+  u.unreachableAreaM2 = static_cast<double>(u.unreachableMapCells) * cellArea;
+  u.keepOutAreaM2 = static_cast<double>(u.keepOutMapCells) * cellArea;
+  const SearchGrid terrainGrid = makeSearchGrid(pdm, classes, params.footprint);
+  SearchGrid zonedGrid = makeSearchGrid(pdm, zoned, params.footprint);
+  SearchGrid reachGrid = makeSearchGrid(pdm, reachClasses, params.footprint);
+  // A search cell whose centre (the target itself) lies in a zone is never a target either.
+  if (!params.keepOut.empty())
+    for (int i = 0; i < zonedGrid.geometry().cellCount(); ++i)
+      if (params.keepOut.zoneAt(zonedGrid.centre(zonedGrid.geometry().cell(i))) >= 0) {
+        zonedGrid.impassable.at(i) = 1;
+        reachGrid.impassable.at(i) = 1;
+      }
+  for (int i = 0; i < reachGrid.geometry().cellCount(); ++i) {
+    if (terrainGrid.impassable.at(i)) continue;
+    if (zonedGrid.impassable.at(i)) {
+      ++u.keepOutSearchCells;
+      u.keepOutSearchMass += terrainGrid.mass.at(i);
+    } else if (reachGrid.impassable.at(i)) {
+      ++u.unreachableSearchCells;
+      u.unreachableSearchMass += terrainGrid.mass.at(i);
+    }
+  }
+  // Paper mode keeps today's route (on the terrain classes and the zones alone) so it can be
+  // compared.
+  out.grid = timed ? std::move(reachGrid) : std::move(zonedGrid);
   const std::unique_ptr<RouteGenerator> routes = makeRouteGenerator(params.routeMethod, params.route);
   out.route = routes->generate(out.grid, teamStartCell(out.grid, starts));
   out.routeCurve = accumulatedAlongRoute(out.grid, out.route);
@@ -93,8 +124,8 @@ TeamMissionResult runTeamMission(const terrain::Dem& dem, const Raster<std::uint
 
   const Raster<std::uint8_t>* goalsOn = timed ? &reach : nullptr;
   std::unique_ptr<TaskBuilder> builder;
-  if (hybrid) builder = std::make_unique<HybridTasks>(dem, classes, params, goalsOn);
-  else builder = std::make_unique<SlotTasks>(dem, classes, params, goalsOn);
+  if (hybrid) builder = std::make_unique<HybridTasks>(dem, zoned, params, goalsOn);
+  else builder = std::make_unique<SlotTasks>(dem, zoned, params, goalsOn);
   const std::vector<RoverTask> tasks = builder->build(starts, out.route, cancel);
   for (std::size_t k = 0; k < tasks.size(); ++k)
     for (int t = 0; t < static_cast<int>(out.route.cells.size()); ++t) {
@@ -104,7 +135,7 @@ TeamMissionResult runTeamMission(const terrain::Dem& dem, const Raster<std::uint
     }
   TeamMissionParams p = params;
   p.coordination.slip.seed = deriveSeed(params.seed, 0x511b);
-  out.plan = coordinate(dem, classes, tasks, p.coordination, params.seed, observer, cancel,
+  out.plan = coordinate(dem, zoned, tasks, p.coordination, params.seed, observer, cancel,
                         &lattice);
   if (cancel && cancel->cancelled()) out.plan.cancelled = true;
   out.curves = accumulatedProbability(pdm, out.plan.trajectories, params.sensingDiameter);

@@ -32,6 +32,13 @@ struct ReachabilityReport {
   double unreachableMass = 0;        // PDM mass on those cells (of 1)
   int unreachableSearchCells = 0;
   double unreachableSearchMass = 0;  // original mass of those search cells
+  // Excluded by the operator's keep-out zones (with their margin), not counted as unreachable:
+  // map cells with data that were passable, and search cells that were possible targets.
+  std::int64_t keepOutMapCells = 0;
+  double keepOutAreaM2 = 0;
+  double keepOutMass = 0;
+  int keepOutSearchCells = 0;
+  double keepOutSearchMass = 0;
 };
 
 // Everything a run produces.

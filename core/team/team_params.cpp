@@ -74,6 +74,8 @@ ParamTable<P> buildTable() {
           [](auto& p) -> auto& { return p.mission.traversability.highRiskDeg; });
   addReal(t, realParam("impassable_deg", 0.1, 90, "deg", "Traversability: slope from which a cell is impassable (never a target, never entered)."),
           [](auto& p) -> auto& { return p.mission.traversability.impassableDeg; });
+  addReal(t, realParam("keep_out_margin", 0, 10, "m", "Planned paths keep this far (along x and y) from the mission's keep-out zones; no sample ever enters a zone's cells."),
+          [](auto& p) -> auto& { return p.mission.keepOutMargin; });
   // RRT* and eq. 9 (SPEC §3.2).
   t.group("RRT*");
   addReal(t, common(realParam("range", 0.05, 100, "m", "RRT* range: the longest edge (paper 001: 1 m).")),

@@ -123,7 +123,8 @@ bool cellAllowed(const terrain::Dem& dem, const Raster<std::uint8_t>& classes,
   auto cell = localToCell(classes.geometry, p);
   if (!cell) return false;
   auto cls = static_cast<terrain::TerrainClass>(classes(cell->row, cell->col));
-  if (cls == terrain::TerrainClass::Impassable || cls == terrain::TerrainClass::NoData)
+  if (cls == terrain::TerrainClass::Impassable || cls == terrain::TerrainClass::NoData ||
+      cls == terrain::TerrainClass::KeepOut)
     return false;
   return dem.valid(cell->row, cell->col);
 }
@@ -139,9 +140,11 @@ Eigen::Vector2d sampleAt(const Eigen::Vector2d& a, const Eigen::Vector2d& b, int
 
 }  // namespace
 
-// Outside every keep-out zone, and inside the corridor when there is one.
+// Outside every keep-out disc, off the operator's keep-out zones' cells (the class KeepOut: never
+// waived, not even in the escape disc), and inside the corridor when there is one.
 bool TerrainEdgeModel::outsideKeepOut(const Eigen::Vector2d& p) const {
   if (corridor_ && !corridor_->contains(p)) return false;
+  if (inZone(p)) return false;
   for (const auto& z : keepOut_)
     if ((p - z.centre).squaredNorm() <= z.radius * z.radius) return false;
   return true;
@@ -261,6 +264,11 @@ double pathCost(const TerrainEdgeModel& model, const std::vector<Eigen::Vector2d
     if (t.length > 0) heading = std::atan2(b.y() - a.y(), b.x() - a.x());
   }
   return sum;
+}
+
+bool TerrainEdgeModel::inZone(const Eigen::Vector2d& p) const {
+  auto cell = localToCell(classes_.geometry, p);
+  return cell && classes_(cell->row, cell->col) == static_cast<std::uint8_t>(terrain::TerrainClass::KeepOut);
 }
 
 const char* pathStatusName(PathStatus s) {

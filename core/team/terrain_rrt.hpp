@@ -76,7 +76,8 @@ double edgeResolutionOn(const GridGeometry& map, const RrtParams& params);
 // |to − from| wrapped to [0, π]: the smaller turn from heading `from` to heading `to`.
 double headingChange(double from, double to);
 
-// A disc the path must stay out of (ours, for prioritised planning, SPEC §3.4): where a
+// A disc the path must stay out of (ours, for prioritised planning, SPEC §3.4; not an operator's
+// keep-out zone, which reaches the planner as the class KeepOut, core/planning/keep_out.hpp): where a
 // higher-priority rover was when a candidate path came too close to it. Re-planning with only a
 // new seed cannot separate a head-on pair on open ground — RRT* converges to the same straight
 // line whatever the seed — so each retry also keeps out of the places the earlier tries collided.
@@ -161,6 +162,10 @@ class TerrainEdgeModel {
   EdgeTerms edgeTerms(const Eigen::Vector2d& a, const Eigen::Vector2d& b) const;
   // edgeValid and edgeTerms in one pass over the samples: the terms when the edge is valid.
   std::optional<EdgeTerms> validEdgeTerms(const Eigen::Vector2d& a, const Eigen::Vector2d& b) const;
+
+  // On a map cell an operator's keep-out zone overlaps (the class KeepOut,
+  // core/planning/keep_out.hpp). No point on such a cell is ever valid.
+  bool inZone(const Eigen::Vector2d& p) const;
 
   const SearchBounds& bounds() const { return bounds_; }
   double edgeResolution() const { return resolution_; }

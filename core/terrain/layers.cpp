@@ -92,6 +92,7 @@ const char* terrainClassName(TerrainClass c) {
     case TerrainClass::HighRisk: return "high_risk";
     case TerrainClass::Impassable: return "impassable";
     case TerrainClass::NoData: return "nodata";
+    case TerrainClass::KeepOut: return "keep_out";
   }
   return "?";
 }

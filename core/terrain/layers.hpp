@@ -21,7 +21,15 @@ Raster<float> aspectHorn(const Dem& dem);
 Raster<float> hillshade(const Dem& dem, double azimuthDeg = 315.0, double altitudeDeg = 45.0,
                         double zFactor = 1.0);
 
-enum class TerrainClass : std::uint8_t { Traversable = 0, HighRisk = 1, Impassable = 2, NoData = 3 };
+// KeepOut is for planning only (core/planning/keep_out.hpp): a map cell an operator's keep-out
+// zone overlaps. No terrain layer holds it; every check that blocks Impassable blocks it too.
+enum class TerrainClass : std::uint8_t {
+  Traversable = 0,
+  HighRisk = 1,
+  Impassable = 2,
+  NoData = 3,
+  KeepOut = 4,
+};
 const char* terrainClassName(TerrainClass c);
 
 struct TraversabilityParams {

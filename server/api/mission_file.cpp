@@ -18,6 +18,8 @@ json missionFile(const store::MissionRecord& m, const std::string& demSha256,
          {"rovers", spec.value("rovers", json::array())},
          {"params", spec.value("params", json::object())}};
   if (spec.contains("pace")) f["pace"] = spec["pace"];
+  // The zones the run kept out of, as the request gave them (local frame): a re-run keeps out too.
+  if (spec.contains("keep_out") && !spec["keep_out"].is_null()) f["keep_out"] = spec["keep_out"];
   // The run's current label (its request's name until renamed; a cleared label clears it).
   if (!m.label.empty()) f["name"] = m.label;
   return f;

@@ -10,6 +10,7 @@
 #include "server/json/json_edge.hpp"
 #include "server/json/mission_request.hpp"
 #include "server/json/plan_json.hpp"
+#include "server/json/zones_json.hpp"
 
 namespace rover::api::openapi {
 
@@ -123,7 +124,9 @@ json schemas(const PlannerRegistry& planners) {
        {"roverplan", nullable(str("The server version that wrote the mission file (informative)."))},
        {"dem_sha256", nullable({{"type", "string"}, {"pattern", "^[0-9a-f]{64}$"},
                                 {"description", "The map's grid digest; a map with another answers 409 map_changed."}})},
-       {"map_name", nullable(str("Informative."))}},
+       {"map_name", nullable(str("Informative."))},
+       {"keep_out", {{"allOf", {openapi::ref("Zones")}}, {"nullable", true},
+                     {"description", "Keep-out zones of this mission, in the local frame."}}}},
       {"map", "planner", "rovers"}, true);
   // Every field the parser accepts has its schema, and no other.
   for (const char* f : rover::json::kMissionRequestFields)
@@ -133,6 +136,22 @@ json schemas(const PlannerRegistry& planners) {
   file["required"] = {"format", "version", "map", "planner", "rovers", "params"};
   file["description"] = "A mission file: everything to run a mission again (POST it to /api/missions).";
   s["MissionFile"] = file;
+  // Keep-out zones (server/json/zones_json.hpp): Polygons in the local frame unless ?crs=map.
+  json position = {{"type", "array"}, {"items", num()}, {"minItems", 2}, {"maxItems", 3}};
+  json ring = {{"type", "array"}, {"items", position}, {"minItems", 4}, {"maxItems", rover::json::kMaxZoneVertices + 1}};
+  json polygon = object({{"type", {{"type", "string"}, {"enum", {"Polygon"}}}},
+                         {"coordinates", {{"type", "array"}, {"items", ring}, {"minItems", 1}}}},
+                        {"type", "coordinates"});
+  json feature = object({{"type", {{"type", "string"}, {"enum", {"Feature"}}}},
+                         {"geometry", polygon},
+                         {"properties", nullable(object({{"name", str()}}))}},
+                        {"type", "geometry"});
+  s["Zones"] = object({{"type", {{"type", "string"}, {"enum", {"FeatureCollection"}}}},
+                       {"features", {{"type", "array"}, {"items", feature}, {"maxItems", rover::json::kMaxZones}}}},
+                      {"type", "features"});
+  s["Zones"]["description"] = "Keep-out zones: a GeoJSON FeatureCollection of Polygons (at most " +
+                              std::to_string(rover::json::kMaxZones) + " zones and " +
+                              std::to_string(rover::json::kMaxZoneVertices) + " vertices in all).";
   s["MissionLabel"] = object({{"label", name("The run's new label (\"\" clears it).")}}, {"label"}, true);
 
   const char* statuses[] = {"queued", "running", "succeeded", "completed_with_warnings", "failed", "cancelled", "interrupted"};

@@ -14,6 +14,7 @@
 #include "maps/dem_import_options.hpp"
 #include "maps/georef.hpp"
 #include "server/api/mission_file.hpp"
+#include "server/api/json_body.hpp"
 #include "server/api/multipart.hpp"
 #include "server/api/openapi.hpp"
 #include "server/problems/problem_builder.hpp"
@@ -21,6 +22,8 @@
 #include "server/json/mission_request.hpp"
 #include "server/json/pdm_json.hpp"
 #include "server/json/plan_json.hpp"
+#include "server/json/zones_json.hpp"
+#include "server/api/zone_routes.hpp"
 
 namespace rover::api {
 
@@ -149,6 +152,8 @@ struct InvalidateMapAfter {
 // allowed): a browser sends text/plain, form-urlencoded or multipart cross-site without asking
 // first (no CORS preflight), so accepting those would let any page launch or rename missions
 // on an open server.
+}  // namespace
+
 json jsonBody(const Request& req, const rj::JsonLimits& limits) {
   std::string type = req.header("content-type");
   type = type.substr(0, type.find(';'));
@@ -162,6 +167,8 @@ json jsonBody(const Request& req, const rj::JsonLimits& limits) {
                    "content-type");
   return rj::parseJsonLimited(req.body, limits);
 }
+
+namespace {
 
 std::string queryString(const Request& req, const std::string& key) {
   auto it = req.query.find(key);
@@ -232,6 +239,7 @@ missions::MissionJob buildMission(ApiContext& ctx, const json& body) {
   job.record.label = request.name;
   job.params = std::move(request.params);
   job.problem.rovers = std::move(request.rovers);
+  job.problem.keepOut = std::move(request.keepOut);
   if (request.pace) job.pace = *request.pace;
   const Planner* planner = &ctx.planners.get(job.record.planner);
   if (!ctx.db.getMap(job.record.mapId))
@@ -256,6 +264,7 @@ missions::MissionJob buildMission(ApiContext& ctx, const json& body) {
   // it is built once to validate and dropped: a queued mission holds only its request, and a
   // worker builds the world again when it starts the mission (MissionJob::build).
   const GridGeometry mapGeometry = ctx.maps.get(job.record.mapId)->dem.geometry();
+  rj::checkZonesOnMap(job.problem.keepOut, mapGeometry, "keep_out");
   const int roverCount = static_cast<int>(job.problem.rovers.size());
   problems::MapGround ground;
   try {
@@ -282,6 +291,7 @@ missions::MissionJob buildMission(ApiContext& ctx, const json& body) {
       pdm = std::make_shared<Raster<float>>(maps.pdmMass(j.record.pdmId));
     PlanningProblem built = problems::problemOnMap(ground, dem, std::move(pdm), body);
     built.rovers = std::move(j.problem.rovers);  // the request's, kept
+    built.keepOut = std::move(j.problem.keepOut);
     built.threads = j.problem.threads;
     j.problem = std::move(built);
     j.geo = dem->z.geo;
@@ -491,6 +501,8 @@ void addApiRoutes(http::Router& router, ApiContext& ctx) {
               .returns(200, "The layer file.", nullptr, "application/octet-stream")
               .errors({400, 404, 503, 507}),
           onPool));
+
+  addZoneRoutes(router, ctx);  // GET|PUT /api/maps/{id}/zones
 
   // --- PDMs ---
   router.add("GET", "/api/maps/{id}/pdms", guarded([&ctx](const Request& req) {
@@ -720,5 +732,7 @@ void addApiRoutes(http::Router& router, ApiContext& ctx) {
     return s->subscribe(std::move(c));
   }, ws);
 }
+
+http::Handler guardedRoute(http::Handler handler) { return guarded(std::move(handler)); }
 
 }  // namespace rover::api

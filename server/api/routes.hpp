@@ -50,5 +50,8 @@ struct ApiContext {
 
 // Registers every /api route on `router`.
 void addApiRoutes(http::Router& router, ApiContext& ctx);
+// `handler` with the API's error mapping (core Error -> 400 naming its field, JSON type errors ->
+// 400, anything else -> 500 without details), for routes registered outside routes.cpp.
+http::Handler guardedRoute(http::Handler handler);
 
 }  // namespace rover::api

@@ -77,6 +77,7 @@ int coverageCommand(const std::vector<std::string>& argv, std::ostream& out) {
               "Rover starts in the local frame (metres from the lower-left corner) and headings "
               "(degrees counter-clockwise from east); overrides --rovers.");
   addCoverageParamOptions(args);
+  addKeepOutOption(args);
   args.option("geojson", "FILE", "", "Also write the rover paths as GeoJSON in the map's CRS.");
   args.flag("json", "Print one JSON object (metrics, per-rover paths, coverage curve).");
   if (!args.parse(argv)) {
@@ -105,6 +106,7 @@ int coverageCommand(const std::vector<std::string>& argv, std::ostream& out) {
     } else {
       problem = problems::problemOnGrid(wp);
     }
+    problem.keepOut = readKeepOutOption(args, dem ? dem->dem.geometry() : problem.world.geometry());
     problem.rovers = !starts.empty() ? starts : problems::randomValidStarts(planner, problem, params, rovers, wp.seed);
     planner.validate(problem, params);
   } catch (const Error& e) {

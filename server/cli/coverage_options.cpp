@@ -1,5 +1,11 @@
 #include "server/cli/coverage_options.hpp"
 
+#include <fstream>
+
+#include "server/http/http_types.hpp"
+#include "server/json/json_edge.hpp"
+#include "server/json/zones_json.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <numbers>
@@ -148,6 +154,36 @@ ParamSet readCoverageParamOptions(const ArgParser& a) {
   implies("alpha", "beta");
   if (set.count("cost_table") && !set.count("pattern")) set["pattern"] = std::string("custom");
   return set;
+}
+
+}  // namespace rover::cli
+
+namespace rover::cli {
+
+void addKeepOutOption(ArgParser& args) {
+  args.option("keep-out", "FILE", "",
+              "Keep-out zones: a GeoJSON FeatureCollection of Polygons in the local frame (metres "
+              "from the lower-left corner); every planner keeps out of them.");
+}
+
+KeepOut readKeepOutOption(const ArgParser& args, const GridGeometry& map) {
+  if (!args.has("keep-out")) return {};
+  const std::string path = args.str("keep-out", "");
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw UsageError("invalid value for --keep-out: " + path + ": cannot read");
+  std::string text(json::kMaxZonesFileBytes + 1, '\0');
+  in.read(text.data(), static_cast<std::streamsize>(text.size()));
+  text.resize(static_cast<std::size_t>(in.gcount()));
+  try {
+    const nlohmann::json body = json::parseJsonLimited(text, {json::kMaxZonesFileBytes, 64});
+    if (body.contains("crs"))
+      throw UsageError("invalid value for --keep-out: " + path +
+                       ": the file names a CRS; give the zones in the local frame (or import it "
+                       "into a map with PUT /api/maps/{id}/zones?crs=map)");
+    return json::zonesFromJson(body, "zones", &map);
+  } catch (const http::ApiError& e) {
+    throw UsageError("invalid value for --keep-out: " + path + ": " + e.what());
+  }
 }
 
 }  // namespace rover::cli

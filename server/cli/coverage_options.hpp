@@ -27,6 +27,12 @@ ParamSet readParamOptions(const ArgParser& args, const std::vector<ParamInfo>& i
 // in radians); empty when the option is not given.
 std::vector<RoverStart> readStartOption(const ArgParser& args);
 
+// --keep-out FILE.geojson: keep-out zones, a FeatureCollection of Polygons in the local frame
+// (server/json/zones_json.hpp), checked against `map` (the world or the DEM's grid). Empty
+// when not given; a bad file is a UsageError naming the option and the field.
+void addKeepOutOption(ArgParser& args);
+KeepOut readKeepOutOption(const ArgParser& args, const GridGeometry& map);
+
 // The option name of a planner parameter key (sense_radius -> sense, max_steps -> max-steps).
 std::string optionForParam(const std::string& key);
 // A core validation error, re-said in terms of the command's options.

@@ -41,6 +41,10 @@ void printSummary(std::ostream& out, const MissionSetup& s, const PlanResult& r)
       << count("unreachable_search_cells") << " search cells, probability " << std::setprecision(4)
       << m("unreachable_probability") << "); " << count("targets_no_slot")
       << " rover slots without valid ground\n";
+  if (m("keep_out_area_m2") > 0)
+    out << std::setprecision(2) << "keep-out   " << m("keep_out_area_m2") << " m² excluded ("
+        << count("keep_out_search_cells") << " search cells, probability " << std::setprecision(4)
+        << m("keep_out_probability") << ")\n";
   out << std::setprecision(2) << "wall       " << m("plan_wall_s") << " s\n";
   out << "outcome    " << (r.warnings.empty() ? "completed" : "completed with warnings") << "\n";
   for (const auto& w : r.warnings) out << "  warning: " << w << "\n";

@@ -30,6 +30,7 @@ void addMissionOptions(ArgParser& a) {
   a.option("start", "X,Y,DEG[;X,Y,DEG...]", "formation",
            "Rover starts in the local frame (metres from the lower-left corner) and headings "
            "(degrees counter-clockwise from east); overrides --rovers.");
+  addKeepOutOption(a);
   addParamOptions(a, team::teamParamTable().infos());
 }
 
@@ -65,6 +66,7 @@ MissionSetup readMissionOptions(const ArgParser& a) {
                                      pdm.empty() ? nullptr : std::make_shared<Raster<float>>(std::move(pdm)),
                                      import.body);
 
+  s.problem.keepOut = readKeepOutOption(a, dem->geometry());
   std::vector<RoverStart> starts = readStartOption(a);
   if (starts.empty()) {
     const int n = static_cast<int>(a.integer("rovers", 5, 1, 64));

@@ -421,7 +421,7 @@ void HttpSession::routeRequest() {
     Response r;
     r.status = 204;
     r.contentType.clear();
-    r.headers = {{"Access-Control-Allow-Methods", "GET, POST, PATCH, DELETE, OPTIONS"},
+    r.headers = {{"Access-Control-Allow-Methods", "GET, POST, PUT, PATCH, DELETE, OPTIONS"},
                  {"Access-Control-Allow-Headers", "Authorization, Content-Type"},
                  {"Access-Control-Max-Age", "600"}};
     return send(std::move(r), bodyPending);

@@ -8,6 +8,7 @@
 #include "server/http/http_types.hpp"
 #include "server/json/json_edge.hpp"
 #include "server/json/plan_json.hpp"
+#include "server/json/zones_json.hpp"
 
 namespace rover::json {
 
@@ -122,6 +123,8 @@ MissionRequest parseMissionRequest(const json& body, const PlannerRegistry& plan
                               "a number of degrees in [-360, 360]");
     req.rovers.push_back({{x, y}, heading * std::numbers::pi / 180.0});
   }
+  if (auto k = body.find("keep_out"); k != body.end() && !k->is_null())
+    req.keepOut = zonesFromJson(*k, "keep_out");
   if (auto pace = body.find("pace"); pace != body.end())
     req.pace = boundedNumber(*pace, "pace", 0, kMaxPace, "a number of steps per second in [0, 1e6]");
 

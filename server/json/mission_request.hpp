@@ -24,6 +24,9 @@ struct MissionRequest {
   nlohmann::json spec;             // the body as accepted, without map, pdm and planner
   // From a mission file (server/api/mission_file.hpp): the grid digest its map must have.
   std::optional<std::string> demSha256;
+  // `keep_out`: a FeatureCollection of Polygons in the local frame (zones_json.hpp); checked
+  // against the map's extent by the route, which knows the map.
+  KeepOut keepOut;
 };
 
 // Limits stated in README (API): at most kMaxRovers rovers; x and y finite with |v| <= 1e9 m (the
@@ -35,12 +38,16 @@ inline constexpr double kMaxPace = 1e6;
 // Every top-level field a request (or a mission file) may hold; any other is 400 unknown_field.
 inline constexpr const char* kMissionRequestFields[] = {"map",     "pdm",       "planner",    "rovers",
                                                         "params",  "pace",      "name",       "format",
-                                                        "version", "roverplan", "dem_sha256", "map_name"};
+                                                        "version", "roverplan", "dem_sha256", "map_name",
+                                                        "keep_out"};
 
 // A mission file's own fields are accepted too: format ("roverplan-mission"), version (at most
 // `maxFileVersion`), dem_sha256 (64 hex digits, or null) and the informative roverplan and
 // map_name (strings, not checked further).
-// Throws http::ApiError (400) naming the field: "map", "planner", "params.KEY", "rovers[2].x", ...
+// `keep_out` (optional, null = none): keep-out zones, GeoJSON FeatureCollection of Polygons in the
+// local frame (server/json/zones_json.hpp for its limits).
+// Throws http::ApiError (400) naming the field: "map", "planner", "params.KEY", "rovers[2].x",
+// "keep_out.features[0].geometry.coordinates", ...
 MissionRequest parseMissionRequest(const nlohmann::json& body, const PlannerRegistry& planners,
                                    int maxFileVersion = 1);
 

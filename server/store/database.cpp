@@ -26,7 +26,7 @@ namespace rover::store {
 
 namespace {
 
-constexpr int kSchemaVersion = 2;
+constexpr int kSchemaVersion = 3;
 
 // A full disk (SQLITE_FULL), a failed write (SQLITE_IOERR_*) or a file over RLIMIT_FSIZE are
 // the disk's fault, not a bug: StorageFull, answered 507.
@@ -177,6 +177,16 @@ UPDATE missions SET label = COALESCE(json_extract(spec, '$.name'), '')
   WHERE json_valid(spec) AND json_type(spec, '$.name') = 'text';
 )sql";
 
+// Version 3: a map's keep-out zones (issue 13), one GeoJSON FeatureCollection per map, deleted
+// with the map.
+constexpr const char* kMigrateV2toV3 = R"sql(
+CREATE TABLE IF NOT EXISTS zones(
+  map_id     TEXT PRIMARY KEY REFERENCES maps(id) ON DELETE CASCADE,
+  body       TEXT NOT NULL,
+  updated_at TEXT NOT NULL
+);
+)sql";
+
 // A mission row with the names of its map and PDM (empty once they are deleted).
 constexpr const char* kMissionSelect =
     "SELECT m.id, m.map_id, m.pdm_id, m.planner, m.spec, m.status, m.message, m.created_at, "
@@ -313,6 +323,12 @@ void Database::open(const std::string& path, bool exclusive) {
         s.run();
         version = 2;
       }
+      if (version == 2) {
+        exec(db_, kMigrateV2toV3);
+        Stmt s(db_, "INSERT INTO schema_version(version) VALUES (3)");
+        s.run();
+        version = 3;
+      }
       exec(db_, "COMMIT");
     } catch (...) {
       sqlite3_exec(db_, "ROLLBACK", nullptr, nullptr, nullptr);
@@ -371,6 +387,27 @@ bool Database::deleteMap(const std::string& id) {
     s.bind(1, id).run();
     return sqlite3_changes(db_) > 0;
   });
+}
+
+bool Database::setZones(const std::string& mapId, const nlohmann::json& zones) {
+  const std::string body = dumpJson(zones, "zones");
+  std::lock_guard lock(mutex_);
+  ensureReserves();
+  // One statement: the row is written only while the map exists (a delete racing it wins).
+  Stmt s(db_,
+         "INSERT INTO zones(map_id, body, updated_at) SELECT ?1, ?2, ?3 WHERE EXISTS "
+         "(SELECT 1 FROM maps WHERE id = ?1) ON CONFLICT(map_id) DO UPDATE SET "
+         "body = excluded.body, updated_at = excluded.updated_at");
+  s.bind(1, mapId).bind(2, body).bind(3, nowIso()).run();
+  return sqlite3_changes(db_) > 0;
+}
+
+std::optional<nlohmann::json> Database::getZones(const std::string& mapId) {
+  std::lock_guard lock(mutex_);
+  Stmt s(db_, "SELECT body FROM zones WHERE map_id = ?1");
+  s.bind(1, mapId);
+  if (!s.step()) return std::nullopt;
+  return parseJson(s, 0, "zones");
 }
 
 // ---- PDMs -------------------------------------------------------------------------------------

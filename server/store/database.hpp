@@ -70,6 +70,10 @@ class Database {
   std::vector<MapRecord> listMaps(long long limit = -1, long long offset = 0);  // oldest first
   long long countMaps();
   bool deleteMap(const std::string& id);  // also deletes its PDMs' rows; returns false if absent
+  // A map's keep-out zones (a GeoJSON FeatureCollection, local frame), replacing any before; false
+  // when the map does not exist. Deleted with the map.
+  bool setZones(const std::string& mapId, const nlohmann::json& zones);
+  std::optional<nlohmann::json> getZones(const std::string& mapId);  // nullopt: never set
 
   void insertPdm(const PdmRecord& p);
   std::optional<PdmRecord> getPdm(const std::string& id);

@@ -292,5 +292,33 @@ run mission --dem "$TMP/t.tif" --random-pdm 4 --pdm "$TMP/nope.json"
 expect_status 2 "mission with two PDM sources"
 pass "mission errors exit 2 naming the option"
 
+# Keep-out zones (issue 13): a 60 x 60 random world, a wall x 20..30 m across all but the top
+# 10 m; the coverage path never enters it; a bad file is one line naming the option.
+cat >"$TMP/zones.geojson" <<'JSON'
+{"type": "FeatureCollection", "features": [{"type": "Feature", "properties": {},
+ "geometry": {"type": "Polygon", "coordinates": [[[20, -1], [30, -1], [30, 50], [20, 50], [20, -1]]]}}]}
+JSON
+run coverage --seed 3 --start "5.5,5.5,0" --frontier --keep-out "$TMP/zones.geojson" --json
+expect_status 0 "coverage --keep-out"
+python3 -c '
+import json, sys
+j = json.load(open(sys.argv[1]))
+pts = [p for r in j["rovers"] for p in r["path"]]
+inside = [p for p in pts if 20 < p[0] < 30 and p[1] < 50]
+assert not inside, inside[:3]
+assert any(p[0] > 30 for p in pts), "never went round the zone"
+assert j["metrics"]["keep_out_cells"] >= 400, j["metrics"]["keep_out_cells"]
+' "$OUT" || fail "coverage --keep-out: a path point inside the zone"
+echo '{"type": "FeatureCollection", "features": [{"type": "Feature", "geometry": {"type": "Polygon", "coordinates": [[[1, 1], [2, 2], [3, 1]]]}}]}' >"$TMP/open.geojson"
+run coverage --keep-out "$TMP/open.geojson"
+expect_status 2 "coverage with an open ring"
+[ "$(lines "$ERR")" -eq 1 ] && grep -q -- "--keep-out" "$ERR" && grep -q "geometry.coordinates" "$ERR" || fail "coverage --keep-out bad file: stderr"
+# t.tif is 32 x 32 m: a zone x 22..26 east of the formation at the centre.
+echo '{"type": "FeatureCollection", "features": [{"type": "Feature", "geometry": {"type": "Polygon", "coordinates": [[[22, 2], [26, 2], [26, 30], [22, 30], [22, 2]]]}}]}' >"$TMP/small.geojson"
+run mission --dem "$TMP/t.tif" --rovers 2 --targets 2 --keep-out "$TMP/small.geojson"
+expect_status 0 "mission --keep-out"
+grep -q "^keep-out " "$OUT" || fail "mission --keep-out: no keep-out line in the summary"
+pass "coverage and mission keep out of --keep-out zones; a bad file exits 2 naming it"
+
 echo "$passed passed, 0 failed"
 exit 0

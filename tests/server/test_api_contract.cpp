@@ -57,6 +57,7 @@ class SchemaCheck {
       if (s.contains("type") && !s.value("nullable", false)) out.push_back(at + ": null not allowed");
       return;
     }
+    for (const auto& alt : s.value("allOf", json::array())) visit(v, alt, at, out);
     for (const char* k : {"anyOf", "oneOf"}) {
       if (!s.contains(k)) continue;
       int matches = 0;

@@ -344,26 +344,26 @@ TEST_CASE("database: WAL mode and schema version") {
     db.insertMap(makeMap("m", "2026-01-01T00:00:00.000Z"));
     CHECK(fs::exists(t.db() + "-wal"));
     CHECK(rawQuery(t.db(), "PRAGMA journal_mode") == "wal");
-    CHECK(rawQuery(t.db(), "SELECT MAX(version) FROM schema_version") == "2");
-    CHECK(rawQuery(t.db(), "SELECT COUNT(*) FROM schema_version") == "2");  // 1, then 1 -> 2
+    CHECK(rawQuery(t.db(), "SELECT MAX(version) FROM schema_version") == "3");
+    CHECK(rawQuery(t.db(), "SELECT COUNT(*) FROM schema_version") == "3");  // 1, 1 -> 2, 2 -> 3
   }
   {
     Database again(t.db());  // reopening an existing schema is a no-op
     CHECK(again.getMap("m").has_value());
   }
-  CHECK(rawQuery(t.db(), "SELECT COUNT(*) FROM schema_version") == "2");
+  CHECK(rawQuery(t.db(), "SELECT COUNT(*) FROM schema_version") == "3");
 
   // A database written by a newer server is refused rather than misread.
-  rawQuery(t.db(), "INSERT INTO schema_version(version) VALUES (3)");
+  rawQuery(t.db(), "INSERT INTO schema_version(version) VALUES (4)");
   try {
     Database newer(t.db());
     FAIL("expected an exception");
   } catch (const std::runtime_error& e) {
-    CHECK(std::string(e.what()).find("schema version 3") != std::string::npos);
+    CHECK(std::string(e.what()).find("schema version 4") != std::string::npos);
   }
 }
 
-TEST_CASE("database: a version 1 file migrates to 2, its runs labelled with their request's name") {
+TEST_CASE("database: a version 1 file migrates to 3, its runs labelled with their request's name") {
   TempDir t;
   {  // The version 1 schema as servers before the migration wrote it.
     sqlite3* db = nullptr;
@@ -386,7 +386,7 @@ TEST_CASE("database: a version 1 file migrates to 2, its runs labelled with thei
     sqlite3_close(db);
   }
   Database db(t.db());
-  CHECK(rawQuery(t.db(), "SELECT MAX(version) FROM schema_version") == "2");
+  CHECK(rawQuery(t.db(), "SELECT MAX(version) FROM schema_version") == "3");
   auto a = db.getMission("a");
   REQUIRE(a);
   CHECK(a->label == "old run");
@@ -674,4 +674,22 @@ TEST_CASE("data dir: cleanTmp empties tmp but keeps it; removeTree") {
   CHECK_FALSE(fs::exists(staged));
   DataDir::removeTree(staged);  // absent: no error
   DataDir::removeTree((t.path / "never" / "there").string());
+}
+
+TEST_CASE("database: a map's keep-out zones are replaced on write and go with the map") {
+  TempDir t;
+  Database db(t.db());
+  db.insertMap(makeMap("m", "2026-01-01T00:00:00.000Z"));
+  CHECK_FALSE(db.getZones("m"));
+  const nlohmann::json one{{"type", "FeatureCollection"}, {"features", nlohmann::json::array({1})}};
+  const nlohmann::json none{{"type", "FeatureCollection"}, {"features", nlohmann::json::array()}};
+  CHECK(db.setZones("m", one));
+  CHECK(*db.getZones("m") == one);
+  CHECK(db.setZones("m", none));
+  CHECK(*db.getZones("m") == none);
+  CHECK_FALSE(db.setZones("absent", one));  // no map, no row
+  CHECK_FALSE(db.getZones("absent"));
+  CHECK(db.deleteMap("m"));
+  CHECK_FALSE(db.getZones("m"));
+  CHECK(rawQuery(t.db(), "SELECT COUNT(*) FROM zones") == "0");
 }

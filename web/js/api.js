@@ -95,6 +95,8 @@ export const api = {
   pdms: (mapId) => getAllPages(`/api/maps/${mapId}/pdms`),
   createPdm: (mapId, body) => sendJson('POST', `/api/maps/${mapId}/pdms`, body),
   deletePdm: (mapId, pdmId) => sendJson('DELETE', `/api/maps/${mapId}/pdms/${pdmId}`),
+  zones: (mapId) => getJson(`/api/maps/${mapId}/zones`),
+  saveZones: (mapId, fc, crs = 'local') => sendJson('PUT', `/api/maps/${mapId}/zones${crs === 'map' ? '?crs=map' : ''}`, fc),
   missions: () => getAllPages('/api/missions'),
   mission: (id) => getJson(`/api/missions/${id}`),
   launch: (body) => sendJson('POST', '/api/missions', body),

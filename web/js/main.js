@@ -11,6 +11,7 @@ import { RunsPanel } from './runs.js';
 import { counters, state } from './state.js';
 import { $, report, setErrorReporter } from './util.js';
 import { View3D } from './view3d.js';
+import { ZoneEditor } from './zones.js';
 
 // --- status line: a message part and a live-mission part ---
 const statusParts = { msg: '', live: '' };
@@ -39,6 +40,14 @@ const missionView = new MissionView({ view, layers, statusLine, selectMap, onFin
 const pdmEditor = new PdmEditor({ view, layers });
 const missionForm = new MissionForm({ view, onLaunched: (m) => launched(m) });
 const mapsPanel = new MapsPanel({ selectMap: chooseMap });
+const zoneEditor = new ZoneEditor({ view, layers });
+// The mission form's "respect keep-out zones": on by default when the map has saved zones.
+state.on('zones', (fc) => {
+  const n = fc?.features?.length || 0;
+  $('m-keep-out').checked = n > 0;
+  $('m-keep-out').disabled = n === 0;
+  $('m-keep-out-count').textContent = n ? `${n} saved on this map` : 'none on this map';
+});
 const runs = new RunsPanel({
   missionView,
   onDuplicate: async (file) => {
@@ -47,7 +56,7 @@ const runs = new RunsPanel({
   },
 });
 const view3d = new View3D({ container: $('view3d'), message: $('view3d-message'), layers, missionView });
-window.__roverplanApp = { view, layers, missionView, pdmEditor, missionForm, mapsPanel, runs, view3d, state };
+window.__roverplanApp = { view, layers, missionView, pdmEditor, missionForm, mapsPanel, zoneEditor, runs, view3d, state };
 
 async function selectMap(id) {
   if (!id) {
@@ -148,6 +157,7 @@ const TOOL_HELP = {
   pan: 'drag to pan · wheel or +/− to zoom',
   pdm: 'PDM: click to add a Gaussian · drag handles to shape it · drag elsewhere to pan',
   rovers: 'Mission: click to place the next rover, drag from it to set its heading',
+  zones: 'Zones: click to add corners, click the first (or Enter) to close · drag a corner · Delete removes the selected',
 };
 state.on('tool', (tool) => {
   view.setTool(tool);

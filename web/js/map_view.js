@@ -198,6 +198,7 @@ export class MapView {
     this.tool = name;
     this.canvas.classList.toggle('tool-pdm', name === 'pdm');
     this.canvas.classList.toggle('tool-rovers', name === 'rovers');
+    this.canvas.classList.toggle('tool-zones', name === 'zones');
   }
 
   onHover(fn) {

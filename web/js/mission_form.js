@@ -490,6 +490,8 @@ export class MissionForm {
       pace,
     };
     if ($('m-pdm').value) body.pdm = $('m-pdm').value;
+    // Keep-out zones (issue 13): the map's saved zones, when the operator keeps the box ticked.
+    if ($('m-keep-out').checked && state.zones?.features?.length) body.keep_out = state.zones;
     if ($('m-name').value.trim()) body.name = $('m-name').value.trim();
     const button = $('m-launch');
     button.disabled = true;

@@ -2,7 +2,7 @@
 //
 // Events: 'map' (the selected map changed: detail), 'maps' (list reloaded), 'pdms' (the map's PDM
 // list changed), 'pdm-selected' (id or ''), 'tool' (map click tool), 'mission' (a mission is now
-// shown), 'render' (something on the map changed: redraw).
+// shown), 'render' (something on the map changed: redraw), 'zones' (the map's saved keep-out zones).
 
 class AppState extends EventTarget {
   constructor() {
@@ -12,7 +12,8 @@ class AppState extends EventTarget {
     this.pdms = [];        // the selected map's PDMs
     this.pdmId = '';       // the PDM shown and offered to missions
     this.planners = [];    // GET /api/planners
-    this.tool = 'pan';     // 'pan' | 'pdm' | 'rovers'
+    this.tool = 'pan';     // 'pan' | 'pdm' | 'rovers' | 'zones'
+    this.zones = null;     // the selected map's saved keep-out zones (GeoJSON, local frame)
   }
 
   emit(type, detail) {

@@ -1,0 +1,172 @@
+// Keep-out zones from the page (issue 13): a zone drawn with mouse clicks and saved with the map;
+// a coverage mission and a small team mission launched with "respect keep-out zones" never put a
+// trajectory point inside it (read from result.json).
+import assert from 'node:assert/strict';
+import { after, before, describe, test } from 'node:test';
+import { mkdirSync } from 'node:fs';
+import { launchBrowser, mapPoint, missingPrerequisite, openPage, repoRoot, startServer, waitEnded, waitForMap } from './lib/harness.mjs';
+import { join, resolve } from 'node:path';
+
+const missing = missingPrerequisite();
+if (missing) console.log(`# browser tests skipped: ${missing}`);
+
+const shotsDir = resolve(repoRoot, '../shots');
+
+function inside(ring, x, y) {
+  let c = false;
+  for (let i = 0, j = ring.length - 1; i < ring.length; j = i++) {
+    const [xi, yi] = ring[i], [xj, yj] = ring[j];
+    if ((yi > y) !== (yj > y) && x < ((xj - xi) * (y - yi)) / (yj - yi) + xi) c = !c;
+  }
+  return c;
+}
+
+async function shot(page, name) {
+  mkdirSync(shotsDir, { recursive: true });
+  await page.screenshot({ path: join(shotsDir, `zones-${name}.png`) });
+}
+
+// Launches the mission the form holds and waits for its end; returns its result.json.
+async function launchAndWait(page, server) {
+  await page.fill('#m-pace', '0');
+  const posted = page.waitForResponse((r) => r.url().endsWith('/api/missions') && r.request().method() === 'POST', { timeout: 30000 });
+  await page.click('#m-launch');
+  const refused = await page.waitForFunction(() => !document.getElementById('m-error').hidden, null, { timeout: 2000 }).then(() => true, () => false);
+  if (refused) assert.fail(`not launched: ${await page.textContent('#m-error')}`);
+  const response = await posted;
+  const launched = await response.json();
+  assert.equal(response.status(), 202, `launch refused: ${JSON.stringify(launched)} ${await page.textContent('#m-error')}`);
+  const id = launched.id;
+  const m = await waitEnded(server.url, id);
+  assert.ok(['succeeded', 'completed_with_warnings'].includes(m.status), `${m.status}: ${m.message}`);
+  assert.ok(m.spec.keep_out, 'the mission was sent with keep_out');
+  const result = await (await fetch(`${server.url}/api/missions/${id}/result.json`)).json();
+  await page.waitForFunction(() => window.__roverplan.doneFrames > 0, null, { timeout: 60000 }).catch(() => {});
+  return { id, result };
+}
+
+function checkOutside(result, ring, what) {
+  let points = 0, outside = 0;
+  for (const r of result.rovers) {
+    for (const [x, y] of r.path) {
+      points++;
+      if (!inside(ring, x, y)) outside++;
+    }
+  }
+  console.log(`${what}: ${points} trajectory points, ${points - outside} inside the zone`);
+  assert.ok(points > 10, `${what}: too few points (${points})`);
+  assert.equal(outside, points, `${what}: trajectory points inside the zone`);
+}
+
+describe('keep-out zones', { skip: missing || false, timeout: 300000 }, () => {
+  let server, browser;
+  before(async () => {
+    server = await startServer();
+    browser = await launchBrowser();
+  });
+  after(async () => {
+    await browser?.close();
+    await server?.stop();
+  });
+
+  test('a zone drawn with clicks is saved and no coverage or team trajectory enters it', async () => {
+    const { page, errors, context } = await openPage(browser, `${server.url}/`);
+    await waitForMap(page);
+    const mapId = await page.evaluate(() => window.__roverplanApp.state.map.id);
+    // The default map is 150 × 150 m; the zone is a quadrilateral east of the rovers.
+    const ring = [[60, 45], [95, 40], [100, 110], [62, 105]];
+    await page.click('#zones-draw');
+    for (const [x, y] of ring) {
+      const p = await mapPoint(page, x, y);
+      await page.mouse.click(p.x, p.y);
+    }
+    const first = await mapPoint(page, ring[0][0], ring[0][1]);
+    await page.mouse.click(first.x, first.y);  // closes it
+    assert.equal(await page.locator('#zone-list li').count(), 1);
+    // Edit: drag the third corner 5 m east, then save.
+    const c = await mapPoint(page, ring[2][0], ring[2][1]);
+    const c2 = await mapPoint(page, ring[2][0] + 5, ring[2][1]);
+    await page.mouse.move(c.x, c.y);
+    await page.mouse.down();
+    await page.mouse.move(c2.x, c2.y, { steps: 4 });
+    await page.mouse.up();
+    await shot(page, 'editing');  // corner handles while the tool is on
+    await page.click('#zones-save');
+    await page.waitForFunction(() => /saved 1 zone/.test(document.getElementById('zones-status').textContent), null, { timeout: 10000 });
+    const saved = await (await fetch(`${server.url}/api/maps/${mapId}/zones`)).json();
+    assert.equal(saved.features.length, 1);
+    const stored = saved.features[0].geometry.coordinates[0].slice(0, -1);
+    assert.equal(stored.length, 4);
+    // The drawn corners, within the pixel the click landed on; the dragged one moved ~5 m.
+    const px = await page.evaluate(() => 1 / window.__roverplanApp.view.scale);
+    for (const k of [0, 1, 3]) {
+      assert.ok(Math.hypot(stored[k][0] - ring[k][0], stored[k][1] - ring[k][1]) < 2 * px, `corner ${k}: ${stored[k]}`);
+    }
+    assert.ok(Math.abs(stored[2][0] - (ring[2][0] + 5)) < 3 * px, `dragged corner: ${stored[2]}`);
+    const zone = stored;
+    // The legend says what the hatching is.
+    assert.match(await page.textContent('#legend-list [data-layer="zones"]'), /no rover enters \(1 zone\)/);
+    await page.click('#zones-draw');  // done drawing
+    await shot(page, 'drawn');
+
+    // A coverage mission: one rover west of the zone.
+    await page.click('#tab-mission');
+    assert.equal(await page.isChecked('#m-keep-out'), true, 'on by default when the map has zones');
+    await page.selectOption('#m-planner', 'coverage');
+    await page.fill('#m-rover-count', '1');
+    if ((await page.getAttribute('#m-place', 'aria-pressed')) !== 'true') await page.click('#m-place');
+    const s = await mapPoint(page, 30, 75);
+    await page.mouse.click(s.x, s.y);
+    const cov = await launchAndWait(page, server);
+    checkOutside(cov.result, zone, 'coverage');
+    assert.ok(cov.result.metrics.keep_out_cells > 100, `keep_out_cells ${cov.result.metrics.keep_out_cells}`);
+    await page.waitForTimeout(300);
+    await shot(page, 'coverage');
+
+    // Import the zone again from a file in the map's CRS, as an export is written: the coverage
+    // run's result.geojson gives the CRS (its "crs" member) and the local -> CRS mapping (its
+    // track's points are result.json's path); its LineString is skipped, the Polygon replaces
+    // the saved zone.
+    const exported = await (await fetch(`${server.url}/api/missions/${cov.id}/result.geojson`)).json();
+    const local = cov.result.rovers[0].path, crsLine = exported.features[0].geometry.coordinates;
+    const [a, b] = [0, local.length - 1];
+    const sx = (crsLine[b][0] - crsLine[a][0]) / (local[b][0] - local[a][0]);
+    const sy = (crsLine[b][1] - crsLine[a][1]) / (local[b][1] - local[a][1]);
+    const toCrs = ([x, y]) => [crsLine[a][0] + (x - local[a][0]) * sx, crsLine[a][1] + (y - local[a][1]) * sy];
+    const inCrs = {
+      type: 'FeatureCollection', crs: exported.crs,
+      features: [exported.features[0], { type: 'Feature', properties: { name: 'imported' },
+        geometry: { type: 'Polygon', coordinates: [[...zone, zone[0]].map(toCrs)] } }],
+    };
+    await page.click('#tab-maps');
+    await page.setInputFiles('#zones-import', { name: 'zones-map-crs.geojson', mimeType: 'application/geo+json', buffer: Buffer.from(JSON.stringify(inCrs)) });
+    await page.waitForFunction(() => /imported 1 zone \(map's CRS\), skipped 1 other/.test(document.getElementById('zones-status').textContent), null, { timeout: 10000 });
+    const imported = (await (await fetch(`${server.url}/api/maps/${mapId}/zones`)).json()).features;
+    assert.equal(imported.length, 1);
+    assert.equal(imported[0].properties.name, 'imported');
+    imported[0].geometry.coordinates[0].slice(0, -1).forEach(([x, y], k) =>
+      assert.ok(Math.hypot(x - zone[k][0], y - zone[k][1]) < 1e-3, `imported corner ${k}: ${x}, ${y} vs ${zone[k]}`));
+    await page.click('#tab-mission');
+
+    // A small team mission: two rovers, four targets, west of the zone.
+    await page.selectOption('#m-planner', 'team-search');
+    await page.fill('#m-rover-count', '2');
+    if (await page.locator('#m-param-targets').count()) await page.fill('#m-param-targets', '4');
+    if ((await page.getAttribute('#m-place', 'aria-pressed')) !== 'true') await page.click('#m-place');
+    for (const [x, y] of [[40, 70], [40, 78]]) {
+      const p = await mapPoint(page, x, y);
+      await page.mouse.click(p.x, p.y);
+    }
+    const team = await launchAndWait(page, server);
+    checkOutside(team.result, zone, 'team');
+    console.log(`team: keep_out_search_cells ${team.result.metrics.keep_out_search_cells}, unreachable_search_cells ${team.result.metrics.unreachable_search_cells}`);
+    assert.ok(team.result.metrics.keep_out_search_cells >= 1);
+    await page.waitForTimeout(300);
+    await shot(page, 'team');
+    // The mission file carries the zones, so a re-run keeps out too.
+    const file = await (await fetch(`${server.url}/api/missions/${team.id}/mission.json`)).json();
+    assert.equal(file.keep_out.features.length, 1);
+    assert.deepEqual(errors, []);
+    await context.close();
+  });
+});

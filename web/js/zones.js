@@ -1,0 +1,359 @@
+// Keep-out zones (issue 13; QGroundControl's geofence, MMGIS's draw tool): draw, edit and delete
+// polygons on the map canvas, saved with the map (PUT /api/maps/{id}/zones, local frame: metres
+// from the map's lower-left corner). A small editor on the existing canvas map view rather than
+// OpenLayers: the view, its layers and tools are hand-made canvas code, and OpenLayers' Draw and
+// Modify interactions need its own Map and projection to replace them.
+//
+// Tool 'zones': a click adds a vertex to the zone being drawn; a click on its first vertex (or
+// Enter, or "finish") closes it (3 points at least); Escape drops it. Without a zone in progress,
+// dragging a vertex moves it, a click inside a zone selects it, Delete removes the selected one.
+// state.zones holds the zones as last saved/loaded (what missions get); edits are kept here until
+// "save zones".
+
+import { api } from './api.js';
+import { state } from './state.js';
+import { $, el, fmt, showError } from './util.js';
+
+const COLOUR = '#ff7a45';
+const HIT_PX = 9;
+
+// A hatch pattern for the zones' fill (diagonal lines), made once.
+function hatchCanvas(size = 8) {
+  const c = document.createElement('canvas');
+  c.width = c.height = size;
+  const g = c.getContext('2d');
+  g.strokeStyle = COLOUR;
+  g.lineWidth = 1.5;
+  g.beginPath();
+  g.moveTo(0, size);
+  g.lineTo(size, 0);
+  g.moveTo(-size / 2, size / 2);
+  g.lineTo(size / 2, -size / 2);
+  g.moveTo(size / 2, size * 1.5);
+  g.lineTo(size * 1.5, size / 2);
+  g.stroke();
+  return c;
+}
+
+function area(ring) {
+  let a = 0;
+  for (let i = 0, j = ring.length - 1; i < ring.length; j = i++) a += ring[j][0] * ring[i][1] - ring[i][0] * ring[j][1];
+  return Math.abs(a) / 2;
+}
+
+function inside(ring, x, y) {
+  let c = false;
+  for (let i = 0, j = ring.length - 1; i < ring.length; j = i++) {
+    const [xi, yi] = ring[i], [xj, yj] = ring[j];
+    if ((yi > y) !== (yj > y) && x < ((xj - xi) * (y - yi)) / (yj - yi) + xi) c = !c;
+  }
+  return c;
+}
+
+// GeoJSON rings are closed (first position repeated); the editor keeps them open.
+export function zonesToGeoJson(zones) {
+  return {
+    type: 'FeatureCollection',
+    features: zones.map((z) => ({
+      type: 'Feature',
+      properties: z.name ? { name: z.name } : {},
+      geometry: { type: 'Polygon', coordinates: [[...z.ring, z.ring[0]].map(([x, y]) => [x, y])] },
+    })),
+  };
+}
+
+function zonesFromGeoJson(fc) {
+  return (fc?.features || []).map((f) => {
+    const ring = f.geometry.coordinates[0].slice(0, -1).map(([x, y]) => [x, y]);
+    return { ring, name: f.properties?.name || '' };
+  });
+}
+
+export class ZoneEditor {
+  constructor({ view, layers }) {
+    this.view = view;
+    this.layers = layers;
+    this.zones = [];        // [{ring: [[x, y], ...] (open), name}]
+    this.drawing = null;    // the ring in progress
+    this.selected = -1;
+    this.dirty = false;
+    this.hover = null;
+    this.drag = null;
+    this.pattern = null;
+    this.layer = layers.addOverlay({
+      id: 'zones', label: 'keep-out zones', legendTitle: 'Keep-out zones', visible: true, opacity: 0.8,
+      legend: () => this.legend(),
+    });
+    view.addLayer({ id: 'zones', order: 45, draw: (ctx, v) => this.draw(ctx, v) });
+    view.registerTool('zones', {
+      down: (p) => this.pointerDown(p),
+      move: (p) => this.pointerMove(p),
+      up: () => { this.drag = null; },
+      click: (p) => this.click(p),
+      hover: (p) => { this.hover = p; if (this.drawing) view.invalidate(); },
+    });
+    $('zones-draw').addEventListener('click', () => this.setActive(state.tool !== 'zones'));
+    $('zones-finish').addEventListener('click', () => this.finish());
+    $('zones-delete').addEventListener('click', () => this.removeSelected());
+    $('zones-save').addEventListener('click', () => this.save());
+    $('zones-import').addEventListener('change', (e) => this.importFile(e.target));
+    view.canvas.addEventListener('keydown', (e) => {
+      if (state.tool !== 'zones') return;
+      if (e.key === 'Enter') this.finish();
+      else if (e.key === 'Escape') this.cancel();
+      else if (e.key === 'Delete' || e.key === 'Backspace') this.removeSelected();
+      else return;
+      e.preventDefault();
+    });
+    state.on('tool', (tool) => {
+      $('zones-draw').setAttribute('aria-pressed', String(tool === 'zones'));
+      $('zones-draw').classList.toggle('active', tool === 'zones');
+      if (tool !== 'zones') this.cancel();
+      this.view.invalidate();
+    });
+    state.on('map', (map) => this.load(map));
+    this.renderList();
+  }
+
+  setActive(on) {
+    state.setTool(on ? 'zones' : 'pan');
+  }
+
+  async load(map) {
+    this.zones = [];
+    this.drawing = null;
+    this.selected = -1;
+    this.dirty = false;
+    state.zones = { type: 'FeatureCollection', features: [] };
+    showError($('zones-error'), null);
+    if (map) {
+      try {
+        const fc = await api.zones(map.id);
+        if (state.map?.id !== map.id) return;  // another map was chosen meanwhile
+        state.zones = fc;
+        this.zones = zonesFromGeoJson(fc);
+      } catch (err) {
+        showError($('zones-error'), `zones not loaded: ${err.message}`);
+      }
+    }
+    this.changed();
+    state.emit('zones', state.zones);
+  }
+
+  // --- editing ---
+  hitVertex(p) {
+    for (let z = this.zones.length - 1; z >= 0; z--) {
+      const ring = this.zones[z].ring;
+      for (let i = 0; i < ring.length; i++) {
+        const [sx, sy] = this.view.worldToScreen(ring[i][0], ring[i][1]);
+        if (Math.hypot(sx - p.sx, sy - p.sy) <= HIT_PX) return { z, i };
+      }
+    }
+    return null;
+  }
+
+  pointerDown(p) {
+    if (this.drawing) return false;  // a click adds a vertex (click below)
+    const hit = this.hitVertex(p);
+    if (!hit) return false;          // a drag pans; a click selects or starts a zone
+    this.drag = hit;
+    this.selected = hit.z;
+    this.changed();
+    return true;
+  }
+
+  pointerMove(p) {
+    if (!this.drag) return;
+    const m = state.map;
+    const x = Math.min(Math.max(p.x, 0), m ? m.width_m : p.x), y = Math.min(Math.max(p.y, 0), m ? m.height_m : p.y);
+    this.zones[this.drag.z].ring[this.drag.i] = [x, y];
+    this.changed(true);
+  }
+
+  click(p) {
+    const m = state.map;
+    if (!m) return;
+    if (!this.drawing) {
+      const z = this.zones.findIndex((zone) => inside(zone.ring, p.x, p.y));
+      if (z >= 0) {
+        this.selected = z;
+        this.changed();
+        return;
+      }
+      if (p.x < 0 || p.y < 0 || p.x > m.width_m || p.y > m.height_m) return;
+      this.drawing = [];
+      this.selected = -1;
+    }
+    const first = this.drawing[0];
+    if (first && this.drawing.length >= 3) {
+      const [sx, sy] = this.view.worldToScreen(first[0], first[1]);
+      if (Math.hypot(sx - p.sx, sy - p.sy) <= HIT_PX) return this.finish();
+    }
+    this.drawing.push([Math.min(Math.max(p.x, 0), m.width_m), Math.min(Math.max(p.y, 0), m.height_m)]);
+    this.changed();
+  }
+
+  finish() {
+    if (!this.drawing) return;
+    if (this.drawing.length >= 3 && area(this.drawing) > 0) {
+      this.zones.push({ ring: this.drawing, name: '' });
+      this.selected = this.zones.length - 1;
+      this.drawing = null;
+      this.changed(true);
+    } else {
+      showError($('zones-error'), 'a zone needs at least 3 points that enclose an area');
+    }
+  }
+
+  cancel() {
+    if (!this.drawing) return;
+    this.drawing = null;
+    this.changed();
+  }
+
+  remove(z) {
+    this.zones.splice(z, 1);
+    this.selected = -1;
+    this.changed(true);
+  }
+
+  removeSelected() {
+    if (this.selected >= 0) this.remove(this.selected);
+  }
+
+  async save() {
+    const m = state.map;
+    if (!m) return;
+    const button = $('zones-save');
+    button.disabled = true;
+    $('zones-status').textContent = 'saving…';
+    showError($('zones-error'), null);
+    try {
+      state.zones = await api.saveZones(m.id, zonesToGeoJson(this.zones));
+      this.zones = zonesFromGeoJson(state.zones);
+      this.dirty = false;
+      $('zones-status').textContent = `saved ${this.zones.length} zone${this.zones.length === 1 ? '' : 's'}`;
+      state.emit('zones', state.zones);
+    } catch (err) {
+      $('zones-status').textContent = '';
+      showError($('zones-error'), `zones refused: ${err.message}${err.field ? ` (field: ${err.field})` : ''}`);
+    } finally {
+      button.disabled = false;
+      this.changed();
+    }
+  }
+
+  // A GeoJSON file: its Polygon features (other geometries, e.g. an export's tracks, are skipped)
+  // replace the saved zones; a file that names a CRS (a "crs" member, as our result.geojson
+  // exports write) is taken as being in the map's CRS and converted by the server (?crs=map).
+  async importFile(input) {
+    const m = state.map, file = input.files[0];
+    input.value = '';
+    if (!m || !file) return;
+    showError($('zones-error'), null);
+    try {
+      const fc = JSON.parse(await file.text());
+      const all = Array.isArray(fc.features) ? fc.features : [];
+      const polygons = all.filter((f) => f && f.geometry && f.geometry.type === 'Polygon');
+      const crs = fc.crs ? 'map' : 'local';
+      const body = { type: 'FeatureCollection', features: polygons };
+      if (fc.crs) body.crs = fc.crs;
+      state.zones = await api.saveZones(m.id, body, crs);
+      this.zones = zonesFromGeoJson(state.zones);
+      this.dirty = false;
+      this.selected = -1;
+      $('zones-status').textContent = `imported ${polygons.length} zone${polygons.length === 1 ? '' : 's'} (${crs === 'map' ? "map's CRS" : 'local metres'})` +
+        (all.length > polygons.length ? `, skipped ${all.length - polygons.length} other features` : '');
+      state.emit('zones', state.zones);
+    } catch (err) {
+      showError($('zones-error'), `import refused: ${err.message}${err.field ? ` (field: ${err.field})` : ''}`);
+    }
+    this.changed();
+  }
+
+  changed(edited = false) {
+    if (edited) this.dirty = true;
+    if (edited) showError($('zones-error'), null);
+    this.renderList();
+    this.layers.renderLegends();
+    this.view.invalidate();
+  }
+
+  // --- panel ---
+  renderList() {
+    const list = $('zone-list');
+    list.replaceChildren(...this.zones.map((z, i) => el('li', { class: i === this.selected ? 'selected' : '', dataset: { zone: String(i) } },
+      el('button', { class: 'name', onclick: () => { this.selected = i; this.changed(); } }, z.name || `zone ${i + 1}`),
+      el('span', { class: 'meta' }, `${z.ring.length} points · ${fmt(area(z.ring))} m²`),
+      el('button', { class: 'small', title: `delete zone ${i + 1}`, 'aria-label': `delete zone ${i + 1}`, onclick: () => this.remove(i) }, '✕'))));
+    $('zones-finish').disabled = !this.drawing;
+    $('zones-delete').disabled = this.selected < 0;
+    const saved = state.zones?.features?.length ?? 0;
+    const n = this.zones.length;
+    $('zones-summary').textContent = this.dirty ? `${n} zone${n === 1 ? '' : 's'}, not saved (missions use the ${saved} saved)` : `${saved} saved`;
+  }
+
+  legend() {
+    if (!this.zones.length && !this.drawing) return null;
+    const swatch = el('canvas', { width: 28, height: 14, class: 'zone-swatch' });
+    const g = swatch.getContext('2d');
+    g.fillStyle = g.createPattern(hatchCanvas(), 'repeat');
+    g.fillRect(0, 0, 28, 14);
+    g.strokeStyle = COLOUR;
+    g.lineWidth = 2;
+    g.strokeRect(1, 1, 26, 12);
+    return el('div', { class: 'zone-legend' }, swatch,
+      el('span', {}, `no rover enters (${this.zones.length} zone${this.zones.length === 1 ? '' : 's'}${this.dirty ? ', unsaved' : ''})`));
+  }
+
+  // --- drawing ---
+  path(ctx, v, ring) {
+    ctx.beginPath();
+    ring.forEach(([x, y], i) => {
+      const [sx, sy] = v.worldToScreen(x, y);
+      if (i === 0) ctx.moveTo(sx, sy);
+      else ctx.lineTo(sx, sy);
+    });
+  }
+
+  draw(ctx, v) {
+    if (!this.layer.visible) return;
+    if (!this.pattern) this.pattern = ctx.createPattern(hatchCanvas(), 'repeat');
+    const editing = state.tool === 'zones';
+    ctx.globalAlpha = this.layer.opacity;
+    this.zones.forEach((z, i) => {
+      this.path(ctx, v, z.ring);
+      ctx.closePath();
+      ctx.fillStyle = this.pattern;
+      ctx.fill();
+      ctx.strokeStyle = i === this.selected ? '#ffffff' : COLOUR;
+      ctx.lineWidth = i === this.selected ? 3 : 2;
+      ctx.setLineDash(this.dirty ? [6, 3] : []);
+      ctx.stroke();
+      ctx.setLineDash([]);
+      if (editing) this.handles(ctx, v, z.ring);
+    });
+    if (this.drawing) {
+      ctx.globalAlpha = 1;
+      const ring = this.hover ? [...this.drawing, [this.hover.x, this.hover.y]] : this.drawing;
+      this.path(ctx, v, ring);
+      ctx.strokeStyle = '#ffffff';
+      ctx.lineWidth = 2;
+      ctx.setLineDash([5, 4]);
+      ctx.stroke();
+      ctx.setLineDash([]);
+      this.handles(ctx, v, this.drawing);
+    }
+  }
+
+  handles(ctx, v, ring) {
+    for (const [x, y] of ring) {
+      const [sx, sy] = v.worldToScreen(x, y);
+      ctx.fillStyle = '#0b0d10';
+      ctx.strokeStyle = '#ffffff';
+      ctx.lineWidth = 1.5;
+      ctx.fillRect(sx - 4, sy - 4, 8, 8);
+      ctx.strokeRect(sx - 4, sy - 4, 8, 8);
+    }
+  }
+}
