@@ -19,6 +19,29 @@
 
 namespace rover::maps {
 
+// A keep-out polygon in the local frame: the outer ring, then holes (rings need not be closed).
+struct Zone {
+  std::vector<std::vector<Eigen::Vector2d>> rings;
+  std::string name;
+};
+
+// Everything a mission's map shows (issue 13: exports a GIS user can use) from its result
+// (tracks, the overlay keyed "route", targets, incidents) and its keep-out zones:
+// one FeatureCollection (one OGR layer, "mission", mixed geometry) whose features carry a "layer"
+// property saying what they are, in this order:
+//   "track"    LineString per rover (and per believed track): rover, length_m, duration_s (team),
+//              the track's metrics;
+//   "route"    LineString: the team route from the start centre through the targets in order
+//              (targets, length_m);
+//   "target"   Point per route target: target (visiting order), status reached | short | skipped |
+//              unreachable, legs_reached, legs_short, legs_skipped, legs_no_slot;
+//   "zone"     Polygon per keep-out zone: zone (index), name;
+//   "incident" Point: rover, kind, time_s (or step for a planner without a clock), other, note.
+// CRS and errors as below.
+std::string missionToGeoJson(const PlanResult& r, const std::vector<Zone>& zones, const GridGeometry& g,
+                             const GeoReference& geo);
+
+// The tracks alone (layer "track" features), as missionToGeoJson.
 std::string tracksToGeoJson(const std::vector<Track>& tracks, const GridGeometry& g,
                             const GeoReference& geo);
 

@@ -443,12 +443,16 @@ Image renderLayer(RenderLayer layer, const RenderInput& input, const RenderOptio
       break;
   }
 
-  // 3. The image: map at the top-left, legend strip below.
+  // 3. The image: map at the top-left, legend strip below (drawn at 1/k of the width, then
+  // enlarged k× so its labels stay legible on a big picture).
   const bool isClasses = layer == RenderLayer::Traversability;
-  const int width = options.legend ? std::max(outCols, kMinLegendWidth) : outCols;
-  const int legendHeight = !options.legend ? 0
-                           : isClasses     ? layoutClassLegend(width, classes, nullptr)
-                                           : kRampLegendHeight;
+  const int k = std::max(1, options.legendScale);
+  const int width = options.legend ? std::max(outCols, kMinLegendWidth * k) : outCols;
+  const int stripWidth = width / k;
+  const int stripHeight = !options.legend ? 0
+                          : isClasses     ? layoutClassLegend(stripWidth, classes, nullptr)
+                                          : kRampLegendHeight;
+  const int legendHeight = stripHeight * k;
   Image img;
   img.width = width;
   img.height = outRows + legendHeight;
@@ -493,10 +497,20 @@ Image renderLayer(RenderLayer layer, const RenderInput& input, const RenderOptio
   }
 
   if (options.legend) {
+    Image strip;
+    strip.width = stripWidth;
+    strip.height = stripHeight;
+    strip.rgba.assign(std::size_t(strip.width) * strip.height * 4, 0);
     if (isClasses)
-      drawClassLegend(img, outRows, legendHeight, "traversability", classes);
+      drawClassLegend(strip, 0, stripHeight, "traversability", classes);
     else
-      drawRampLegend(img, outRows, scale);
+      drawRampLegend(strip, 0, scale);
+    for (int y = 0; y < legendHeight; ++y)
+      for (int x = 0; x < width; ++x) {
+        const int sx = std::min(x / k, strip.width - 1), sy = y / k;
+        std::copy_n(&strip.rgba[(std::size_t(sy) * strip.width + sx) * 4], 4,
+                    &img.rgba[(std::size_t(outRows + y) * width + x) * 4]);
+      }
   }
   return img;
 }

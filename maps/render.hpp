@@ -29,6 +29,7 @@ struct RenderInput {
 struct RenderOptions {
   int maxSize = 0;      // > 0: downsample (box average) so neither side exceeds it — an overview
   bool legend = true;   // a legend strip with title, colour bar / class swatches and values
+  int legendScale = 1;  // > 1: the legend drawn that many times larger (a big picture's labels)
 };
 
 // RGBA image, row-major, 4 bytes a pixel; nodata cells are transparent. With a legend, the map

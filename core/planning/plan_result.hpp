@@ -3,6 +3,7 @@
 // named metrics, one track per rover in the local frame, and named curves.
 #include <Eigen/Core>
 #include <cstdint>
+#include <limits>
 #include <string>
 #include <utility>
 #include <vector>
@@ -15,6 +16,18 @@ struct Metric {
   std::string unit;  // "" when dimensionless
 };
 
+// One sample of a rover's motion as the planner knows it (the exports' CSV rows). NaN where the
+// planner has no such quantity. Units inside: radians, metres, seconds.
+struct TrackSample {
+  static constexpr double kNone = std::numeric_limits<double>::quiet_NaN();
+  double time = kNone;                 // s from the mission start
+  Eigen::Vector2d position{0, 0};      // local frame, metres
+  double heading = kNone;              // rad, counter-clockwise from east
+  double roll = kNone, pitch = kNone;  // rad, as terrain::attitudeAt
+  double speed = kNone;                // m/s over the ground
+  double elevation = kNone;            // m, terrain height under the rover
+};
+
 struct Track {
   int rover = 0;
   std::vector<Eigen::Vector2d> points;  // local frame, metres
@@ -22,6 +35,20 @@ struct Track {
   // A planner that models localisation error (coverage): `points` are the true positions and
   // these, one per point, where the rover believed it was; empty otherwise.
   std::vector<Eigen::Vector2d> believed;
+  // Every sample of the motion when the planner has a clock (team: the simulator's 10 Hz
+  // samples, denser than `points`); empty when its steps are grid moves (coverage: the exports
+  // derive heading, attitude and height per point from the DEM, core/planning/ground_sample.hpp).
+  std::vector<TrackSample> samples;
+};
+
+// A team route's target in visiting order and what became of the legs that served it:
+// "reached" (every rover's leg reached its slot), "unreachable" (no rover got a slot on valid
+// ground), "skipped" (no leg got there or near), else "short" (some legs ended away from it).
+struct RouteTarget {
+  int index = 0;
+  Eigen::Vector2d position{0, 0};  // local frame, the target cell's centre
+  std::string status;
+  int reached = 0, shortLegs = 0, skipped = 0, noSlot = 0;  // legs, one per rover
 };
 
 struct Series {
@@ -61,6 +88,7 @@ struct PlanResult {
   std::vector<Series> series;
   std::vector<Polyline> overlays;
   std::vector<Incident> incidents;
+  std::vector<RouteTarget> targets;  // team planners: the route's targets; empty otherwise
   // What the planner took for granted that the user did not say, e.g. {"body", "mars"}.
   std::vector<std::pair<std::string, std::string>> assumptions;
   // Non-empty: the run completed, but with something the user must be told (a team mission's

@@ -38,7 +38,6 @@ ConflictPolicy timedPolicy(const CoordinationParams& p) {
   c.waitsAfterReplans = 0;
   c.invalidGoalEndsPiece = true;
   c.dwell = std::min(p.dwellCheck, p.safetyDistance / p.controller.nominalSpeed + 1.0);
-  c.quickReplans = true;
   return c;
 }
 
@@ -202,11 +201,9 @@ class Coordinator {
         return r;
       }
     }
-    const std::uint64_t seed = seedFor(seed_, k, i, piece, attempt);
-    if (attempt > 0 && policy_.quickReplans)
-      return planner_.replan(from, last(k).heading, goal, seed, keepOut, cancel_);
     ++out_.rrtCalls;
-    return planner_.plan(from, last(k).heading, goal, seed, keepOut, cancel_);
+    return planner_.plan(from, last(k).heading, goal, seedFor(seed_, k, i, piece, attempt), keepOut,
+                         cancel_);
   }
 
   // Rover k standing where it is for `ticks` samples, appended to `samples`.

@@ -34,8 +34,6 @@ struct ConflictPolicy {
   bool invalidGoalEndsPiece = false;
   // s the rover is checked standing at the end of a leg that is not its last.
   double dwell = 10.0;
-  // Re-plans (tries after the first) ask the planner's quicker answer (LegPlanner::replan).
-  bool quickReplans = false;
 };
 
 // Paper 001 fig. 8 as SPEC §3.4 reads it: re-plan with a new seed (and a keep-out zone) on each
@@ -43,9 +41,8 @@ struct ConflictPolicy {
 ConflictPolicy paperPolicy(const CoordinationParams& p);
 // Ours: start the same try later (0, δ, 2δ, … up to max_waits × wait_step, δ = delay_step) — a
 // reservation check in time against every committed trajectory — and re-plan only when no delay
-// clears it, on the guide path alone (quickReplans). The dwell is the time to get going and out
-// of the safety distance (1 s + safety / nominal speed, at most dwell_check): the next leg's
-// delays check the standing rover themselves.
+// clears it. The dwell is the time to get going and out of the safety distance (1 s + safety /
+// nominal speed, at most dwell_check): the next leg's delays check the standing rover themselves.
 ConflictPolicy timedPolicy(const CoordinationParams& p);
 
 // Plans, simulates and coordinates the team with the given stages. `params` gives the limits

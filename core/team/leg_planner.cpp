@@ -42,32 +42,13 @@ PathResult GuidedRrtPlanner::plan(const Eigen::Vector2d& from, double heading,
   if (r.status == PathStatus::Exact || r.status == PathStatus::Cancelled ||
       r.status == PathStatus::InvalidGoal)
     return r;
-  PathResult g = guideResult(std::move(*guide), heading);
-  g.vertices = r.vertices;
-  g.iterations = r.iterations;
-  return g;
-}
-
-PathResult GuidedRrtPlanner::replan(const Eigen::Vector2d& from, double heading,
-                                    const Eigen::Vector2d& goal, std::uint64_t seed,
-                                    const std::vector<KeepOutZone>& keepOut,
-                                    const CancelToken* cancel) const {
-  if (cancel && cancel->cancelled()) {
-    PathResult r;
-    r.status = PathStatus::Cancelled;
-    return r;
-  }
-  auto guide = lattice_.guidePath(from, goal, keepOut);
-  if (!guide) return boxed(from, heading, goal, seed, keepOut, cancel);
-  return guideResult(std::move(*guide), heading);
-}
-
-PathResult GuidedRrtPlanner::guideResult(std::vector<Eigen::Vector2d> guide, double heading) const {
   PathResult g;
   g.status = PathStatus::Exact;
-  g.waypoints = std::move(guide);
+  g.waypoints = std::move(*guide);
   g.cost = pathCost(lattice_.model(), g.waypoints, heading, weights_, false);
   g.costWithTurns = pathCost(lattice_.model(), g.waypoints, heading, weights_, true);
+  g.vertices = r.vertices;
+  g.iterations = r.iterations;
   return g;
 }
 

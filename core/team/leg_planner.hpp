@@ -29,13 +29,6 @@ class LegPlanner {
   virtual PathResult plan(const Eigen::Vector2d& from, double heading, const Eigen::Vector2d& goal,
                           std::uint64_t seed, const std::vector<KeepOutZone>& keepOut,
                           const CancelToken* cancel) const = 0;
-  // A re-plan after a try that came too close or tilted: by default the same as plan. A planner
-  // may answer it more cheaply, the coordinator's later tries being many and one after another.
-  virtual PathResult replan(const Eigen::Vector2d& from, double heading, const Eigen::Vector2d& goal,
-                            std::uint64_t seed, const std::vector<KeepOutZone>& keepOut,
-                            const CancelToken* cancel) const {
-    return plan(from, heading, goal, seed, keepOut, cancel);
-  }
   // A straight move the rover may drive: the fixed points of a hybrid leg are checked with it.
   virtual bool edgeValid(const Eigen::Vector2d& a, const Eigen::Vector2d& b) const = 0;
   // A point where the rover may stop and turn in place (a parking spot).
@@ -90,14 +83,8 @@ class GuidedRrtPlanner final : public TerrainLegPlanner {
   PathResult plan(const Eigen::Vector2d& from, double heading, const Eigen::Vector2d& goal,
                   std::uint64_t seed, const std::vector<KeepOutZone>& keepOut,
                   const CancelToken* cancel) const override;
-  // The guide path alone (valid by construction, an A* on the lattice: milliseconds where an
-  // RRT* of 1250 vertices takes tens), the boxed RRT* when there is none.
-  PathResult replan(const Eigen::Vector2d& from, double heading, const Eigen::Vector2d& goal,
-                    std::uint64_t seed, const std::vector<KeepOutZone>& keepOut,
-                    const CancelToken* cancel) const override;
 
  private:
-  PathResult guideResult(std::vector<Eigen::Vector2d> guide, double heading) const;
   const TraversalLattice& lattice_;
   double corridorRadius_;
 };

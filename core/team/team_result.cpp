@@ -52,6 +52,31 @@ Series curveSeries(std::string key, std::string xLabel, const std::vector<std::p
   return s;
 }
 
+// Each route target with the fate of its legs (PlanResult::targets), in visiting order.
+std::vector<RouteTarget> routeTargets(const TeamMissionResult& r) {
+  std::vector<RouteTarget> out;
+  for (std::size_t i = 0; i < r.route.centres.size(); ++i)
+    out.push_back({static_cast<int>(i), r.route.centres[i], "", 0, 0, 0, 0});
+  for (const LegRecord& leg : r.plan.legs) {
+    if (leg.target < 0 || leg.target >= static_cast<int>(out.size())) continue;
+    RouteTarget& t = out[static_cast<std::size_t>(leg.target)];
+    t.reached += leg.status == LegStatus::Reached;
+    t.shortLegs += leg.status == LegStatus::Short;
+    t.skipped += leg.status == LegStatus::Skipped;
+  }
+  for (const auto& [rover, target] : r.noSlot)
+    if (target >= 0 && target < static_cast<int>(out.size())) ++out[static_cast<std::size_t>(target)].noSlot;
+  for (RouteTarget& t : out) {
+    const int legs = t.reached + t.shortLegs + t.skipped + t.noSlot;
+    t.status = legs == 0                    ? "skipped"
+               : t.reached == legs          ? "reached"
+               : t.noSlot == legs           ? "unreachable"
+               : t.skipped + t.noSlot == legs ? "skipped"
+                                              : "short";
+  }
+  return out;
+}
+
 }  // namespace
 
 PlanResult toPlanResult(const TeamMissionResult& r, const TeamPlannerParams& p, bool hybrid,
@@ -115,6 +140,9 @@ PlanResult toPlanResult(const TeamMissionResult& r, const TeamPlannerParams& p, 
     Track track;
     track.rover = static_cast<int>(k);
     track.points = decimate(t, every);  // one point a second of the 10 Hz trajectory
+    track.samples.reserve(t.samples.size());  // the exports' CSV: every 10 Hz sample
+    for (const TrajectorySample& s : t.samples)
+      track.samples.push_back({s.time, {s.x, s.y}, s.heading, s.roll, s.pitch, s.speed, s.z});
     track.metrics = {{"trajectory_m", trajectoryLength(t), "m"},
                      {"time_s", t.samples.empty() ? 0.0 : t.samples.back().time, "s"},
                      {"energy_j", roverEnergy, "J"},
@@ -134,6 +162,7 @@ PlanResult toPlanResult(const TeamMissionResult& r, const TeamPlannerParams& p, 
   route.points.insert(route.points.end(), r.route.centres.begin(), r.route.centres.end());
   out.overlays.insert(out.overlays.begin(), std::move(route));
   out.metrics.push_back({"energy_j", energy, "J"});  // motion_series.hpp: paper 000 eq. 5
+  out.targets = routeTargets(r);
   out.metrics.push_back({"attitude_limit_deg", p.mission.exceedanceLimit * 180.0 / std::numbers::pi, "deg"});
   out.series.push_back(curveSeries("probability_vs_distance_team", "mean distance per rover (m)", r.curves.team));
   out.series.push_back(curveSeries("probability_vs_distance_single", "distance (m)", r.curves.single));

@@ -15,6 +15,7 @@
 #include "maps/georef.hpp"
 #include "server/api/mission_file.hpp"
 #include "server/api/json_body.hpp"
+#include "server/api/mission_map_file.hpp"
 #include "server/api/multipart.hpp"
 #include "server/api/openapi.hpp"
 #include "server/problems/problem_builder.hpp"
@@ -97,7 +98,9 @@ json missionJson(const store::MissionRecord& m) {
            {{"stream", "/api/missions/" + m.id + "/stream"},
             {"result_json", "/api/missions/" + m.id + "/result.json"},
             {"result_geojson", "/api/missions/" + m.id + "/result.geojson"},
-            {"result_csv", "/api/missions/" + m.id + "/result.csv"}}}};
+            {"result_csv", "/api/missions/" + m.id + "/result.csv"},
+            {"map_png", "/api/missions/" + m.id + "/map.png"},
+            {"map_tif", "/api/missions/" + m.id + "/map.tif"}}}};
 }
 
 double queryNumber(const Request& req, const std::string& key, double fallback) {
@@ -692,12 +695,19 @@ void addApiRoutes(http::Router& router, ApiContext& ctx) {
       r.headers.emplace_back("Content-Disposition", "attachment; filename=\"mission-" + id + ".json\"");
       return r;
     }
+    if (file == "map.png" || file == "map.tif") {
+      Response r = fileResponse(missionMapFile(ctx, *m, file.substr(4)), file == "map.png" ? "image/png" : "image/tiff");
+      r.headers.emplace_back("Content-Disposition", "attachment; filename=\"mission-" + id + "-" + file + "\"");
+      return r;
+    }
     static const std::map<std::string, std::string> types{{"result.json", "application/json"},
                                                           {"result.geojson", "application/geo+json"},
                                                           {"result.csv", "text/csv"}};
     auto t = types.find(file);
     if (t == types.end())
-      throw ApiError(404, "not_found", "no file '" + rj::shown(file) + "' (mission.json, result.json, result.geojson, result.csv)", "file");
+      throw ApiError(404, "not_found",
+                     "no file '" + rj::shown(file) + "' (mission.json, result.json, result.geojson, result.csv, map.png, map.tif)",
+                     "file");
     const fs::path path = fs::path(ctx.dir.missionDir(id)) / file;
     if (!fs::exists(path)) {
       // An ended run without files (failed, cancelled before it stored anything) will never
@@ -713,12 +723,17 @@ void addApiRoutes(http::Router& router, ApiContext& ctx) {
     r.headers.emplace_back("Content-Disposition", "attachment; filename=\"mission-" + id + "-" + file + "\"");
     return r;
   }), doc("A mission's file (mission.json: everything to run it again, POST it to /api/missions), or "
-          "a finished mission's result: result.json, result.geojson (map CRS), result.csv.",
+          "a finished mission's result: result.json, result.geojson (map CRS: tracks, route, targets, "
+          "zones, incidents), result.csv (every sample, both frames), map.png (the map with its "
+          "legend and scale bar, at most 4096 px a side), map.tif (the same map as a GeoTIFF in the "
+          "map's CRS).",
           Operation()
               .returns(200, "mission.json (MissionFile), result.json, result.geojson or result.csv.",
                        {{"oneOf", {ref("MissionFile"), {{"type", "object"}, {"required", {"planner", "metrics"}}}}}})
               .returns(200, "result.geojson.", {{"type", "object"}}, "application/geo+json")
               .returns(200, "result.csv.", {{"type", "string"}}, "text/csv")
+              .returns(200, "map.png.", nullptr, "image/png")
+              .returns(200, "map.tif.", nullptr, "image/tiff")
               .errors({404, 409, 503}),
           onPool));
 

@@ -121,7 +121,7 @@ int coverageCommand(const std::vector<std::string>& argv, std::ostream& out) {
     std::string text;
     try {
       // Tracks are in the map's local frame: convert through the map's own grid.
-      text = maps::tracksToGeoJson(result.tracks, dem ? dem->dem.geometry() : problem.world.geometry(), geo);
+      text = maps::missionToGeoJson(result, {}, dem ? dem->dem.geometry() : problem.world.geometry(), geo);
     } catch (const Error& e) {
       throw UsageError(e.what());
     }

@@ -61,7 +61,7 @@ int missionCommand(const std::vector<std::string>& argv, std::ostream& out) {
                  "the PDM, RRT* per rover and segment, 10 Hz rover simulation, prioritised "
                  "coordination; or the hybrid mission (SPEC §4).");
   addMissionOptions(args);
-  args.option("geojson", "FILE", "", "Also write the rover trajectories as GeoJSON in the map's CRS.");
+  args.option("geojson", "FILE", "", "Also write the trajectories, route, targets and incidents as GeoJSON in the map's CRS.");
   args.flag("json", "Print one JSON object (metrics, per-rover trajectories, curves, incidents).");
   if (!args.parse(argv)) {
     out << args.help();
@@ -74,8 +74,7 @@ int missionCommand(const std::vector<std::string>& argv, std::ostream& out) {
   if (args.has("geojson")) {
     const std::string path = args.str("geojson", "");
     std::string text = orUsage([&] {
-      return maps::tracksToGeoJson(result.tracks, setup.problem.dem->geometry(),
-                                   setup.problem.dem->z.geo);
+      return maps::missionToGeoJson(result, {}, setup.problem.dem->geometry(), setup.problem.dem->z.geo);
     });
     std::ofstream f(path);
     f << text;

@@ -107,6 +107,14 @@ json toJson(const PlanResult& r) {
     incidents.push_back(std::move(x));
   }
   j["incidents"] = incidents;
+  if (!r.targets.empty()) {
+    json targets = json::array();
+    for (const auto& t : r.targets)
+      targets.push_back({{"target", t.index}, {"x", t.position.x()}, {"y", t.position.y()},
+                         {"status", t.status}, {"legs_reached", t.reached}, {"legs_short", t.shortLegs},
+                         {"legs_skipped", t.skipped}, {"legs_no_slot", t.noSlot}});
+    j["targets"] = std::move(targets);
+  }
   return j;
 }
 

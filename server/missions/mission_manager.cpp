@@ -8,6 +8,7 @@
 
 #include "core/coverage/coverage_entry.hpp"
 #include "maps/geojson.hpp"
+#include "maps/result_csv.hpp"
 #include "server/http/http_types.hpp"
 #include "server/json/plan_json.hpp"
 
@@ -238,8 +239,7 @@ void MissionManager::runJob(MissionJob& job, Active a) {
     }
     PlanResult result = planner.run(job.problem, job.params, a.stream.get(), a.cancel.get());
     job.problem.world = {};  // the result is saved below; the world is no longer needed
-    job.problem.dem.reset();
-    job.problem.pdm.reset();
+    job.problem.pdm.reset();  // (the DEM gives the CSV's heights and attitudes; dropped below)
     // Built once: on a fine grid the result's JSON is the biggest thing a mission holds.
     nlohmann::json resultJson = json::toJson(result);
     metrics = resultJson["metrics"];
@@ -258,6 +258,7 @@ void MissionManager::runJob(MissionJob& job, Active a) {
       message = outcomeSummary(result.warnings);
     }
     saveResult(job, result, std::move(resultJson), *a.stream);
+    job.problem.dem.reset();
   } catch (const store::StorageFull& e) {
     status = "failed";
     message = std::string("insufficient storage: ") + e.what();
@@ -296,24 +297,50 @@ void MissionManager::writeResultFiles(const MissionJob& job, const PlanResult& r
   j = nullptr;  // free the tree before the other files are formatted
   store::DataDir::writeFileAtomic(
       (s / "result.geojson").string(),
-      maps::tracksToGeoJson(result.tracks, job.mapGrid, job.geo));
-  std::ostringstream csv;
-  // Coverage under localisation error: the true position, then the believed one.
+      maps::missionToGeoJson(result, keepOutZones(job.record.spec), job.mapGrid, job.geo));
+  std::vector<double> headings;
+  for (const auto& r : job.problem.rovers) headings.push_back(r.heading);
+  store::DataDir::writeFileAtomic(
+      (s / "result.csv").string(),
+      maps::resultCsv(result.tracks, job.mapGrid, job.geo, job.problem.dem.get(), headings));
   bool believed = false;
   for (const auto& t : result.tracks) believed = believed || !t.believed.empty();
-  csv << "rover,index,x_m,y_m" << (believed ? ",believed_x_m,believed_y_m" : "") << "\n";
-  for (const auto& t : result.tracks)
-    for (std::size_t i = 0; i < t.points.size(); ++i) {
-      csv << t.rover << "," << i << "," << t.points[i].x() << "," << t.points[i].y();
-      if (i < t.believed.size()) csv << "," << t.believed[i].x() << "," << t.believed[i].y();
-      csv << "\n";
-    }
-  store::DataDir::writeFileAtomic((s / "result.csv").string(), csv.str());
   store::DataDir::writeFileAtomic((s / "grid.bin").string(), stream.fullGridFrame());
   store::DataDir::writeFileAtomic((s / "trails.json").string(), stream.trailsJson().dump());
   store::DataDir::writeFileAtomic((s / "overlays.json").string(), stream.overlaysJson().dump());
   if (believed)  // coverage under localisation error: the believed trails (issue 15)
     store::DataDir::writeFileAtomic((s / "beliefs.json").string(), stream.beliefsJson().dump());
+}
+
+// The mission's keep-out zones (request field `keep_out`: a GeoJSON FeatureCollection of Polygons
+// in the local frame) for the exports; none when the request has none. The request was
+// validated when it was accepted, so anything else is skipped rather than refused here.
+std::vector<maps::Zone> keepOutZones(const nlohmann::json& spec) {
+  std::vector<maps::Zone> out;
+  if (!spec.is_object()) return out;
+  auto fc = spec.find("keep_out");
+  if (fc == spec.end() || !fc->is_object()) return out;
+  auto features = fc->find("features");
+  if (features == fc->end() || !features->is_array()) return out;
+  for (const auto& f : *features) {
+    if (!f.is_object() || !f.contains("geometry") || !f["geometry"].is_object()) continue;
+    const auto& geom = f["geometry"];
+    if (geom.value("type", "") != "Polygon" || !geom.contains("coordinates") || !geom["coordinates"].is_array())
+      continue;
+    maps::Zone z;
+    for (const auto& ring : geom["coordinates"]) {
+      if (!ring.is_array()) continue;
+      auto& r = z.rings.emplace_back();
+      for (const auto& p : ring)
+        if (p.is_array() && p.size() >= 2 && p[0].is_number() && p[1].is_number())
+          r.emplace_back(p[0].get<double>(), p[1].get<double>());
+    }
+    if (f.contains("properties") && f["properties"].is_object() && f["properties"].contains("name") &&
+        f["properties"]["name"].is_string())
+      z.name = f["properties"]["name"].get<std::string>();
+    out.push_back(std::move(z));
+  }
+  return out;
 }
 
 void MissionManager::stop() {

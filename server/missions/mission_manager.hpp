@@ -22,12 +22,17 @@
 
 #include "core/common/cancel.hpp"
 #include "core/planning/planner.hpp"
+#include "maps/geojson.hpp"
 #include "server/missions/mission_memory.hpp"
 #include "server/missions/mission_stream.hpp"
 #include "server/store/data_dir.hpp"
 #include "server/store/database.hpp"
 
 namespace rover::missions {
+
+// The keep-out zones of a mission request (its `keep_out`: a GeoJSON FeatureCollection of
+// Polygons in the local frame), for the exports; none when it has none.
+std::vector<maps::Zone> keepOutZones(const nlohmann::json& spec);
 
 struct MissionJob {
   store::MissionRecord record;  // id, map, planner, spec (as accepted)

@@ -143,7 +143,7 @@ describe('coverage mission', { skip: missing || false, timeout: 300000 }, () => 
     assert.equal(geo.type, 'FeatureCollection');
     const csv = await fetch(server.url + (await page.getAttribute('#export-csv', 'href')));
     assert.equal(csv.status, 200);
-    assert.match(await csv.text(), /^rover,index,x_m,y_m/);
+    assert.match(await csv.text(), /^rover,move,x_m,y_m,easting_m,northing_m,/);
     const [download] = await Promise.all([page.waitForEvent('download'), page.click('#export-geojson')]);
     assert.match(download.suggestedFilename(), /result\.geojson$/);
     const [png] = await Promise.all([page.waitForEvent('download'), page.click('#export-png')]);
@@ -166,13 +166,14 @@ describe('coverage mission', { skip: missing || false, timeout: 300000 }, () => 
     await boxes.nth(0).check();
     await boxes.nth(1).check();
     await page.click('#runs-compare');
-    await page.waitForSelector('#compare:not([hidden]) table');
-    const table = await page.textContent('#compare table');
+    await page.waitForSelector('#compare-view:not([hidden]) #compare-metrics');
+    const table = await page.textContent('#compare-metrics');
     assert.match(table, /path length ratio/);
-    assert.equal(await page.evaluate(() => window.__roverplanApp.missionView.compareSets.length), 2);
+    await page.waitForSelector('#compare-map-img[src]');
     await page.waitForTimeout(300);
     await screenshot(page, 'runs-compare');
-    await page.click('#compare button');
+    await page.click('#compare-close');
+    assert.equal(await page.isHidden('#compare-view'), true);
     // Open a finished run from the list: its stream replays the stored state.
     const before = (await counters(page)).doneFrames;
     await page.click('#run-list li[data-mission] button.name');

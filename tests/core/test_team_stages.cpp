@@ -75,16 +75,8 @@ class StraightLinePlanner final : public LegPlanner {
     }
     return r;
   }
-  // Counts the coordinator's quick re-plans (the same straight line).
-  PathResult replan(const Eigen::Vector2d& from, double heading, const Eigen::Vector2d& goal,
-                    std::uint64_t seed, const std::vector<KeepOutZone>& keepOut,
-                    const CancelToken* cancel) const override {
-    ++replans;
-    return plan(from, heading, goal, seed, keepOut, cancel);
-  }
   bool edgeValid(const Eigen::Vector2d&, const Eigen::Vector2d&) const override { return true; }
   bool canStop(const Eigen::Vector2d&) const override { return true; }
-  mutable int replans = 0;
 };
 
 // A fake rover: drives the waypoints in straight lines at 0.5 m/s, sampled at 10 Hz.
@@ -344,19 +336,6 @@ TEST_CASE("stages: the coordinator with a fake planner and rover: the policy dec
   CHECK(skipped.legs[1].status == LegStatus::Skipped);
   CHECK(skipped.legs[1].reason == LegReason::Conflict);
   CHECK(skipped.legs[1].note.find("of rover 0") != std::string::npos);
-  // Timed re-plans ask the planner's quick answer (a guide path for the terrain planner); the
-  // paper's are full plans with new seeds.
-  CoordinationParams replanOnly = none;
-  replanOnly.maxReplans = 3;
-  const StraightLinePlanner counted;
-  const CoordinationResult quick = coordinateWith(tasks, counted, rover, timedPolicy(replanOnly), replanOnly, 1);
-  CHECK(quick.legs[1].replans == 3);
-  CHECK(counted.replans == 3);
-  CHECK(quick.rrtCalls == 2);  // the two legs planned ahead
-  const StraightLinePlanner full;
-  const CoordinationResult paperTries = coordinateWith(tasks, full, rover, paperPolicy(replanOnly), replanOnly, 1);
-  CHECK(paperTries.legs[1].replans >= 1);
-  CHECK(full.replans == 0);
 }
 
 TEST_CASE("stages: the coordinator reports an invalid and an unreachable goal and goes on") {

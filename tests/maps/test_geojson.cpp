@@ -286,3 +286,72 @@ TEST_CASE("geojson: ogrinfo reads the document") {
     std::filesystem::remove(file);
   }
 }
+
+TEST_CASE("geojson: a mission's route, targets, zones and incidents beside its tracks, by layer") {
+  GeoReference geo;
+  geo.valid = true;
+  geo.geotransform = {500000, 2, 0, 4000000, 0, -2};
+  geo.crsWkt = wktFrom("EPSG:32633");
+  rover::PlanResult r;
+  r.tracks.resize(2);
+  r.tracks[0].rover = 0;
+  r.tracks[0].points = {{0, 0}, {3, 4}};
+  r.tracks[0].samples = {{0.0, {0, 0}}, {12.5, {3, 4}}};
+  r.tracks[1].rover = 1;
+  r.tracks[1].points = {{10, 10}, {10, 20}};
+  r.overlays = {{"route", -1, {{5, 5}, {20, 20}, {40, 20}}}, {"path", 0, {{0, 0}, {1, 1}}}};
+  r.targets = {{0, {20, 20}, "reached", 2, 0, 0, 0}, {1, {40, 20}, "skipped", 0, 0, 2, 0}};
+  r.incidents = {{"skipped", 1, -1, 30.0, {40, 20}, 1.0, "target 1: given up"}};
+  Zone z;
+  z.rings = {{{50, 50}, {60, 50}, {60, 60}, {50, 60}}};
+  z.name = "crater rim";
+  const std::string json = missionToGeoJson(r, {z}, kGrid, geo);
+  Parsed parsed(json);
+  CHECK(std::string(OGR_L_GetName(parsed.layer)) == "mission");
+  CHECK(OGR_L_GetFeatureCount(parsed.layer, TRUE) == 2 + 1 + 2 + 1 + 1);  // the path overlay is not exported
+  OGRFeatureDefnH defn = OGR_L_GetLayerDefn(parsed.layer);
+  const int iLayer = OGR_FD_GetFieldIndex(defn, "layer"), iStatus = OGR_FD_GetFieldIndex(defn, "status");
+  const int iLength = OGR_FD_GetFieldIndex(defn, "length_m"), iDuration = OGR_FD_GetFieldIndex(defn, "duration_s");
+  const int iKind = OGR_FD_GetFieldIndex(defn, "kind"), iName = OGR_FD_GetFieldIndex(defn, "name");
+  REQUIRE(iLayer >= 0);
+  REQUIRE(iStatus >= 0);
+  REQUIRE(iKind >= 0);
+  std::vector<std::string> layers;
+  OGR_L_ResetReading(parsed.layer);
+  while (OGRFeatureH f = OGR_L_GetNextFeature(parsed.layer)) {
+    const std::string layer = OGR_F_GetFieldAsString(f, iLayer);
+    layers.push_back(layer);
+    OGRGeometryH g = OGR_F_GetGeometryRef(f);
+    REQUIRE(g != nullptr);
+    const auto type = wkbFlatten(OGR_G_GetGeometryType(g));
+    if (layer == "track") {
+      CHECK(type == wkbLineString);
+      if (layers.size() == 1) {
+        CHECK(OGR_F_GetFieldAsDouble(f, iLength) == doctest::Approx(5.0));
+        CHECK(OGR_F_GetFieldAsDouble(f, iDuration) == doctest::Approx(12.5));
+      } else {
+        CHECK(!OGR_F_IsFieldSetAndNotNull(f, iDuration));  // no clock
+      }
+    } else if (layer == "route") {
+      CHECK(type == wkbLineString);
+      CHECK(OGR_G_GetPointCount(g) == 3);
+    } else if (layer == "target") {
+      CHECK(type == wkbPoint);
+      CHECK(std::string(OGR_F_GetFieldAsString(f, iStatus)) == (layers.size() == 4 ? "reached" : "skipped"));
+    } else if (layer == "zone") {
+      CHECK(type == wkbPolygon);
+      CHECK(std::string(OGR_F_GetFieldAsString(f, iName)) == "crater rim");
+      // The ring is closed and in the CRS: local (50, 50) is easting 500050, northing 4000000 − 200 + 50.
+      OGRGeometryH ring = OGR_G_GetGeometryRef(g, 0);
+      CHECK(OGR_G_GetPointCount(ring) == 5);
+      CHECK(OGR_G_GetX(ring, 0) == doctest::Approx(500050));
+      CHECK(OGR_G_GetY(ring, 0) == doctest::Approx(3999850));
+    } else {
+      CHECK(layer == "incident");
+      CHECK(type == wkbPoint);
+      CHECK(std::string(OGR_F_GetFieldAsString(f, iKind)) == "skipped");
+    }
+    OGR_F_Destroy(f);
+  }
+  CHECK(layers == std::vector<std::string>{"track", "track", "route", "target", "target", "zone", "incident"});
+}

@@ -1,4 +1,5 @@
 // The REST + WebSocket API over loopback, with an in-process server on an ephemeral port.
+#include <map>
 #include <doctest/doctest.h>
 
 #include <filesystem>
@@ -218,9 +219,15 @@ TEST_CASE("api: a coverage mission runs, reports metrics and exports its results
   CHECK(res["rovers"].size() == 1);
   auto geo = s.get("/api/missions/" + id + "/result.geojson");
   CHECK(geo.status == 200);
-  CHECK(geo.json()["features"].size() == 1);
+  CHECK(geo.json()["features"].size() == 1);  // one track: no route, targets or incidents
   auto csv = s.get("/api/missions/" + id + "/result.csv");
-  CHECK(csv.body.rfind("rover,index,x_m,y_m\n", 0) == 0);
+  CHECK(csv.body.rfind("rover,move,x_m,y_m,easting_m,northing_m,heading_deg,roll_deg,pitch_deg,elevation_m\n", 0) == 0);
+  auto png = s.get("/api/missions/" + id + "/map.png");
+  CHECK(png.status == 200);
+  CHECK(png.body.rfind("\x89PNG", 0) == 0);
+  auto tif = s.get("/api/missions/" + id + "/map.tif");
+  CHECK(tif.status == 200);
+  CHECK((tif.body.rfind("II*", 0) == 0 || tif.body.rfind("MM", 0) == 0));
   checkError(s.get("/api/missions/" + id + "/result.xml"), 404, "file");
 }
 
@@ -369,11 +376,14 @@ TEST_CASE("api: a coverage mission under localisation error streams and exports 
   CHECK(res["series"].contains("true_coverage_vs_moves"));
   CHECK(res["series"].contains("localisation_error_m_rover_0"));
   auto geo = s.get("/api/missions/" + id + "/result.geojson").json();
-  REQUIRE(geo["features"].size() == 2);
+  std::size_t bumps = 0;
+  for (const auto& i : res["incidents"]) bumps += i["kind"] == "bump";
+  REQUIRE(geo["features"].size() == 2 + bumps);  // both tracks, then the bumps as incidents
   CHECK(geo["features"][0]["properties"]["track"] == "true");
   CHECK(geo["features"][1]["properties"]["track"] == "believed");
   auto csv = s.get("/api/missions/" + id + "/result.csv");
-  CHECK(csv.body.rfind("rover,index,x_m,y_m,believed_x_m,believed_y_m\n", 0) == 0);
+  CHECK(csv.body.rfind("rover,move,x_m,y_m,easting_m,northing_m,heading_deg,roll_deg,pitch_deg,elevation_m,"
+                        "believed_x_m,believed_y_m\n", 0) == 0);
   // A late joiner gets both trails whole in the snapshot.
   auto late = test::readAllFrames(s.port(), "/api/missions/" + id + "/stream");
   REQUIRE(!late.empty());
@@ -597,7 +607,20 @@ TEST_CASE("api: a team-search mission with a PDM streams the route and paths, an
   }
   CHECK(res["metrics"]["attitude_limit_deg"].get<double>() == doctest::Approx(15));
   CHECK(res["incidents"].is_array());
-  CHECK(s.get("/api/missions/" + id + "/result.geojson").json()["features"].size() == 2);
+  // The GeoJSON: both tracks, the route, every target with its status and every incident.
+  const json geo = s.get("/api/missions/" + id + "/result.geojson").json();
+  std::map<std::string, std::size_t> kinds;
+  for (const auto& f : geo["features"]) ++kinds[f["properties"]["layer"].get<std::string>()];
+  CHECK(kinds["track"] == 2);
+  CHECK(kinds["route"] == 1);
+  REQUIRE(res["targets"].size() == 4);
+  CHECK(kinds["target"] == 4);
+  CHECK(kinds["incident"] == res["incidents"].size());
+  for (const auto& t : res["targets"])
+    CHECK(t["legs_reached"].get<int>() + t["legs_short"].get<int>() + t["legs_skipped"].get<int>() +
+              t["legs_no_slot"].get<int>() == 2);
+  auto csv = s.get("/api/missions/" + id + "/result.csv");
+  CHECK(csv.body.rfind("rover,time_s,x_m,y_m,easting_m,northing_m,heading_deg,roll_deg,pitch_deg,speed_m_s,elevation_m\n", 0) == 0);
   // A late joiner gets the overlays in its snapshot.
   auto late = test::readAllFrames(s.port(), "/api/missions/" + id + "/stream");
   CHECK(json::parse(late[0].data)["route"].size() == 5);

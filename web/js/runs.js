@@ -1,25 +1,11 @@
 // The Runs tab: every mission with its label, map, PDM, key metrics and parameters
 // (GET /api/missions); open one (live or finished: its stream replays the stored final state),
-// rename it (PATCH), delete an ended one, or tick two and compare them side by side — metrics
-// table and both runs' trails on the map.
+// rename it (PATCH), delete an ended one, or tick two and compare them (compare_view.js).
 
 import { api, downloadWithToken } from './api.js';
+import { CompareView } from './compare_view.js';
 import { $, el, fmt, report } from './util.js';
 
-const COMPARED = [
-  ['coverage', 'coverage', 'max'],
-  ['coverage_reachable', 'coverage of reachable', 'max'],
-  ['moves', 'moves', 'min'],
-  ['makespan', 'makespan', 'min'],
-  ['path_length_ratio', 'path length ratio', 'min'],
-  ['makespan_ratio', 'makespan ratio', 'min'],
-  ['distance_m', 'distance (m)', 'min'],
-  ['energy_j', 'energy (J)', 'min'],
-  ['max_pitch_deg', 'max pitch (°)', 'min'],
-  ['revisits', 'revisits', 'min'],
-  ['unreachable_cells', 'unreachable cells', ''],
-  ['steps', 'steps', 'min'],
-];
 
 // The figures a run is judged by, per planner family: coverage runs by coverage and moves, team
 // runs by probability found, targets and collisions.
@@ -54,6 +40,8 @@ export class RunsPanel {
     this.onDuplicate = onDuplicate;
     this.missions = [];
     this.selected = new Set();
+    this.compareView = new CompareView({ missionView });
+    this.compareView.onClose = () => this.clearCompare();
     $('runs-refresh').addEventListener('click', () => this.reload());
     $('runs-compare').addEventListener('click', () => this.compare());
   }
@@ -154,8 +142,7 @@ export class RunsPanel {
 
   async open(m) {
     try {
-      this.missionView.setCompare([]);
-      $('compare').hidden = true;
+      this.clearCompare();
       await this.missionView.show(m);
       this.render();
     } catch (err) {
@@ -163,28 +150,15 @@ export class RunsPanel {
     }
   }
 
+  // The comparison panel (compare_view.js): every metric side by side, curves on one chart, the
+  // maps toggled A/B. Both runs on the same map are the usual case; on different maps the switch
+  // selects each run's own map.
   async compare() {
-    const ids = [...this.selected];
-    const runs = ids.map((id) => this.missions.find((m) => m.id === id));
-    const box = $('compare');
+    const runs = [...this.selected].map((id) => this.missions.find((m) => m.id === id));
     try {
-      const results = await Promise.all(ids.map((id) => api.result(id)));
-      if (runs[0].map !== runs[1].map) report('the two runs are on different maps: trails are drawn on the current map');
-      else if (this.missionView.mission?.map !== runs[0].map) await this.missionView.selectMap(runs[0].map);
-      this.missionView.setCompare(results.map((r, i) => ({ label: i === 0 ? 'A' : 'B', paths: r.rovers.map((rv) => rv.path) })));
-      const head = el('tr', {}, el('th', {}, 'metric'), el('th', {}, `A ${ids[0]}`), el('th', {}, `B ${ids[1]}`));
-      const rows = COMPARED.filter(([k]) => results.some((r) => r.metrics[k] !== undefined)).map(([k, label, better]) => {
-        const a = results[0].metrics[k], b = results[1].metrics[k];
-        const best = better === 'min' ? Math.min(a, b) : better === 'max' ? Math.max(a, b) : null;
-        const cell = (v) => el('td', { class: best !== null && a !== b && v === best ? 'better' : '' }, fmt(v));
-        return el('tr', {}, el('td', {}, label), cell(a), cell(b));
-      });
-      const params = el('tr', {}, el('td', {}, 'parameters'), ...runs.map((m) => el('td', { style: 'text-align:left;font-size:11px' }, paramsLine(m))));
-      box.replaceChildren(
-        el('h2', {}, 'A (solid) vs B (dashed)'),
-        el('table', {}, head, ...rows, params),
-        el('div', { class: 'form-row' }, el('button', { onclick: () => this.clearCompare() }, 'clear comparison')));
-      box.hidden = false;
+      this.missionView.setCompare([]);
+      $('compare').hidden = true;
+      await this.compareView.show(runs);
     } catch (err) {
       report(err);
     }
@@ -193,5 +167,6 @@ export class RunsPanel {
   clearCompare() {
     this.missionView.setCompare([]);
     $('compare').hidden = true;
+    this.compareView.close();
   }
 }
