@@ -287,14 +287,30 @@ LoadedDem loadDem(const std::string& path, const LoadOptions& opt) {
     fail(shown, "the file's raster of " + std::to_string(info.sourceRows) + " x " + std::to_string(info.sourceCols) +
                     " cells exceeds the source budget of " + std::to_string(4 * opt.maxCells) + " cells",
          "max_cells");
-  if (opt.cellSize > 0 || opt.crop || rotated || southUp) {
-    if (!info.georeferenced) fail(shown, "cropping or resampling needs a georeferenced file", "crop");
+  // A pixel window is the CRS window of those pixels' outer edges.
+  std::optional<std::array<double, 4>> crop = opt.crop;
+  if (opt.cropPixels) {
+    const auto& w = *opt.cropPixels;
+    if (crop) fail(shown, "give a crop window in CRS units or in pixels, not both", "crop_px");
+    if (!(w[0] >= 0 && w[1] >= 0 && w[2] > 0 && w[3] > 0) || w[0] + w[2] > info.sourceCols ||
+        w[1] + w[3] > info.sourceRows)
+      fail(shown, "the pixel window lies outside the raster's " + std::to_string(info.sourceCols) + " x " +
+                      std::to_string(info.sourceRows) + " pixels (columns x rows)",
+           "crop_px");
+    if (rotated) fail(shown, "a pixel window needs a north-up (unrotated) raster", "crop_px");
+    const double ya = gt[3] + w[1] * gt[5], yb = gt[3] + (w[1] + w[3]) * gt[5];
+    crop = std::array<double, 4>{gt[0] + w[0] * gt[1], std::min(ya, yb), w[2] * std::fabs(gt[1]),
+                                 w[3] * std::fabs(gt[5])};
+  }
+  if (opt.cellSize > 0 || crop || rotated || southUp) {
+    if (!info.georeferenced)
+      fail(shown, "cropping or resampling needs a georeferenced file", opt.cropPixels ? "crop_px" : "crop");
     std::vector<std::string> args{"-of", "VRT", "-ot", "Float32", "-dstnodata", "nan",
                                   "-wo", "NUM_THREADS=ALL_CPUS"};
     if (info.nodata) args.insert(args.end(), {"-srcnodata", num(*info.nodata)});
     double nativeRes = std::fabs(gt[1]);
-    if (opt.crop) {
-      const auto& c = *opt.crop;
+    if (crop) {
+      const auto& c = *crop;
       if (!(c[2] > 0 && c[3] > 0) || !std::isfinite(c[0] + c[1] + c[2] + c[3]))
         fail(shown, "crop width and height must be positive", "crop");
       if (!rotated) {
@@ -315,12 +331,12 @@ LoadedDem loadDem(const std::string& path, const LoadOptions& opt) {
         double a = OSRGetSemiMajor(srs, &e1), b = OSRGetSemiMinor(srs, &e2);
         double unit = OSRGetAngularUnits(srs, nullptr);
         double lon = gt[0] + gt[1] * info.sourceCols / 2.0, lat = gt[3] + gt[5] * info.sourceRows / 2.0;
-        if (opt.crop) lon = (*opt.crop)[0] + (*opt.crop)[2] / 2, lat = (*opt.crop)[1] + (*opt.crop)[3] / 2;
+        if (crop) lon = (*crop)[0] + (*crop)[2] / 2, lat = (*crop)[1] + (*crop)[3] / 2;
         std::string proj = "+proj=eqc +lat_ts=" + num(lat * unit * 180 / std::numbers::pi) +
                            " +lon_0=" + num(lon * unit * 180 / std::numbers::pi) + " +a=" + num(a) +
                            " +b=" + num(b) + " +units=m +no_defs";
         args.insert(args.end(), {"-t_srs", proj});
-        if (opt.crop) {
+        if (crop) {
           // The crop window stays in the file's own (geographic) units.
           char* wkt = nullptr;
           OSRExportToWkt(srs, &wkt);
@@ -335,8 +351,8 @@ LoadedDem loadDem(const std::string& path, const LoadOptions& opt) {
       }
       // A cell that does not fit twice across the map leaves no grid: say so in metres.
       const double metresPerUnitX = nativeRes > 0 ? nativeMetres / nativeRes : 1.0;
-      const double widthM = (opt.crop ? (*opt.crop)[2] : info.sourceCols * std::fabs(gt[1])) * metresPerUnitX;
-      const double heightM = (opt.crop ? (*opt.crop)[3] : info.sourceRows * std::fabs(gt[5])) * metresPerUnitY;
+      const double widthM = (crop ? (*crop)[2] : info.sourceCols * std::fabs(gt[1])) * metresPerUnitX;
+      const double heightM = (crop ? (*crop)[3] : info.sourceRows * std::fabs(gt[5])) * metresPerUnitY;
       if (!rotated && opt.cellSize * 2 > std::min(widthM, heightM))
         fail(shown, "a cell size of " + num(opt.cellSize) + " m is larger than the map allows: the map is " +
                         num(std::round(widthM * 10) / 10) + " x " + num(std::round(heightM * 10) / 10) +

@@ -20,6 +20,9 @@ struct LoadOptions {
   double cellSize = 0;  // metres; 0 = the file's own grid
   // Window in the file's CRS units: lower-left X0, Y0, width W, height H.
   std::optional<std::array<double, 4>> crop;
+  // Or a window in pixels: first column, first row (from the upper-left corner), width, height
+  // (gdal_translate -srcwin); converted to the CRS window through the geotransform.
+  std::optional<std::array<double, 4>> cropPixels;
   double verticalScale = 1.0;                // multiplies heights after the file's scale/offset
   std::int64_t maxCells = 200'000'000;       // refused before anything is allocated
   std::string resampling = "auto";           // auto | near | average | bilinear | cubic
@@ -51,7 +54,8 @@ struct LoadedDem {
 // Throws rover::Error (InvalidInput, field "file") with a message "PATH: reason" for a missing,
 // empty, truncated ("truncated or corrupt GeoTIFF") or non-raster file, a PDS3 .IMG without its
 // label, an upload refused by the sandbox (a VRT, a file outside the upload), an over-budget size
-// (field "max_cells"), all-nodata, infinite values, a crop outside the raster (field "crop") or a
+// (field "max_cells"), all-nodata, infinite values, a crop outside the raster (field "crop" or
+// "crop_px") or a
 // cell size the map cannot hold twice (field "cell"). PATH may be a /vsizip/ or /vsitar/ member.
 LoadedDem loadDem(const std::string& path, const LoadOptions& options = {});
 

@@ -23,6 +23,15 @@ const char* paramTypeName(ParamType type) {
   return "?";
 }
 
+const char* paramLevelName(ParamLevel level) {
+  return level == ParamLevel::Common ? "common" : "advanced";
+}
+
+ParamInfo common(ParamInfo info) {
+  info.level = ParamLevel::Common;
+  return info;
+}
+
 namespace {
 std::string rangeText(const ParamInfo& info) {
   std::ostringstream s;

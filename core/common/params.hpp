@@ -21,6 +21,10 @@ using ParamSet = std::map<std::string, ParamValue>;
 enum class ParamType { Bool, Int, Real, Choice, RealList };
 const char* paramTypeName(ParamType type);
 
+// How prominent a parameter is in a form: the common ones shown first, the rest folded away.
+enum class ParamLevel { Common, Advanced };
+const char* paramLevelName(ParamLevel level);
+
 struct ParamInfo {
   std::string key;
   ParamType type = ParamType::Real;
@@ -30,6 +34,16 @@ struct ParamInfo {
   double min = -std::numeric_limits<double>::infinity();  // Int/Real inclusive range
   double max = std::numeric_limits<double>::infinity();
   std::vector<std::string> choices;  // Choice only
+  std::string group;                 // the form's section ("route", "rrt", ...), set by the table
+  ParamLevel level = ParamLevel::Advanced;
+};
+
+// A named set of values (e.g. "paper 001": the seed paper's study), checked against the table
+// when it is added; keys not in it keep their defaults.
+struct ParamPreset {
+  std::string name;
+  std::string doc;
+  ParamSet values;
 };
 
 // Descriptions for ParamTable::add (the default is filled in from the struct).
@@ -37,6 +51,8 @@ ParamInfo realParam(std::string key, double min, double max, std::string unit, s
 ParamInfo intParam(std::string key, double min, double max, std::string unit, std::string doc);
 ParamInfo boolParam(std::string key, std::string doc);
 ParamInfo choiceParam(std::string key, std::vector<std::string> choices, std::string doc);
+// Marks a description as one of the few a user sets most often (shown unfolded in forms).
+ParamInfo common(ParamInfo info);
 
 // Value coercions used by the tables; throw InvalidParameter naming `key`.
 bool paramAsBool(const std::string& key, const ParamValue& v);
@@ -53,10 +69,19 @@ class ParamTable {
   using Setter = std::function<void(P&, const ParamInfo&, const ParamValue&)>;
   using Getter = std::function<ParamValue(const P&)>;
 
+  // Every parameter added after this call belongs to the section `name`.
+  void group(std::string name) { group_ = std::move(name); }
   void add(ParamInfo info, Getter get, Setter set) {
     info.defaultValue = get(P{});
+    if (info.group.empty()) info.group = group_;
     entries_.push_back({std::move(info), std::move(get), std::move(set)});
   }
+  // A preset is parsed once here, so a bad key or value in a table is caught at start-up.
+  void preset(std::string name, std::string doc, ParamSet values) {
+    parse(values);
+    presets_.push_back({std::move(name), std::move(doc), std::move(values)});
+  }
+  const std::vector<ParamPreset>& presets() const { return presets_; }
   std::vector<ParamInfo> infos() const {
     std::vector<ParamInfo> out;
     for (const auto& e : entries_) out.push_back(e.info);
@@ -90,6 +115,8 @@ class ParamTable {
     return nullptr;
   }
   std::vector<Entry> entries_;
+  std::vector<ParamPreset> presets_;
+  std::string group_ = "general";
 };
 
 }  // namespace rover

@@ -181,6 +181,7 @@ class CoveragePlanner final : public Planner {
            "mode.";
   }
   std::vector<ParamInfo> params() const override { return coverageParamTable().infos(); }
+  std::vector<ParamPreset> presets() const override { return coverageParamTable().presets(); }
   void validate(const PlanningProblem& problem, const ParamSet& params) const override {
     const CoverageParams p = parseCoverageParams(params);
     validateWorld(problem.world);

@@ -51,9 +51,10 @@ void addFlag(ParamTable<P>& t, ParamInfo info, bool P::*field) {
 
 ParamTable<P> buildTable() {
   ParamTable<P> t;
+  t.group("motion");
   t.add(
-      choiceParam("mode", {"overlap", "voronoi"},
-             "Team strategy (paper 002 §2.3): one shared map, or one Voronoi region per rover."),
+      common(choiceParam("mode", {"overlap", "voronoi"},
+             "Team strategy (paper 002 §2.3): one shared map, or one Voronoi region per rover.")),
       [](const P& p) -> ParamValue {
         return std::string(p.mode == TeamMode::Overlap ? "overlap" : "voronoi");
       },
@@ -61,8 +62,8 @@ ParamTable<P> buildTable() {
         p.mode = paramAsChoice(i, v) == "overlap" ? TeamMode::Overlap : TeamMode::Voronoi;
       });
   t.add(
-      choiceParam("pattern", {"spiral", "boustrophedon", "custom"},
-             "Motion pattern: the static cost table preset, or custom (then give cost_table)."),
+      common(choiceParam("pattern", {"spiral", "boustrophedon", "custom"},
+             "Motion pattern: the static cost table preset, or custom (then give cost_table).")),
       [](const P& p) -> ParamValue { return p.pattern; },
       [](P& p, const ParamInfo& i, const ParamValue& v) { p.pattern = paramAsChoice(i, v); });
   {
@@ -79,14 +80,14 @@ ParamTable<P> buildTable() {
         });
   }
   addFlag(t,
-          boolParam("circumnavigate",
+          common(boolParam("circumnavigate",
                "Follow an obstacle's contour when it blocks the way ahead, "
-               "until the original line is regained (paper 002 §2.2)."),
+               "until the original line is regained (paper 002 §2.2).")),
           &P::circumnavigate);
   addFlag(t,
-          boolParam("frontier",
+          common(boolParam("frontier",
                "When every neighbour is visited, take the shortest known path to the "
-               "nearest unexplored cell; stop when none is reachable (ours)."),
+               "nearest unexplored cell; stop when none is reachable (ours).")),
           &P::frontier);
   t.add(
       intParam("sense_radius", 1, 2, "cells",
@@ -96,27 +97,29 @@ ParamTable<P> buildTable() {
         p.senseRadius = static_cast<int>(paramAsInt(i, v));
       });
   addReal(t,
-          realParam("coverage", 0.01, 1.0, "",
-               "Coverage goal: stop when visited >= goal·(n − known obstacles)."),
+          common(realParam("coverage", 0.01, 1.0, "",
+               "Coverage goal: stop when visited >= goal·(n − known obstacles).")),
           &P::coverage);
+  t.group("cost");
   addReal(t,
-          realParam("alpha", 0.0, 1.0, "",
-               "Weight of static + visited cost (paper 000 eq. 3); alpha + beta = 1."),
+          common(realParam("alpha", 0.0, 1.0, "",
+               "Weight of static + visited cost (paper 000 eq. 3); alpha + beta = 1.")),
           &P::alpha);
-  addReal(t, realParam("beta", 0.0, 1.0, "", "Weight of the height difference |Δh| (paper 000 eq. 3)."),
+  addReal(t, common(realParam("beta", 0.0, 1.0, "", "Weight of the height difference |Δh| (paper 000 eq. 3).")),
           &P::beta);
   addReal(t,
           realParam("mc_visited", 1.1, 1000.0, "",
                "Cost added per previous visit of a cell (paper 000: >= 1.1)."),
           &P::mcVisited);
+  t.group("grid");
   t.add(
       intParam("max_steps", 0, 1e9, "steps", "Step budget; 0 = 20 × number of cells."),
       [](const P& p) -> ParamValue { return p.maxSteps; },
       [](P& p, const ParamInfo& i, const ParamValue& v) { p.maxSteps = paramAsInt(i, v); });
   addReal(t,
-          realParam("coverage_cell", 0.0, 1e7, "m",
+          common(realParam("coverage_cell", 0.0, 1e7, "m",
                     "Coverage grid cell on a DEM: square cells laid in the map's local frame; 0 = "
-                    "from the map (its own cell, or the smallest size that fits cell_budget)."),
+                    "from the map (its own cell, or the smallest size that fits cell_budget).")),
           &P::coverageCell);
   t.add(
       intParam("cell_budget", 4, 1e6, "cells",
@@ -129,12 +132,13 @@ ParamTable<P> buildTable() {
                     "On a DEM: a pixel with a slope of this or more to a neighbour is impassable, "
                     "and its coverage cell an obstacle (SPEC §2)."),
           &P::impassableDeg);
+  t.group("energy");
   addEnergy(t, realParam("rover_mass", 0.1, 1000.0, "kg", "Rover mass (CLOVER: 7 kg)."),
             &EnergyModel::massKg);
   addEnergy(t,
-            realParam("gravity", 0.1, 30.0, "m/s²",
+            common(realParam("gravity", 0.1, 30.0, "m/s²",
                       "Surface gravity (Moon 1.62, Mars 3.71, Earth 9.81); by default the map's "
-                      "body's, from its CRS."),
+                      "body's, from its CRS.")),
             &EnergyModel::gravity);
   addEnergy(t, realParam("rolling_resistance", 0.0, 2.0, "", "Rolling resistance coefficient μ."),
             &EnergyModel::rollingResistance);
@@ -143,15 +147,16 @@ ParamTable<P> buildTable() {
   addEnergy(t, realParam("turn_energy", 0.0, 1000.0, "J/rad", "Energy per radian of spot turn."),
             &EnergyModel::turnJoulesPerRad);
   // Localisation error (issue 15, core/coverage/dead_reckoning.hpp).
+  t.group("localisation");
   addLocalisation(t,
-                  realParam("odometry_noise", 0.0, 50.0, "%",
+                  common(realParam("odometry_noise", 0.0, 50.0, "%",
                             "Odometry drift: std of each move's travelled distance, in % of the "
-                            "move; 0 with heading_noise 0 = the rover knows its pose exactly."),
+                            "move; 0 with heading_noise 0 = the rover knows its pose exactly.")),
                   &LocalisationModel::distanceNoisePct);
   addLocalisation(t,
-                  realParam("heading_noise", 0.0, 45.0, "deg",
+                  common(realParam("heading_noise", 0.0, 45.0, "deg",
                             "Odometry drift: std of the heading error each move adds (it "
-                            "accumulates, like the dead-reckoned heading)."),
+                            "accumulates, like the dead-reckoned heading).")),
                   &LocalisationModel::headingNoiseDeg);
   addLocalisation(t,
                   realParam("slip_per_deg", 0.0, 10.0, "%/deg",
@@ -186,6 +191,18 @@ ParamTable<P> buildTable() {
       [](P& p, const ParamInfo& i, const ParamValue& v) {
         p.localisation.seed = static_cast<std::uint64_t>(paramAsInt(i, v));
       });
+  // Presets (the page's form offers them; GET /api/planners lists them).
+  t.preset("paper 002",
+           "Laîné & Yoshida (paper 002): the spiral cost table without circumnavigation or "
+           "frontier, sensing radius 1, mc_visited 1.1, alpha 1 and beta 0 (eq. 1), overlap teams, "
+           "95 % coverage goal.",
+           {{"pattern", std::string("spiral")}, {"mode", std::string("overlap")},
+            {"circumnavigate", false}, {"frontier", false}, {"sense_radius", std::int64_t{1}},
+            {"coverage", 0.95}, {"alpha", 1.0}, {"beta", 0.0}, {"mc_visited", 1.1}});
+  t.preset("fast preview",
+           "A quick look: frontier mode (no wandering for the last cells), 80 % coverage goal on a "
+           "grid of at most 10 000 cells.",
+           {{"frontier", true}, {"coverage", 0.8}, {"cell_budget", std::int64_t{10000}}});
   return t;
 }
 

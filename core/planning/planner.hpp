@@ -48,6 +48,8 @@ class Planner {
   virtual std::string name() const = 0;
   virtual std::string summary() const = 0;
   virtual std::vector<ParamInfo> params() const = 0;
+  // Named parameter sets a form offers ("paper 001", "fast preview"); none by default.
+  virtual std::vector<ParamPreset> presets() const { return {}; }
   // Full validation, so a server can answer 400 before it queues anything. Throws rover::Error.
   virtual void validate(const PlanningProblem& problem, const ParamSet& params) const = 0;
   // The grid of the planner's cellsChanged events (the coverage grid; the team route's search

@@ -27,6 +27,7 @@ class TeamPlanner final : public Planner {
                      "10 Hz, prioritised multi-rover coordination.";
   }
   std::vector<ParamInfo> params() const override { return teamParamTable().infos(); }
+  std::vector<ParamPreset> presets() const override { return teamParamTable().presets(); }
 
   void validate(const PlanningProblem& problem, const ParamSet& params) const override {
     const TeamPlannerParams p = parseTeamParams(params);

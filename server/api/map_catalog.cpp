@@ -14,6 +14,7 @@
 #include "core/common/error.hpp"
 #include "maps/dem_digest.hpp"
 #include "maps/dem_io.hpp"
+#include "maps/georef.hpp"
 #include "maps/gdal_env.hpp"
 #include "maps/render.hpp"
 #include "maps/synthetic_terrain.hpp"
@@ -167,7 +168,8 @@ MapCatalog::MapCatalog(store::Database& db, store::DataDir& dir, std::int64_t ma
       layers_(fs::path(dir.mapDir("x")).parent_path().string(), layerCacheBytes, offLadderOverview) {}
 
 store::MapRecord MapCatalog::importDem(const std::vector<UploadedFile>& files, const std::string& name,
-                                       double cellSize) {
+                                       const maps::DemImport& options) {
+  const double cellSize = options.load.cellSize;
   if (files.empty()) throw ApiError(400, "invalid_input", "no DEM file in the request", "file");
   if (!(cellSize >= 0) || !std::isfinite(cellSize) || cellSize > 1e5)
     throw ApiError(400, "invalid_parameter", "cell must be a positive number of metres", "cell");
@@ -227,8 +229,7 @@ store::MapRecord MapCatalog::importDem(const std::vector<UploadedFile>& files, c
                            " file(s); accepted: " + maps::uploadFormatsInWords() + ")",
                        "file");
       }
-      maps::LoadOptions o;
-      o.cellSize = cellSize;
+      maps::LoadOptions o = options.load;
       o.maxCells = maxCells_;
       o.upload = &sandbox;
       try {
@@ -243,9 +244,23 @@ store::MapRecord MapCatalog::importDem(const std::vector<UploadedFile>& files, c
     storingGeoTiff([&] { maps::writeGeoTiff((fs::path(staging) / "dem.tif").string(), d.dem.z); });
     store::MapRecord rec;
     rec.id = store::DataDir::newId();
-    rec.name = name.empty() ? fs::path(raster).filename().string() : name;
+    // A default name comes from the file (a zip member's may hold anything): its last path part,
+    // hidden controls and bad bytes dropped, at most 200 characters.
+    if (name.empty()) {
+      rec.name = rover::json::cleanName(fs::path(raster).filename().string());
+      if (rec.name.empty()) rec.name = "upload";
+    } else {
+      rec.name = name;
+    }
     rec.createdAt = store::nowIso();
     rec.meta = metaFor(d, t, sources);
+    // The body the planners assume: declared with the upload, else read from the CRS.
+    const terrain::Body body = options.body ? *options.body : maps::bodyOfCrs(d.dem.z.geo.crsWkt);
+    rec.meta["body"] = terrain::bodyName(body);
+    rec.meta["body_source"] = options.body ? "declared" : "crs";
+    rec.meta["vertical_scale"] = options.load.verticalScale;
+    if (options.load.crop) rec.meta["crop"] = *options.load.crop;
+    if (options.load.cropPixels) rec.meta["crop_px"] = *options.load.cropPixels;
     // Files first, then the row: a crash in between leaves an orphan folder nobody lists.
     dir_.commitDir(staging, dir_.mapDir(rec.id));
     db_.insertMap(rec);
@@ -286,7 +301,7 @@ void MapCatalog::ensureDefaultMap() {
   const std::string moved = (fs::path(dir_.tmpDir()) / (store::DataDir::newId() + ".tif")).string();
   fs::rename(path, moved);
   store::DataDir::removeTree(staging);
-  importDem({{moved, "default-mars.tif"}}, "Default: synthetic Mars, 150 m (seed 1)", 0);
+  importDem({{moved, "default-mars.tif"}}, "Default: synthetic Mars, 150 m (seed 1)");
 }
 
 std::shared_ptr<const MapData> MapCatalog::loadFromDisk(const store::MapRecord& r) {
@@ -294,6 +309,11 @@ std::shared_ptr<const MapData> MapCatalog::loadFromDisk(const store::MapRecord& 
   data->record = r;
   data->dem = maps::loadDem((fs::path(dir_.mapDir(r.id)) / "dem.tif").string()).dem;
   data->traversability = terrain::traversability(data->dem);
+  // Maps imported before bodies were stored read theirs from the CRS, as they did then.
+  const auto declared = r.meta.contains("body") && r.meta["body"].is_string()
+                            ? maps::bodyFromName(r.meta["body"].get<std::string>() == "unknown" ? "auto" : r.meta["body"].get<std::string>())
+                            : std::nullopt;
+  data->body = declared ? *declared : maps::bodyOfCrs(data->dem.z.geo.crsWkt);
   data->valid.resize(data->dem.geometry().cellCount());
   for (int i = 0; i < data->dem.geometry().cellCount(); ++i) data->valid[i] = !std::isnan(data->dem.z.at(i));
   return data;
@@ -309,7 +329,7 @@ std::shared_ptr<const MapData> MapCatalog::get(const std::string& id) {
       }
   }
   auto rec = db_.getMap(id);
-  if (!rec) throw ApiError(404, "not_found", "no map '" + id + "'", "id");
+  if (!rec) throw ApiError(404, "not_found", "no map '" + rover::json::shown(id) + "'", "id");
   auto data = loadFromDisk(*rec);
   std::lock_guard lock(mutex_);
   cache_.push_front(data);
@@ -319,7 +339,7 @@ std::shared_ptr<const MapData> MapCatalog::get(const std::string& id) {
 
 void MapCatalog::remove(const std::string& id) {
   auto pdms = db_.listPdms(id);
-  if (!db_.deleteMap(id)) throw ApiError(404, "not_found", "no map '" + id + "'", "id");
+  if (!db_.deleteMap(id)) throw ApiError(404, "not_found", "no map '" + rover::json::shown(id) + "'", "id");
   {
     std::lock_guard lock(mutex_);
     cache_.remove_if([&](const auto& m) { return m->record.id == id; });
@@ -363,9 +383,9 @@ std::string MapCatalog::layerFile(const std::string& id, const std::string& laye
                                   const std::string& format, int max, const std::string& pdmId) {
   static const std::vector<std::string> layers{"elevation", "hillshade", "slope", "traversability", "pdm"};
   if (std::find(layers.begin(), layers.end(), layer) == layers.end())
-    throw ApiError(404, "not_found", "no layer '" + layer + "' (elevation, hillshade, slope, traversability, pdm)", "layer");
+    throw ApiError(404, "not_found", "no layer '" + rover::json::shown(layer) + "' (elevation, hillshade, slope, traversability, pdm)", "layer");
   if (format != "png" && format != "tif" && format != "f32")
-    throw ApiError(404, "not_found", "no format '" + format + "' (png, tif, f32)", "format");
+    throw ApiError(404, "not_found", "no format '" + rover::json::shown(format) + "' (png, tif, f32)", "format");
   if (max < 0 || max > 16384) throw ApiError(400, "invalid_parameter", "max must be in [0, 16384]", "max");
   auto map = get(id);
   std::string pdm = pdmId;
@@ -376,7 +396,7 @@ std::string MapCatalog::layerFile(const std::string& id, const std::string& laye
   }
   if (layer == "pdm") {
     auto rec = db_.getPdm(pdm);
-    if (!rec || rec->mapId != id) throw ApiError(404, "not_found", "no PDM '" + pdm + "' on this map", "pdm");
+    if (!rec || rec->mapId != id) throw ApiError(404, "not_found", "no PDM '" + rover::json::shown(pdm) + "' on this map", "pdm");
   }
   const fs::path dir = fs::path(dir_.mapDir(id)) / "layers";
   const GridGeometry& geom = map->dem.geometry();

@@ -11,6 +11,7 @@
 
 #include "core/pdm/pdm.hpp"
 #include "core/terrain/layers.hpp"
+#include "maps/dem_import_options.hpp"
 #include "server/api/layer_cache.hpp"
 #include "server/store/data_dir.hpp"
 #include "server/store/database.hpp"
@@ -22,6 +23,7 @@ struct MapData {
   terrain::Dem dem;
   terrain::Traversability traversability;
   std::vector<std::uint8_t> valid;  // cells with data
+  terrain::Body body = terrain::Body::Unknown;  // declared at upload, else from the CRS
 };
 
 struct UploadedFile {
@@ -37,8 +39,9 @@ class MapCatalog {
              std::uint64_t layerCacheBytes = kDefaultLayerCacheBytes);
 
   // Validates and stores a DEM; throws http::ApiError 400 (field "file"/"cell"/"name") on bad input.
+  // `options`: cell size, crop window (CRS or pixels), vertical scale, declared body.
   store::MapRecord importDem(const std::vector<UploadedFile>& files, const std::string& name,
-                             double cellSize);
+                             const maps::DemImport& options = {});
   // Start-up: removes map and PDM folders that have no database row (a crash between committing
   // the files and inserting the row leaves one behind). Returns how many were removed.
   int sweepOrphans();

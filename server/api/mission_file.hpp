@@ -1,6 +1,7 @@
 #pragma once
 // A mission file (issue 13, GET /api/missions/{id}/mission.json): everything needed to run a
-// mission again — its map (id and the grid's SHA-256, maps/dem_digest), PDM, planner, rovers, the
+// mission again — its map (id and the SHA-256 of the grid it was launched on, recorded with the
+// run at launch; maps/dem_digest), PDM, planner, rovers, the
 // parameters as they were given (the rest take the planner's defaults of the version named in
 // the file, seed included), pace and name. POST /api/missions takes it back as it is: the
 // request fields are the same, and the file's own fields are checked (format, version, and the

@@ -11,10 +11,13 @@
 #include "core/coverage/coverage_entry.hpp"
 #include "core/coverage/terrain_world.hpp"
 #include "maps/dem_digest.hpp"
+#include "maps/dem_import_options.hpp"
 #include "maps/georef.hpp"
 #include "server/api/mission_file.hpp"
+#include "server/api/json_body.hpp"
 #include "server/api/mission_map_file.hpp"
 #include "server/api/multipart.hpp"
+#include "server/api/openapi.hpp"
 #include "server/problems/problem_builder.hpp"
 #include "server/json/json_edge.hpp"
 #include "server/json/mission_request.hpp"
@@ -148,6 +151,28 @@ struct InvalidateMapAfter {
   ~InvalidateMapAfter() { ctx.invalidateMap(id); }
 };
 
+// A JSON route's body. The media type must be application/json (parameters such as charset
+// allowed): a browser sends text/plain, form-urlencoded or multipart cross-site without asking
+// first (no CORS preflight), so accepting those would let any page launch or rename missions
+// on an open server.
+}  // namespace
+
+json jsonBody(const Request& req, const rj::JsonLimits& limits) {
+  std::string type = req.header("content-type");
+  type = type.substr(0, type.find(';'));
+  std::transform(type.begin(), type.end(), type.begin(), [](unsigned char c) { return std::tolower(c); });
+  while (!type.empty() && (type.back() == ' ' || type.back() == '\t')) type.pop_back();
+  while (!type.empty() && (type.front() == ' ' || type.front() == '\t')) type.erase(0, 1);
+  if (type != "application/json")
+    throw ApiError(415, "unsupported_media_type",
+                   "send the body as JSON with Content-Type: application/json" +
+                       (type.empty() ? std::string(" (the request has none)") : " (not " + rj::shown(type) + ")"),
+                   "content-type");
+  return rj::parseJsonLimited(req.body, limits);
+}
+
+namespace {
+
 std::string queryString(const Request& req, const std::string& key) {
   auto it = req.query.find(key);
   return it == req.query.end() ? "" : it->second;
@@ -167,7 +192,7 @@ struct RemoveOnExit {
 // multipart fields are at most 64 KiB each (413 naming the field). On a throw nothing it made
 // is left; on success the caller owns the returned files.
 std::vector<UploadedFile> uploadedFiles(const Request& req, store::DataDir& dir, std::string& name,
-                                        std::string& cell) {
+                                        std::map<std::string, std::string>& options) {
   if (req.bodyFile.empty() || req.bodySize == 0)
     throw ApiError(400, "invalid_input", "the request has no body: send the DEM file", "file");
   std::vector<UploadedFile> files;
@@ -179,7 +204,7 @@ std::vector<UploadedFile> uploadedFiles(const Request& req, store::DataDir& dir,
     for (const auto& p : splitMultipart(req.bodyFile, boundary, parts)) {
       if (p.filename.empty()) {
         if (p.name == "name" && name.empty()) name = p.value;
-        if (p.name == "cell" && cell.empty()) cell = p.value;
+        if (auto o = options.find(p.name); o != options.end() && o->second.empty()) o->second = p.value;
         continue;
       }
       const std::string moved = (fs::path(dir.tmpDir()) / store::DataDir::newId()).string();
@@ -221,8 +246,11 @@ missions::MissionJob buildMission(ApiContext& ctx, const json& body) {
   if (request.pace) job.pace = *request.pace;
   const Planner* planner = &ctx.planners.get(job.record.planner);
   if (!ctx.db.getMap(job.record.mapId))
-    throw ApiError(400, "not_found", "no map '" + job.record.mapId + "'", "map");
-  if (request.demSha256 && *request.demSha256 != mapDigest(ctx, job.record.mapId))
+    throw ApiError(400, "not_found", "no map '" + rj::shown(job.record.mapId) + "'", "map");
+  // The grid the run plans on, recorded with it (its mission file names this DEM even if the
+  // map is deleted or its digest computed differently later).
+  const std::string digest = mapDigest(ctx, job.record.mapId);
+  if (request.demSha256 && *request.demSha256 != digest)
     throw ApiError(409, "map_changed",
                    "map " + job.record.mapId + " is not the grid this mission file was planned on "
                    "(its dem_sha256 differs): upload the same DEM with the same crop and cell size, "
@@ -231,7 +259,7 @@ missions::MissionJob buildMission(ApiContext& ctx, const json& body) {
   if (!job.record.pdmId.empty()) {
     auto p = ctx.db.getPdm(job.record.pdmId);
     if (!p || p->mapId != job.record.mapId)
-      throw ApiError(400, "not_found", "no PDM '" + job.record.pdmId + "' on this map", "pdm");
+      throw ApiError(400, "not_found", "no PDM '" + rj::shown(job.record.pdmId) + "' on this map", "pdm");
   }
   // What the planner plans on: the coverage planner a grid world (the map resampled to its
   // cell); the team planners the map at its own resolution and the PDM. Its memory is estimated
@@ -260,10 +288,11 @@ missions::MissionJob buildMission(ApiContext& ctx, const json& body) {
   ctx.missions.admit(job.memory);
   job.build = [&maps = ctx.maps, ground](missions::MissionJob& j) {
     auto dem = maps.demAtCell(j.record.mapId, 0);
+    const terrain::Body body = maps.get(j.record.mapId)->body;
     std::shared_ptr<const Raster<float>> pdm;
     if (!ground.coverageGrid && !j.record.pdmId.empty())
       pdm = std::make_shared<Raster<float>>(maps.pdmMass(j.record.pdmId));
-    PlanningProblem built = problems::problemOnMap(ground, dem, std::move(pdm));
+    PlanningProblem built = problems::problemOnMap(ground, dem, std::move(pdm), body);
     built.rovers = std::move(j.problem.rovers);  // the request's, kept
     built.keepOut = std::move(j.problem.keepOut);
     built.threads = j.problem.threads;
@@ -280,6 +309,7 @@ missions::MissionJob buildMission(ApiContext& ctx, const json& body) {
     throw fromCore(e, roverField || e.field().empty() ? "" : "params.");
   }
   job.record.spec = std::move(request.spec);
+  job.record.spec["dem_sha256"] = digest;
   job.problem.world = {};
   job.problem.dem.reset();
   job.problem.pdm.reset();
@@ -290,12 +320,17 @@ missions::MissionJob buildMission(ApiContext& ctx, const json& body) {
 // and runs on the server's work pool, so the io threads keep answering (see RouteOptions).
 constexpr bool onPool = true;
 
-http::RouteOptions doc(const std::string& summary, bool blocking = false) {
+// A route's summary and OpenAPI operation (server/api/openapi.hpp: its statuses and schemas).
+http::RouteOptions doc(const std::string& summary, const openapi::Operation& op, bool blocking = false) {
   http::RouteOptions o;
   o.summary = summary;
   o.blocking = blocking;
+  o.openapi = op.toJson();
   return o;
 }
+using openapi::Operation;
+using openapi::ref;
+const json kId = {{"type", "string"}};
 
 Response fileResponse(const std::string& path, const std::string& type) {
   Response r;
@@ -315,12 +350,15 @@ Response submitMission(ApiContext& ctx, const json& body) {
   ctx.missions.submit(std::move(job));
   return Response::json(202, missionJson(*ctx.db.getMission(id)));
 }
-http::RouteOptions routeDoc(const std::string& summary, bool blocking) { return doc(summary, blocking); }
+http::RouteOptions routeDoc(const std::string& summary, const openapi::Operation& op, bool blocking) {
+  return doc(summary, op, blocking);
+}
 
 void addApiRoutes(http::Router& router, ApiContext& ctx) {
   http::RouteOptions open;
   open.requireAuth = false;
   open.summary = "Liveness and a few counters (no token needed).";
+  open.openapi = Operation().returns(200, "Alive.", ref("Health")).toJson();
   router.add("GET", "/api/health", [&ctx](const Request&) {
     return Response::json(200, {{"status", "ok"},
                                 {"version", ctx.version},
@@ -331,17 +369,17 @@ void addApiRoutes(http::Router& router, ApiContext& ctx) {
   }, open);
 
   router.add("GET", "/api/openapi.json", [&router, &ctx](const Request&) {
-    return Response::json(200, openApiDocument(router, ctx.version));
-  }, doc("This document."));
+    return Response::json(200, openapi::document(router, ctx.planners, ctx.version));
+  }, doc("This document.", Operation().returns(200, "The OpenAPI 3.0.3 document.", {{"type", "object"}})));
 
   router.add("GET", "/api/planners", guarded([&ctx](const Request& req) {
     // ?map=ID: the defaults that come from that map (coverage cell, the body's gravity) filled in.
     ParamSet mapDefaults;
     json mapInfo;
     if (const std::string id = queryString(req, "map"); !id.empty()) {
-      if (!ctx.db.getMap(id)) throw ApiError(404, "not_found", "no map '" + id + "'", "map");
+      if (!ctx.db.getMap(id)) throw ApiError(404, "not_found", "no map '" + rj::shown(id) + "'", "map");
       auto map = ctx.maps.get(id);
-      const terrain::Body body = maps::bodyOfCrs(map->dem.z.geo.crsWkt);
+      const terrain::Body body = map->body;
       mapDefaults = coverage::coverageMapDefaults(map->dem.geometry(), body);
       mapInfo = {{"map", id}, {"body", terrain::bodyName(body)}};
     }
@@ -354,13 +392,18 @@ void addApiRoutes(http::Router& router, ApiContext& ctx) {
         for (auto& info : params)
           if (auto d = mapDefaults.find(info["key"].get<std::string>()); d != mapDefaults.end())
             info["default"] = defaults[d->first] = rj::toJson(d->second);
-      json entry{{"name", name}, {"summary", p.summary()}, {"params", params}};
+      json entry{{"name", name}, {"summary", p.summary()}, {"params", params}, {"presets", rj::toJson(p.presets())}};
       if (!mapInfo.is_null()) entry["map_defaults"] = defaults;
       out.push_back(std::move(entry));
     }
     return Response::json(200, out);
   }), doc("Registered planners with every parameter, its default, unit and range; ?map=ID fills in "
-         "the defaults that come from the map (coverage_cell, gravity) and its body.", onPool));
+         "the defaults that come from the map (coverage_cell, gravity) and its body.",
+         Operation()
+             .query("map", kId, "A map id: fill in the defaults that come from it.")
+             .returns(200, "Every planner.", {{"type", "array"}, {"items", ref("Planner")}})
+             .errors({404}),
+         onPool));
 
   // --- maps ---
   router.add("GET", "/api/maps", guarded([&ctx](const Request& req) {
@@ -368,28 +411,45 @@ void addApiRoutes(http::Router& router, ApiContext& ctx) {
     json out = json::array();
     for (const auto& m : ctx.db.listMaps(page.limit, page.offset)) out.push_back(mapJson(m));
     return pageResponse(req, page, std::move(out), ctx.db.countMaps());
-  }), doc("List maps, oldest first: ?limit= (50, at most 500), ?offset=; X-Total-Count and Link rel=next."));
+  }), doc("List maps, oldest first: ?limit= (50, at most 500), ?offset=; X-Total-Count and Link rel=next.",
+          Operation().listing("Map")));
 
   http::RouteOptions upload;
   upload.streamBody = true;
   upload.blocking = onPool;
   upload.summary = "Upload a DEM (raw body with ?filename=, or multipart/form-data with file parts; "
-                   "PDS3 .IMG+.LBL pairs as two parts or a zip), ?name=&cell=.";
+                   "PDS3 .IMG+.LBL pairs as two parts or a zip), ?name=&cell=&crop=|crop_px=&vertical_scale=&body= "
+                   "(or plain multipart fields of those names).";
+  {
+    Operation op;
+    op.query("name", {{"type", "string"}}, "The map's name (default: from the file).")
+        .query("filename", {{"type", "string"}}, "A raw body's file name (its extension picks the driver).");
+    for (const auto& o : maps::demImportOptionInfos())
+      op.query(o.key, {{"type", "string"}, {"pattern", o.pattern}}, o.doc);
+    op.body(ref("MapUpload"), "multipart/form-data")
+        .body({{"type", "string"}, {"format", "binary"}}, "application/octet-stream")
+        .returns(201, "Imported.", ref("Map"))
+        .errors({400, 413, 503, 507});
+    upload.openapi = op.toJson();
+  }
   router.add("POST", "/api/maps", guarded([&ctx](const Request& req) {
-    std::string name = queryString(req, "name"), cellText = queryString(req, "cell");
-    auto files = uploadedFiles(req, ctx.dir, name, cellText);
+    // The DEM options (maps/dem_import_options: cell, crop, crop_px, vertical_scale, body) as
+    // query parameters or plain multipart fields, read by the CLI's own parser.
+    std::string name = queryString(req, "name");
+    std::map<std::string, std::string> options;
+    for (const auto& info : maps::demImportOptionInfos()) options[info.key] = queryString(req, info.key);
+    auto files = uploadedFiles(req, ctx.dir, name, options);
     try {
       rj::checkName(name, "name");
-      // 0 (or none) keeps the file's own cell size; otherwise [1 mm, 100 km].
-      double cell = 0;
-      if (!cellText.empty()) {
-        char* end = nullptr;
-        cell = std::strtod(cellText.c_str(), &end);
-        if (*end != '\0' || !std::isfinite(cell) || (cell != 0 && (cell < 1e-3 || cell > 1e5)))
-          throw ApiError(400, "invalid_parameter", "cell must be 0 (the file's own) or a number of metres in [0.001, 100000]",
-                         "cell");
+      for (const auto& [key, value] : options)
+        if (value.size() > 200) throw ApiError(400, "invalid_parameter", key + " is longer than 200 bytes", key);
+      maps::DemImport import;
+      try {
+        import = maps::parseDemImportOptions(options);
+      } catch (const Error& e) {
+        throw fromCore(e);
       }
-      return Response::json(201, mapJson(ctx.maps.importDem(files, name, cell)));
+      return Response::json(201, mapJson(ctx.maps.importDem(files, name, import)));
     } catch (...) {
       for (auto& f : files) store::DataDir::removeTree(f.path);
       throw;
@@ -408,7 +468,7 @@ void addApiRoutes(http::Router& router, ApiContext& ctx) {
     }
     const std::uint64_t ticket = ctx.mapCacheTicket();  // before the reads
     auto m = ctx.db.getMap(id);
-    if (!m) throw ApiError(404, "not_found", "no map '" + id + "'", "id");
+    if (!m) throw ApiError(404, "not_found", "no map '" + rj::shown(id) + "'", "id");
     json j = mapJson(*m);
     // The first kMaxPage PDMs; pdms_total says when /api/maps/{id}/pdms holds more.
     j["pdms"] = json::array();
@@ -418,13 +478,15 @@ void addApiRoutes(http::Router& router, ApiContext& ctx) {
     ctx.cacheMapBody(id, r.body, ticket);
     return r;
   }), doc("One map: size, cell size, CRS, elevation range, class percentages, its first 500 PDMs "
-          "(pdms_total counts them all)."));
+          "(pdms_total counts them all).",
+          Operation().returns(200, "The map.", ref("Map")).errors({404})));
 
   router.add("DELETE", "/api/maps/{id}", guarded([&ctx](const Request& req) {
     InvalidateMapAfter after{ctx, req.params.at("id")};
     ctx.maps.remove(req.params.at("id"));
     return Response::json(200, {{"deleted", req.params.at("id")}});
-  }), doc("Delete a map and its PDMs (missions keep their records and results).", onPool));
+  }), doc("Delete a map and its PDMs (missions keep their records and results).",
+          Operation().returns(200, "Deleted.", ref("Deleted")).errors({404, 503}), onPool));
 
   router.add("GET", "/api/maps/{id}/layers/{file}", guarded([&ctx](const Request& req) {
     const std::string file = req.params.at("file");
@@ -445,25 +507,43 @@ void addApiRoutes(http::Router& router, ApiContext& ctx) {
     r.headers.emplace_back("Cache-Control", "max-age=3600");
     return r;
   }), doc("A layer (elevation|hillshade|slope|traversability|pdm) as .png (?max= overview), "
-                   ".tif (GeoTIFF) or .f32 (raw little-endian float32, size in X-Rows/X-Cols); ?pdm=ID for pdm.", onPool));
+                   ".tif (GeoTIFF) or .f32 (raw little-endian float32, size in X-Rows/X-Cols); ?pdm=ID for pdm.",
+          Operation()
+              .query("max", {{"type", "integer"}, {"minimum", 0}, {"maximum", 16384}},
+                     "PNG overview: longest side rounded up to 256, 512, 1024, 2048 or 4096.")
+              .query("pdm", kId, "The PDM of a pdm layer (default: the newest).")
+              .returns(200, "The layer file.", nullptr, "image/png")
+              .returns(200, "The layer file.", nullptr, "image/tiff")
+              .returns(200, "The layer file.", nullptr, "application/octet-stream")
+              .errors({400, 404, 503, 507}),
+          onPool));
 
   addZoneRoutes(router, ctx);  // GET|PUT /api/maps/{id}/zones
 
   // --- PDMs ---
   router.add("GET", "/api/maps/{id}/pdms", guarded([&ctx](const Request& req) {
     const std::string& id = req.params.at("id");
-    if (!ctx.db.getMap(id)) throw ApiError(404, "not_found", "no map '" + id + "'", "id");
+    if (!ctx.db.getMap(id)) throw ApiError(404, "not_found", "no map '" + rj::shown(id) + "'", "id");
     const Page page = pageOf(req);
     json out = json::array();
     for (const auto& p : ctx.db.listPdms(id, page.limit, page.offset)) out.push_back(pdmJson(p));
     return pageResponse(req, page, std::move(out), ctx.db.countPdms(id));
-  }), doc("List a map's PDMs, oldest first: ?limit= (50, at most 500), ?offset=; X-Total-Count and Link rel=next."));
+  }), doc("List a map's PDMs, oldest first: ?limit= (50, at most 500), ?offset=; X-Total-Count and Link rel=next.",
+          Operation().listing("Pdm").errors({404})));
 
   http::RouteOptions pdmUpload;
   pdmUpload.streamBody = true;
   pdmUpload.blocking = onPool;
   pdmUpload.summary = "Create a PDM: JSON {name, components:[{x,y,sigma_x,sigma_y,rotation_deg,weight}]} "
                       "or {name, random: G, seed: S}, or a raster body (any GDAL format) of weights.";
+  pdmUpload.openapi = Operation()
+                          .query("name", {{"type", "string"}}, "A raster body's PDM name.")
+                          .query("filename", {{"type", "string"}}, "A raster body's file name.")
+                          .body(ref("PdmRequest"))
+                          .body({{"type", "string"}, {"format", "binary"}}, "application/octet-stream")
+                          .returns(201, "Created.", ref("Pdm"))
+                          .errors({400, 404, 413, 503, 507})
+                          .toJson();
   router.add("POST", "/api/maps/{id}/pdms", guarded([&ctx](const Request& req) {
     const std::string mapId = req.params.at("id");
     ctx.maps.get(mapId);  // 404 for an unknown map
@@ -523,35 +603,41 @@ void addApiRoutes(http::Router& router, ApiContext& ctx) {
 
   router.add("GET", "/api/maps/{id}/pdms/{pdm}", guarded([&ctx](const Request& req) {
     auto p = ctx.db.getPdm(req.params.at("pdm"));
-    if (!p || p->mapId != req.params.at("id")) throw ApiError(404, "not_found", "no PDM '" + req.params.at("pdm") + "' on this map", "pdm");
+    if (!p || p->mapId != req.params.at("id")) throw ApiError(404, "not_found", "no PDM '" + rj::shown(req.params.at("pdm")) + "' on this map", "pdm");
     return Response::json(200, pdmJson(*p));
-  }), doc("One PDM."));
+  }), doc("One PDM.", Operation().returns(200, "The PDM.", ref("Pdm")).errors({404})));
 
   router.add("DELETE", "/api/maps/{id}/pdms/{pdm}", guarded([&ctx](const Request& req) {
     auto p = ctx.db.getPdm(req.params.at("pdm"));
-    if (!p || p->mapId != req.params.at("id")) throw ApiError(404, "not_found", "no PDM '" + req.params.at("pdm") + "' on this map", "pdm");
+    if (!p || p->mapId != req.params.at("id")) throw ApiError(404, "not_found", "no PDM '" + rj::shown(req.params.at("pdm")) + "' on this map", "pdm");
     InvalidateMapAfter after{ctx, p->mapId};
     ctx.db.deletePdm(p->id);
     store::DataDir::removeTree(ctx.dir.pdmDir(p->id));
     return Response::json(200, {{"deleted", p->id}});
-  }), doc("Delete a PDM."));
+  }), doc("Delete a PDM.", Operation().returns(200, "Deleted.", ref("Deleted")).errors({404})));
 
   // --- missions ---
   router.add("POST", "/api/missions", guarded([&ctx](const Request& req) {
-    return submitMission(ctx, rj::parseJsonLimited(req.body, rj::kMissionJsonLimits));
+    return submitMission(ctx, jsonBody(req, rj::kMissionJsonLimits));
   }), doc("Launch a mission {map, pdm?, planner, rovers:[{x,y,heading}], params:{...}, pace?}; "
-                   "validated fully, then queued (202).", onPool));
+                   "validated fully, then queued (202). A mission file (GET .../mission.json) is accepted as it is.",
+          Operation()
+              .body({{"anyOf", {ref("MissionRequest"), ref("MissionFile")}}})
+              .returns(202, "Queued.", ref("Mission"))
+              .errors({400, 409, 413, 415, 429, 503, 507}),
+          onPool));
 
   router.add("GET", "/api/missions", guarded([&ctx](const Request& req) {
     const Page page = pageOf(req);
     json out = json::array();
     for (const auto& m : ctx.db.listMissions(page.limit, page.offset)) out.push_back(missionJson(m));
     return pageResponse(req, page, std::move(out), ctx.db.countMissions());
-  }), doc("List missions, newest first: ?limit= (50, at most 500), ?offset=; X-Total-Count and Link rel=next."));
+  }), doc("List missions, newest first: ?limit= (50, at most 500), ?offset=; X-Total-Count and Link rel=next.",
+          Operation().listing("Mission")));
 
   router.add("GET", "/api/missions/{id}", guarded([&ctx](const Request& req) {
     auto m = ctx.db.getMission(req.params.at("id"));
-    if (!m) throw ApiError(404, "not_found", "no mission '" + req.params.at("id") + "'", "id");
+    if (!m) throw ApiError(404, "not_found", "no mission '" + rj::shown(req.params.at("id")) + "'", "id");
     json j = missionJson(*m);
     if (auto s = ctx.missions.stream(m->id)) {
       json live = s->summary();
@@ -559,48 +645,59 @@ void addApiRoutes(http::Router& router, ApiContext& ctx) {
       j["step"] = live["step"];
     }
     return Response::json(200, j);
-  }), doc("One mission: status, progress, metrics."));
+  }), doc("One mission: status, progress, metrics.", Operation().returns(200, "The mission.", ref("Mission")).errors({404})));
 
   router.add("DELETE", "/api/missions/{id}", guarded([&ctx](const Request& req) {
     const std::string id = req.params.at("id");
     auto m = ctx.db.getMission(id);
-    if (!m) throw ApiError(404, "not_found", "no mission '" + id + "'", "id");
+    if (!m) throw ApiError(404, "not_found", "no mission '" + rj::shown(id) + "'", "id");
     if (ctx.missions.cancel(id)) return Response::json(202, {{"id", id}, {"status", "cancelling"}});
     // Not running (any more): the run is deleted, its row first so no listing shows a run whose
     // files are half gone. A mission that is still finishing cannot be deleted yet.
     if (!store::isFinal(m->status))
-      throw ApiError(409, "not_finished", "mission " + id + " is " + m->status + ": try again when it has ended", "id");
+      throw ApiError(409, "not_finished", "mission " + rj::shown(id) + " is " + m->status + ": try again when it has ended", "id");
     // Only the request whose delete removed the row says so; a concurrent one finds nothing.
-    if (!ctx.db.deleteMission(id)) throw ApiError(404, "not_found", "no mission '" + id + "'", "id");
+    if (!ctx.db.deleteMission(id)) throw ApiError(404, "not_found", "no mission '" + rj::shown(id) + "'", "id");
     ctx.missions.forget(id);
     store::DataDir::removeTree(ctx.dir.missionDir(id));
     return Response::json(200, {{"deleted", id}});
   }), doc("Cancel a queued or running mission (202; the planner stops within one step), or delete "
-          "an ended one with its result files (200)."));
+          "an ended one with its result files (200).",
+          Operation()
+              .returns(200, "Deleted (it had ended).", ref("Deleted"))
+              .returns(202, "Cancelling (it was queued or running).", ref("Cancelling"))
+              .errors({404, 409})));
 
   router.add("PATCH", "/api/missions/{id}", guarded([&ctx](const Request& req) {
     const std::string id = req.params.at("id");
-    json body = rj::parseJsonLimited(req.body, rj::kMissionJsonLimits);
+    json body = jsonBody(req, rj::kMissionJsonLimits);
     if (!body.is_object()) throw ApiError(400, "bad_json", "the request body must be a JSON object", "body");
     for (const auto& item : body.items())
       if (item.key() != "label")
-        throw ApiError(400, "unknown_field", "only 'label' can be changed", item.key().substr(0, 64));
+        throw ApiError(400, "unknown_field", "only 'label' can be changed, not '" + rj::shown(item.key()) + "'",
+                       rj::shown(item.key()));
     auto label = body.find("label");
     if (label == body.end() || !label->is_string())
       throw ApiError(400, "invalid_field", "label must be a string", "label");
     rj::checkName(label->get<std::string>(), "label");
     // A DELETE may land between the update and the read back: then it is gone (404).
     auto m = ctx.db.setMissionLabel(id, label->get<std::string>()) ? ctx.db.getMission(id) : std::nullopt;
-    if (!m) throw ApiError(404, "not_found", "no mission '" + id + "'", "id");
+    if (!m) throw ApiError(404, "not_found", "no mission '" + rj::shown(id) + "'", "id");
     return Response::json(200, missionJson(*m));
-  }), doc("Rename a run: {\"label\": \"...\"} (at most 200 characters, no control characters)."));
+  }), doc("Rename a run: {\"label\": \"...\"} (at most 200 characters, no control characters).",
+          Operation().body(ref("MissionLabel")).returns(200, "Renamed.", ref("Mission")).errors({400, 404, 415})));
 
   router.add("GET", "/api/missions/{id}/{file}", guarded([&ctx](const Request& req) {
     const std::string id = req.params.at("id"), file = req.params.at("file");
     auto m = ctx.db.getMission(id);
-    if (!m) throw ApiError(404, "not_found", "no mission '" + id + "'", "id");
+    if (!m) throw ApiError(404, "not_found", "no mission '" + rj::shown(id) + "'", "id");
     if (file == "mission.json") {
-      const std::string digest = ctx.db.getMap(m->mapId) ? mapDigest(ctx, m->mapId) : std::string();
+      // Recorded at launch; runs launched before that name their map's current grid.
+      std::string digest;
+      if (m->spec.is_object() && m->spec.contains("dem_sha256") && m->spec["dem_sha256"].is_string())
+        digest = m->spec["dem_sha256"].get<std::string>();
+      else if (ctx.db.getMap(m->mapId))
+        digest = mapDigest(ctx, m->mapId);
       Response r = Response::json(200, missionFile(*m, digest, ctx.version));
       r.headers.emplace_back("Content-Disposition", "attachment; filename=\"mission-" + id + ".json\"");
       return r;
@@ -616,11 +713,19 @@ void addApiRoutes(http::Router& router, ApiContext& ctx) {
     auto t = types.find(file);
     if (t == types.end())
       throw ApiError(404, "not_found",
-                     "no file '" + file + "' (mission.json, result.json, result.geojson, result.csv, map.png, map.tif)",
+                     "no file '" + rj::shown(file) + "' (mission.json, result.json, result.geojson, result.csv, map.png, map.tif)",
                      "file");
     const fs::path path = fs::path(ctx.dir.missionDir(id)) / file;
-    if (!fs::exists(path))
-      throw ApiError(409, "not_ready", "mission " + id + " is " + m->status + ": no result yet", "id");
+    if (!fs::exists(path)) {
+      // An ended run without files (failed, cancelled before it stored anything) will never
+      // have them: say so, with the reason it ended.
+      if (store::isFinal(m->status))
+        throw ApiError(409, "no_result",
+                       "mission " + rj::shown(id) + " ended " + m->status + " without a result" +
+                           (m->message.empty() ? std::string() : ": " + m->message),
+                       "id");
+      throw ApiError(409, "not_ready", "mission " + rj::shown(id) + " is " + m->status + ": no result yet", "id");
+    }
     Response r = fileResponse(path.string(), t->second);
     r.headers.emplace_back("Content-Disposition", "attachment; filename=\"mission-" + id + "-" + file + "\"");
     return r;
@@ -628,14 +733,24 @@ void addApiRoutes(http::Router& router, ApiContext& ctx) {
           "a finished mission's result: result.json, result.geojson (map CRS: tracks, route, targets, "
           "zones, incidents), result.csv (every sample, both frames), map.png (the map with its "
           "legend and scale bar, at most 4096 px a side), map.tif (the same map as a GeoTIFF in the "
-          "map's CRS).", onPool));
+          "map's CRS).",
+          Operation()
+              .returns(200, "mission.json (MissionFile), result.json, result.geojson or result.csv.",
+                       {{"oneOf", {ref("MissionFile"), {{"type", "object"}, {"required", {"planner", "metrics"}}}}}})
+              .returns(200, "result.geojson.", {{"type", "object"}}, "application/geo+json")
+              .returns(200, "result.csv.", {{"type", "string"}}, "text/csv")
+              .returns(200, "map.png.", nullptr, "image/png")
+              .returns(200, "map.tif.", nullptr, "image/tiff")
+              .errors({404, 409, 503}),
+          onPool));
 
   http::RouteOptions ws;
+  ws.openapi = Operation().errors({404}).toJson();
   ws.summary = "WebSocket: a snapshot, then live events (binary grid frames, JSON poses/progress), "
                "then {\"type\":\"done\"}; see README for the protocol.";
   router.addWebSocket("/api/missions/{id}/stream", [&ctx](const Request& req, std::shared_ptr<http::WsConnection> c) {
     auto s = ctx.missions.stream(req.params.at("id"));
-    if (!s) throw ApiError(404, "not_found", "no mission '" + req.params.at("id") + "'", "id");
+    if (!s) throw ApiError(404, "not_found", "no mission '" + rj::shown(req.params.at("id")) + "'", "id");
     return s->subscribe(std::move(c));
   }, ws);
 
@@ -643,42 +758,5 @@ void addApiRoutes(http::Router& router, ApiContext& ctx) {
 }
 
 http::Handler guardedRoute(http::Handler handler) { return guarded(std::move(handler)); }
-
-json openApiDocument(const http::Router& router, const std::string& version) {
-  json paths = json::object();
-  const json error = {{"description", "Error"},
-                      {"content", {{"application/json", {{"schema", {{"$ref", "#/components/schemas/Error"}}}}}}}};
-  for (const auto& r : router.routes()) {
-    json op{{"summary", r.options.summary}};
-    json params = json::array();
-    for (std::size_t p = r.pattern.find('{'); p != std::string::npos; p = r.pattern.find('{', p + 1)) {
-      auto end = r.pattern.find('}', p);
-      params.push_back({{"name", r.pattern.substr(p + 1, end - p - 1)}, {"in", "path"}, {"required", true},
-                        {"schema", {{"type", "string"}}}});
-    }
-    if (!params.empty()) op["parameters"] = params;
-    op["responses"] = {{"200", {{"description", "OK"}}}, {"400", error}, {"404", error}};
-    if (r.options.requireAuth) op["security"] = json::array({{{"bearer", json::array()}}});
-    if (r.method == "WS") op["responses"]["101"] = {{"description", "Switching to WebSocket"}};
-    for (const auto& [k, v] : r.options.openapi.items()) op[k] = v;
-    std::string method = r.method == "WS" ? "get" : r.method;
-    std::transform(method.begin(), method.end(), method.begin(), [](unsigned char c) { return std::tolower(c); });
-    paths[r.pattern][method] = op;
-  }
-  return {{"openapi", "3.0.3"},
-          {"info", {{"title", "roverplan API"}, {"version", version},
-                    {"description", "Mission planning for teams of planetary micro-rovers."}}},
-          {"paths", paths},
-          {"components",
-           {{"securitySchemes", {{"bearer", {{"type", "http"}, {"scheme", "bearer"}}}}},
-            {"schemas",
-             {{"Error",
-               {{"type", "object"},
-                {"properties",
-                 {{"error",
-                   {{"type", "object"},
-                    {"properties", {{"code", {{"type", "string"}}}, {"message", {{"type", "string"}}},
-                                    {"field", {{"type", "string"}}}}}}}}}}}}}}}};
-}
 
 }  // namespace rover::api

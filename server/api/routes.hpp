@@ -7,6 +7,7 @@
 
 #include "core/planning/planner.hpp"
 #include "server/api/map_catalog.hpp"
+#include "server/api/openapi.hpp"
 #include "server/http/router.hpp"
 #include "server/missions/mission_manager.hpp"
 #include "server/studies/study_manager.hpp"
@@ -57,10 +58,9 @@ void addApiRoutes(http::Router& router, ApiContext& ctx);
 http::Handler guardedRoute(http::Handler handler);
 // /api/studies (study_routes.cpp), with the handler wrapper and doc() of routes.cpp.
 void addStudyRoutes(http::Router& router, ApiContext& ctx);
-http::RouteOptions routeDoc(const std::string& summary, bool blocking = false);
+http::RouteOptions routeDoc(const std::string& summary, const openapi::Operation& op,
+                            bool blocking = false);
 // POST /api/missions with a parsed body: validated, queued, answered 202 (throws ApiError).
 http::Response submitMission(ApiContext& ctx, const nlohmann::json& body);
-// The OpenAPI 3 document of the router's routes.
-nlohmann::json openApiDocument(const http::Router& router, const std::string& version);
 
 }  // namespace rover::api

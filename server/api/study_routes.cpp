@@ -3,6 +3,8 @@
 #include <cmath>
 
 #include "core/common/error.hpp"
+#include "server/api/json_body.hpp"
+#include "server/api/openapi.hpp"
 #include "server/api/routes.hpp"
 #include "server/json/json_edge.hpp"
 #include "server/json/pdm_json.hpp"
@@ -108,6 +110,10 @@ json configurationsJson(const studies::StudySpec& spec) {
   return out;
 }
 
+using openapi::Operation;
+const nlohmann::json obj = {{"type", "object"}};
+const nlohmann::json arr = {{"type", "array"}, {"items", {{"type", "object"}}}};
+
 }  // namespace
 
 void addStudyRoutes(http::Router& router, ApiContext& ctx) {
@@ -120,22 +126,22 @@ void addStudyRoutes(http::Router& router, ApiContext& ctx) {
       out.push_back({{"name", name}, {"spec", spec}});
     }
     return Response::json(200, out);
-  }), routeDoc("Study presets (laine-fig6, laine-fig8, frontier, swinton) as study documents."));
+  }), routeDoc("Study presets (laine-fig6, laine-fig8, frontier, swinton) as study documents.", Operation().returns(200, "The presets", obj)));
 
   router.add("POST", "/api/studies", guardedRoute([&ctx](const Request& req) {
-    const json body = rj::parseJsonLimited(req.body, kStudyJsonLimits);
+    const json body = jsonBody(req, kStudyJsonLimits);
     const studies::StudyState s = ctx.studies->submit(body);
     return Response::json(202, studies::toJson(s));
   }), routeDoc("Launch a study: a study document (see README \"Studies\") or {\"preset\": NAME, \"runs\": N, "
                "\"master_seed\"?}; validated (400 naming the field), stored and queued (202). At most " +
                std::to_string(studies::kMaxServerRuns) + " runs per study, " + std::to_string(studies::kMaxActive) +
-               " studies queued or running, " + std::to_string(studies::kMaxStored) + " kept (429).", true));
+               " studies queued or running, " + std::to_string(studies::kMaxStored) + " kept (429).", Operation().body(obj).returns(202, "Queued", obj).errors({400, 413, 415, 429}), true));
 
   router.add("GET", "/api/studies", guardedRoute([&ctx](const Request&) {
     json out = json::array();
     for (const auto& s : ctx.studies->list()) out.push_back(studies::toJson(s));
     return Response::json(200, out);
-  }), routeDoc("List studies, newest first: status, runs done/total, ETA."));
+  }), routeDoc("List studies, newest first: status, runs done/total, ETA.", Operation().returns(200, "Studies", arr)));
 
   router.add("GET", "/api/studies/{id}", guardedRoute([&ctx](const Request& req) {
     const studies::StudyState s = studyOr404(ctx, req.params.at("id"));
@@ -146,7 +152,7 @@ void addStudyRoutes(http::Router& router, ApiContext& ctx) {
     j["summary"] = ctx.studies->summary(s.id);
     return Response::json(200, j);
   }), routeDoc("One study: its document, configurations, status and summary table (mean, std, quartiles "
-               "per configuration and metric; partial while it runs).", true));
+               "per configuration and metric; partial while it runs).", Operation().returns(200, "The study", obj).errors({404}), true));
 
   router.add("DELETE", "/api/studies/{id}", guardedRoute([&ctx](const Request& req) {
     const std::string id = req.params.at("id");
@@ -158,7 +164,7 @@ void addStudyRoutes(http::Router& router, ApiContext& ctx) {
     }
     return Response::json(200, {{"deleted", id}});
   }), routeDoc("Cancel a queued or running study (202; the runs done are kept), or delete an ended one with "
-               "its database (200).", true));
+               "its database (200).", Operation().returns(202, "Cancelled", obj).returns(200, "Deleted", obj).errors({404}), true));
 
   router.add("GET", "/api/studies/{id}/runs.csv", guardedRoute([&ctx](const Request& req) {
     const studies::StudyState s = studyOr404(ctx, req.params.at("id"));
@@ -168,7 +174,7 @@ void addStudyRoutes(http::Router& router, ApiContext& ctx) {
     r.headers.emplace_back("Content-Disposition", "attachment; filename=\"study-" + s.id + "-runs.csv\"");
     return r;
   }), routeDoc("The study's runs as CSV: run_index, config, replicate, seed, status, wall_s, cpu_s, host, "
-               "rank, then one column per metric.", true));
+               "rank, then one column per metric.", Operation().returns(200, "Runs", nullptr, "text/csv").errors({404}), true));
 
   router.add("GET", "/api/studies/{id}/study.sqlite", guardedRoute([&ctx](const Request& req) {
     const studies::StudyState s = studyOr404(ctx, req.params.at("id"));
@@ -180,14 +186,14 @@ void addStudyRoutes(http::Router& router, ApiContext& ctx) {
     r.headers.emplace_back("Content-Disposition", "attachment; filename=\"study-" + s.id + ".sqlite\"");
     return r;
   }), routeDoc("The study database (SQLite, WAL: complete once the study has ended): spec, configs, runs, "
-               "curves; `roverplan study summary` reads it."));
+               "curves; `roverplan study summary` reads it.", Operation().returns(200, "SQLite database", nullptr, "application/vnd.sqlite3").errors({404})));
 
   router.add("GET", "/api/studies/{id}/runs/{run}", guardedRoute([&ctx](const Request& req) {
     const studies::StudyState s = studyOr404(ctx, req.params.at("id"));
     const studies::StudySpec spec = studies::parseStudySpec(ctx.studies->specJson(s.id));
     return Response::json(200, runMission(ctx, spec, runIndexOf(req, spec)));
   }), routeDoc("One run: its configuration, parameters, seed and the mission it was (or why it has none: "
-               "mission_unavailable).", true));
+               "mission_unavailable).", Operation().returns(200, "The run", obj).errors({404}), true));
 
   router.add("POST", "/api/studies/{id}/runs/{run}/mission", guardedRoute([&ctx](const Request& req) {
     const studies::StudyState s = studyOr404(ctx, req.params.at("id"));
@@ -213,10 +219,10 @@ void addStudyRoutes(http::Router& router, ApiContext& ctx) {
     return submitMission(ctx, body);
   }), routeDoc("Open a run as a mission: the same map, planner, parameters, seed, starts (and PDM, created on "
                "the map) queued as a new mission (202, the mission); 409 not_a_mission when the run's world "
-               "is no stored map.", true));
+               "is no stored map.", Operation().returns(202, "Queued mission", obj).errors({404, 409, 429}), true));
 
   http::RouteOptions ws = routeDoc("WebSocket: {\"type\":\"snapshot\"}, then progress frames (runs done/total, "
-                                   "ETA, a partial summary every few seconds), then {\"type\":\"done\"}.");
+                                   "ETA, a partial summary every few seconds), then {\"type\":\"done\"}.", Operation().returns(101, "Switching protocols").errors({404}));
   router.addWebSocket("/api/studies/{id}/stream", [&ctx](const Request& req, std::shared_ptr<http::WsConnection> c) {
     auto s = ctx.studies->stream(req.params.at("id"));
     if (!s) throw ApiError(404, "not_found", "no study '" + req.params.at("id") + "'", "id");

@@ -1,6 +1,8 @@
 #include "server/api/zone_routes.hpp"
 
 #include "maps/georef.hpp"
+#include "server/api/json_body.hpp"
+#include "server/api/openapi.hpp"
 #include "server/json/json_edge.hpp"
 #include "server/json/zones_json.hpp"
 
@@ -17,9 +19,10 @@ void addZoneRoutes(http::Router& router, ApiContext& ctx) {
   get.summary =
       "A map's keep-out zones: a GeoJSON FeatureCollection of Polygons in the local frame (metres "
       "from the map's lower-left corner), empty when none were saved.";
+  get.openapi = openapi::Operation().returns(200, "The zones.", openapi::ref("Zones")).errors({404}).toJson();
   router.add("GET", "/api/maps/{id}/zones", guardedRoute([&ctx](const Request& req) {
     const std::string& id = req.params.at("id");
-    if (!ctx.db.getMap(id)) throw ApiError(404, "not_found", "no map '" + id + "'", "id");
+    if (!ctx.db.getMap(id)) throw ApiError(404, "not_found", "no map '" + rj::shown(id) + "'", "id");
     auto zones = ctx.db.getZones(id);
     return Response::json(200, zones ? *zones : rj::zonesToJson({}));
   }), get);
@@ -31,11 +34,18 @@ void addZoneRoutes(http::Router& router, ApiContext& ctx) {
       "1024 vertices in all; rings closed, 3+ distinct points; on or near the map). Local frame by "
       "default; ?crs=map converts from the map's own CRS (as result.geojson exports are written). "
       "Answers the zones as stored, in the local frame.";
+  put.openapi = openapi::Operation()
+                    .query("crs", {{"type", "string"}, {"enum", {"local", "map"}}},
+                           "local (default): metres from the map's lower-left corner; map: the map's own CRS.")
+                    .body(openapi::ref("Zones"))
+                    .returns(200, "The zones as stored, in the local frame.", openapi::ref("Zones"))
+                    .errors({400, 404, 413, 415, 503, 507})
+                    .toJson();
   router.add("PUT", "/api/maps/{id}/zones", guardedRoute([&ctx](const Request& req) {
     const std::string& id = req.params.at("id");
     auto map = ctx.maps.get(id);  // 404 for an unknown map
     const rj::JsonLimits limits{rj::kMaxZonesFileBytes, 64};
-    json body = rj::parseJsonLimited(req.body, limits);
+    json body = jsonBody(req, limits);
     std::string crs = "local";
     if (auto it = req.query.find("crs"); it != req.query.end()) crs = it->second;
     if (crs != "local" && crs != "map")
@@ -56,7 +66,7 @@ void addZoneRoutes(http::Router& router, ApiContext& ctx) {
     }
     const KeepOut zones = rj::zonesFromJson(body, "zones", &g, toLocal);
     const json stored = rj::zonesToJson(zones, rj::zoneNames(body));
-    if (!ctx.db.setZones(id, stored)) throw ApiError(404, "not_found", "no map '" + id + "'", "id");
+    if (!ctx.db.setZones(id, stored)) throw ApiError(404, "not_found", "no map '" + rj::shown(id) + "'", "id");
     return Response::json(200, stored);
   }), put);
 }

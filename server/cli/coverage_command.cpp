@@ -95,13 +95,14 @@ int coverageCommand(const std::vector<std::string>& argv, std::ostream& out) {
   coverage::CoverageParams typed;
   PlanningProblem problem;
   std::optional<maps::LoadedDem> dem;
-  if (args.has("dem")) dem = loadDemOrFail(args.str("dem", ""), readDemOptions(args, "dem-cell", 0));
+  const maps::DemImport import = readDemImport(args, "dem-cell");
+  if (args.has("dem")) dem = loadDemOrFail(args.str("dem", ""), import.load);
   try {
     typed = coverage::parseCoverageParams(params);
     if (dem) {
       // Square cells of coverage_cell metres in the map's local frame, whatever its pixels.
       problem = problems::problemOnMap(problems::groundOnMap("coverage", dem->dem.geometry(), params),
-                                       std::make_shared<terrain::Dem>(dem->dem));
+                                       std::make_shared<terrain::Dem>(dem->dem), nullptr, import.body);
     } else {
       problem = problems::problemOnGrid(wp);
     }

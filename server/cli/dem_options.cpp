@@ -12,27 +12,46 @@
 
 namespace rover::cli {
 
+namespace {
+std::string kebab(std::string key) {
+  for (char& c : key)
+    if (c == '_') c = '-';
+  return key;
+}
+}  // namespace
+
+// The DEM options come from the import table (maps/dem_import_options) that the upload route also
+// reads, so --crop, --crop-px, --vertical-scale and --body take what ?crop= ... take.
 void addDemOptions(ArgParser& a, const std::string& cellOption, const std::string& cellDefault) {
-  a.option(cellOption, "M", cellDefault, "Resample to cells of M metres (GDAL warper: average when "
-                                         "shrinking, bilinear when enlarging).");
-  a.option("crop", "X0,Y0,W,H", "", "Window in the file's CRS units: lower-left corner, width, height.");
-  a.option("vertical-scale", "K", "1", "Multiply heights by K (for files whose values are not metres).");
+  for (const auto& info : maps::demImportOptionInfos()) {
+    if (info.key == "cell") a.option(cellOption, info.metavar, cellDefault, info.doc);
+    else a.option(kebab(info.key), info.metavar, info.key == "vertical_scale" ? "1" : info.key == "body" ? "auto" : "", info.doc);
+  }
   a.option("resampling", "ALG", "auto", "auto | near | average | bilinear | cubic.");
   a.option("max-cells", "N", "200000000", "Refuse rasters larger than N cells (checked before reading).");
 }
 
-maps::LoadOptions readDemOptions(const ArgParser& a, const std::string& cellOption,
-                                 double cellDefault) {
-  maps::LoadOptions o;
-  o.cellSize = a.has(cellOption) ? a.real(cellOption, 0, 1e-6, 1e7) : cellDefault;
-  if (a.has("crop")) {
-    auto v = a.realList("crop");
-    if (v.size() != 4) throw UsageError("invalid value for --crop: expected X0,Y0,W,H");
-    o.crop = std::array<double, 4>{v[0], v[1], v[2], v[3]};
+maps::DemImport readDemImport(const ArgParser& a, const std::string& cellOption) {
+  std::map<std::string, std::string> values;
+  for (const auto& info : maps::demImportOptionInfos()) {
+    const std::string option = info.key == "cell" ? cellOption : kebab(info.key);
+    if (a.has(option)) values[info.key] = a.str(option, "");
   }
-  o.verticalScale = a.real("vertical-scale", 1.0, -1e9, 1e9);
-  o.resampling = a.str("resampling", "auto");
-  o.maxCells = a.integer("max-cells", o.maxCells, 4, INT64_MAX);
+  maps::DemImport d;
+  try {
+    d = maps::parseDemImportOptions(values);
+  } catch (const Error& e) {
+    const std::string option = e.field() == "cell" ? cellOption : kebab(e.field());
+    throw UsageError("invalid value for --" + option + ": " + e.what());
+  }
+  d.load.resampling = a.str("resampling", "auto");
+  d.load.maxCells = a.integer("max-cells", d.load.maxCells, 4, INT64_MAX);
+  return d;
+}
+
+maps::LoadOptions readDemOptions(const ArgParser& a, const std::string& cellOption, double cellDefault) {
+  maps::LoadOptions o = readDemImport(a, cellOption).load;
+  if (!a.has(cellOption)) o.cellSize = cellDefault;
   return o;
 }
 

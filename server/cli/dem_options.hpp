@@ -3,6 +3,7 @@
 // resampling and the cell budget.
 #include "core/grid/raster.hpp"
 #include "core/terrain/dem.hpp"
+#include "maps/dem_import_options.hpp"
 #include "maps/dem_io.hpp"
 #include "server/cli/arg_parser.hpp"
 
@@ -11,6 +12,8 @@ namespace rover::cli {
 // `cellOption` is the name of the resampling option ("cell", or "coverage-cell" for coverage).
 void addDemOptions(ArgParser& args, const std::string& cellOption = "cell",
                    const std::string& cellDefault = "native");
+// The options as read (the body too); a bad value is a one-line UsageError naming the option.
+maps::DemImport readDemImport(const ArgParser& args, const std::string& cellOption = "cell");
 maps::LoadOptions readDemOptions(const ArgParser& args, const std::string& cellOption = "cell",
                                  double cellDefault = 0);
 // Loads a DEM, turning loader errors into one-line usage errors ("FILE: reason").

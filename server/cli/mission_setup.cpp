@@ -47,7 +47,8 @@ MissionSetup readMissionOptions(const ArgParser& a) {
     throwAsUsage(e);
   }
   s.demPath = a.str("dem", "");
-  maps::LoadedDem loaded = loadDemOrFail(s.demPath, readDemOptions(a, "cell", 0));
+  const maps::DemImport import = readDemImport(a, "cell");
+  maps::LoadedDem loaded = loadDemOrFail(s.demPath, import.load);
   auto dem = std::make_shared<terrain::Dem>(std::move(loaded.dem));
   const PdmOptionNames names = missionPdmNames();
   Raster<float> pdm = readPdmOptions(a, *dem, names, true);
@@ -62,7 +63,8 @@ MissionSetup readMissionOptions(const ArgParser& a) {
     s.pdmSource = "uniform";
   }
   s.problem = problems::problemOnMap(problems::groundOnMap(s.plannerName, dem->geometry(), s.params), dem,
-                                     pdm.empty() ? nullptr : std::make_shared<Raster<float>>(std::move(pdm)));
+                                     pdm.empty() ? nullptr : std::make_shared<Raster<float>>(std::move(pdm)),
+                                     import.body);
 
   s.problem.keepOut = readKeepOutOption(a, dem->geometry());
   std::vector<RoverStart> starts = readStartOption(a);

@@ -4,6 +4,7 @@
 // dump() recurse once per nesting level, so a 70 000-deep array overflowed the stack in the
 // handler. The depth check is a single byte scan (no recursion, no allocation) done first.
 #include <cstddef>
+#include <cstdint>
 #include <string>
 #include <string_view>
 
@@ -32,9 +33,18 @@ int jsonNestingDepth(std::string_view text, int stopAt);
 // `requireObject`).
 nlohmann::json parseJsonLimited(std::string_view text, const JsonLimits& limits, bool requireObject = true);
 
-// Names of maps, PDMs and missions: valid UTF-8 of at most kMaxNameChars characters (code points).
-// Throws http::ApiError 400 invalid_field naming `field`.
+// Names of maps, PDMs and missions: valid UTF-8 of at most kMaxNameChars characters (code points),
+// none of them a hidden control (isHiddenControl). Throws http::ApiError 400 invalid_field naming
+// `field`.
 inline constexpr std::size_t kMaxNameChars = 200;
 void checkName(std::string_view name, const std::string& field);
+// C0/C1 controls, DEL, zero-width and bidi marks/overrides/isolates, U+2028/2029, U+FEFF.
+bool isHiddenControl(std::uint32_t codePoint);
+// A name made from untrusted text (a file or zip member name): invalid bytes and hidden controls
+// dropped, cut at `maxChars` code points, blanks trimmed; passes checkName. May be "".
+std::string cleanName(std::string_view raw, std::size_t maxChars = kMaxNameChars);
+// Untrusted text echoed in an error message or field: at most `maxBytes` bytes, cut at a character
+// boundary and followed by "..." when cut; invalid bytes and hidden controls shown as '?'.
+std::string shown(std::string_view text, std::size_t maxBytes = 64);
 
 }  // namespace rover::json

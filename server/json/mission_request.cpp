@@ -17,11 +17,6 @@ using nlohmann::json;
 
 namespace {
 
-// Echoed user text is cut, so an error about a 60 KB key is not itself 60 KB.
-std::string shown(const std::string& s) {
-  return s.size() <= 64 ? s : s.substr(0, 64) + "...";
-}
-
 std::string stringField(const json& body, const char* key, bool required) {
   auto it = body.find(key);
   if (it == body.end() || it->is_null()) {
@@ -71,12 +66,9 @@ ParamValue paramValue(const ParamInfo& info, const json& value) {
 MissionRequest parseMissionRequest(const json& body, const PlannerRegistry& planners,
                                    int maxFileVersion) {
   if (!body.is_object()) throw ApiError(400, "bad_json", "the request body must be a JSON object", "body");
-  static const std::vector<std::string> known{"map",     "pdm",       "planner",    "rovers",
-                                              "params",  "pace",      "name",       "format",
-                                              "version", "roverplan", "dem_sha256", "map_name",
-                                              "keep_out"};
   for (const auto& item : body.items())
-    if (std::find(known.begin(), known.end(), item.key()) == known.end())
+    if (std::find(std::begin(kMissionRequestFields), std::end(kMissionRequestFields), item.key()) ==
+        std::end(kMissionRequestFields))
       throw ApiError(400, "unknown_field", "unknown field '" + shown(item.key()) + "'", shown(item.key()));
   MissionRequest req;
   req.mapId = stringField(body, "map", true);

@@ -35,6 +35,11 @@ inline constexpr std::size_t kMaxRovers = 64;
 inline constexpr double kMaxCoordinateM = 1e9;
 inline constexpr double kMaxHeadingDeg = 360;
 inline constexpr double kMaxPace = 1e6;
+// Every top-level field a request (or a mission file) may hold; any other is 400 unknown_field.
+inline constexpr const char* kMissionRequestFields[] = {"map",     "pdm",       "planner",    "rovers",
+                                                        "params",  "pace",      "name",       "format",
+                                                        "version", "roverplan", "dem_sha256", "map_name",
+                                                        "keep_out"};
 
 // A mission file's own fields are accepted too: format ("roverplan-mission"), version (at most
 // `maxFileVersion`), dem_sha256 (64 hex digits, or null) and the informative roverplan and

@@ -22,7 +22,21 @@ json toJson(const ParamInfo& info) {
   if (std::isfinite(info.min)) j["min"] = info.min;
   if (std::isfinite(info.max)) j["max"] = info.max;
   if (!info.choices.empty()) j["choices"] = info.choices;
+  j["group"] = info.group;
+  j["level"] = paramLevelName(info.level);
   return j;
+}
+
+json toJson(const ParamSet& values) {
+  json j = json::object();
+  for (const auto& [key, value] : values) j[key] = toJson(value);
+  return j;
+}
+
+json toJson(const std::vector<ParamPreset>& presets) {
+  json arr = json::array();
+  for (const auto& p : presets) arr.push_back({{"name", p.name}, {"doc", p.doc}, {"params", toJson(p.values)}});
+  return arr;
 }
 
 json toJson(const std::vector<ParamInfo>& infos) {

@@ -11,6 +11,8 @@ namespace rover::json {
 nlohmann::json toJson(const ParamValue& v);
 nlohmann::json toJson(const ParamInfo& info);
 nlohmann::json toJson(const std::vector<ParamInfo>& infos);
+nlohmann::json toJson(const ParamSet& values);
+nlohmann::json toJson(const std::vector<ParamPreset>& presets);
 nlohmann::json toJson(const PlanResult& r);
 // Reads a JSON value as a parameter of the declared type; throws rover::Error naming the key.
 ParamValue paramFromJson(const ParamInfo& info, const nlohmann::json& v);

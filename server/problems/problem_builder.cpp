@@ -25,9 +25,10 @@ MapGround groundOnMap(const std::string& planner, const GridGeometry& map, const
 }
 
 PlanningProblem problemOnMap(const MapGround& ground, std::shared_ptr<const terrain::Dem> dem,
-                             std::shared_ptr<const Raster<float>> pdm) {
+                             std::shared_ptr<const Raster<float>> pdm, std::optional<terrain::Body> body) {
   PlanningProblem p;
-  p.body = maps::bodyOfCrs(dem->z.geo.crsWkt);  // the rover climbs against its body's gravity
+  // The rover climbs against its body's gravity.
+  p.body = body ? *body : maps::bodyOfCrs(dem->z.geo.crsWkt);
   if (ground.coverageGrid) {
     p.world = coverage::worldFromDem(*dem, ground.cell, ground.traversal);
   } else {

@@ -9,6 +9,7 @@
 // it. Errors are core Errors naming the parameter (the caller qualifies the field).
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -31,9 +32,11 @@ struct MapGround {
 MapGround groundOnMap(const std::string& planner, const GridGeometry& map, const ParamSet& params);
 
 // The problem on a map: the coverage grid world laid on it (coverageGrid), the map itself, the
-// PDM (team planners; null = none) and the body of the map's CRS. Rovers are left empty.
+// PDM (team planners; null = none) and the map's body: `body` when declared (an upload's or the
+// CLI's --body), else the body of the map's CRS. Rovers are left empty.
 PlanningProblem problemOnMap(const MapGround& ground, std::shared_ptr<const terrain::Dem> dem,
-                             std::shared_ptr<const Raster<float>> pdm = nullptr);
+                             std::shared_ptr<const Raster<float>> pdm = nullptr,
+                             std::optional<terrain::Body> body = std::nullopt);
 
 // The problem on a random grid world (coverage planner; no map, no body).
 PlanningProblem problemOnGrid(const coverage::WorldParams& world);

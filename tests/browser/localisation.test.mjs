@@ -32,6 +32,7 @@ describe('coverage under localisation error', { skip: missing || false, timeout:
       assert.ok(await page.$(`#m-param-${key}`), `input for ${key}`);
     await page.fill('#m-param-odometry_noise', '3');
     await page.fill('#m-param-heading_noise', '0.3');
+    await page.click('fieldset[data-group="localisation"] > details > summary');  // loop closure is folded
     await page.check('#m-param-loop_closure');
     await page.fill('#m-param-coverage', '0.05');
     await page.fill('#m-pace', '3000');

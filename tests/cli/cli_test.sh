@@ -161,6 +161,32 @@ assert abs(total - 100) < 1e-6, total
 [ -s "$TMP/classes.tif" ] || fail "traversability --out: no classes GeoTIFF"
 pass "traversability prints the class shares and writes the classes"
 
+# The DEM import options the upload route shares (maps/dem_import_options): a pixel window, a
+# body, and bad values naming their option.
+run traversability "$TMP/t.tif" --crop-px 8,4,32,16 --vertical-scale 2 --json
+expect_status 0 "traversability --crop-px"
+python3 -c '
+import json, sys
+d = json.load(open(sys.argv[1]))
+assert d["rows"] == 16 and d["cols"] == 32, (d["rows"], d["cols"])
+' "$OUT" || fail "traversability --crop-px: not a 32 x 16 window"
+run coverage --dem "$TMP/t.tif" --body moon --coverage 0.2 --json
+expect_status 0 "coverage --dem --body moon"
+python3 -c '
+import json, sys
+d = json.load(open(sys.argv[1]))
+assert d["world"]["body"] == "moon", d["world"]
+assert abs(d["metrics"]["gravity_m_s2"] - 1.62) < 1e-9, d["metrics"]["gravity_m_s2"]
+' "$OUT" || fail "coverage --body moon: not planned on the Moon"
+for bad in "--crop-px 0,0,100,10" "--crop-px 1,2,3" "--crop 1,2,3,4 --crop-px 1,2,3,4" "--body pluto" "--vertical-scale 0"; do
+  # shellcheck disable=SC2086
+  run traversability "$TMP/t.tif" $bad
+  expect_status 2 "traversability $bad"
+  [ "$(lines "$ERR")" -eq 1 ] || fail "traversability $bad: expected one stderr line"
+done
+grep -q -- "--vertical-scale" "$ERR" || fail "--vertical-scale 0: stderr does not name the option"
+pass "DEM import options: a pixel window, a declared body, bad values exit 2"
+
 printf 'not a raster\n' > "$TMP/notes.txt"
 for bad in "$TMP/notes.txt" "$TMP/missing.tif"; do
   run traversability "$bad"

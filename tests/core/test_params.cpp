@@ -1,6 +1,10 @@
 #include <doctest/doctest.h>
 
 #include "core/coverage/coverage_params.hpp"
+#include "core/planning/planner.hpp"
+#include "core/team/team_entry.hpp"
+
+#include <algorithm>
 
 using namespace rover;
 using namespace rover::coverage;
@@ -77,4 +81,37 @@ TEST_CASE("a custom cost table needs pattern custom and the right shape") {
   CHECK(errorOf({{"pattern", std::string("custom")}}).field() == "cost_table");
   CHECK(errorOf({{"cost_table", std::vector<double>{0.2, 0.4, 0.1, 0.7, 0.9, 0.8, 0.6, 0.5}}})
             .field() == "cost_table");
+}
+
+TEST_CASE("every planner's table sorts its parameters into sections, a few common, and its presets parse") {
+  const PlannerRegistry registry = makeBuiltinRegistry();
+  for (const auto& name : registry.names()) {
+    const Planner& p = registry.get(name);
+    CAPTURE(name);
+    int common = 0;
+    std::vector<std::string> groups;
+    for (const auto& info : p.params()) {
+      CHECK(!info.group.empty());
+      common += info.level == ParamLevel::Common;
+      // A section is contiguous in the table, so a form can show it in one piece.
+      if (groups.empty() || groups.back() != info.group) {
+        CHECK_MESSAGE(std::find(groups.begin(), groups.end(), info.group) == groups.end(), info.group);
+        groups.push_back(info.group);
+      }
+    }
+    CHECK(common >= 5);
+    CHECK(common * 2 < static_cast<int>(p.params().size()));
+    REQUIRE(p.presets().size() == 2);
+    for (const auto& preset : p.presets()) {
+      CHECK(!preset.doc.empty());
+      // Through the planner's parser, cross-field checks (alpha + beta = 1, ...) included.
+      if (name == "coverage") CHECK_NOTHROW(parseCoverageParams(preset.values));
+      else CHECK_NOTHROW(team::parseTeamParams(preset.values));
+    }
+  }
+  const auto team = registry.get("team-search").presets();
+  CHECK(team[0].name == "paper 001");
+  CHECK(std::get<std::int64_t>(team[0].values.at("max_vertices")) == 1250);
+  CHECK(std::get<std::string>(team[0].values.at("coordination")) == "paper");
+  CHECK(registry.get("coverage").presets()[0].name == "paper 002");
 }

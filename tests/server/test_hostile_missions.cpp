@@ -134,6 +134,13 @@ TEST_CASE("hostile missions: a queued mission holds its request, not its world (
   CHECK(m["status"] == "failed");
   CHECK(std::string(m["message"]).find("cannot build what the planner plans on") != std::string::npos);
   CHECK(s.manager.memoryReserved() == 0);
+  // Its result will never come: 409 with a code that says so (not a 500, not "not ready"); its
+  // mission file still names the grid it was launched on (recorded at launch, the map is gone).
+  for (const char* f : {"result.json", "result.geojson", "result.csv"})
+    checkError(s.get("/api/missions/" + waiting + "/" + f), 409, "no_result", "id");
+  auto file = s.get("/api/missions/" + waiting + "/mission.json");
+  REQUIRE(file.status == 200);
+  CHECK(file.json()["dem_sha256"] == up.json()["dem_sha256"]);
 }
 
 TEST_CASE("hostile missions: every WebSocket subscriber gets the same snapshot bytes, built once") {

@@ -162,13 +162,15 @@ export function hasToken() {
   return Boolean(sessionToken);
 }
 
-// Multipart DEM upload with progress: each file is a part named "file". Resolves to the new map.
-export function uploadDem(files, { name = '', cell = '' } = {}, onProgress = () => {}) {
+// Multipart DEM upload with progress: each file is a part named "file"; `fields` are plain parts
+// (name, cell, crop | crop_px, vertical_scale, body: the server's DEM import options), empty ones
+// left out. Resolves to the new map.
+export function uploadDem(files, fields = {}, onProgress = () => {}) {
   return new Promise((resolve, reject) => {
     const form = new FormData();
     for (const f of files) form.append('file', f, f.name);
-    if (name) form.append('name', name);
-    if (cell !== '' && cell !== null && cell !== undefined) form.append('cell', String(cell));
+    for (const [key, value] of Object.entries(fields))
+      if (value !== '' && value !== null && value !== undefined) form.append(key, String(value));
     const xhr = new XMLHttpRequest();
     xhr.open('POST', '/api/maps');
     if (sessionToken) xhr.setRequestHeader('Authorization', `Bearer ${sessionToken}`);

@@ -35,6 +35,8 @@ export class MapsPanel {
     window.addEventListener('dragover', (e) => e.preventDefault());
     window.addEventListener('drop', (e) => e.preventDefault());
     $('dem-upload').addEventListener('click', () => this.upload());
+    $('dem-crop-unit').addEventListener('change', () => this.cropHelp());
+    this.cropHelp();
     state.on('map', () => this.renderList());
   }
 
@@ -45,25 +47,58 @@ export class MapsPanel {
     showError($('dem-error'), null);
   }
 
+  // The crop window's units: the file's CRS (as gdal_translate -projwin, lower-left corner) or its
+  // pixels (as -srcwin, from the upper-left corner).
+  cropHelp() {
+    const px = $('dem-crop-unit').value === 'crop_px';
+    $('dem-crop').placeholder = px ? 'COL,ROW,W,H (whole file)' : 'X0,Y0,W,H (whole file)';
+    $('dem-crop-help').textContent = px
+      ? 'Pixels of the file: first column and row from its upper-left corner, width and height.'
+      : "The file's CRS units: lower-left corner X0, Y0, then width and height.";
+  }
+
+  // The DEM import options as the server reads them (maps/dem_import_options), checked here
+  // for shape first. Returns [fields, error] with error = [field, message] or null.
+  importFields() {
+    const cell = $('dem-cell').value.trim();
+    const crop = $('dem-crop').value.trim().replace(/\s+/g, '');
+    const cropKey = $('dem-crop-unit').value;
+    const scale = $('dem-vscale').value.trim();
+    const fields = { name: $('dem-name').value.trim(), cell, vertical_scale: scale === '1' ? '' : scale, body: $('dem-body').value === 'auto' ? '' : $('dem-body').value };
+    if (cell !== '' && !(Number(cell) >= 0)) return [fields, ['cell', 'cell size must be a positive number of metres']];
+    if (crop !== '') {
+      const v = crop.split(',').map(Number);
+      if (v.length !== 4 || v.some((x) => !Number.isFinite(x)) || !(v[2] > 0 && v[3] > 0))
+        return [fields, [cropKey, 'crop must be four numbers X0,Y0,W,H with a positive width and height']];
+      fields[cropKey] = crop;
+    }
+    if (scale !== '' && !(Number.isFinite(Number(scale)) && Number(scale) !== 0))
+      return [fields, ['vertical_scale', 'vertical scale must be a non-zero number']];
+    return [fields, null];
+  }
+
+  fieldInput(field) {
+    return { cell: $('dem-cell'), name: $('dem-name'), crop: $('dem-crop'), crop_px: $('dem-crop'), vertical_scale: $('dem-vscale'), body: $('dem-body') }[field];
+  }
+
   async upload() {
     if (this.files.length === 0) return;
     const bar = $('dem-progress'), text = $('dem-progress-text'), button = $('dem-upload');
-    const cellInput = $('dem-cell');
-    const cell = cellInput.value.trim();
-    if (cell !== '' && !(Number(cell) >= 0)) {
-      showError($('dem-error'), 'cell size must be a positive number of metres (field: cell)');
-      cellInput.classList.add('invalid');
+    for (const n of ['dem-cell', 'dem-name', 'dem-crop', 'dem-vscale', 'dem-body']) $(n).classList.remove('invalid');
+    const [fields, bad] = this.importFields();
+    if (bad) {
+      showError($('dem-error'), `${bad[1]} (field: ${bad[0]})`);
+      this.fieldInput(bad[0]).classList.add('invalid');
+      if (bad[0] !== 'cell') $('dem-options').open = true;
       return;
     }
-    cellInput.classList.remove('invalid');
-    $('dem-name').classList.remove('invalid');
     showError($('dem-error'), null);
     button.disabled = true;
     bar.hidden = false;
     bar.value = 0;
     text.textContent = 'uploading…';
     try {
-      const map = await uploadDem(this.files, { name: $('dem-name').value.trim(), cell }, (f, loaded, phase) => {
+      const map = await uploadDem(this.files, fields, (f, loaded, phase) => {
         if (phase === 'processing') {
           bar.removeAttribute('value');  // indeterminate while the server imports
           text.textContent = 'importing…';
@@ -81,8 +116,9 @@ export class MapsPanel {
     } catch (err) {
       text.textContent = '';
       showError($('dem-error'), `upload refused: ${err.message}${err.field ? ` (field: ${err.field})` : ''}${err.status ? ` — HTTP ${err.status}` : ''}`);
-      const field = { cell: cellInput, name: $('dem-name') }[err.field];
+      const field = this.fieldInput(err.field);
       if (field) field.classList.add('invalid');
+      if (field && !['cell', 'name'].includes(err.field)) $('dem-options').open = true;
       button.disabled = this.files.length === 0;
     } finally {
       bar.hidden = true;
@@ -133,6 +169,10 @@ export class MapsPanel {
       line('elevation', `${fmt(m.elevation?.min)} … ${fmt(m.elevation?.max)} m`),
       line('classes', `traversable ${fmt(c.traversable_pct, 2)} %, high risk ${fmt(c.high_risk_pct, 2)} %, impassable ${fmt(c.impassable_pct, 2)} %, nodata ${fmt(c.nodata_pct, 2)} %`),
       line('CRS', m.crs || 'none'),
+      line('body', `${m.body || 'unknown'}${m.body_source === 'declared' ? ' (declared at upload)' : ''}`),
+      ...(m.crop || m.crop_px || (m.vertical_scale !== undefined && m.vertical_scale !== 1)
+        ? [line('imported', [m.crop ? `crop ${m.crop.map((v) => fmt(v)).join(', ')}` : '', m.crop_px ? `pixels ${m.crop_px.join(', ')}` : '',
+          m.vertical_scale !== undefined && m.vertical_scale !== 1 ? `heights × ${fmt(m.vertical_scale)}` : ''].filter(Boolean).join(' · '))] : []),
       line('source', `${(m.source_files || []).join(', ')} (${m.driver || '?'})`));
   }
 

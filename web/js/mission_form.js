@@ -1,18 +1,25 @@
 // The Mission tab: planner (from GET /api/planners), PDM, rovers placed by clicking on the map
 // (heading by dragging from the click point), pace, and every planner parameter with its
 // default, unit and doc, checked against min/max/choices before sending. A 400 from the server
-// is shown next to the input its field names.
+// is shown next to the input its field names. Parameters come in the sections of the planner's
+// own table (`group`), its common ones first and the rest folded away (`level`); the planner's
+// presets ("paper 001", "fast preview") fill the form in.
 
 import { api } from './api.js';
 import { state } from './state.js';
 import { $, el, fmt, roverColour, showError } from './util.js';
 
-// A number as a person reads it: 12 significant digits, so a default converted from radians shows
-// "15", not "14.999999999999998". Lists are tidied element by element.
+// A number as a person reads it: 6 significant digits, so a default converted from radians shows
+// "15", not "14.999999999999998", and 0.1 + 0.2 shows 0.3. Whole numbers stay exact (seeds).
+// Lists are tidied element by element.
 function tidy(v) {
   if (Array.isArray(v)) return v.map(tidy);
-  return typeof v === 'number' && Number.isFinite(v) ? Number(v.toPrecision(12)) : v;
+  if (typeof v !== 'number' || !Number.isFinite(v) || Number.isInteger(v)) return v;
+  return Number(v.toPrecision(6));
 }
+
+// A section's title: its key from the table, capitalised ("RRT*" stays as it is).
+const groupTitle = (g) => (g ? g.charAt(0).toUpperCase() + g.slice(1) : 'Other');
 
 const FIELD_PREFIX = 'm-param-';
 
@@ -31,6 +38,7 @@ export class MissionForm {
       up: (p, e, moved) => this.placeUp(moved),
     });
     $('m-planner').addEventListener('change', () => this.renderParams());
+    $('m-preset').addEventListener('change', () => this.applyPreset($('m-preset').value));
     $('m-rover-count').addEventListener('input', () => this.setCount(Number($('m-rover-count').value)));
     $('m-place').addEventListener('click', () => this.setPlacing(!this.placing));
     $('mission-form').addEventListener('submit', (e) => {
@@ -111,16 +119,64 @@ export class MissionForm {
       this.renderMapDefaults(null);
       return box.replaceChildren();
     }
-    box.replaceChildren(...p.params.map((info) => this.paramRow(info)));
+    // Sections in the table's order; in each, the common parameters, then the rest folded.
+    const groups = new Map();
+    for (const info of p.params) {
+      if (!groups.has(info.group)) groups.set(info.group, []);
+      groups.get(info.group).push(info);
+    }
+    box.replaceChildren(...[...groups].map(([group, infos]) => {
+      const common = infos.filter((i) => i.level === 'common');
+      const rest = infos.filter((i) => i.level !== 'common');
+      const more = rest.length ? el('details', { class: 'param-more' },
+        el('summary', {}, `${rest.length} more ${groupTitle(group)} parameter${rest.length > 1 ? 's' : ''}`),
+        ...rest.map((info) => this.paramRow(info))) : null;
+      return el('fieldset', { class: 'param-group', dataset: { group } },
+        el('legend', {}, groupTitle(group)), ...common.map((info) => this.paramRow(info)), more);
+    }));
+    this.renderPresets(p);
     this.renderMapDefaults(p);
     this.updateDependent();
+  }
+
+  // --- presets (the planner's own, from GET /api/planners) ---
+  renderPresets(p) {
+    const sel = $('m-preset');
+    const presets = p.presets || [];
+    sel.replaceChildren(el('option', { value: '' }, 'defaults'), ...presets.map((x) => el('option', { value: x.name, title: x.doc }, x.name)));
+    sel.value = '';
+    $('m-preset-doc').textContent = presets.length ? 'Defaults, or a preset: it sets the parameters it names, the rest take their defaults.' : '';
+  }
+
+  // Every parameter back to its default, then the preset's values.
+  applyPreset(name) {
+    const p = this.planner;
+    if (!p) return;
+    const preset = (p.presets || []).find((x) => x.name === name);
+    for (const info of p.params) this.setInput(info, tidy(info.default));
+    if (preset) for (const [key, value] of Object.entries(preset.params)) {
+      const info = p.params.find((i) => i.key === key);
+      if (info) this.setInput(info, tidy(value));
+    }
+    $('m-preset-doc').textContent = preset ? preset.doc : 'Every parameter at its default.';
+    for (const n of document.querySelectorAll('#m-params .field-error')) n.textContent = '';
+    this.updateDependent();
+  }
+
+  setInput(info, value) {
+    const input = $(FIELD_PREFIX + info.key);
+    if (!input) return;
+    input.classList.remove('invalid');
+    if (input.type === 'checkbox') input.checked = Boolean(value);
+    else if (Array.isArray(value)) input.value = value.join(', ');
+    else input.value = String(value);
   }
 
   paramRow(info) {
     const id = FIELD_PREFIX + info.key;
     const shown = tidy(info.default);
-    const range = [info.min !== undefined ? `min ${fmt(info.min)}` : '', info.max !== undefined ? `max ${fmt(info.max)}` : ''].filter(Boolean).join(', ');
-    const help = `${info.doc}${info.unit ? ` [${info.unit}]` : ''} — default ${JSON.stringify(shown)}${range ? `; ${range}` : ''}`;
+    const limits = [info.min !== undefined ? `min ${fmt(info.min)}` : '', info.max !== undefined ? `max ${fmt(info.max)}` : ''].filter(Boolean).join(', ');
+    const help = `${info.doc}${info.unit ? ` [${info.unit}]` : ''} — default ${JSON.stringify(shown)}${limits ? `; ${limits}` : ''}`;
     let input;
     switch (info.type) {
       case 'choice':
@@ -149,7 +205,7 @@ export class MissionForm {
     });
     return el('div', { class: 'param', dataset: { param: info.key } },
       el('div', { class: 'form-row' }, el('label', { for: id, title: help }, info.key), input, info.unit ? el('span', { class: 'unit' }, info.unit) : null),
-      el('div', { class: 'doc', id: `${id}-doc` }, `${info.doc} (default ${Array.isArray(shown) ? `[${shown.join(', ')}]` : shown}${range ? `; ${range}` : ''})`),
+      el('div', { class: 'doc', id: `${id}-doc`, title: help }, `${info.doc} (default ${Array.isArray(shown) ? `[${shown.join(', ')}]` : shown}${limits ? `; ${limits}` : ''})`),
       el('div', { class: 'field-error', dataset: { field: `params.${info.key}` } }));
   }
 
@@ -346,6 +402,7 @@ export class MissionForm {
       input = $('m-planner');
     }
     if (input) input.classList.add('invalid');
+    input?.closest('details')?.setAttribute('open', '');  // a folded parameter is shown
     const node = document.querySelector(`#mission-form .field-error[data-field="${key}"]`);
     if (node) {
       node.textContent = message;

@@ -15,7 +15,8 @@ export const repoRoot = resolve(browserDir, '../..');
 export const artifactsDir = join(browserDir, 'artifacts');
 export const roverplanBin = process.env.ROVERPLAN_BIN ? resolve(process.env.ROVERPLAN_BIN) : join(repoRoot, 'build/bin/roverplan');
 export const chromiumPath = process.env.CHROMIUM_BIN || '/usr/bin/chromium';
-export const sharedDems = resolve(repoRoot, '../shared/dems');
+// ROVER_SHARED_DEMS overrides the folder (as for the C++ tests), e.g. from a git worktree.
+export const sharedDems = process.env.ROVER_SHARED_DEMS ? resolve(process.env.ROVER_SHARED_DEMS) : resolve(repoRoot, '../shared/dems');
 
 export const CHROMIUM_ARGS = ['--headless', '--no-sandbox', '--disable-gpu', '--disable-background-networking',
   '--disable-component-update', '--disable-sync'];
