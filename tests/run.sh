@@ -21,6 +21,8 @@ ninja -C build
 echo "== Tests (Release)"
 ctest --test-dir build --output-on-failure -j "$jobs"
 
+# The script tests that start the roverplan binary (serve-restart, disk-full, exports, study-launcher)
+# run in the Release pass only: the sanitizer build makes the unit-test binaries, not roverplan.
 # Warnings are checked by the Release build; with sanitizers at -O1 GCC 12 reports false
 # maybe-uninitialized warnings inside std::regex, so this build does not use -Werror.
 echo "== Sanitizer build (build-asan/: ASan + UBSan)"
@@ -30,7 +32,7 @@ ninja -C build-asan test_core test_maps test_server
 echo "== Unit tests under sanitizers"
 export ASAN_OPTIONS=abort_on_error=1:detect_leaks=1:strict_string_checks=1
 export UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
-ctest --test-dir build-asan --output-on-failure -j "$jobs" -R '^(core|maps|server)/' -E 'serve-restart|disk-full'
+ctest --test-dir build-asan --output-on-failure -j "$jobs" -R '^(core|maps|server)/' -E 'serve-restart|disk-full|server/exports|study-launcher'
 
 echo "== Fuzzing (libFuzzer, ${ROVERPLAN_FUZZ_SECONDS:-30} s per target)"
 bash tests/fuzz/run.sh "${ROVERPLAN_FUZZ_SECONDS:-30}"
