@@ -69,7 +69,8 @@ class Coordinator {
         seed_(seed),
         observer_(observer),
         cancel_(cancel),
-        period_(params.controller.samplePeriod) {}
+        period_(params.controller.samplePeriod),
+        traffic_(params.safetyDistance, params.controller.samplePeriod) {}
 
   CoordinationResult run() {
     const int n = static_cast<int>(tasks_.size());
@@ -84,6 +85,7 @@ class Coordinator {
         if (out_.cancelled) break;
       }
       if (!out_.cancelled) park(k);
+      traffic_.add(out_.trajectories[k]);  // rover k is done: the next ones plan round it
     }
     out_.conflicts = checkSeparation(out_.trajectories, p_.safetyDistance).conflicts;
     return std::move(out_);
@@ -260,25 +262,25 @@ class Coordinator {
     return d;
   }
 
-  // The first sample of `samples` (appended to rover k's trajectory) closer than the safety
-  // distance to a higher-priority rover; then rover k standing at its last position for the
-  // policy's dwell, or, with `parkedForGood`, for as long as any higher-priority rover moves.
-  std::optional<Conflict> firstConflict(int k, const std::vector<TrajectorySample>& samples,
+  // The first conflict with a higher-priority rover (the traffic table holds exactly those) of
+  // rover k standing where it is for `ticks` samples, then driving `samples` (appended to its
+  // trajectory after them); then standing at its last position for the policy's dwell, or, with
+  // `parkedForGood`, for as long as any higher-priority rover moves.
+  std::optional<Conflict> firstConflict(int k, std::span<const TrajectorySample> samples, int ticks,
                                         bool parkedForGood) const {
-    const std::span<const Trajectory> others(out_.trajectories.data(), static_cast<std::size_t>(k));
     const std::size_t base = out_.trajectories[k].samples.size();
-    for (std::size_t m = 0; m < samples.size(); ++m)
-      if (auto c = conflictAt(others, k, base + m, xyOf(samples[m]), p_.safetyDistance, period_))
+    if (ticks > 0)
+      if (auto c = traffic_.standing(k, here(k), base, base + static_cast<std::size_t>(ticks)))
         return c;
-    std::size_t end = 0;
-    for (const Trajectory& t : others) end = std::max(end, t.samples.size());
-    const std::size_t from = base + samples.size();
+    const std::size_t from = base + static_cast<std::size_t>(ticks);
+    if (auto c = traffic_.driving(k, samples, from)) return c;
+    std::size_t end = traffic_.end();
+    const std::size_t after = from + samples.size();
     if (!parkedForGood)
-      end = std::min(end, from + static_cast<std::size_t>(std::lround(policy_.dwell / period_)));
+      end = std::min(end, after + static_cast<std::size_t>(std::lround(policy_.dwell / period_)));
+    if (after >= end) return std::nullopt;
     const Eigen::Vector2d p = samples.empty() ? here(k) : xyOf(samples.back());
-    for (std::size_t idx = from; idx < end; ++idx)
-      if (auto c = conflictAt(others, k, idx, p, p_.safetyDistance, period_)) return c;
-    return std::nullopt;
+    return traffic_.standing(k, p, after, end);
   }
 
   // The first sample with |roll| or |pitch| above the attitude check, if any.
@@ -374,17 +376,19 @@ class Coordinator {
       const bool parks = lastLeg && reachesGoal(c0, goal);
       std::optional<Conflict> first;
       for (int ticks : policy_.startDelays) {
-        Candidate c = delayed(k, c0, ticks);
-        conflict = firstConflict(k, c.samples, parks);
+        conflict = firstConflict(k, c0.samples, ticks, parks);
         if (!first) first = conflict;
+        // Standing still already conflicts: so does every longer delay (it stands longer).
+        if (conflict && conflict->time < static_cast<double>(out_.trajectories[k].samples.size() + ticks) * period_)
+          break;
         if (conflict || steep) continue;
         if (ticks > 0) {
           ++rec.waits;
           ++out_.waits;
           rec.waitTime += ticks * period_;
         }
-        reachedGoal = path.status == PathStatus::Exact && c.reached;
-        commit(k, c);
+        reachedGoal = path.status == PathStatus::Exact && c0.reached;
+        commit(k, delayed(k, c0, ticks));
         return Outcome::Accepted;
       }
       conflict = first;
@@ -413,7 +417,7 @@ class Coordinator {
       if (cancelled()) return Outcome::Cancelled;
       const int ticks = static_cast<int>(std::lround(w * p_.waitStep / period_));
       Candidate c = simulateTry(k, firstTry->path, ticks, slipSeed(0x3a17ull, k, i, piece, w));
-      conflict = firstConflict(k, c.samples, lastLeg && reachesGoal(c, goal));
+      conflict = firstConflict(k, c.samples, 0, lastLeg && reachesGoal(c, goal));
       if (!conflict && !firstExceedance(c.samples) && !firstForbidden(c.samples)) {
         rec.waits = w;
         out_.waits += w;
@@ -434,7 +438,7 @@ class Coordinator {
   // map: 14 of 18 skipped legs were the team mates' last coverage moves round the first rover's
   // end).
   void park(int k) {
-    if (!firstConflict(k, {}, true) && !blocksLaterGoal(k, here(k))) return;
+    if (!firstConflict(k, {}, 0, true) && !blocksLaterGoal(k, here(k))) return;
     const Eigen::Vector2d from = here(k);
     // Candidates: first back along its own trajectory (ground it has driven, so reachable even
     // in a dead end), every 2 m up to 40 m; then rings of growing radius around it.
@@ -465,7 +469,7 @@ class Coordinator {
         PathResult path = planner_.plan(from, last(k).heading, spot, seed, {}, cancel_);
         if (path.status != PathStatus::Exact || path.waypoints.size() < 2) continue;
         Candidate c = simulateTry(k, path.waypoints, 0, seedFor(seed_ ^ 0x9a4dull, k, attempt, 0, 0));
-        if (!c.reached || firstConflict(k, c.samples, true) || firstForbidden(c.samples) ||
+        if (!c.reached || firstConflict(k, c.samples, 0, true) || firstForbidden(c.samples) ||
             (pass == 0 && firstExceedance(c.samples)))
           continue;
         commit(k, c);
@@ -566,6 +570,7 @@ class Coordinator {
   const double period_;
   std::vector<std::vector<Ahead>> ahead_;
   CoordinationResult out_;
+  TrafficTable traffic_;  // the trajectories of the rovers done so far
   int legsDone_ = 0;
   int legsTotal_ = 0;
 };

@@ -12,13 +12,99 @@ Eigen::Vector2d positionAtIndex(const Trajectory& t, std::size_t i) {
   return {s.x, s.y};
 }
 
-std::optional<Conflict> conflictAt(std::span<const Trajectory> others, int rover, std::size_t index,
-                                   const Eigen::Vector2d& p, double safety, double period) {
-  for (std::size_t j = 0; j < others.size(); ++j) {
-    const Eigen::Vector2d o = positionAtIndex(others[j], index);
-    const double d = (p - o).norm();
-    if (d < safety)
-      return Conflict{rover, static_cast<int>(j), static_cast<double>(index) * period, 0.0, d, p, o};
+void TrafficTable::add(const Trajectory& t) {
+  if (t.samples.empty()) throw Error(ErrorCode::InvalidInput, "trajectory", "a trajectory has no samples");
+  if (rovers_.size() == kMaxRovers)
+    throw Error(ErrorCode::InvalidInput, "rovers", "between 1 and 64 rovers are supported");
+  Track track;
+  track.at.reserve(t.samples.size());
+  for (const auto& s : t.samples) track.at.emplace_back(s.x, s.y);
+  for (std::size_t b = 0; b * kBlock < track.at.size(); ++b) {
+    const std::size_t last = std::min(track.at.size(), (b + 1) * kBlock);
+    Box box{track.at[b * kBlock].x(), track.at[b * kBlock].y(), track.at[b * kBlock].x(),
+            track.at[b * kBlock].y()};
+    for (std::size_t i = b * kBlock + 1; i < last; ++i) {
+      box.x0 = std::min(box.x0, track.at[i].x());
+      box.y0 = std::min(box.y0, track.at[i].y());
+      box.x1 = std::max(box.x1, track.at[i].x());
+      box.y1 = std::max(box.y1, track.at[i].y());
+    }
+    track.boxes.push_back(box);
+  }
+  end_ = std::max(end_, track.at.size());
+  rovers_.push_back(std::move(track));
+}
+
+// A block past a rover's last sample holds its parked position (and so does the rest of its last
+// block, inside that block's box).
+TrafficTable::Box TrafficTable::boxAt(const Track& t, std::size_t block) const {
+  if (block < t.boxes.size()) return t.boxes[block];
+  const Eigen::Vector2d& p = t.at.back();
+  return {p.x(), p.y(), p.x(), p.y()};
+}
+
+template <class Pos>
+std::optional<Conflict> TrafficTable::scanBlock(int rover, std::size_t from, std::size_t count,
+                                                const Box& box, const Pos& pos) const {
+  // Rovers whose block box comes within the safety distance of the rover's box (plus a micrometre,
+  // so rounding can never skip a pair the exact check would catch).
+  const double reach = safety_ + 1e-6;
+  const std::size_t block = from / kBlock;
+  int nearList[kMaxRovers];
+  int nearCount = 0;
+  for (std::size_t j = 0; j < rovers_.size(); ++j) {
+    const Box o = boxAt(rovers_[j], block);
+    const double dx = std::max({0.0, box.x0 - o.x1, o.x0 - box.x1});
+    const double dy = std::max({0.0, box.y0 - o.y1, o.y0 - box.y1});
+    if (dx * dx + dy * dy >= reach * reach) continue;
+    nearList[nearCount++] = static_cast<int>(j);
+  }
+  if (nearCount == 0) return std::nullopt;
+  for (std::size_t m = 0; m < count; ++m) {
+    const std::size_t index = from + m;
+    const Eigen::Vector2d p = pos(m);
+    for (int n = 0; n < nearCount; ++n) {
+      const Track& t = rovers_[static_cast<std::size_t>(nearList[n])];
+      const Eigen::Vector2d& o = t.at[std::min(index, t.at.size() - 1)];
+      const double d = (p - o).norm();
+      if (d < safety_)
+        return Conflict{rover, nearList[n], static_cast<double>(index) * period_, 0.0, d, p, o};
+    }
+  }
+  return std::nullopt;
+}
+
+std::optional<Conflict> TrafficTable::standing(int rover, const Eigen::Vector2d& p,
+                                               std::size_t from, std::size_t to) const {
+  // Past every rover's end nothing moves: one index stands for the rest.
+  if (to > end_) to = std::max(from, end_) + 1;
+  const Box box{p.x(), p.y(), p.x(), p.y()};
+  for (std::size_t i = from; i < to;) {
+    const std::size_t count = std::min(to, (i / kBlock + 1) * kBlock) - i;
+    if (auto c = scanBlock(rover, i, count, box, [&](std::size_t) { return p; })) return c;
+    i += count;
+  }
+  return std::nullopt;
+}
+
+std::optional<Conflict> TrafficTable::driving(int rover, std::span<const TrajectorySample> samples,
+                                              std::size_t from) const {
+  for (std::size_t m = 0; m < samples.size();) {
+    const std::size_t i = from + m;
+    const std::size_t count = std::min(samples.size() - m, (i / kBlock + 1) * kBlock - i);
+    Box box{samples[m].x, samples[m].y, samples[m].x, samples[m].y};
+    for (std::size_t q = m + 1; q < m + count; ++q) {
+      box.x0 = std::min(box.x0, samples[q].x);
+      box.y0 = std::min(box.y0, samples[q].y);
+      box.x1 = std::max(box.x1, samples[q].x);
+      box.y1 = std::max(box.y1, samples[q].y);
+    }
+    const std::size_t base = m;
+    if (auto c = scanBlock(rover, i, count, box, [&](std::size_t q) {
+          return Eigen::Vector2d(samples[base + q].x, samples[base + q].y);
+        }))
+      return c;
+    m += count;
   }
   return std::nullopt;
 }
