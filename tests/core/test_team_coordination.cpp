@@ -2,9 +2,11 @@
 #include <doctest/doctest.h>
 
 #include <cmath>
+#include <optional>
 
 #include "core/common/cancel.hpp"
 #include "core/common/error.hpp"
+#include "core/common/random.hpp"
 #include "core/planning/planner.hpp"
 #include "core/team/coordination.hpp"
 #include "core/team/team_entry.hpp"
@@ -66,6 +68,79 @@ TEST_CASE("team: checkSeparation finds each close episode once and the closest a
   // A parked rover is an obstacle: rover 1 stops at (5, 0) after 1 sample; rover 0 drives through.
   std::vector<Trajectory> parked{line({0, 0}, {10, 0}, 101), line({5, 0}, {5, 0}, 2)};
   CHECK(checkSeparation(parked, 1.0).conflicts.size() == 1);
+}
+
+namespace {
+// The scan the traffic table replaces: every sample index, every rover in priority order.
+std::optional<Conflict> scanConflict(const std::vector<Trajectory>& others, int rover,
+                                     std::size_t index, const Eigen::Vector2d& p, double safety) {
+  for (std::size_t j = 0; j < others.size(); ++j) {
+    const Eigen::Vector2d o = positionAtIndex(others[j], index);
+    if ((p - o).norm() < safety)
+      return Conflict{rover, static_cast<int>(j), static_cast<double>(index) * 0.1, 0.0,
+                      (p - o).norm(), p, o};
+  }
+  return std::nullopt;
+}
+
+// A random walk of `n` samples at up to 0.03 m per sample (a rover's 0.3 m/s at 10 Hz), parking
+// when it ends, inside a 6 × 6 m square so paths cross often.
+Trajectory walk(Rng& rng, std::size_t n) {
+  Trajectory t;
+  Eigen::Vector2d p(rng.uniform() * 6, rng.uniform() * 6);
+  for (std::size_t i = 0; i < n; ++i) {
+    TrajectorySample s;
+    s.time = static_cast<double>(i) * 0.1;
+    p += Eigen::Vector2d(rng.uniform() - 0.5, rng.uniform() - 0.5) * 0.06;
+    p = p.cwiseMax(0.0).cwiseMin(6.0);
+    s.x = p.x();
+    s.y = p.y();
+    t.samples.push_back(s);
+  }
+  return t;
+}
+}  // namespace
+
+TEST_CASE("team: the traffic table answers exactly what a sample-by-sample scan answers") {
+  // Four committed rovers of different lengths (so some are parked while others move), a fifth
+  // driving or standing from many start indices: the first conflict (index, then rover) and its
+  // fields must be the scan's, including none.
+  Rng rng(11);
+  std::vector<Trajectory> others;
+  for (std::size_t n : {300u, 45u, 170u, 1u}) others.push_back(walk(rng, n));
+  TrafficTable table(1.0, 0.1);
+  for (const auto& t : others) table.add(t);
+  CHECK(table.rovers() == 4);
+  CHECK(table.end() == 300);
+  int conflicts = 0, clear = 0;
+  for (int trial = 0; trial < 400; ++trial) {
+    const Trajectory mine = walk(rng, 1 + static_cast<std::size_t>(rng.uniform() * 120));
+    const auto from = static_cast<std::size_t>(rng.uniform() * 330);
+    std::optional<Conflict> expected;
+    for (std::size_t m = 0; m < mine.samples.size() && !expected; ++m)
+      expected = scanConflict(others, 4, from + m, {mine.samples[m].x, mine.samples[m].y}, 1.0);
+    const auto got = table.driving(4, mine.samples, from);
+    REQUIRE(got.has_value() == expected.has_value());
+    if (got) {
+      ++conflicts;
+      CHECK(got->other == expected->other);
+      CHECK(got->time == expected->time);
+      CHECK(got->distance == expected->distance);
+      CHECK(got->otherPosition == expected->otherPosition);
+    } else {
+      ++clear;
+    }
+    // Standing at the walk's end over [from, from + 37).
+    const Eigen::Vector2d p(mine.samples.back().x, mine.samples.back().y);
+    std::optional<Conflict> still;
+    for (std::size_t i = from; i < from + 37 && !still; ++i) still = scanConflict(others, 4, i, p, 1.0);
+    const auto stood = table.standing(4, p, from, from + 37);
+    REQUIRE(stood.has_value() == still.has_value());
+    if (stood) CHECK(stood->time == still->time);
+  }
+  // Both answers were exercised.
+  CHECK(conflicts > 20);
+  CHECK(clear > 20);
 }
 
 TEST_CASE("team: a head-on pair is forced to re-plan and the plan is collision-free") {
