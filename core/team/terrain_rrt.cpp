@@ -17,10 +17,12 @@
 #include <cmath>
 #include <memory>
 #include <mutex>
+#include <stdexcept>
 #include <string>
 
 #include "core/common/error.hpp"
 #include "core/common/random.hpp"
+#include "core/team/grid_neighbors.hpp"
 #include "core/terrain/layers.hpp"
 
 namespace rover::team {
@@ -427,6 +429,15 @@ class SeededRrtStar : public og::RRTstar {
   }
   // Vertices currently in the tree (the termination condition polls this every iteration).
   std::size_t treeSize() const { return nn_ ? nn_->size() : 0; }
+  // The exact grid neighbours over the search box instead of GNAT (grid_neighbors.hpp): the same
+  // neighbours in the same order, for fewer distance calls. Before setup(), which keeps it.
+  void useGridNeighbors(const SearchBounds& box, double cell) {
+    nn_ = std::make_shared<GridNearestNeighbors<Motion*>>(
+        box.min, box.max, cell, [](Motion* const& m) { return xyOf(m->state); });
+  }
+  bool usesGridNeighbors() const {
+    return dynamic_cast<const GridNearestNeighbors<Motion*>*>(nn_.get()) != nullptr;
+  }
 };
 
 class SeededSampler : public ob::RealVectorStateSampler {
@@ -521,8 +532,14 @@ PathResult planPath(const terrain::Dem& dem, const Raster<std::uint8_t>& classes
   // rewired) is longer than `range` — paper 001's N_R = 1 m assumes exactly that. k-nearest
   // rewiring has no such cap.
   planner->setKNearest(false);
+  // Buckets of half the range, so an r-disc query (r <= range) reads at most 5 × 5 of them; at
+  // most 128 a side (a corridor can span the map): 16 384 buckets, 400 kB.
+  const Eigen::Vector2d extent = box.max - box.min;
+  planner->useGridNeighbors(box, std::max(params.range / 2, extent.maxCoeff() / 128));
   planner->setProblemDefinition(pdef);
   planner->setup();
+  if (!planner->usesGridNeighbors())
+    throw std::logic_error("OMPL's RRTstar::setup replaced the nearest-neighbour structure");
 
   // Vertex-count termination (paper 001 §3.6), not wall-clock, so the result depends on the seed
   // only; the iteration cap and the cancel token are the other ways out.

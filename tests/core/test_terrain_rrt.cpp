@@ -6,7 +6,11 @@
 #include <thread>
 #include <vector>
 
+#include <ompl/datastructures/NearestNeighborsLinear.h>
+
 #include "core/common/error.hpp"
+#include "core/common/random.hpp"
+#include "core/team/grid_neighbors.hpp"
 #include "core/team/terrain_rrt.hpp"
 #include "core/terrain/layers.hpp"
 #include "dem_literals.hpp"
@@ -430,4 +434,45 @@ TEST_CASE("rrt: edge roll and pitch are terrain::attitudeAt's, maximised over th
   }
   CHECK(valid > 0);  // both outcomes are exercised
   CHECK(valid < static_cast<int>(edges.size()));
+}
+
+TEST_CASE("rrt: the grid neighbours answer what a linear scan answers, in the same order") {
+  // Points in a 7 × 4 m box (some on its edges), queries inside it: nearestR over radii up to the
+  // range and beyond a bucket, nearestK and nearest, against OMPL's brute-force structure.
+  struct Pt {
+    double x, y;
+  };
+  std::vector<Pt> pts;
+  Rng rng(5);
+  for (int i = 0; i < 600; ++i) pts.push_back({1 + 7 * rng.uniform(), 2 + 4 * rng.uniform()});
+  pts.push_back({1, 2});
+  pts.push_back({8, 6});
+  auto dist = [](Pt* const& a, Pt* const& b) { return std::hypot(a->x - b->x, a->y - b->y); };
+  GridNearestNeighbors<Pt*> grid({1, 2}, {8, 6}, 0.5, [](Pt* const& p) { return Eigen::Vector2d(p->x, p->y); });
+  ompl::NearestNeighborsLinear<Pt*> linear;
+  grid.setDistanceFunction(dist);
+  linear.setDistanceFunction(dist);
+  for (auto& p : pts) {
+    grid.add(&p);
+    linear.add(&p);
+  }
+  CHECK(grid.size() == pts.size());
+  std::vector<Pt*> a, b;
+  for (int q = 0; q < 200; ++q) {
+    Pt query{1 + 7 * rng.uniform(), 2 + 4 * rng.uniform()};
+    for (double r : {0.05, 0.3, 0.5, 1.0, 2.2}) {
+      grid.nearestR(&query, r, a);
+      linear.nearestR(&query, r, b);
+      REQUIRE(a == b);
+    }
+    for (std::size_t k : {1u, 3u, 17u}) {
+      grid.nearestK(&query, k, a);
+      linear.nearestK(&query, k, b);
+      REQUIRE(a == b);
+    }
+    CHECK(grid.nearest(&query) == linear.nearest(&query));
+  }
+  CHECK(grid.remove(&pts[7]));
+  CHECK_FALSE(grid.remove(&pts[7]));
+  CHECK(grid.size() == pts.size() - 1);
 }
