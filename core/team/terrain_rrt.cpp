@@ -118,17 +118,19 @@ TerrainEdgeModel::TerrainEdgeModel(const terrain::Dem& dem, const Raster<std::ui
 namespace {
 
 // Cell checks shared by pointValid and edgeValid: inside the bounds and the map, data present, not
-// impassable. High-risk cells are allowed; the attitude limit decides along edges.
-bool cellAllowed(const terrain::Dem& dem, const Raster<std::uint8_t>& classes,
-                 const SearchBounds& bounds, const Eigen::Vector2d& p) {
-  if (!std::isfinite(p.x()) || !std::isfinite(p.y()) || !bounds.contains(p)) return false;
+// impassable, not in an operator's zone. High-risk cells are allowed; the attitude limit decides
+// along edges. The cell, when allowed (the corridor reads it too: one lookup per sample).
+std::optional<CellIndex> allowedCell(const terrain::Dem& dem, const Raster<std::uint8_t>& classes,
+                                     const SearchBounds& bounds, const Eigen::Vector2d& p) {
+  if (!std::isfinite(p.x()) || !std::isfinite(p.y()) || !bounds.contains(p)) return std::nullopt;
   auto cell = localToCell(classes.geometry, p);
-  if (!cell) return false;
+  if (!cell) return std::nullopt;
   auto cls = static_cast<terrain::TerrainClass>(classes(cell->row, cell->col));
   if (cls == terrain::TerrainClass::Impassable || cls == terrain::TerrainClass::NoData ||
       cls == terrain::TerrainClass::KeepOut)
-    return false;
-  return dem.valid(cell->row, cell->col);
+    return std::nullopt;
+  if (!dem.valid(cell->row, cell->col)) return std::nullopt;
+  return cell;
 }
 
 // Number of segments an edge of length `len` is cut into for sampling.
@@ -147,24 +149,38 @@ Eigen::Vector2d sampleAt(const Eigen::Vector2d& a, const Eigen::Vector2d& b, int
 bool TerrainEdgeModel::outsideKeepOut(const Eigen::Vector2d& p) const {
   if (corridor_ && !corridor_->contains(p)) return false;
   if (inZone(p)) return false;
+  return outsideDiscs(p);
+}
+
+bool TerrainEdgeModel::outsideDiscs(const Eigen::Vector2d& p) const {
   for (const auto& z : keepOut_)
     if ((p - z.centre).squaredNorm() <= z.radius * z.radius) return false;
   return true;
 }
 
+// allowedCell, then the corridor and the discs: outsideKeepOut on an allowed cell (its zone check
+// is allowedCell's class check), with the cell looked up once.
+bool TerrainEdgeModel::allowed(const Eigen::Vector2d& p) const {
+  const auto cell = allowedCell(dem_, classes_, bounds_, p);
+  if (!cell) return false;
+  if (corridor_ && !corridor_->containsCell(*cell)) return false;
+  return outsideDiscs(p);
+}
+
 bool TerrainEdgeModel::pointValid(const Eigen::Vector2d& p) const {
+  terrain::SurfacePoint sp;
   if (inEscape(p))
-    return bounds_.contains(p) && outsideKeepOut(p) && terrain::surfaceAt(dem_, p.x(), p.y());
-  return cellAllowed(dem_, classes_, bounds_, p) && outsideKeepOut(p) &&
-         terrain::surfaceAt(dem_, p.x(), p.y());
+    return bounds_.contains(p) && outsideKeepOut(p) && terrain::bilinearSurfaceAt<false>(dem_, p.x(), p.y(), sp);
+  return allowed(p) && terrain::bilinearSurfaceAt<false>(dem_, p.x(), p.y(), sp);
 }
 
 bool TerrainEdgeModel::turnValid(const Eigen::Vector2d& p) const {
   if (inEscape(p)) return pointValid(p);
-  if (!cellAllowed(dem_, classes_, bounds_, p) || !outsideKeepOut(p)) return false;
-  auto sp = terrain::surfaceAt(dem_, p.x(), p.y());
+  if (!allowed(p)) return false;
+  terrain::SurfacePoint sp;
   const double t = std::tan(limit_);
-  return sp && sp->dzdx * sp->dzdx + sp->dzdy * sp->dzdy < t * t;
+  return terrain::bilinearSurfaceAt<false>(dem_, p.x(), p.y(), sp) &&
+         sp.dzdx * sp.dzdx + sp.dzdy * sp.dzdy < t * t;
 }
 
 // Roll and pitch follow SPEC §2 exactly as terrain::attitudeAt does — pitch = atan(∇h·(cosψ,
@@ -178,17 +194,16 @@ bool TerrainEdgeModel::edgeValid(const Eigen::Vector2d& a, const Eigen::Vector2d
   if (!(len > 0)) return pointValid(a);  // no heading: only the point itself
   const double c = d.x() / len, s = d.y() / len, tanLimit = std::tan(limit_);
   const int n = segmentsFor(len, resolution_);
+  terrain::SurfacePoint sp;
   for (int i = 0; i <= n; ++i) {
     const Eigen::Vector2d p = sampleAt(a, b, i, n);
     if (inEscape(p)) {
       if (!pointValid(p)) return false;
       continue;
     }
-    if (!cellAllowed(dem_, classes_, bounds_, p) || !outsideKeepOut(p)) return false;
-    auto sp = terrain::surfaceAt(dem_, p.x(), p.y());
-    if (!sp) return false;
-    if (std::abs(sp->dzdx * c + sp->dzdy * s) >= tanLimit ||
-        std::abs(-sp->dzdx * s + sp->dzdy * c) >= tanLimit)
+    if (!allowed(p) || !terrain::bilinearSurfaceAt<false>(dem_, p.x(), p.y(), sp)) return false;
+    if (std::abs(sp.dzdx * c + sp.dzdy * s) >= tanLimit ||
+        std::abs(-sp.dzdx * s + sp.dzdy * c) >= tanLimit)
       return false;
   }
   return true;
@@ -207,11 +222,12 @@ EdgeTerms TerrainEdgeModel::edgeTerms(const Eigen::Vector2d& a, const Eigen::Vec
   const double c = d.x() / t.length, s = d.y() / t.length;
   const int n = segmentsFor(t.length, resolution_);
   double tanPitch = 0, tanRoll = 0;  // largest |∇h·(cosψ, sinψ)|, |∇h·(−sinψ, cosψ)|
+  terrain::SurfacePoint sp;
   for (int i = 0; i <= n; ++i) {
     const Eigen::Vector2d p = sampleAt(a, b, i, n);
-    if (auto sp = terrain::surfaceAt(dem_, p.x(), p.y())) {
-      tanPitch = std::max(tanPitch, std::abs(sp->dzdx * c + sp->dzdy * s));
-      tanRoll = std::max(tanRoll, std::abs(-sp->dzdx * s + sp->dzdy * c));
+    if (terrain::bilinearSurfaceAt<false>(dem_, p.x(), p.y(), sp)) {
+      tanPitch = std::max(tanPitch, std::abs(sp.dzdx * c + sp.dzdy * s));
+      tanRoll = std::max(tanRoll, std::abs(-sp.dzdx * s + sp.dzdy * c));
     }
   }
   t.pitch = std::atan(tanPitch);
@@ -231,13 +247,12 @@ std::optional<EdgeTerms> TerrainEdgeModel::validEdgeTerms(const Eigen::Vector2d&
   const double c = d.x() / t.length, s = d.y() / t.length, tanLimit = std::tan(limit_);
   const int n = segmentsFor(t.length, resolution_);
   double tanPitch = 0, tanRoll = 0;
+  terrain::SurfacePoint sp;
   for (int i = 0; i <= n; ++i) {
     const Eigen::Vector2d p = sampleAt(a, b, i, n);
-    if (!cellAllowed(dem_, classes_, bounds_, p) || !outsideKeepOut(p)) return std::nullopt;
-    auto sp = terrain::surfaceAt(dem_, p.x(), p.y());
-    if (!sp) return std::nullopt;
-    const double pitch = std::abs(sp->dzdx * c + sp->dzdy * s);
-    const double roll = std::abs(-sp->dzdx * s + sp->dzdy * c);
+    if (!allowed(p) || !terrain::bilinearSurfaceAt<false>(dem_, p.x(), p.y(), sp)) return std::nullopt;
+    const double pitch = std::abs(sp.dzdx * c + sp.dzdy * s);
+    const double roll = std::abs(-sp.dzdx * s + sp.dzdy * c);
     if (pitch >= tanLimit || roll >= tanLimit) return std::nullopt;
     tanPitch = std::max(tanPitch, pitch);
     tanRoll = std::max(tanRoll, roll);

@@ -95,8 +95,11 @@ struct Corridor {
   Raster<std::uint8_t> mask;     // 1 = inside; rows × cols of the window
   bool contains(const Eigen::Vector2d& p) const {
     auto c = localToCell(map, p);
-    if (!c) return false;
-    const int r = c->row - row0, k = c->col - col0;
+    return c && containsCell(*c);
+  }
+  // `c`: a cell of `map`.
+  bool containsCell(const CellIndex& c) const {
+    const int r = c.row - row0, k = c.col - col0;
     return mask.geometry.contains(r, k) && mask(r, k) != 0;
   }
 };
@@ -181,6 +184,8 @@ class TerrainEdgeModel {
   Eigen::Vector2d escapeCentre_{0, 0};
   double escapeRadius_ = 0;
   bool outsideKeepOut(const Eigen::Vector2d& p) const;
+  bool outsideDiscs(const Eigen::Vector2d& p) const;
+  bool allowed(const Eigen::Vector2d& p) const;
   bool inEscape(const Eigen::Vector2d& p) const {
     return escapeRadius_ > 0 && (p - escapeCentre_).squaredNorm() <= escapeRadius_ * escapeRadius_;
   }

@@ -170,28 +170,8 @@ Traversability traversability(const Dem& dem, const TraversabilityParams& p, boo
 }
 
 std::optional<SurfacePoint> surfaceAt(const Dem& dem, double x, double y) {
-  const GridGeometry& g = dem.geometry();
-  if (g.rows < 2 || g.cols < 2 || !std::isfinite(x) || !std::isfinite(y)) return std::nullopt;
-  if (x < 0 || y < 0 || x > g.widthMetres() || y > g.heightMetres()) return std::nullopt;
-  // Pixel coordinates of the point relative to cell centres; clamped so points within half a cell
-  // of the border use the outermost square of centres.
-  double u = std::clamp(x / g.cellWidth - 0.5, 0.0, g.cols - 1.0);
-  double v = std::clamp((g.rows - y / g.cellHeight) - 0.5, 0.0, g.rows - 1.0);
-  int c0 = std::min(static_cast<int>(u), g.cols - 2), r0 = std::min(static_cast<int>(v), g.rows - 2);
-  double fu = u - c0, fv = v - r0;
-  double z00 = dem.z(r0, c0), z01 = dem.z(r0, c0 + 1), z10 = dem.z(r0 + 1, c0),
-         z11 = dem.z(r0 + 1, c0 + 1);
-  if (std::isnan(z00 + z01 + z10 + z11)) return std::nullopt;
   SurfacePoint s;
-  s.height = (1 - fv) * ((1 - fu) * z00 + fu * z01) + fv * ((1 - fu) * z10 + fu * z11);
-  double dzdu = (1 - fv) * (z01 - z00) + fv * (z11 - z10);
-  double dzdv = (1 - fu) * (z10 - z00) + fu * (z11 - z01);
-  // The row's cell width only matters on maps with per-row widths (geographic grids); the
-  // rounding is skipped on the rest (it showed up in the RRT* profile, issue 10).
-  s.dzdx = dzdu / (dem.rowCellWidth.empty()
-                       ? g.cellWidth
-                       : dem.dx(std::clamp(static_cast<int>(std::lround(v)), 0, g.rows - 1)));
-  s.dzdy = -dzdv / dem.dy();  // v grows southwards
+  if (!bilinearSurfaceAt<true>(dem, x, y, s)) return std::nullopt;
   return s;
 }
 

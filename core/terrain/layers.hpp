@@ -4,7 +4,9 @@
 // Display layers use Horn's (1981) 3×3 gradient with exactly gdaldem's definitions, so the two agree
 // number for number: border cells and cells whose window holds nodata are NaN (gdaldem without
 // -compute_edges). The traversability layer is paper 001 §3.4's worst-case 8-neighbour slope.
+#include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <optional>
 
@@ -62,6 +64,36 @@ struct SurfacePoint {
   double dzdy = 0;  // north
 };
 std::optional<SurfacePoint> surfaceAt(const Dem& dem, double x, double y);
+
+// surfaceAt's arithmetic, inline, with the height left out when `Height` is false: the RRT* edge
+// loops call it millions of times per mission and need only the gradient (a call and the unused
+// height were a fifth of a team mission's profile, issue 10). False where surfaceAt is nullopt;
+// the numbers are surfaceAt's, operation for operation.
+template <bool Height>
+inline bool bilinearSurfaceAt(const Dem& dem, double x, double y, SurfacePoint& s) {
+  const GridGeometry& g = dem.geometry();
+  if (g.rows < 2 || g.cols < 2 || !std::isfinite(x) || !std::isfinite(y)) return false;
+  if (x < 0 || y < 0 || x > g.widthMetres() || y > g.heightMetres()) return false;
+  // Pixel coordinates of the point relative to cell centres; clamped so points within half a cell
+  // of the border use the outermost square of centres.
+  const double u = std::clamp(x / g.cellWidth - 0.5, 0.0, g.cols - 1.0);
+  const double v = std::clamp((g.rows - y / g.cellHeight) - 0.5, 0.0, g.rows - 1.0);
+  const int c0 = std::min(static_cast<int>(u), g.cols - 2), r0 = std::min(static_cast<int>(v), g.rows - 2);
+  const double fu = u - c0, fv = v - r0;
+  const double z00 = dem.z(r0, c0), z01 = dem.z(r0, c0 + 1), z10 = dem.z(r0 + 1, c0),
+               z11 = dem.z(r0 + 1, c0 + 1);
+  if (std::isnan(z00 + z01 + z10 + z11)) return false;
+  if constexpr (Height) s.height = (1 - fv) * ((1 - fu) * z00 + fu * z01) + fv * ((1 - fu) * z10 + fu * z11);
+  const double dzdu = (1 - fv) * (z01 - z00) + fv * (z11 - z10);
+  const double dzdv = (1 - fu) * (z10 - z00) + fu * (z11 - z01);
+  // The row's cell width only matters on maps with per-row widths (geographic grids); the
+  // rounding is skipped on the rest (it showed up in the RRT* profile, issue 10).
+  s.dzdx = dzdu / (dem.rowCellWidth.empty()
+                       ? g.cellWidth
+                       : dem.dx(std::clamp(static_cast<int>(std::lround(v)), 0, g.rows - 1)));
+  s.dzdy = -dzdv / dem.dy();  // v grows southwards
+  return true;
+}
 
 // Roll and pitch (radians) of a rover at (x, y) with heading ψ (radians counter-clockwise from
 // east): pitch = atan(∇h·(cosψ, sinψ)), roll = atan(∇h·(−sinψ, cosψ)); positive pitch = nose up.
