@@ -24,8 +24,9 @@ ConflictPolicy paperPolicy(const CoordinationParams& p) {
   return c;
 }
 
-// The dwell: measured on the default map, seeds 1–3, 9 of 960 legs were skipped with 10 s, 6 with
-// 4.5 s; with 0.5 s a rover could arrive where it had no time to get away (7 skipped on seed 2).
+// The dwell: with 0.5 s a rover could arrive where it had no time to get away (7 skipped on the
+// default map, seed 2); 4.5 s skipped fewer legs there (6 of 960 against 9) but left no time to
+// step aside on real ground (below).
 ConflictPolicy timedPolicy(const CoordinationParams& p) {
   ConflictPolicy c;
   const double period = p.controller.samplePeriod;
@@ -37,7 +38,11 @@ ConflictPolicy timedPolicy(const CoordinationParams& p) {
   c.earlyConflictEndsReplans = false;
   c.waitsAfterReplans = 0;
   c.invalidGoalEndsPiece = true;
-  c.dwell = std::min(p.dwellCheck, p.safetyDistance / p.controller.nominalSpeed + 1.0);
+  // The whole dwell_check (10 s by default): a stop checked for less left a rover no time to get
+  // out of the way when its next leg found no clear try (HiRISE site: a rover stopped 4.4 s before
+  // a higher-priority one ran over its spot, 12 collisions in one mission).
+  c.dwell = p.dwellCheck;
+  c.recover = true;
   return c;
 }
 
@@ -92,7 +97,7 @@ class Coordinator {
   }
 
  private:
-  enum class Outcome { Accepted, Skipped, NoPath, InvalidGoal, Steep, KeepOut, Cancelled };
+  enum class Outcome { Accepted, Skipped, NoPath, InvalidGoal, Steep, TiltsAtStart, KeepOut, Cancelled };
 
   struct Candidate {
     std::vector<Eigen::Vector2d> path;         // waypoints, the rover's position first
@@ -262,12 +267,17 @@ class Coordinator {
     return d;
   }
 
+  // `stand` for firstConflict: standing for as long as any higher-priority rover moves.
+  static constexpr long kForGood = -1;
+  long dwellTicks() const { return std::lround(policy_.dwell / period_); }
+
   // The first conflict with a higher-priority rover (the traffic table holds exactly those) of
   // rover k standing where it is for `ticks` samples, then driving `samples` (appended to its
-  // trajectory after them); then standing at its last position for the policy's dwell, or, with
-  // `parkedForGood`, for as long as any higher-priority rover moves.
+  // trajectory after them); then standing at its last position for `stand` samples, or, with
+  // kForGood, for as long as any higher-priority rover moves.
   std::optional<Conflict> firstConflict(int k, std::span<const TrajectorySample> samples, int ticks,
-                                        bool parkedForGood) const {
+                                        long stand) const {
+    const bool parkedForGood = stand == kForGood;
     const std::size_t base = out_.trajectories[k].samples.size();
     if (ticks > 0)
       if (auto c = traffic_.standing(k, here(k), base, base + static_cast<std::size_t>(ticks)))
@@ -276,8 +286,7 @@ class Coordinator {
     if (auto c = traffic_.driving(k, samples, from)) return c;
     std::size_t end = traffic_.end();
     const std::size_t after = from + samples.size();
-    if (!parkedForGood)
-      end = std::min(end, after + static_cast<std::size_t>(std::lround(policy_.dwell / period_)));
+    if (!parkedForGood) end = std::min(end, after + static_cast<std::size_t>(std::max(0L, stand)));
     if (after >= end) return std::nullopt;
     const Eigen::Vector2d p = samples.empty() ? here(k) : xyOf(samples.back());
     return traffic_.standing(k, p, after, end);
@@ -362,12 +371,19 @@ class Coordinator {
       const Candidate c0 = simulateTry(k, path.waypoints, 0, slipSeed(0x51ee5ull, k, i, piece, attempt));
       if (cancelled()) return Outcome::Cancelled;
       std::optional<Eigen::Vector2d> steep = firstExceedance(c0.samples);
+      // Where the try ends the rover stops, and turns for its next move: ground it may turn on,
+      // or the try is refused like a tilted one (a stop 0.2 m short of a valid vertex on 15°
+      // ground left rovers unable to turn for the rest of the mission, recover above).
+      if (!steep && policy_.recover && !c0.samples.empty() && !planner_.canStop(xyOf(c0.samples.back())))
+        steep = xyOf(c0.samples.back());
       if (const auto zone = firstForbidden(c0.samples)) {
         // Into a keep-out zone: refused like a tilted try, whatever the policy.
         ++zoneTries;
         keepOutOf(k, goal, {*zone, 0.5}, keepOut);
         continue;
       }
+      // Tilted while turning in place at the start: no path can help, only driving out straight.
+      if (steep && policy_.recover && (*steep - here(k)).norm() < 0.1) return Outcome::TiltsAtStart;
       if (steep && !policy_.checkTiltedTries) {
         keepOutOf(k, goal, {*steep, 0.5}, keepOut);
         continue;
@@ -376,7 +392,7 @@ class Coordinator {
       const bool parks = lastLeg && reachesGoal(c0, goal);
       std::optional<Conflict> first;
       for (int ticks : policy_.startDelays) {
-        conflict = firstConflict(k, c0.samples, ticks, parks);
+        conflict = firstConflict(k, c0.samples, ticks, parks ? kForGood : dwellTicks());
         if (!first) first = conflict;
         // Standing still already conflicts: so does every longer delay (it stands longer).
         if (conflict && conflict->time < static_cast<double>(out_.trajectories[k].samples.size() + ticks) * period_)
@@ -417,7 +433,7 @@ class Coordinator {
       if (cancelled()) return Outcome::Cancelled;
       const int ticks = static_cast<int>(std::lround(w * p_.waitStep / period_));
       Candidate c = simulateTry(k, firstTry->path, ticks, slipSeed(0x3a17ull, k, i, piece, w));
-      conflict = firstConflict(k, c.samples, 0, lastLeg && reachesGoal(c, goal));
+      conflict = firstConflict(k, c.samples, 0, lastLeg && reachesGoal(c, goal) ? kForGood : dwellTicks());
       if (!conflict && !firstExceedance(c.samples) && !firstForbidden(c.samples)) {
         rec.waits = w;
         out_.waits += w;
@@ -431,58 +447,136 @@ class Coordinator {
   }
 
   // The rover stays where its last leg left it for the rest of the mission. If a higher-priority
-  // rover still moving would pass too close, it drives out of the way (ours): to the first spot,
-  // in rings of growing radius around it, that it can reach and stay at without a conflict.
+  // rover still moving would pass too close, it drives out of the way (ours).
   // It also drives off when it stands near a goal or fixed point of a lower-priority rover's
   // leg: parked there for good, it would block that leg for ever (hybrid missions on the default
   // map: 14 of 18 skipped legs were the team mates' last coverage moves round the first rover's
   // end).
   void park(int k) {
-    if (!firstConflict(k, {}, 0, true) && !blocksLaterGoal(k, here(k))) return;
+    // Where no spot stays clear for good, the rover moves again before each next pass (ours: on
+    // the HiRISE site higher-priority rovers roamed round a stopped one for an hour).
+    for (int move = 0; move < kMaxAsideMoves; ++move) {
+      if (!firstConflict(k, {}, 0, kForGood) && !blocksLaterGoal(k, here(k))) return;
+      if (!moveAside(k)) return;
+      LegRecord rec;
+      rec.rover = k;
+      rec.leg = static_cast<int>(tasks_[k].legs.size());
+      rec.startTime = asideStart_;
+      rec.endTime = last(k).time;
+      rec.pieces = 1;
+      rec.note = "parked out of the way";
+      out_.legs.push_back(rec);
+    }
+  }
+
+  // Drives rover k to a spot it can reach and stand at without a conflict, clear of later rovers'
+  // goals: one clear for good if any, else the one that stays clear longest (at least
+  // kMinHold seconds). Candidates: back along its own trajectory (ground it has driven, so
+  // reachable even in a dead end), every 2 m up to 200 m; then rings of growing radius round it.
+  // How long each stays clear is read off the traffic table before any path is planned. A
+  // straight move is tried before RRT*, which gets at most kAsideRrtCalls calls. Within the
+  // attitude limit if at all possible; a collision is worse than a tilt, so the second pass
+  // accepts a move that exceeds it (reported as an exceedance). Commits the move; false when no
+  // spot works.
+  static constexpr int kMaxAsideMoves = 8;
+  static constexpr int kAsideRrtCalls = 8;
+  static constexpr double kMinHold = 20.0;  // s
+  bool moveAside(int k) {
     const Eigen::Vector2d from = here(k);
-    // Candidates: first back along its own trajectory (ground it has driven, so reachable even
-    // in a dead end), every 2 m up to 40 m; then rings of growing radius around it.
     std::vector<Eigen::Vector2d> spots;
     const auto& samples = out_.trajectories[k].samples;
     const double end = samples.back().distance;
     double next = 2.0;
-    for (auto it = samples.rbegin(); it != samples.rend() && next <= 40.0; ++it) {
+    for (auto it = samples.rbegin(); it != samples.rend() && next <= 200.0; ++it) {
       if (end - it->distance < next) continue;
       spots.emplace_back(it->x, it->y);
       next += 2.0;
     }
-    for (double radius : {1.5, 2.5, 3.5, 5.0, 7.0, 10.0, 14.0})
-      for (int d = 0; d < 8; ++d) {
-        const double a = d * std::numbers::pi / 4;
+    for (double radius : {1.5, 2.5, 3.5, 5.0, 7.0, 10.0, 14.0, 20.0, 28.0})
+      for (int d = 0; d < 16; ++d) {
+        const double a = d * std::numbers::pi / 8;
         spots.push_back(from + radius * Eigen::Vector2d(std::cos(a), std::sin(a)));
       }
-    // Within the attitude limit if at all possible; a collision is worse than a tilt, so the
-    // second pass accepts a move that exceeds it (reported as an exceedance).
-    int attempt = 0;
+    // How long standing at each spot stays clear, from the earliest arrival (kForGood: always).
+    const std::size_t now = out_.trajectories[k].samples.size();
+    const long holdTicks = std::lround(kMinHold / period_);
+    struct Spot {
+      Eigen::Vector2d at;
+      long clearTicks;  // after the earliest arrival; kForGood = for good
+    };
+    std::vector<Spot> ranked;
+    for (const Eigen::Vector2d& spot : spots) {
+      if (!planner_.canStop(spot) || blocksLaterGoal(k, spot)) continue;
+      const double travel = (spot - from).norm() / p_.controller.nominalSpeed;
+      const std::size_t arrive = now + static_cast<std::size_t>(travel / period_);
+      const auto c = arrive < traffic_.end() ? traffic_.standing(k, spot, arrive, traffic_.end()) : std::nullopt;
+      const long clear = c ? std::lround(c->time / period_) - static_cast<long>(arrive) : kForGood;
+      if (clear == kForGood || clear >= holdTicks) ranked.push_back({spot, clear});
+    }
+    // For good first, then longest clear; the candidates' own order breaks ties.
+    std::stable_sort(ranked.begin(), ranked.end(), [](const Spot& a, const Spot& b) {
+      if ((a.clearTicks == kForGood) != (b.clearTicks == kForGood)) return a.clearTicks == kForGood;
+      return a.clearTicks > b.clearTicks;
+    });
+    int attempt = 0, rrtCalls = 0;
     for (int pass = 0; pass < 2; ++pass)
-      for (const Eigen::Vector2d& spot : spots) {
-        if (cancelled()) return;
-        if (!planner_.canStop(spot) || blocksLaterGoal(k, spot)) continue;
-        const std::uint64_t seed = seedFor(seed_ ^ 0x9a4cull, k, attempt, 0, 0);
+      for (const Spot& spot : ranked) {
+        if (cancelled()) return false;
         ++attempt;
-        ++out_.rrtCalls;
-        PathResult path = planner_.plan(from, last(k).heading, spot, seed, {}, cancel_);
+        PathResult path;
+        if (planner_.edgeValid(from, spot.at)) {
+          path.status = PathStatus::Exact;
+          path.waypoints = {from, spot.at};
+        } else {
+          if (rrtCalls == kAsideRrtCalls) continue;
+          ++rrtCalls;
+          ++out_.rrtCalls;
+          path = planner_.plan(from, last(k).heading, spot.at, seedFor(seed_ ^ 0x9a4cull, k, attempt, 0, 0), {}, cancel_);
+        }
         if (path.status != PathStatus::Exact || path.waypoints.size() < 2) continue;
         Candidate c = simulateTry(k, path.waypoints, 0, seedFor(seed_ ^ 0x9a4dull, k, attempt, 0, 0));
-        if (!c.reached || firstConflict(k, c.samples, 0, true) || firstForbidden(c.samples) ||
-            (pass == 0 && firstExceedance(c.samples)))
+        if (!c.reached || firstConflict(k, c.samples, 0, spot.clearTicks == kForGood ? kForGood : holdTicks) ||
+            firstForbidden(c.samples) ||
+            (pass == 0 && (firstExceedance(c.samples) || !planner_.canStop(xyOf(c.samples.back())))))
           continue;
+        asideStart_ = c.samples.front().time;
         commit(k, c);
-        LegRecord rec;
-        rec.rover = k;
-        rec.leg = static_cast<int>(tasks_[k].legs.size());
-        rec.startTime = c.samples.front().time;
-        rec.endTime = last(k).time;
-        rec.pieces = 1;
-        rec.note = "parked out of the way";
-        out_.legs.push_back(rec);
-        return;
+        return true;
       }
+    return false;
+  }
+
+  // Rover k tilts when it turns in place where it stands (a stop on ground steeper than the limit
+  // in some direction): drives straight out, nearest its heading first (every 10° round), 0.5 to
+  // 1.5 m, to ground where it may stop and turn, without tilting, entering a zone or a conflict
+  // (delayed like any try). The planner's edge check is not asked: its limit is the planning
+  // one (14°), and the rover stands on steeper ground already; the simulated drive is the judge.
+  // Commits the move; false when no heading works.
+  bool escapeTurn(int k, int i, int piece) {
+    const Eigen::Vector2d from = here(k);
+    const double heading = last(k).heading;
+    int attempt = 0;
+    for (int step = 0; step <= 18; ++step)
+      for (int sign : {1, -1}) {
+        if ((step == 0 || step == 18) && sign < 0) continue;
+        const double psi = heading + sign * step * 10.0 * std::numbers::pi / 180.0;
+        const Eigen::Vector2d dir(std::cos(psi), std::sin(psi));
+        for (double d : {0.5, 1.0, 1.5}) {
+          if (cancelled()) return false;
+          const Eigen::Vector2d q = from + d * dir;
+          if (!planner_.canStop(q)) continue;
+          const Candidate c = simulateTry(k, {from, q}, 0, slipSeed(0xe5ca9eull, k, i, piece, attempt++));
+          if (!c.reached || c.samples.empty() || firstExceedance(c.samples) || firstForbidden(c.samples) ||
+              !planner_.canStop(xyOf(c.samples.back())))
+            continue;
+          for (int ticks : policy_.startDelays)
+            if (!firstConflict(k, c.samples, ticks, dwellTicks())) {
+              commit(k, delayed(k, c, ticks));
+              return true;
+            }
+        }
+      }
+    return false;
   }
 
   // `p` is closer than the safety distance plus both acceptance circles to a goal or fixed point
@@ -507,6 +601,7 @@ class Coordinator {
     rec.target = leg.target;
     rec.startTime = last(k).time;
     rec.status = LegStatus::Short;
+    bool steppedAside = false;
     for (int piece = 0; piece < p_.maxPieces; ++piece) {
       const double before = (here(k) - goal).norm();
       if (before <= p_.controller.acceptanceRadius) {
@@ -519,9 +614,25 @@ class Coordinator {
         out_.cancelled = true;
         return;
       }
+      if (o == Outcome::Skipped && policy_.recover && !steppedAside && firstConflict(k, {}, 0, kForGood) &&
+          moveAside(k)) {
+        // Standing here it would be run over later: it stepped aside; the leg goes on from there.
+        steppedAside = true;
+        ++rec.pieces;
+        continue;
+      }
       if (o == Outcome::Skipped) {
         rec.status = LegStatus::Skipped;
         rec.reason = LegReason::Conflict;
+        break;
+      }
+      if (o == Outcome::TiltsAtStart) {
+        if (escapeTurn(k, i, piece)) {
+          ++rec.pieces;
+          continue;
+        }
+        rec.note = "every try tilts past the attitude limit (turning where it stands)";
+        rec.reason = LegReason::Steep;
         break;
       }
       if (o == Outcome::InvalidGoal) {
@@ -571,6 +682,7 @@ class Coordinator {
   std::vector<std::vector<Ahead>> ahead_;
   CoordinationResult out_;
   TrafficTable traffic_;  // the trajectories of the rovers done so far
+  double asideStart_ = 0;  // s, when the last move aside started
   int legsDone_ = 0;
   int legsTotal_ = 0;
 };

@@ -34,6 +34,15 @@ struct ConflictPolicy {
   bool invalidGoalEndsPiece = false;
   // s the rover is checked standing at the end of a leg that is not its last.
   double dwell = 10.0;
+  // Recoveries (ours), for a rover that would otherwise stay stuck where it stands:
+  // - a try that tilts while the rover turns in place at its start (a stop on ground steeper
+  //   than the limit in some direction) first drives straight out, within a few degrees of its
+  //   heading, to ground where it may turn;
+  // - a leg skipped for conflicts, where standing still would be run over by a higher-priority
+  //   rover later, first steps aside to a spot clear for good, then tries the leg again.
+  // Before them, on the HiRISE site, a rover stuck on a 15° spot ended 26–57 legs short in one
+  // mission, and one left standing in another's way made the plan's only collisions.
+  bool recover = false;
 };
 
 // Paper 001 fig. 8 as SPEC §3.4 reads it: re-plan with a new seed (and a keep-out zone) on each

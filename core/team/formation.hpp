@@ -26,11 +26,15 @@ TerrainEdgeModel wholeMapModel(const terrain::Dem& dem, const Raster<std::uint8_
 
 // The nearest point to `want` (rings of a quarter metre, up to `reach`) that RRT* accepts as a
 // goal (turnValid), keeps `safety` from every point of `taken` and, with `reachable`, lies on a
-// cell marked 1 there; nullopt when there is none.
+// cell marked 1 there; with `stopRadius` > 0, eight points on the circle of that radius round it
+// are turnValid too, so wherever a rover stops in its acceptance circle it can turn there (ours:
+// on the HiRISE site rovers stopped 0.2 m from a valid goal on a 15° spot, and every later leg
+// tilted while turning). nullopt when there is none.
 std::optional<Eigen::Vector2d> nearestValid(const TerrainEdgeModel& model, Eigen::Vector2d want,
                                             double reach, double safety,
                                             const std::vector<Eigen::Vector2d>& taken,
-                                            const Raster<std::uint8_t>* reachable = nullptr);
+                                            const Raster<std::uint8_t>* reachable = nullptr,
+                                            double stopRadius = 0);
 
 // Starts for `n` rovers in formation around `centre` (the slots, each moved to the nearest valid
 // point as for a target, up to a footprint away), heading east. Throws InvalidInput "rovers"

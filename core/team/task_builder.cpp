@@ -31,13 +31,15 @@ std::vector<std::vector<std::optional<Eigen::Vector2d>>> slotGoals(
   // map, 5 rovers: 31 of 60 skipped legs in 13 missions were such pairs).
   const double spacing =
       params.coordination.safetyDistance + 2 * params.coordination.controller.acceptanceRadius;
+  // Where a rover may stop: its acceptance circle, and a little more for the last approach.
+  const double stopCircle = params.coordination.controller.acceptanceRadius + 0.05;
   std::vector<std::vector<std::optional<Eigen::Vector2d>>> out;
   for (const auto& centre : route.centres) {
     std::vector<std::optional<Eigen::Vector2d>> goals;
     std::vector<Eigen::Vector2d> taken;
     for (int k = 0; k < rovers; ++k) {
       auto g = nearestValid(model, centre + slots[k], params.footprint / 2, spacing, taken,
-                            reachable);
+                            reachable, stopCircle);
       if (g) taken.push_back(*g);
       goals.push_back(g);
     }
@@ -170,7 +172,7 @@ std::vector<RoverTask> hybridTasks(const terrain::Dem& dem, const Raster<std::ui
       // leg a skip ("invalid goal": 23 of 53 hybrid skips on the default map).
       for (int c : cov.rovers[j].cells)
         if (auto p = nearestValid(model, origin + cellToLocal(wg, wg.cell(c)), cell / 2, 0.0, {},
-                                  reachable))
+                                  reachable, params.coordination.controller.acceptanceRadius + 0.05))
           leg.via.push_back(*p);
       if (leg.via.size() < 2) continue;  // no moves: nothing to add
       leg.goal = leg.via.back();
