@@ -363,3 +363,69 @@ TEST_CASE("stages: the coordinator reports an invalid and an unreachable goal an
   CHECK_THROWS_WITH_AS(coordinateWith(tasks, planner, rover, bad, p, 1),
                        "coordination: a policy starts each try without delay first", Error);
 }
+
+TEST_CASE("stages: a rover whose spot will be run over steps aside, then goes on (timed)") {
+  // Rover 0 drives east along y = 5 from x = 0 to 20 (at x = 10 after 20 s). Rover 1 stands at
+  // (10, 5) and must go west to (0, 5): every try meets rover 0 head-on, and standing still it is
+  // run over. Timed: it steps aside off the line, waits there and goes once rover 0 has passed.
+  // Paper (no recoveries): the leg is skipped, and the rover only parks out of the way at the end.
+  std::vector<RoverTask> tasks(2);
+  tasks[0].start = {0, 5, 0};
+  tasks[0].legs = {{{20, 5}, {}, 0}};
+  tasks[1].start = {10, 5, M_PI};
+  tasks[1].legs = {{{0, 5}, {}, 0}};
+  const StraightLinePlanner planner;
+  const StraightLineRover rover;
+  CoordinationParams p;
+  const CoordinationResult timed = coordinateWith(tasks, planner, rover, timedPolicy(p), p, 1);
+  REQUIRE(timed.legs.size() >= 2);
+  CHECK(timed.legs[1].status == LegStatus::Reached);
+  CHECK(timed.legs[1].pieces == 2);  // the step aside, then the leg
+  CHECK(timed.conflicts.empty());
+  CHECK(checkSeparation(timed.trajectories, p.safetyDistance).minimumDistance >= p.safetyDistance);
+  CHECK((endOf(timed.trajectories[1]) - Eigen::Vector2d(0, 5)).norm() < 1e-9);
+  const CoordinationResult paper = coordinateWith(tasks, planner, rover, paperPolicy(p), p, 1);
+  CHECK(paper.legs[1].status == LegStatus::Skipped);
+  CHECK(paper.conflicts.empty());
+}
+
+namespace {
+// The fake rover on a strip x < 1 steeper than the limit across: turning in place there by more
+// than 45° tilts it to 20°; driving is fine everywhere.
+class StripRover final : public LegSimulator {
+ public:
+  Trajectory drive(const std::vector<Eigen::Vector2d>& waypoints, const Pose& start,
+                   double startTime, std::uint64_t seed, const CancelToken* cancel) const override {
+    Trajectory t = straight_.drive(waypoints, start, startTime, seed, cancel);
+    const Eigen::Vector2d to = waypoints.front() - Eigen::Vector2d(start.x, start.y);
+    const double turn = std::abs(std::remainder(std::atan2(to.y(), to.x()) - start.heading, 2 * M_PI));
+    if (start.x < 1 && turn > M_PI / 4 && t.samples.size() > 1) t.samples[1].pitch = 20 * M_PI / 180;
+    return t;
+  }
+
+ private:
+  StraightLineRover straight_;
+};
+}  // namespace
+
+TEST_CASE("stages: a rover that tilts turning where it stands drives straight out first (timed)") {
+  // The rover stands on the strip facing east; its goal is behind it. Timed: it drives out east
+  // off the strip, turns there and reaches the goal. Paper: every try tilts, the leg ends short.
+  std::vector<RoverTask> tasks(1);
+  tasks[0].start = {0.5, 0, 0};
+  tasks[0].legs = {{{-3, 0}, {}, 0}};
+  const StraightLinePlanner planner;
+  const StripRover rover;
+  CoordinationParams p;
+  const CoordinationResult timed = coordinateWith(tasks, planner, rover, timedPolicy(p), p, 1);
+  REQUIRE(timed.legs.size() == 1);
+  CHECK(timed.legs[0].status == LegStatus::Reached);
+  CHECK(timed.legs[0].pieces == 2);
+  double east = 0;
+  for (const auto& s : timed.trajectories[0].samples) east = std::max(east, s.x);
+  CHECK(east >= 1.0);  // it left the strip before turning
+  for (const auto& s : timed.trajectories[0].samples) CHECK(std::abs(s.pitch) < p.attitudeCheck);
+  const CoordinationResult paper = coordinateWith(tasks, planner, rover, paperPolicy(p), p, 1);
+  CHECK(paper.legs[0].status == LegStatus::Short);
+  CHECK(paper.legs[0].reason == LegReason::Steep);
+}
