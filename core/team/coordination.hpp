@@ -104,9 +104,9 @@ struct CoordinationParams {
   int maxPieces = 6;
   // s a rover is checked standing at the end of each leg (ours): it stops there and needs a few
   // seconds to get going again, so a leg ending where a higher-priority rover passes a moment
-  // later is refused then, while waiting can still help, not on the next leg. Timed mode uses
-  // at most 1 s + safety_distance / nominal_speed: its next leg checks the standing rover
-  // itself.                                                                     [dwell_check]
+  // later is refused then, while waiting can still help, not on the next leg. Both modes use
+  // it; in timed mode it is also the time a stopped rover has to step aside when its next leg
+  // finds no clear try (coordinator.cpp, ConflictPolicy::recover).             [dwell_check]
   double dwellCheck = 10.0;
   // rad; a simulated try whose |roll| or |pitch| goes above this is refused and planned again like
   // a conflict, keeping out of half a metre around the spot (ours; 0 = off); when no try is within
