@@ -110,8 +110,8 @@ struct CoordinationParams {
   double dwellCheck = 10.0;
   // rad; a simulated try whose |roll| or |pitch| goes above this is refused and planned again like
   // a conflict, keeping out of half a metre around the spot (ours; 0 = off); when no try is within
-  // it the leg ends short. Only the final move out of a collision (parking) may exceed it, and
-  // that is reported.                                                          [attitude_check]
+  // it the leg ends short. Only a move out of a collision (parking, timed mode's step aside)
+  // may exceed it, and that is reported.                                                          [attitude_check]
   double attitudeCheck = kDefaultAttitudeLimit;
   // Threads the caller grants (the look-ahead planning, the lattice); 0 = all cores. The server
   // gives each mission its share so missions in parallel do not oversubscribe the machine.

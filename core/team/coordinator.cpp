@@ -347,7 +347,8 @@ class Coordinator {
     std::optional<Candidate> firstTry;  // the first try within the attitude check
     std::optional<Conflict> conflict;
     std::optional<PathStatus> noPath;
-    int zoneTries = 0;  // tries refused for a sample in a keep-out zone
+    int zoneTries = 0;       // tries refused for a sample in a keep-out zone
+    int unturnableEnds = 0;  // tries refused for ending where the rover cannot turn
     for (int attempt = 0; attempt <= p_.maxReplans; ++attempt) {
       if (cancelled()) return Outcome::Cancelled;
       if (attempt > 0) {
@@ -371,19 +372,21 @@ class Coordinator {
       const Candidate c0 = simulateTry(k, path.waypoints, 0, slipSeed(0x51ee5ull, k, i, piece, attempt));
       if (cancelled()) return Outcome::Cancelled;
       std::optional<Eigen::Vector2d> steep = firstExceedance(c0.samples);
+      // Tilted while turning in place at the start: no path can help, only driving out straight.
+      if (steep && policy_.recover && (*steep - here(k)).norm() < 0.1) return Outcome::TiltsAtStart;
       // Where the try ends the rover stops, and turns for its next move: ground it may turn on,
       // or the try is refused like a tilted one (a stop 0.2 m short of a valid vertex on 15°
-      // ground left rovers unable to turn for the rest of the mission, recover above).
-      if (!steep && policy_.recover && !c0.samples.empty() && !planner_.canStop(xyOf(c0.samples.back())))
+      // ground left rovers unable to turn for the rest of the mission; ConflictPolicy::recover).
+      if (!steep && policy_.recover && !c0.samples.empty() && !planner_.canStop(xyOf(c0.samples.back()))) {
         steep = xyOf(c0.samples.back());
+        ++unturnableEnds;
+      }
       if (const auto zone = firstForbidden(c0.samples)) {
         // Into a keep-out zone: refused like a tilted try, whatever the policy.
         ++zoneTries;
         keepOutOf(k, goal, {*zone, 0.5}, keepOut);
         continue;
       }
-      // Tilted while turning in place at the start: no path can help, only driving out straight.
-      if (steep && policy_.recover && (*steep - here(k)).norm() < 0.1) return Outcome::TiltsAtStart;
       if (steep && !policy_.checkTiltedTries) {
         keepOutOf(k, goal, {*steep, 0.5}, keepOut);
         continue;
@@ -394,8 +397,9 @@ class Coordinator {
       for (int ticks : policy_.startDelays) {
         conflict = firstConflict(k, c0.samples, ticks, parks ? kForGood : dwellTicks());
         if (!first) first = conflict;
-        // Standing still already conflicts: so does every longer delay (it stands longer).
-        if (conflict && conflict->time < static_cast<double>(out_.trajectories[k].samples.size() + ticks) * period_)
+        // Standing still already conflicts: so does every longer delay (it stands longer; the
+        // delays ascend, coordinateWith checks).
+        if (conflict && conflict->index < out_.trajectories[k].samples.size() + static_cast<std::size_t>(ticks))
           break;
         if (conflict || steep) continue;
         if (ticks > 0) {
@@ -423,7 +427,8 @@ class Coordinator {
         return Outcome::KeepOut;
       }
       if (!noPath) {
-        rec.note = "every try tilts past the attitude limit";
+        rec.note = unturnableEnds > 0 ? "every try tilts past the attitude limit or ends where the rover cannot turn"
+                                      : "every try tilts past the attitude limit";
         return Outcome::Steep;
       }
       rec.note = std::string("no path: ") + pathStatusName(*noPath);
@@ -453,15 +458,18 @@ class Coordinator {
   // map: 14 of 18 skipped legs were the team mates' last coverage moves round the first rover's
   // end).
   void park(int k) {
-    // Where no spot stays clear for good, the rover moves again before each next pass (ours: on
-    // the HiRISE site higher-priority rovers roamed round a stopped one for an hour).
-    for (int move = 0; move < kMaxAsideMoves; ++move) {
+    // Timed: where no spot stays clear for good the rover moves again before each next pass
+    // (ours: on the HiRISE site higher-priority rovers roamed round a stopped one for an hour).
+    // Paper: one move to a spot clear for good, as before.
+    const int moves = policy_.recover ? kMaxAsideMoves : 1;
+    for (int move = 0; move < moves; ++move) {
       if (!firstConflict(k, {}, 0, kForGood) && !blocksLaterGoal(k, here(k))) return;
-      if (!moveAside(k)) return;
+      const std::optional<double> start = moveAside(k, move);
+      if (!start) return;
       LegRecord rec;
       rec.rover = k;
       rec.leg = static_cast<int>(tasks_[k].legs.size());
-      rec.startTime = asideStart_;
+      rec.startTime = *start;
       rec.endTime = last(k).time;
       rec.pieces = 1;
       rec.note = "parked out of the way";
@@ -470,80 +478,98 @@ class Coordinator {
   }
 
   // Drives rover k to a spot it can reach and stand at without a conflict, clear of later rovers'
-  // goals: one clear for good if any, else the one that stays clear longest (at least
-  // kMinHold seconds). Candidates: back along its own trajectory (ground it has driven, so
-  // reachable even in a dead end), every 2 m up to 200 m; then rings of growing radius round it.
-  // How long each stays clear is read off the traffic table before any path is planned. A
-  // straight move is tried before RRT*, which gets at most kAsideRrtCalls calls. Within the
-  // attitude limit if at all possible; a collision is worse than a tilt, so the second pass
-  // accepts a move that exceeds it (reported as an exceedance). Commits the move; false when no
-  // spot works.
+  // goals, and commits the move; returns when it started (nullopt: no spot works). Candidates:
+  // back along its own trajectory (ground it has driven, so reachable even in a dead end), every
+  // 2 m, then rings of growing radius round it; within the attitude limit if at all possible (a
+  // collision is worse than a tilt, so a second pass accepts a move that exceeds it, reported as
+  // an exceedance). `move` numbers the calls for a rover (it salts the seeds).
+  // Paper: up to 40 m back, 7 rings of 8, an RRT* call per spot, a spot clear for good — as
+  // before. Timed (ConflictPolicy::recover): up to 200 m back and 9 rings of 16; how long each
+  // spot stays clear is read off the traffic table before any path is planned; spots clear for
+  // good first, else (nearest first) one clear for at least kMinHold; a straight move before
+  // RRT*, which gets at most kAsideRrtCalls calls, and at most kAsideSimulations simulated moves;
+  // the rover must be able to turn where it stops.
   static constexpr int kMaxAsideMoves = 8;
+  static constexpr int kMaxRecoveries = 2;  // per leg
   static constexpr int kAsideRrtCalls = 8;
+  static constexpr int kAsideSimulations = 48;
   static constexpr double kMinHold = 20.0;  // s
-  bool moveAside(int k) {
+  std::optional<double> moveAside(int k, int move) {
+    const bool timed = policy_.recover;
     const Eigen::Vector2d from = here(k);
     std::vector<Eigen::Vector2d> spots;
     const auto& samples = out_.trajectories[k].samples;
     const double end = samples.back().distance;
     double next = 2.0;
-    for (auto it = samples.rbegin(); it != samples.rend() && next <= 200.0; ++it) {
+    for (auto it = samples.rbegin(); it != samples.rend() && next <= (timed ? 200.0 : 40.0); ++it) {
       if (end - it->distance < next) continue;
       spots.emplace_back(it->x, it->y);
       next += 2.0;
     }
-    for (double radius : {1.5, 2.5, 3.5, 5.0, 7.0, 10.0, 14.0, 20.0, 28.0})
-      for (int d = 0; d < 16; ++d) {
-        const double a = d * std::numbers::pi / 8;
+    const int directions = timed ? 16 : 8;
+    for (double radius : {1.5, 2.5, 3.5, 5.0, 7.0, 10.0, 14.0, 20.0, 28.0}) {
+      if (!timed && radius > 14.0) break;
+      for (int d = 0; d < directions; ++d) {
+        const double a = d * 2 * std::numbers::pi / directions;
         spots.push_back(from + radius * Eigen::Vector2d(std::cos(a), std::sin(a)));
       }
-    // How long standing at each spot stays clear, from the earliest arrival (kForGood: always).
-    const std::size_t now = out_.trajectories[k].samples.size();
-    const long holdTicks = std::lround(kMinHold / period_);
+    }
     struct Spot {
       Eigen::Vector2d at;
-      long clearTicks;  // after the earliest arrival; kForGood = for good
+      bool forGood = true;
     };
     std::vector<Spot> ranked;
+    const std::size_t now = out_.trajectories[k].samples.size();
+    const long holdTicks = std::lround(kMinHold / period_);
     for (const Eigen::Vector2d& spot : spots) {
       if (!planner_.canStop(spot) || blocksLaterGoal(k, spot)) continue;
+      if (!timed) {
+        ranked.push_back({spot, true});
+        continue;
+      }
+      // Standing there from the earliest arrival (the table clamps past the end: parked rovers).
       const double travel = (spot - from).norm() / p_.controller.nominalSpeed;
       const std::size_t arrive = now + static_cast<std::size_t>(travel / period_);
-      const auto c = arrive < traffic_.end() ? traffic_.standing(k, spot, arrive, traffic_.end()) : std::nullopt;
-      const long clear = c ? std::lround(c->time / period_) - static_cast<long>(arrive) : kForGood;
-      if (clear == kForGood || clear >= holdTicks) ranked.push_back({spot, clear});
+      const auto c = traffic_.standing(k, spot, arrive, std::max(arrive + 1, traffic_.end()));
+      if (!c) ranked.push_back({spot, true});
+      else if (static_cast<long>(c->index) - static_cast<long>(arrive) >= holdTicks) ranked.push_back({spot, false});
     }
-    // For good first, then longest clear; the candidates' own order breaks ties.
-    std::stable_sort(ranked.begin(), ranked.end(), [](const Spot& a, const Spot& b) {
-      if ((a.clearTicks == kForGood) != (b.clearTicks == kForGood)) return a.clearTicks == kForGood;
-      return a.clearTicks > b.clearTicks;
-    });
-    int attempt = 0, rrtCalls = 0;
-    for (int pass = 0; pass < 2; ++pass)
-      for (const Spot& spot : ranked) {
-        if (cancelled()) return false;
-        ++attempt;
-        PathResult path;
-        if (planner_.edgeValid(from, spot.at)) {
-          path.status = PathStatus::Exact;
-          path.waypoints = {from, spot.at};
-        } else {
-          if (rrtCalls == kAsideRrtCalls) continue;
-          ++rrtCalls;
-          ++out_.rrtCalls;
-          path = planner_.plan(from, last(k).heading, spot.at, seedFor(seed_ ^ 0x9a4cull, k, attempt, 0, 0), {}, cancel_);
-        }
-        if (path.status != PathStatus::Exact || path.waypoints.size() < 2) continue;
-        Candidate c = simulateTry(k, path.waypoints, 0, seedFor(seed_ ^ 0x9a4dull, k, attempt, 0, 0));
-        if (!c.reached || firstConflict(k, c.samples, 0, spot.clearTicks == kForGood ? kForGood : holdTicks) ||
-            firstForbidden(c.samples) ||
-            (pass == 0 && (firstExceedance(c.samples) || !planner_.canStop(xyOf(c.samples.back())))))
-          continue;
-        asideStart_ = c.samples.front().time;
-        commit(k, c);
-        return true;
+    std::stable_partition(ranked.begin(), ranked.end(), [](const Spot& s) { return s.forGood; });
+    int attempt = 0, rrtCalls = 0, simulations = 0;
+    std::optional<Candidate> tilted;  // the first move that only exceeded the limit (second pass)
+    for (const Spot& spot : ranked) {
+      if (cancelled() || (timed && simulations == kAsideSimulations)) break;
+      const std::uint64_t planSeed = seedFor(seed_ ^ 0x9a4cull, k, attempt, move, 0);
+      ++attempt;
+      PathResult path;
+      if (timed && planner_.edgeValid(from, spot.at)) {
+        path.status = PathStatus::Exact;
+        path.waypoints = {from, spot.at};
+      } else {
+        if (timed && rrtCalls == kAsideRrtCalls) continue;
+        ++rrtCalls;
+        ++out_.rrtCalls;
+        path = planner_.plan(from, last(k).heading, spot.at, planSeed, {}, cancel_);
       }
-    return false;
+      if (path.status != PathStatus::Exact || path.waypoints.size() < 2) continue;
+      ++simulations;
+      Candidate c = simulateTry(k, path.waypoints, 0, seedFor(seed_ ^ 0x9a4dull, k, attempt, move, 0));
+      // A move that ends where it started (a spot back along a looping trajectory) is none.
+      if (!c.reached || c.samples.empty() ||
+          firstConflict(k, c.samples, 0, spot.forGood ? kForGood : holdTicks) || firstForbidden(c.samples))
+        continue;
+      if (firstExceedance(c.samples) || (timed && !planner_.canStop(xyOf(c.samples.back())))) {
+        if (!tilted) tilted = std::move(c);
+        continue;
+      }
+      const double start = c.samples.front().time;
+      commit(k, c);
+      return start;
+    }
+    if (!tilted) return std::nullopt;
+    const double start = tilted->samples.front().time;
+    commit(k, *tilted);
+    return start;
   }
 
   // Rover k tilts when it turns in place where it stands (a stop on ground steeper than the limit
@@ -552,7 +578,7 @@ class Coordinator {
   // (delayed like any try). The planner's edge check is not asked: its limit is the planning
   // one (14°), and the rover stands on steeper ground already; the simulated drive is the judge.
   // Commits the move; false when no heading works.
-  bool escapeTurn(int k, int i, int piece) {
+  bool escapeTurn(int k, int i, int salt) {
     const Eigen::Vector2d from = here(k);
     const double heading = last(k).heading;
     int attempt = 0;
@@ -565,7 +591,7 @@ class Coordinator {
           if (cancelled()) return false;
           const Eigen::Vector2d q = from + d * dir;
           if (!planner_.canStop(q)) continue;
-          const Candidate c = simulateTry(k, {from, q}, 0, slipSeed(0xe5ca9eull, k, i, piece, attempt++));
+          const Candidate c = simulateTry(k, {from, q}, 0, slipSeed(0xe5ca9eull, k, i, salt, attempt++));
           if (!c.reached || c.samples.empty() || firstExceedance(c.samples) || firstForbidden(c.samples) ||
               !planner_.canStop(xyOf(c.samples.back())))
             continue;
@@ -601,8 +627,10 @@ class Coordinator {
     rec.target = leg.target;
     rec.startTime = last(k).time;
     rec.status = LegStatus::Short;
-    bool steppedAside = false;
-    for (int piece = 0; piece < p_.maxPieces; ++piece) {
+    // Recoveries (ConflictPolicy::recover) are moves of their own, not pieces: the leg's
+    // fixed points and pieces go on from where they left the rover.
+    int recoveries = 0;
+    for (int piece = 0; piece < p_.maxPieces;) {
       const double before = (here(k) - goal).norm();
       if (before <= p_.controller.acceptanceRadius) {
         rec.status = LegStatus::Reached;
@@ -614,11 +642,11 @@ class Coordinator {
         out_.cancelled = true;
         return;
       }
-      if (o == Outcome::Skipped && policy_.recover && !steppedAside && firstConflict(k, {}, 0, kForGood) &&
-          moveAside(k)) {
+      if (o == Outcome::Skipped && policy_.recover && recoveries < kMaxRecoveries &&
+          firstConflict(k, {}, 0, kForGood) && moveAside(k, kMaxAsideMoves + recoveries)) {
         // Standing here it would be run over later: it stepped aside; the leg goes on from there.
-        steppedAside = true;
-        ++rec.pieces;
+        ++recoveries;
+        rec.note.clear();
         continue;
       }
       if (o == Outcome::Skipped) {
@@ -627,8 +655,9 @@ class Coordinator {
         break;
       }
       if (o == Outcome::TiltsAtStart) {
-        if (escapeTurn(k, i, piece)) {
-          ++rec.pieces;
+        if (recoveries < kMaxRecoveries && escapeTurn(k, i, recoveries)) {
+          ++recoveries;
+          rec.note.clear();
           continue;
         }
         rec.note = "every try tilts past the attitude limit (turning where it stands)";
@@ -658,7 +687,8 @@ class Coordinator {
         rec.reason = LegReason::NoPath;
         break;
       }
-      if (piece + 1 == p_.maxPieces) {
+      ++piece;
+      if (piece == p_.maxPieces) {
         rec.note = "goal not reached after max_pieces RRT* pieces";
         rec.reason = LegReason::PiecesExhausted;
       }
@@ -682,7 +712,6 @@ class Coordinator {
   std::vector<std::vector<Ahead>> ahead_;
   CoordinationResult out_;
   TrafficTable traffic_;  // the trajectories of the rovers done so far
-  double asideStart_ = 0;  // s, when the last move aside started
   int legsDone_ = 0;
   int legsTotal_ = 0;
 };
@@ -696,9 +725,13 @@ CoordinationResult coordinateWith(const std::vector<RoverTask>& tasks, const Leg
   params.validate();
   if (tasks.empty()) throw Error(ErrorCode::InvalidInput, "rovers", "rovers: none given");
   if (policy.startDelays.empty() || policy.startDelays.front() != 0 || policy.waitsAfterReplans < 0 ||
-      !(policy.dwell >= 0))
+      !(policy.dwell >= 0) ||
+      std::adjacent_find(policy.startDelays.begin(), policy.startDelays.end(),
+                         [](int a, int b) { return b <= a; }) != policy.startDelays.end())
     throw Error(ErrorCode::InvalidParameter, "coordination",
-                "coordination: a policy starts each try without delay first");
+                "coordination: a policy starts each try without delay first, then at ascending delays");
+  if (tasks.size() > TrafficTable::kMaxRovers)
+    throw Error(ErrorCode::InvalidInput, "rovers", "between 1 and 64 rovers are supported");
   for (std::size_t k = 0; k < tasks.size(); ++k) {
     const std::string field = "rovers[" + std::to_string(k) + "]";
     const Pose& s = tasks[k].start;

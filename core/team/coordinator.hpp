@@ -35,11 +35,14 @@ struct ConflictPolicy {
   // s the rover is checked standing at the end of a leg that is not its last.
   double dwell = 10.0;
   // Recoveries (ours), for a rover that would otherwise stay stuck where it stands:
-  // - a try that tilts while the rover turns in place at its start (a stop on ground steeper
-  //   than the limit in some direction) first drives straight out, within a few degrees of its
-  //   heading, to ground where it may turn;
+  // - a try that would end where the rover cannot stop and turn (canStop) is refused like a
+  //   tilted one;
+  // - a try that tilts while the rover turns in place at its start first drives straight out,
+  //   nearest its heading first (every 10° round), to ground where it may turn;
   // - a leg skipped for conflicts, where standing still would be run over by a higher-priority
-  //   rover later, first steps aside to a spot clear for good, then tries the leg again.
+  //   rover later, first steps aside (a spot clear for good, else the nearest clear for 20 s),
+  //   then tries the leg again; at most two recoveries per leg;
+  // - parking at the end moves again until the rover is clear for good (at most 8 moves).
   // Before them, on the HiRISE site, a rover stuck on a 15° spot ended 26–57 legs short in one
   // mission, and one left standing in another's way made the plan's only collisions.
   bool recover = false;
@@ -50,8 +53,8 @@ struct ConflictPolicy {
 ConflictPolicy paperPolicy(const CoordinationParams& p);
 // Ours: start the same try later (0, δ, 2δ, … up to max_waits × wait_step, δ = delay_step) — a
 // reservation check in time against every committed trajectory — and re-plan only when no delay
-// clears it. The dwell is the time to get going and out of the safety distance (1 s + safety /
-// nominal speed, at most dwell_check): the next leg's delays check the standing rover themselves.
+// clears it; then the recoveries above. The dwell is dwell_check, the time a stopped rover has
+// to step aside when its next leg finds no clear try.
 ConflictPolicy timedPolicy(const CoordinationParams& p);
 
 // Plans, simulates and coordinates the team with the given stages. `params` gives the limits

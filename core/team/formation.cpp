@@ -48,18 +48,23 @@ TerrainEdgeModel wholeMapModel(const terrain::Dem& dem, const Raster<std::uint8_
   return TerrainEdgeModel(dem, classes, mapBounds(g), rrt.attitudeLimit, edgeResolutionOn(g, rrt));
 }
 
+bool turnableAround(const TerrainEdgeModel& model, const Eigen::Vector2d& p, double radius) {
+  if (!model.turnValid(p)) return false;
+  if (radius > 0)
+    for (int i = 0; i < 8; ++i) {
+      const double a = i * M_PI / 4;
+      if (!model.turnValid(p + radius * Eigen::Vector2d(std::cos(a), std::sin(a)))) return false;
+    }
+  return true;
+}
+
 std::optional<Eigen::Vector2d> nearestValid(const TerrainEdgeModel& model, Eigen::Vector2d want,
                                             double reach, double safety,
                                             const std::vector<Eigen::Vector2d>& taken,
                                             const Raster<std::uint8_t>* reachable,
                                             double stopRadius) {
   auto ok = [&](const Eigen::Vector2d& p) {
-    if (!model.turnValid(p)) return false;
-    if (stopRadius > 0)
-      for (int i = 0; i < 8; ++i) {
-        const double a = i * M_PI / 4;
-        if (!model.turnValid(p + stopRadius * Eigen::Vector2d(std::cos(a), std::sin(a)))) return false;
-      }
+    if (!turnableAround(model, p, stopRadius)) return false;
     if (reachable) {
       auto c = localToCell(reachable->geometry, p);
       if (!c || (*reachable)(c->row, c->col) == 0) return false;

@@ -24,12 +24,18 @@ std::vector<Eigen::Vector2d> formationSlots(int rovers, double footprint);
 TerrainEdgeModel wholeMapModel(const terrain::Dem& dem, const Raster<std::uint8_t>& classes,
                                const RrtParams& rrt);
 
+// Where a rover stops at a goal: anywhere in its acceptance circle, and a little more for the
+// last approach.
+inline double stopCircleRadius(const ControllerParams& c) { return c.acceptanceRadius + 0.05; }
+// `p` and eight points on the circle of `radius` round it are turnValid (radius 0: `p` alone).
+bool turnableAround(const TerrainEdgeModel& model, const Eigen::Vector2d& p, double radius);
+
 // The nearest point to `want` (rings of a quarter metre, up to `reach`) that RRT* accepts as a
 // goal (turnValid), keeps `safety` from every point of `taken` and, with `reachable`, lies on a
-// cell marked 1 there; with `stopRadius` > 0, eight points on the circle of that radius round it
-// are turnValid too, so wherever a rover stops in its acceptance circle it can turn there (ours:
-// on the HiRISE site rovers stopped 0.2 m from a valid goal on a 15° spot, and every later leg
-// tilted while turning). nullopt when there is none.
+// cell marked 1 there; with `stopRadius` > 0, it is turnableAround that radius, so wherever a
+// rover stops in its acceptance circle it can most likely turn there (ours: on the HiRISE site
+// rovers stopped 0.2 m from a valid goal on a 15° spot, and every later leg tilted while
+// turning). nullopt when there is none.
 std::optional<Eigen::Vector2d> nearestValid(const TerrainEdgeModel& model, Eigen::Vector2d want,
                                             double reach, double safety,
                                             const std::vector<Eigen::Vector2d>& taken,

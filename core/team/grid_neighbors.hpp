@@ -3,17 +3,18 @@
 // over the search bounds, queried by the cells a query's radius touches. OMPL's default for
 // RRTstar is GNAT, built for any metric space; in R² with a bounded box a grid answers the same
 // queries with far fewer distance calls (GNAT and its distance calls were about 15 % of a team
-// mission's profile, issue 10). Answers are those of GNAT: every element within the radius
-// (inclusive), sorted by distance from the query, ties by (distance, address) like GNAT's queue.
-// Distances are the distance function RRTstar sets, so they are the very numbers GNAT compares.
+// mission's profile, issue 10). Answers are GNAT's: every element within the radius (inclusive),
+// sorted by distance from the query; distances are the distance function RRTstar sets, so they
+// are the very numbers GNAT compares. Exact ties (duplicate states) come in storage order here and
+// in GNAT's own storage order there; RRT* plans were identical on every mission compared.
 #include <ompl/datastructures/NearestNeighbors.h>
+#include <ompl/util/Exception.h>
 
 #include <Eigen/Core>
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <functional>
-#include <limits>
 #include <utility>
 #include <vector>
 
@@ -63,14 +64,24 @@ class GridNearestNeighbors : public ompl::NearestNeighbors<T> {
     const auto [qc, qr] = cellOf(position_(data));
     std::vector<std::pair<double, const T*>> best;
     const int rings = std::max(cols_, rows_);
+    auto visit = [&](int r, int c) {
+      if (r < 0 || c < 0 || r >= rows_ || c >= cols_) return;
+      for (const T& e : buckets_[static_cast<std::size_t>(r) * cols_ + c])
+        best.emplace_back(this->distFun_(data, e), &e);
+    };
     for (int ring = 0; ring <= rings; ++ring) {
-      for (int r = qr - ring; r <= qr + ring; ++r)
+      if (ring == 0) {
+        visit(qr, qc);
+      } else {  // the ring's four sides only: O(ring) buckets, not its whole square
         for (int c = qc - ring; c <= qc + ring; ++c) {
-          if (std::max(std::abs(r - qr), std::abs(c - qc)) != ring) continue;  // the ring only
-          if (r < 0 || c < 0 || r >= rows_ || c >= cols_) continue;
-          for (const T& e : buckets_[static_cast<std::size_t>(r) * cols_ + c])
-            best.emplace_back(this->distFun_(data, e), &e);
+          visit(qr - ring, c);
+          visit(qr + ring, c);
         }
+        for (int r = qr - ring + 1; r <= qr + ring - 1; ++r) {
+          visit(r, qc - ring);
+          visit(r, qc + ring);
+        }
+      }
       if (best.size() >= k) {
         std::partial_sort(best.begin(), best.begin() + static_cast<std::ptrdiff_t>(k), best.end());
         best.resize(k);
@@ -108,8 +119,9 @@ class GridNearestNeighbors : public ompl::NearestNeighbors<T> {
  private:
   std::pair<int, int> cellOf(const Eigen::Vector2d& p) const {
     const double fc = std::floor((p.x() - min_.x()) / cell_), fr = std::floor((p.y() - min_.y()) / cell_);
-    const int c = std::isfinite(fc) ? static_cast<int>(std::clamp(fc, 0.0, cols_ - 1.0)) : 0;
-    const int r = std::isfinite(fr) ? static_cast<int>(std::clamp(fr, 0.0, rows_ - 1.0)) : 0;
+    // Clamped into the grid (±∞ to its edges); NaN to the first bucket.
+    const int c = std::isnan(fc) ? 0 : static_cast<int>(std::clamp(fc, 0.0, cols_ - 1.0));
+    const int r = std::isnan(fr) ? 0 : static_cast<int>(std::clamp(fr, 0.0, rows_ - 1.0));
     return {c, r};
   }
   std::size_t bucketOf(const Eigen::Vector2d& p) const {

@@ -21,14 +21,8 @@ void TrafficTable::add(const Trajectory& t) {
   for (const auto& s : t.samples) track.at.emplace_back(s.x, s.y);
   for (std::size_t b = 0; b * kBlock < track.at.size(); ++b) {
     const std::size_t last = std::min(track.at.size(), (b + 1) * kBlock);
-    Box box{track.at[b * kBlock].x(), track.at[b * kBlock].y(), track.at[b * kBlock].x(),
-            track.at[b * kBlock].y()};
-    for (std::size_t i = b * kBlock + 1; i < last; ++i) {
-      box.x0 = std::min(box.x0, track.at[i].x());
-      box.y0 = std::min(box.y0, track.at[i].y());
-      box.x1 = std::max(box.x1, track.at[i].x());
-      box.y1 = std::max(box.y1, track.at[i].y());
-    }
+    Box box = Box::of(track.at[b * kBlock]);
+    for (std::size_t i = b * kBlock + 1; i < last; ++i) box.extend(track.at[i]);
     track.boxes.push_back(box);
   }
   end_ = std::max(end_, track.at.size());
@@ -39,8 +33,7 @@ void TrafficTable::add(const Trajectory& t) {
 // block, inside that block's box).
 TrafficTable::Box TrafficTable::boxAt(const Track& t, std::size_t block) const {
   if (block < t.boxes.size()) return t.boxes[block];
-  const Eigen::Vector2d& p = t.at.back();
-  return {p.x(), p.y(), p.x(), p.y()};
+  return Box::of(t.at.back());
 }
 
 template <class Pos>
@@ -68,7 +61,7 @@ std::optional<Conflict> TrafficTable::scanBlock(int rover, std::size_t from, std
       const Eigen::Vector2d& o = t.at[std::min(index, t.at.size() - 1)];
       const double d = (p - o).norm();
       if (d < safety_)
-        return Conflict{rover, nearList[n], static_cast<double>(index) * period_, 0.0, d, p, o};
+        return Conflict{rover, nearList[n], static_cast<double>(index) * period_, index, 0.0, d, p, o};
     }
   }
   return std::nullopt;
@@ -76,9 +69,10 @@ std::optional<Conflict> TrafficTable::scanBlock(int rover, std::size_t from, std
 
 std::optional<Conflict> TrafficTable::standing(int rover, const Eigen::Vector2d& p,
                                                std::size_t from, std::size_t to) const {
+  if (from >= to) return std::nullopt;
   // Past every rover's end nothing moves: one index stands for the rest.
   if (to > end_) to = std::max(from, end_) + 1;
-  const Box box{p.x(), p.y(), p.x(), p.y()};
+  const Box box = Box::of(p);
   for (std::size_t i = from; i < to;) {
     const std::size_t count = std::min(to, (i / kBlock + 1) * kBlock) - i;
     if (auto c = scanBlock(rover, i, count, box, [&](std::size_t) { return p; })) return c;
@@ -92,13 +86,8 @@ std::optional<Conflict> TrafficTable::driving(int rover, std::span<const Traject
   for (std::size_t m = 0; m < samples.size();) {
     const std::size_t i = from + m;
     const std::size_t count = std::min(samples.size() - m, (i / kBlock + 1) * kBlock - i);
-    Box box{samples[m].x, samples[m].y, samples[m].x, samples[m].y};
-    for (std::size_t q = m + 1; q < m + count; ++q) {
-      box.x0 = std::min(box.x0, samples[q].x);
-      box.y0 = std::min(box.y0, samples[q].y);
-      box.x1 = std::max(box.x1, samples[q].x);
-      box.y1 = std::max(box.y1, samples[q].y);
-    }
+    Box box = Box::of({samples[m].x, samples[m].y});
+    for (std::size_t q = m + 1; q < m + count; ++q) box.extend({samples[q].x, samples[q].y});
     const std::size_t base = m;
     if (auto c = scanBlock(rover, i, count, box, [&](std::size_t q) {
           return Eigen::Vector2d(samples[base + q].x, samples[base + q].y);
@@ -133,7 +122,7 @@ SeparationReport checkSeparation(const std::vector<Trajectory>& trajectories, do
         }
         if (d < safety) {
           if (!open) open = Conflict{static_cast<int>(b), static_cast<int>(a),
-                                     static_cast<double>(i) * period, 0.0, d, pb, pa};
+                                     static_cast<double>(i) * period, i, 0.0, d, pb, pa};
           open->distance = std::min(open->distance, d);
           open->duration = static_cast<double>(i) * period - open->time;
         } else if (open) {

@@ -1,10 +1,12 @@
 #pragma once
-// Separation between rovers on the team's shared 10 Hz clock (SPEC §3.4): the one routine behind
-// the coordinator's check of each try and the plan's final check. Every trajectory starts at
-// t = 0 with one sample per period, so "the same time" is "the same sample index"; before its
+// Separation between rovers on the team's shared 10 Hz clock (SPEC §3.4): the traffic table
+// behind the coordinator's check of each try, and the plan's final check (checkSeparation).
+// Every trajectory starts at t = 0 with one sample per period, so "the same time" is "the same
+// sample index"; before its
 // first sample a rover waits there, after its last it is parked there (parked rovers are
 // obstacles, ours where the paper is silent).
 #include <Eigen/Core>
+#include <algorithm>
 #include <cstddef>
 #include <optional>
 #include <span>
@@ -19,6 +21,7 @@ struct Conflict {
   int rover = 0;  // the lower-priority rover
   int other = 0;  // the higher-priority rover
   double time = 0;        // s, first sample of the episode
+  std::size_t index = 0;  // its sample index on the shared clock (time = index × period)
   double duration = 0;    // s, until the pair is apart again
   double distance = 0;    // m, the smallest distance in the episode
   Eigen::Vector2d position{0, 0};       // the rover, at `time`
@@ -30,7 +33,8 @@ struct Conflict {
 Eigen::Vector2d positionAtIndex(const Trajectory& t, std::size_t i);
 
 // The committed trajectories of the higher-priority rovers read as a reservation table on the
-// shared clock (ours; libMultiRobotPlanning's prioritised planners keep the same kind of table):
+// shared clock (ours; cooperative A*'s reservation table, Silver 2005, and SIPP's collision
+// intervals, Phillips & Likhachev 2011, hold the same information per cell):
 // the coordinator asks it, for every delay of every try, whether a rover at these positions from
 // this sample index on comes closer than the safety distance to any of them. Positions are packed
 // per rover and boxed per block of kBlock samples, so a query skips every block farther than the
@@ -59,6 +63,13 @@ class TrafficTable {
  private:
   struct Box {
     double x0, y0, x1, y1;
+    static Box of(const Eigen::Vector2d& p) { return {p.x(), p.y(), p.x(), p.y()}; }
+    void extend(const Eigen::Vector2d& p) {
+      x0 = std::min(x0, p.x());
+      y0 = std::min(y0, p.y());
+      x1 = std::max(x1, p.x());
+      y1 = std::max(y1, p.y());
+    }
   };
   struct Track {
     std::vector<Eigen::Vector2d> at;  // position per sample index

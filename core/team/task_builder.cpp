@@ -31,8 +31,10 @@ std::vector<std::vector<std::optional<Eigen::Vector2d>>> slotGoals(
   // map, 5 rovers: 31 of 60 skipped legs in 13 missions were such pairs).
   const double spacing =
       params.coordination.safetyDistance + 2 * params.coordination.controller.acceptanceRadius;
-  // Where a rover may stop: its acceptance circle, and a little more for the last approach.
-  const double stopCircle = params.coordination.controller.acceptanceRadius + 0.05;
+  // Timed (ours): the goal's whole stop circle is ground to turn on; paper: the goal alone.
+  const double stopCircle = params.coordination.mode == CoordinationMode::Timed
+                                ? stopCircleRadius(params.coordination.controller)
+                                : 0.0;
   std::vector<std::vector<std::optional<Eigen::Vector2d>>> out;
   for (const auto& centre : route.centres) {
     std::vector<std::optional<Eigen::Vector2d>> goals;
@@ -172,8 +174,14 @@ std::vector<RoverTask> hybridTasks(const terrain::Dem& dem, const Raster<std::ui
       // leg a skip ("invalid goal": 23 of 53 hybrid skips on the default map).
       for (int c : cov.rovers[j].cells)
         if (auto p = nearestValid(model, origin + cellToLocal(wg, wg.cell(c)), cell / 2, 0.0, {},
-                                  reachable, params.coordination.controller.acceptanceRadius + 0.05))
+                                  reachable))
           leg.via.push_back(*p);
+      // The rover drives through fixed points and stops at the last: timed (ours), that one's
+      // stop circle must be ground to turn on, so trailing points that are not are left out.
+      if (params.coordination.mode == CoordinationMode::Timed)
+        while (leg.via.size() >= 2 &&
+               !turnableAround(model, leg.via.back(), stopCircleRadius(params.coordination.controller)))
+          leg.via.pop_back();
       if (leg.via.size() < 2) continue;  // no moves: nothing to add
       leg.goal = leg.via.back();
       tasks[rovers[j]].legs.push_back(std::move(leg));

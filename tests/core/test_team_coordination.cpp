@@ -77,7 +77,7 @@ std::optional<Conflict> scanConflict(const std::vector<Trajectory>& others, int 
   for (std::size_t j = 0; j < others.size(); ++j) {
     const Eigen::Vector2d o = positionAtIndex(others[j], index);
     if ((p - o).norm() < safety)
-      return Conflict{rover, static_cast<int>(j), static_cast<double>(index) * 0.1, 0.0,
+      return Conflict{rover, static_cast<int>(j), static_cast<double>(index) * 0.1, index, 0.0,
                       (p - o).norm(), p, o};
   }
   return std::nullopt;
@@ -125,6 +125,7 @@ TEST_CASE("team: the traffic table answers exactly what a sample-by-sample scan 
       ++conflicts;
       CHECK(got->other == expected->other);
       CHECK(got->time == expected->time);
+      CHECK(got->index == expected->index);
       CHECK(got->distance == expected->distance);
       CHECK(got->otherPosition == expected->otherPosition);
     } else {
@@ -136,7 +137,11 @@ TEST_CASE("team: the traffic table answers exactly what a sample-by-sample scan 
     for (std::size_t i = from; i < from + 37 && !still; ++i) still = scanConflict(others, 4, i, p, 1.0);
     const auto stood = table.standing(4, p, from, from + 37);
     REQUIRE(stood.has_value() == still.has_value());
-    if (stood) CHECK(stood->time == still->time);
+    if (stood) {
+      CHECK(stood->index == still->index);
+      CHECK(stood->other == still->other);
+      CHECK(stood->distance == still->distance);
+    }
   }
   // Both answers were exercised.
   CHECK(conflicts > 20);

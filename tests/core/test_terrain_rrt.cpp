@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <functional>
+#include <limits>
 #include <numbers>
 #include <thread>
 #include <vector>
@@ -447,6 +448,8 @@ TEST_CASE("rrt: the grid neighbours answer what a linear scan answers, in the sa
   for (int i = 0; i < 600; ++i) pts.push_back({1 + 7 * rng.uniform(), 2 + 4 * rng.uniform()});
   pts.push_back({1, 2});
   pts.push_back({8, 6});
+  pts.push_back({-3, 4});   // outside the box: kept in an edge bucket, still found
+  pts.push_back({9.5, 7});
   auto dist = [](Pt* const& a, Pt* const& b) { return std::hypot(a->x - b->x, a->y - b->y); };
   GridNearestNeighbors<Pt*> grid({1, 2}, {8, 6}, 0.5, [](Pt* const& p) { return Eigen::Vector2d(p->x, p->y); });
   ompl::NearestNeighborsLinear<Pt*> linear;
@@ -460,7 +463,8 @@ TEST_CASE("rrt: the grid neighbours answer what a linear scan answers, in the sa
   std::vector<Pt*> a, b;
   for (int q = 0; q < 200; ++q) {
     Pt query{1 + 7 * rng.uniform(), 2 + 4 * rng.uniform()};
-    for (double r : {0.05, 0.3, 0.5, 1.0, 2.2}) {
+    if (q % 10 == 0) query = {-5 + 15 * rng.uniform(), 0 + 8 * rng.uniform()};  // anywhere
+    for (double r : {0.05, 0.3, 0.5, 1.0, 2.2, std::numeric_limits<double>::infinity()}) {
       grid.nearestR(&query, r, a);
       linear.nearestR(&query, r, b);
       REQUIRE(a == b);
