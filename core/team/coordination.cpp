@@ -4,6 +4,7 @@
 #include <cmath>
 #include <numbers>
 #include <optional>
+#include <string>
 
 #include "core/common/error.hpp"
 #include "core/team/coordinator.hpp"
@@ -36,6 +37,12 @@ void CoordinationParams::validate() const {
     throwInvalidParameter("corridor_radius", "must be a number of metres in [0.5, 100]");
   if (!std::isfinite(delayStep) || delayStep < controller.samplePeriod || delayStep > 3600)
     throwInvalidParameter("delay_step", "must be a number of seconds in [sample period, 3600]");
+  // Timed: every try is checked at each delay, so their number bounds a mission's work (and the
+  // delay list's memory): 61 with the defaults; max_waits 1000 × wait_step 3600 s / 0.1 s would
+  // be 36 million per try.
+  if (mode == CoordinationMode::Timed && maxWaits * waitStep / delayStep > kMaxStartDelays)
+    throwInvalidParameter("delay_step", "max_waits × wait_step / delay_step (start delays per try) must be <= " +
+                                            std::to_string(kMaxStartDelays));
 }
 
 const char* coordinationModeName(CoordinationMode m) {

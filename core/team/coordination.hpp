@@ -81,6 +81,9 @@ enum class CoordinationMode {
 };
 const char* coordinationModeName(CoordinationMode m);
 
+// The most start delays timed mode tries per try (CoordinationParams::validate).
+inline constexpr int kMaxStartDelays = 1200;
+
 struct CoordinationParams {
   CoordinationMode mode = CoordinationMode::Timed;  //                          [coordination]
   // m, Timed: RRT* samples within this distance of the guide path (ours).    [corridor_radius]

@@ -4,11 +4,13 @@
 #include <cmath>
 #include <cstdio>
 #include <numbers>
+#include <memory>
 #include <optional>
 
 #include "core/common/error.hpp"
 #include "core/common/parallel.hpp"
 #include "core/common/random.hpp"
+#include "core/team/plan_ahead.hpp"
 #include "core/team/separation.hpp"
 
 namespace rover::team {
@@ -92,6 +94,7 @@ class Coordinator {
       if (!out_.cancelled) park(k);
       traffic_.add(out_.trajectories[k]);  // rover k is done: the next ones plan round it
     }
+    out_.rrtCalls += ahead_->finish();  // every leg's plan, used or not: as many whatever the threads
     out_.conflicts = checkSeparation(out_.trajectories, p_.safetyDistance).conflicts;
     return std::move(out_);
   }
@@ -105,11 +108,6 @@ class Coordinator {
     bool reached = false;                      // the simulation entered the last waypoint's circle
   };
 
-  struct Ahead {
-    bool planned = false;
-    Eigen::Vector2d start{0, 0};
-    PathResult path;
-  };
 
   bool cancelled() const { return cancel_ && cancel_->cancelled(); }
   const TrajectorySample& last(int k) const { return out_.trajectories[k].samples.back(); }
@@ -137,43 +135,26 @@ class Coordinator {
     out_.paths[k].push_back({s.x, s.y});
   }
 
-  // Plans every planned leg from its nominal start in parallel (the legs are independent
-  // problems), on the threads the caller granted.
+  // Every planned leg from its nominal start, planned ahead on the threads the caller granted
+  // while the rovers are coordinated (plan_ahead.hpp). A via leg (hybrid) whose fixed points a
+  // rover may drive is not planned; one that it may not is planned ahead too.
   void planAhead() {
-    ahead_.resize(tasks_.size());
-    struct Job {
-      int rover, leg;
-      Eigen::Vector2d start;
-      double heading;
-    };
-    std::vector<Job> jobs;
+    std::vector<PlanAhead::Job> jobs;
     for (int k = 0; k < static_cast<int>(tasks_.size()); ++k) {
       const RoverTask& task = tasks_[k];
-      ahead_[k].resize(task.legs.size());
+      firstJob_.push_back(jobs.size());
       Eigen::Vector2d start(task.start.x, task.start.y);
       double heading = task.start.heading;
       for (int i = 0; i < static_cast<int>(task.legs.size()); ++i) {
-        const Eigen::Vector2d goal = legGoal(task.legs[i]);
-        jobs.push_back({k, i, start, heading});
+        const Leg& leg = task.legs[i];
+        const Eigen::Vector2d goal = legGoal(leg);
+        jobs.push_back({start, heading, goal, seedFor(seed_, k, i, 0, 0), leg.via.empty() || !viaValid(start, leg)});
         if ((goal - start).norm() > 1e-9) heading = std::atan2(goal.y() - start.y(), goal.x() - start.x());
         start = goal;
       }
     }
-    // A via leg (hybrid) whose fixed points a rover may drive is not planned; one that it may not
-    // is planned here too, in parallel, instead of one after another while coordinating.
-    std::vector<char> planned(jobs.size(), 0);
-    parallelFor(jobs.size(), p_.threads, [&](std::size_t j) {
-      const Job& job = jobs[j];
-      const Leg& leg = tasks_[job.rover].legs[job.leg];
-      if (!leg.via.empty() && viaValid(job.start, leg)) return;
-      Ahead& a = ahead_[job.rover][job.leg];
-      a.start = job.start;
-      a.path = planner_.plan(job.start, job.heading, legGoal(leg),
-                             seedFor(seed_, job.rover, job.leg, 0, 0), {}, cancel_);
-      a.planned = true;
-      planned[j] = 1;
-    });
-    out_.rrtCalls += static_cast<int>(std::count(planned.begin(), planned.end(), 1));
+    const unsigned threads = p_.threads == 0 ? hardwareThreads() : p_.threads;
+    ahead_ = std::make_unique<PlanAhead>(planner_, std::move(jobs), threads > 1 ? threads - 1 : 0, cancel_);
   }
 
   // Every straight move of a via leg's fixed points, from `from`, is one the rover may drive.
@@ -200,12 +181,15 @@ class Coordinator {
       return r;
     }
     if (attempt == 0 && piece == 0) {
-      const Ahead& a = ahead_[k][i];
-      if (a.planned && a.path.hasPath() &&
-          (a.start - from).norm() <= p_.controller.acceptanceRadius + 0.05) {
-        PathResult r = a.path;
-        r.waypoints.front() = from;
-        return r;
+      const std::size_t j = firstJob_[static_cast<std::size_t>(k)] + static_cast<std::size_t>(i);
+      const PlanAhead::Job& a = ahead_->job(j);
+      if (a.planned && (a.start - from).norm() <= p_.controller.acceptanceRadius + 0.05) {
+        const PathResult* ahead = ahead_->get(j);
+        if (ahead->hasPath()) {
+          PathResult r = *ahead;
+          r.waypoints.front() = from;
+          return r;
+        }
       }
     }
     ++out_.rrtCalls;
@@ -709,7 +693,8 @@ class Coordinator {
   CoordinationObserver* observer_;
   const CancelToken* cancel_;
   const double period_;
-  std::vector<std::vector<Ahead>> ahead_;
+  std::unique_ptr<PlanAhead> ahead_;
+  std::vector<std::size_t> firstJob_;  // per rover, the index of its first leg's job
   CoordinationResult out_;
   TrafficTable traffic_;  // the trajectories of the rovers done so far
   int legsDone_ = 0;

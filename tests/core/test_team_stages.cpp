@@ -5,6 +5,8 @@
 #include <doctest/doctest.h>
 
 #include <algorithm>
+#include <chrono>
+#include <thread>
 #include <cmath>
 #include <string>
 #include <vector>
@@ -14,6 +16,7 @@
 #include "core/team/formation.hpp"
 #include "core/team/leg_planner.hpp"
 #include "core/team/leg_simulator.hpp"
+#include "core/team/plan_ahead.hpp"
 #include "core/team/route_generator.hpp"
 #include "core/team/task_builder.hpp"
 #include "core/terrain/layers.hpp"
@@ -434,4 +437,56 @@ TEST_CASE("stages: a rover that tilts turning where it stands drives straight ou
   const CoordinationResult paper = coordinateWith(tasks, planner, rover, paperPolicy(p), p, 1);
   CHECK(paper.legs[0].status == LegStatus::Short);
   CHECK(paper.legs[0].reason == LegReason::Steep);
+}
+
+namespace {
+// A fake planner whose path depends on the seed alone (and throws for one goal), slow enough
+// that workers and the asking thread overlap.
+class SeededPlanner final : public LegPlanner {
+ public:
+  PathResult plan(const Eigen::Vector2d& from, double, const Eigen::Vector2d& goal, std::uint64_t seed,
+                  const std::vector<KeepOutZone>&, const CancelToken*) const override {
+    if (goal.x() < 0) throw Error(ErrorCode::InvalidInput, "goal", "a goal off the map");
+    std::this_thread::sleep_for(std::chrono::microseconds(200));
+    PathResult r;
+    r.status = PathStatus::Exact;
+    r.waypoints = {from, Eigen::Vector2d(static_cast<double>(seed % 97), 0.0), goal};
+    return r;
+  }
+  bool edgeValid(const Eigen::Vector2d&, const Eigen::Vector2d&) const override { return true; }
+  bool canStop(const Eigen::Vector2d&) const override { return true; }
+};
+}  // namespace
+
+TEST_CASE("stages: legs planned ahead on workers are the plans made alone, asked for in any order") {
+  std::vector<PlanAhead::Job> jobs;
+  for (int j = 0; j < 60; ++j)
+    jobs.push_back({{0, 0}, 0.0, {static_cast<double>(j + 1), 1}, 1000u + static_cast<unsigned>(j), j % 7 != 3});
+  const SeededPlanner planner;
+  std::vector<std::vector<Eigen::Vector2d>> alone;
+  for (const auto& job : jobs) alone.push_back(planner.plan(job.start, job.heading, job.goal, job.seed, {}, nullptr).waypoints);
+  for (unsigned workers : {0u, 1u, 3u}) {
+    CAPTURE(workers);
+    PlanAhead ahead(planner, jobs, workers, nullptr);
+    // Asked for out of order, some twice.
+    for (std::size_t j : {5u, 0u, 59u, 5u, 17u, 3u}) {
+      const PathResult* r = ahead.get(j);
+      if (!jobs[j].planned) {
+        CHECK(r == nullptr);
+        continue;
+      }
+      REQUIRE(r != nullptr);
+      CHECK(r->waypoints == alone[j]);
+    }
+    CHECK(ahead.finish() == 51);  // 60 jobs, 9 not planned: the same count whatever the threads
+    for (std::size_t j = 0; j < jobs.size(); ++j)
+      if (jobs[j].planned) CHECK(ahead.get(j)->waypoints == alone[j]);
+  }
+  // A planning error reaches the one who asks for that plan, and finish().
+  jobs[11].goal = {-1, 0};
+  PlanAhead failing(planner, jobs, 1, nullptr);
+  CHECK_THROWS_AS(failing.get(11), Error);
+  CHECK_THROWS_AS(failing.finish(), Error);
+  // Destroyed before finish(): the workers stop without planning everything.
+  { PlanAhead abandoned(planner, jobs, 2, nullptr); }
 }

@@ -1,0 +1,68 @@
+#pragma once
+// The legs of every rover planned ahead from their nominal starts (each leg from the previous
+// leg's goal) on worker threads, while the coordinator works through the rovers in priority order
+// (ours, issue 10). Each leg is its own planning problem with its own seed, so the plans are those
+// of planning each leg alone, whichever thread runs it and whenever; the coordinator asks for
+// them in the order the workers take them, so planning and coordinating overlap instead of one
+// waiting for the other (a hybrid mission spent ~3.4 s planning on two threads, then ~3 s
+// coordinating on one).
+#include <Eigen/Core>
+#include <atomic>
+#include <condition_variable>
+#include <cstdint>
+#include <exception>
+#include <memory>
+#include <mutex>
+#include <thread>
+#include <vector>
+
+#include "core/common/cancel.hpp"
+#include "core/team/leg_planner.hpp"
+
+namespace rover::team {
+
+class PlanAhead {
+ public:
+  struct Job {
+    Eigen::Vector2d start{0, 0};  // the leg's nominal start
+    double heading = 0;           // the rover's heading there
+    Eigen::Vector2d goal{0, 0};
+    std::uint64_t seed = 0;
+    bool planned = true;          // false: nothing to plan (a via leg the rover may drive as given)
+  };
+  // Starts `workers` threads (0: none; every plan is then made by the thread that asks for it).
+  // `planner` must be safe to call from several threads and outlive this object. Destroyed
+  // without finish() (an error while coordinating), the workers stop after their current plan.
+  PlanAhead(const LegPlanner& planner, std::vector<Job> jobs, unsigned workers,
+            const CancelToken* cancel);
+  ~PlanAhead();
+  PlanAhead(const PlanAhead&) = delete;
+  PlanAhead& operator=(const PlanAhead&) = delete;
+
+  const Job& job(std::size_t j) const { return jobs_[j]; }
+  // The plan of job j (nullptr when it is not planned): made by the calling thread if no worker
+  // has started it, else waited for. Rethrows what its planning threw.
+  const PathResult* get(std::size_t j);
+  // Makes or waits for every remaining plan (so the number of plans made does not depend on the
+  // threads) and joins the workers; returns that number. Rethrows the first planning error.
+  int finish();
+
+ private:
+  enum State : int { Pending, Running, Done };
+  void run(std::size_t j);  // plans job j (the caller has claimed it)
+  void work();
+
+  const LegPlanner& planner_;
+  std::vector<Job> jobs_;
+  const CancelToken* cancel_;
+  std::vector<PathResult> results_;
+  std::vector<std::exception_ptr> errors_;
+  std::unique_ptr<std::atomic<int>[]> state_;
+  std::atomic<std::size_t> next_{0};
+  std::atomic<bool> stop_{false};  // the destructor: take no more jobs
+  std::mutex mutex_;
+  std::condition_variable done_;
+  std::vector<std::thread> workers_;
+};
+
+}  // namespace rover::team
