@@ -114,6 +114,49 @@ Raster<std::uint8_t> TraversalLattice::reachable(const std::vector<Eigen::Vector
   return out;
 }
 
+// A rectangle of cells the guide's search is held to, and the cells in it that keep-out zones
+// block (stamped once per window: a zone test per relaxed move cost more than the search itself
+// with the 20 zones a leg's re-plans can gather).
+struct TraversalLattice::Window {
+  int r0, r1, c0, c1, cols;
+  std::vector<std::uint8_t> blocked;  // per window cell, 1 = in a keep-out zone
+
+  Window(const GridGeometry& g, int row0, int row1, int col0, int col1,
+         const std::vector<KeepOutZone>& keepOut)
+      : r0(row0), r1(row1), c0(col0), c1(col1), cols(col1 - col0 + 1),
+        blocked(static_cast<std::size_t>(row1 - row0 + 1) * static_cast<std::size_t>(cols), 0) {
+    for (const auto& z : keepOut) {
+      if (!z.centre.allFinite() || !std::isfinite(z.radius)) continue;
+      // Cells whose centre lies in the disc (as RRT* and the old per-move test read a zone).
+      const double r2 = z.radius * z.radius;
+      // The window's columns and rows a centre in the disc can have (doubles clamped before the
+      // casts, so any finite zone is safe).
+      auto span = [](double a, double b, int lo, int hi) {
+        return std::pair{static_cast<int>(std::clamp(std::floor(a), double(lo), double(hi + 1))),
+                         static_cast<int>(std::clamp(std::floor(b), double(lo - 1), double(hi)))};
+      };
+      const auto [cFirst, cLast] = span((z.centre.x() - z.radius) / g.cellWidth,
+                                        (z.centre.x() + z.radius) / g.cellWidth, c0, c1);
+      // Rows count from the top: the disc's north edge gives the first row.
+      const auto [bFirst, bLast] = span((z.centre.y() - z.radius) / g.cellHeight,
+                                        (z.centre.y() + z.radius) / g.cellHeight,
+                                        g.rows - 1 - r1, g.rows - 1 - r0);
+      for (int r = g.rows - 1 - bLast; r <= g.rows - 1 - bFirst; ++r)
+        for (int c = cFirst; c <= cLast; ++c)
+          if ((cellToLocal(g, {r, c}) - z.centre).squaredNorm() <= r2) blocked[local(r, c)] = 1;
+    }
+  }
+  bool contains(int r, int c) const { return r >= r0 && r <= r1 && c >= c0 && c <= c1; }
+  bool whole(const GridGeometry& g) const {
+    return r0 == 0 && c0 == 0 && r1 == g.rows - 1 && c1 == g.cols - 1;
+  }
+  std::size_t local(int r, int c) const {
+    return static_cast<std::size_t>(r - r0) * static_cast<std::size_t>(cols) +
+           static_cast<std::size_t>(c - c0);
+  }
+  std::size_t size() const { return blocked.size(); }
+};
+
 std::optional<std::vector<Eigen::Vector2d>> TraversalLattice::guidePath(
     const Eigen::Vector2d& start, const Eigen::Vector2d& goal,
     const std::vector<KeepOutZone>& keepOut) const {
@@ -122,8 +165,13 @@ std::optional<std::vector<Eigen::Vector2d>> TraversalLattice::guidePath(
   auto startCell = localToCell(g, start);
   const std::vector<int> from = seeds(start);
   if (!goalCell || !startCell || from.empty()) return std::nullopt;
+  const int target = g.index(*goalCell);
   // A* in a window round start and goal, widened (×4) until it holds a path or is the whole map:
-  // most legs are a few metres long, and a window keeps the search's arrays small.
+  // most legs are a few metres long, and a window keeps the search's arrays small. A search that
+  // failed without the window's edge stopping it has proved there is no path; so has a flood
+  // back from the goal that did (a goal walled in by keep-out zones: the search from a start on
+  // open ground would otherwise flood the whole map, 50 ms a time on the HiRISE site, 10 s of a
+  // mission's 30 when its re-plans walled the goal in).
   const double cell = std::min(g.cellWidth, g.cellHeight);
   for (double margin = 8.0;; margin *= 4) {
     const int m = static_cast<int>(std::ceil(margin / cell));
@@ -131,38 +179,32 @@ std::optional<std::vector<Eigen::Vector2d>> TraversalLattice::guidePath(
     const int r1 = std::min(g.rows - 1, std::max(startCell->row, goalCell->row) + m);
     const int c0 = std::max(0, std::min(startCell->col, goalCell->col) - m);
     const int c1 = std::min(g.cols - 1, std::max(startCell->col, goalCell->col) + m);
-    // Memory: 8 bytes per window cell; windows stop growing past 4 M cells (32 MB), so a guide
+    // Memory: 9 bytes per window cell; windows stop growing past 4 M cells (36 MB), so a guide
     // on a huge map stays bounded (the leg then falls back to the boxed RRT*).
     const std::int64_t cells = static_cast<std::int64_t>(r1 - r0 + 1) * (c1 - c0 + 1);
     if (cells > kMaxWindowCells) return std::nullopt;
-    auto chain = search(from, start, g.index(*goalCell), goal, keepOut, r0, r1, c0, c1);
+    const Window w(g, r0, r1, c0, c1, keepOut);
+    bool clipped = false;
+    auto chain = search(from, start, target, goal, w, clipped);
     if (chain) return simplify(*chain, start, goal);
-    if (r0 == 0 && c0 == 0 && r1 == g.rows - 1 && c1 == g.cols - 1) return std::nullopt;
+    if (!clipped || w.whole(g)) return std::nullopt;
+    bool floodClipped = false;
+    if (!connected(from, target, w, floodClipped) && !floodClipped) return std::nullopt;
   }
 }
 
-// A* over the cells of rows r0..r1, cols c0..c1, in a deterministic order (f, cell index).
+// A* over the window's cells, in a deterministic order (f, cell index). `clipped`: a valid move
+// left the window (a larger window may hold a path this one does not).
 std::optional<std::vector<Eigen::Vector2d>> TraversalLattice::search(
     const std::vector<int>& from, const Eigen::Vector2d& start, int target,
-    const Eigen::Vector2d& goal, const std::vector<KeepOutZone>& keepOut, int r0, int r1, int c0,
-    int c1) const {
+    const Eigen::Vector2d& goal, const Window& w, bool& clipped) const {
   const GridGeometry& g = geometry();
-  const int wc = c1 - c0 + 1;
-  const auto n = static_cast<std::size_t>((r1 - r0 + 1) * wc);
   auto local = [&](int i) {
     const CellIndex c = g.cell(i);
-    return (c.row - r0) * wc + (c.col - c0);
+    return w.local(c.row, c.col);
   };
-  auto inside = [&](int r, int c) { return r >= r0 && r <= r1 && c >= c0 && c <= c1; };
-  auto blocked = [&](int i) {
-    if (keepOut.empty()) return false;
-    const Eigen::Vector2d p = cellToLocal(g, g.cell(i));
-    for (const auto& z : keepOut)
-      if ((p - z.centre).squaredNorm() <= z.radius * z.radius) return true;
-    return false;
-  };
-  std::vector<float> best(n, std::numeric_limits<float>::infinity());
-  std::vector<int> parent(n, -1);
+  std::vector<float> best(w.size(), std::numeric_limits<float>::infinity());
+  std::vector<int> parent(w.size(), -1);
   using Item = std::pair<double, int>;
   std::priority_queue<Item, std::vector<Item>, std::greater<>> open;
   auto h = [&](int i) { return heuristicPerMetre_ * (cellToLocal(g, g.cell(i)) - goal).norm(); };
@@ -170,7 +212,7 @@ std::optional<std::vector<Eigen::Vector2d>> TraversalLattice::search(
   for (std::size_t k = 0; k < from.size(); ++k) {
     const int i = from[k];
     const CellIndex c = g.cell(i);
-    if (!inside(c.row, c.col)) continue;
+    if (!w.contains(c.row, c.col)) continue;
     const double d = k == 0 ? 0.0 : heuristicPerMetre_ * (cellToLocal(g, c) - start).norm();
     if (d < best[local(i)]) {
       best[local(i)] = static_cast<float>(d);
@@ -191,14 +233,18 @@ std::optional<std::vector<Eigen::Vector2d>> TraversalLattice::search(
       const float m = moveCost(i, d);
       if (m < 0) continue;
       const int rr = c.row + kDirRow[d], cc = c.col + kDirCol[d];
-      if (!inside(rr, cc)) continue;
       const int j = g.index(rr, cc);
       if (!node_[j] && j != target) continue;
-      if (blocked(j)) continue;
+      if (!w.contains(rr, cc)) {
+        clipped = true;
+        continue;
+      }
+      const std::size_t lj = w.local(rr, cc);
+      if (w.blocked[lj]) continue;
       const float cand = best[local(i)] + m;
-      if (cand < best[local(j)]) {
-        best[local(j)] = cand;
-        parent[local(j)] = i;
+      if (cand < best[lj]) {
+        best[lj] = cand;
+        parent[lj] = i;
         open.push({cand + h(j), j});
       }
     }
@@ -208,6 +254,49 @@ std::optional<std::vector<Eigen::Vector2d>> TraversalLattice::search(
   for (int i = target; i >= 0; i = parent[local(i)]) chain.push_back(cellToLocal(g, g.cell(i)));
   std::reverse(chain.begin(), chain.end());
   return chain;
+}
+
+// The search's moves backwards (they are symmetric: one cost per cell pair): from the target over
+// the cells the search may enter (valid nodes outside keep-out zones) until a move reaches a seed,
+// which the search starts from whatever it is.
+bool TraversalLattice::connected(const std::vector<int>& from, int target, const Window& w,
+                                 bool& clipped) const {
+  const GridGeometry& g = geometry();
+  const CellIndex t = g.cell(target);
+  if (!w.contains(t.row, t.col)) {
+    clipped = true;
+    return false;
+  }
+  std::vector<std::uint8_t> seen(w.size(), 0);
+  for (int i : from) {
+    const CellIndex c = g.cell(i);
+    if (i == target) return true;
+    if (w.contains(c.row, c.col)) seen[w.local(c.row, c.col)] = 2;  // 2 = a seed
+  }
+  // The search enters the target from any valid move, keep-out zones aside.
+  if (w.blocked[w.local(t.row, t.col)]) return false;
+  seen[w.local(t.row, t.col)] = 1;
+  std::vector<int> stack{target};
+  while (!stack.empty()) {
+    const int i = stack.back();
+    stack.pop_back();
+    const CellIndex c = g.cell(i);
+    for (int d = 0; d < kDirections; ++d) {
+      if (moveCost(i, d) < 0) continue;
+      const int rr = c.row + kDirRow[d], cc = c.col + kDirCol[d];
+      if (!w.contains(rr, cc)) {
+        clipped = true;
+        continue;
+      }
+      std::uint8_t& s = seen[w.local(rr, cc)];
+      if (s == 2) return true;
+      const int j = g.index(rr, cc);
+      if (s || !node_[j] || w.blocked[w.local(rr, cc)]) continue;
+      s = 1;
+      stack.push_back(j);
+    }
+  }
+  return false;
 }
 
 std::vector<Eigen::Vector2d> TraversalLattice::simplify(const std::vector<Eigen::Vector2d>& chain,

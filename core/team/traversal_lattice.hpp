@@ -80,11 +80,15 @@ class TraversalLattice {
     return q == kInvalid ? -1.0f : static_cast<float>(q * costStep_);
   }
   std::vector<int> seeds(const Eigen::Vector2d& p) const;
+  struct Window;
+  // A* from the seeds `from` to the cell `target` inside the window (see the .cpp).
   std::optional<std::vector<Eigen::Vector2d>> search(const std::vector<int>& from,
                                                      const Eigen::Vector2d& start, int target,
                                                      const Eigen::Vector2d& goal,
-                                                     const std::vector<KeepOutZone>& keepOut,
-                                                     int r0, int r1, int c0, int c1) const;
+                                                     const Window& w, bool& clipped) const;
+  // Whether `target` can be entered from a cell of `from` at all, flooding back from it inside the
+  // window: false is final when the flood was not clipped by the window's edge.
+  bool connected(const std::vector<int>& from, int target, const Window& w, bool& clipped) const;
   std::vector<Eigen::Vector2d> simplify(const std::vector<Eigen::Vector2d>& chain,
                                         const Eigen::Vector2d& start,
                                         const Eigen::Vector2d& goal) const;

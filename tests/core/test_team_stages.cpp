@@ -8,6 +8,7 @@
 #include <chrono>
 #include <thread>
 #include <cmath>
+#include <numbers>
 #include <string>
 #include <vector>
 
@@ -288,6 +289,41 @@ TEST_CASE("stages: the guided leg planner goes round a wall the boxed planner ca
     CHECK(guided.edgeValid(r.waypoints[i], r.waypoints[i + 1]));
   CHECK_FALSE(guided.canStop({4.0, 5}));  // on the wall's step
   CHECK(guided.canStop({2, 5}));
+}
+
+TEST_CASE("stages: the guide searches wider windows for a long detour and proves a walled goal unreachable") {
+  // A 36 m wall between start (2, 3) and goal (2, 9), open only past x = 36: the way round leaves
+  // the first search window (start/goal ± 8 m), so the guide must widen it. The goal at (20, 9)
+  // is then walled in by keep-out zones, and the goal at (20, 2) by terrain: the guide proves
+  // both unreachable (nullopt) without flooding the map.
+  std::vector<std::string> picture(12, std::string(40, '.'));
+  for (int x = 0; x < 36; ++x) picture[12 - 1 - 6][x] = '#';  // the wall along y = 6
+  for (int x = 17; x <= 23; ++x) picture[12 - 1 - 0][x] = picture[12 - 1 - 4][x] = '#';
+  for (int y = 0; y <= 4; ++y) picture[12 - 1 - y][17] = picture[12 - 1 - y][23] = '#';
+  const terrain::Dem dem = demFromPicture(picture);
+  const auto classes = terrain::traversability(dem).classes;
+  const CoordinationParams cp;
+  const TraversalLattice lattice = makeLattice(dem, classes, cp);
+  const auto around = lattice.guidePath({2, 3}, {2, 9});
+  REQUIRE(around);
+  CHECK((around->back() - Eigen::Vector2d(2, 9)).norm() < 1e-9);
+  const double east = std::max_element(around->begin(), around->end(), [](auto& a, auto& b) {
+                        return a.x() < b.x();
+                      })->x();
+  CHECK(east > 36);
+  for (std::size_t i = 0; i + 1 < around->size(); ++i)
+    CHECK(lattice.model().edgeValid((*around)[i], (*around)[i + 1]));
+  // A ring of 16 zones of 1 m round (20, 9), centres 1.5 m from it: covered from 0.6 to 2.4 m.
+  std::vector<KeepOutZone> ring;
+  for (int j = 0; j < 16; ++j) {
+    const double a = j * std::numbers::pi / 8;
+    ring.push_back({Eigen::Vector2d(20 + 1.5 * std::cos(a), 9 + 1.5 * std::sin(a)), 1.0});
+  }
+  CHECK(lattice.guidePath({2, 9}, {20, 9}));
+  CHECK_FALSE(lattice.guidePath({2, 9}, {20, 9}, ring));
+  CHECK_FALSE(lattice.guidePath({2, 9}, {20, 2}));  // inside the walled pen
+  CHECK(lattice.guidePath({19, 2}, {21, 2}));       // within the pen
+  CHECK_FALSE(lattice.guidePath({19, 2}, {2, 9}));  // out of it
 }
 
 TEST_CASE("stages: the rover simulator drives to a waypoint at 10 Hz") {
