@@ -193,8 +193,12 @@ class Coordinator {
       }
     }
     ++out_.rrtCalls;
-    return planner_.plan(from, last(k).heading, goal, seedFor(seed_, k, i, piece, attempt), keepOut,
-                         cancel_);
+    return ahead_->plan(replan(k, i, piece, attempt, goal, keepOut));
+  }
+
+  PlanAhead::Request replan(int k, int i, int piece, int attempt, const Eigen::Vector2d& goal,
+                            const std::vector<KeepOutZone>& keepOut) const {
+    return {here(k), last(k).heading, goal, seedFor(seed_, k, i, piece, attempt), keepOut};
   }
 
   // Rover k standing where it is for `ticks` samples, appended to `samples`.
@@ -333,12 +337,19 @@ class Coordinator {
     std::optional<PathStatus> noPath;
     int zoneTries = 0;       // tries refused for a sample in a keep-out zone
     int unturnableEnds = 0;  // tries refused for ending where the rover cannot turn
+    std::size_t zonesBefore = 0;  // keep-out zones of the previous try
     for (int attempt = 0; attempt <= p_.maxReplans; ++attempt) {
       if (cancelled()) return Outcome::Cancelled;
       if (attempt > 0) {
         ++rec.replans;
         ++out_.replans;
       }
+      // The last try added no zone (zones are only added): the next is likely this problem again
+      // with the next seed, and a worker plans it meanwhile (on the HiRISE site such runs of
+      // tries were half of a slow mission's RRT* time).
+      if (attempt > 0 && keepOut.size() == zonesBefore && attempt < p_.maxReplans)
+        ahead_->speculate(replan(k, i, piece, attempt + 1, goal, keepOut));
+      zonesBefore = keepOut.size();
       PathResult path = tryPath(k, i, piece, attempt, goal, keepOut);
       if (path.status == PathStatus::Cancelled) return Outcome::Cancelled;
       if (!path.hasPath() || path.waypoints.size() < 2) {

@@ -6,6 +6,12 @@
 // them in the order the workers take them, so planning and coordinating overlap instead of one
 // waiting for the other (a hybrid mission spent ~3.4 s planning on two threads, then ~3 s
 // coordinating on one).
+// The workers also take the re-plan the coordinator is likely to ask for next (speculate): a leg
+// whose tries keep failing with the same keep-out zones asks for the same problem with the next
+// seed, and two threads then plan two tries at once. A plan is a function of its request alone,
+// so the coordinator's results do not depend on which thread made it, or whether one was made
+// ahead at all.
+#include <deque>
 #include <Eigen/Core>
 #include <atomic>
 #include <condition_variable>
@@ -39,17 +45,43 @@ class PlanAhead {
   PlanAhead(const PlanAhead&) = delete;
   PlanAhead& operator=(const PlanAhead&) = delete;
 
+  // One planning problem, as LegPlanner::plan takes it.
+  struct Request {
+    Eigen::Vector2d from{0, 0};
+    double heading = 0;
+    Eigen::Vector2d goal{0, 0};
+    std::uint64_t seed = 0;
+    std::vector<KeepOutZone> keepOut;
+    bool operator==(const Request& o) const;
+  };
+
   const Job& job(std::size_t j) const { return jobs_[j]; }
   // The plan of job j (nullptr when it is not planned): made by the calling thread if no worker
   // has started it, else waited for. Rethrows what its planning threw.
   const PathResult* get(std::size_t j);
+  // A re-plan likely asked for next: a worker plans it when one is free (before further leg
+  // jobs). It replaces any earlier speculation no thread has started. Without workers, nothing.
+  void speculate(Request r);
+  // The plan for `r`: the speculated one if it matches (waited for, while this thread plans the
+  // next speculation or leg job), else planned by the calling thread. Rethrows planning errors.
+  PathResult plan(const Request& r);
   // Makes or waits for every remaining plan (so the number of plans made does not depend on the
   // threads) and joins the workers; returns that number. Rethrows the first planning error.
   int finish();
 
  private:
   enum State : int { Pending, Running, Done };
+  struct Speculation {
+    Request request;
+    State state = Pending;  // under mutex_
+    PathResult result;
+    std::exception_ptr error;
+  };
   void run(std::size_t j);  // plans job j (the caller has claimed it)
+  void run(Speculation& s);  // plans it (the caller has claimed it)
+  // Claims the next pending leg job or speculation and plans it; false when there is none.
+  bool helpOnce(bool speculations);
+  std::shared_ptr<Speculation> claimSpeculation();  // under mutex_
   void work();
 
   const LegPlanner& planner_;
@@ -59,9 +91,12 @@ class PlanAhead {
   std::vector<std::exception_ptr> errors_;
   std::unique_ptr<std::atomic<int>[]> state_;
   std::atomic<std::size_t> next_{0};
-  std::atomic<bool> stop_{false};  // the destructor: take no more jobs
+  std::atomic<bool> stop_{false};  // the destructor or finish(): take no more jobs
   std::mutex mutex_;
-  std::condition_variable done_;
+  std::condition_variable done_;  // a job or speculation is done, one is pending, or stop_
+  // Speculations not yet taken: at most one pending, and those the workers run or ran (bounded
+  // by the workers; dropped at the next speculate()).
+  std::deque<std::shared_ptr<Speculation>> speculations_;
   std::vector<std::thread> workers_;
 };
 

@@ -481,12 +481,13 @@ namespace {
 class SeededPlanner final : public LegPlanner {
  public:
   PathResult plan(const Eigen::Vector2d& from, double, const Eigen::Vector2d& goal, std::uint64_t seed,
-                  const std::vector<KeepOutZone>&, const CancelToken*) const override {
+                  const std::vector<KeepOutZone>& keepOut, const CancelToken*) const override {
     if (goal.x() < 0) throw Error(ErrorCode::InvalidInput, "goal", "a goal off the map");
     std::this_thread::sleep_for(std::chrono::microseconds(200));
     PathResult r;
     r.status = PathStatus::Exact;
-    r.waypoints = {from, Eigen::Vector2d(static_cast<double>(seed % 97), 0.0), goal};
+    r.waypoints = {from, Eigen::Vector2d(static_cast<double>(seed % 97), static_cast<double>(keepOut.size())),
+                   goal};
     return r;
   }
   bool edgeValid(const Eigen::Vector2d&, const Eigen::Vector2d&) const override { return true; }
@@ -525,4 +526,42 @@ TEST_CASE("stages: legs planned ahead on workers are the plans made alone, asked
   CHECK_THROWS_AS(failing.finish(), Error);
   // Destroyed before finish(): the workers stop without planning everything.
   { PlanAhead abandoned(planner, jobs, 2, nullptr); }
+}
+
+TEST_CASE("stages: a speculated re-plan is the plan made alone, used only for its own request") {
+  const SeededPlanner planner;
+  auto request = [](std::uint64_t seed, std::size_t zones) {
+    PlanAhead::Request r{{1, 2}, 0.5, {9, 3}, seed, {}};
+    for (std::size_t z = 0; z < zones; ++z) r.keepOut.push_back({{5, static_cast<double>(z)}, 0.5});
+    return r;
+  };
+  auto alone = [&](const PlanAhead::Request& r) {
+    return planner.plan(r.from, r.heading, r.goal, r.seed, r.keepOut, nullptr).waypoints;
+  };
+  for (unsigned workers : {0u, 1u, 3u}) {
+    CAPTURE(workers);
+    std::vector<PlanAhead::Job> jobs;
+    for (int j = 0; j < 8; ++j) jobs.push_back({{0, 0}, 0.0, {static_cast<double>(j + 1), 1}, 7u + j, true});
+    PlanAhead ahead(planner, jobs, workers, nullptr);
+    // A run of tries with the same zones, each speculating the next, as the coordinator does.
+    for (std::uint64_t seed = 100; seed < 110; ++seed) {
+      ahead.speculate(request(seed + 1, 2));
+      CHECK(ahead.plan(request(seed, 2)).waypoints == alone(request(seed, 2)));
+    }
+    // The zones changed after all: the speculation is not used for the new request.
+    ahead.speculate(request(200, 2));
+    CHECK(ahead.plan(request(200, 3)).waypoints == alone(request(200, 3)));
+    CHECK(ahead.plan(request(200, 2)).waypoints == alone(request(200, 2)));
+    // Many unused speculations stay bounded and do not disturb the leg jobs.
+    for (std::uint64_t seed = 300; seed < 340; ++seed) ahead.speculate(request(seed, 1));
+    CHECK(ahead.get(4)->waypoints == planner.plan({0, 0}, 0, {5, 1}, 11u, {}, nullptr).waypoints);
+    CHECK(ahead.finish() == 8);
+  }
+  // A speculated plan's error reaches the one who asks for it.
+  PlanAhead failing(planner, {}, 1, nullptr);
+  PlanAhead::Request off = request(5, 0);
+  off.goal = {-1, 0};
+  failing.speculate(off);
+  CHECK_THROWS_AS(failing.plan(off), Error);
+  CHECK(failing.finish() == 0);
 }
