@@ -755,7 +755,7 @@ TEST_CASE("http: CORS headers only with corsOrigin; OPTIONS preflight gives 204"
                     {"Access-Control-Request-Headers", "authorization"}});
     CHECK(r.status == 204);
     CHECK(r.header("access-control-allow-origin") == "http://localhost:5173");
-    CHECK(r.header("access-control-allow-methods") == "GET, POST, PATCH, DELETE, OPTIONS");
+    CHECK(r.header("access-control-allow-methods") == "GET, POST, PUT, PATCH, DELETE, OPTIONS");
     CHECK(r.header("access-control-allow-headers") == "Authorization, Content-Type");
     CHECK(r.body.empty());
     r = call(s.port(), bhttp::verb::get, "/api/x", "", {{"Authorization", "Bearer t"}});
