@@ -1,4 +1,6 @@
 #pragma once
+#include <charconv>
+#include <cmath>
 #include <string>
 #include <vector>
 
@@ -12,6 +14,17 @@ inline std::string join(const std::vector<std::string>& items, const std::string
     out += s;
   }
   return out;
+}
+
+// Text that reads back as exactly `v`: whole numbers below 1e15 as integers ("100000"), the rest
+// in their shortest form ("0.1", "0.099999999", "1e+300"). Error messages quote a rejected value
+// as the client sent it, not rounded to six digits.
+inline std::string exactText(double v) {
+  char buf[32];
+  const auto r = std::abs(v) < 1e15 && std::trunc(v) == v
+                     ? std::to_chars(buf, buf + sizeof buf, static_cast<long long>(v))
+                     : std::to_chars(buf, buf + sizeof buf, v);
+  return std::string(buf, r.ptr);
 }
 
 }  // namespace rover

@@ -59,6 +59,10 @@ TEST_CASE("values are typed, ranged and named") {
   CHECK(errorOf({{"coverage", std::string("all")}}).field() == "coverage");
   CHECK(errorOf({{"frontier", std::int64_t{1}}}).field() == "frontier");
   CHECK(errorOf({{"mc_visited", 1.0}}).field() == "mc_visited");  // paper 000: >= 1.1
+  // The rejected value as sent, not rounded to six digits ("got 1.1" would contradict the range).
+  CHECK(std::string(errorOf({{"mc_visited", 1.0999999999}}).what()) ==
+        "mc_visited: must be in [1.1, 1000], got 1.0999999999");
+  CHECK(std::string(errorOf({{"coverage", 1e300}}).what()).ends_with("got 1e+300"));
   CHECK(errorOf({{"pattern", std::string("zigzag")}}).field() == "pattern");
 }
 
