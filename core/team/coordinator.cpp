@@ -38,6 +38,7 @@ ConflictPolicy timedPolicy(const CoordinationParams& p) {
   for (int ticks = 0; ticks <= maxTicks; ticks += step) c.startDelays.push_back(ticks);
   c.checkTiltedTries = false;
   c.earlyConflictEndsReplans = false;
+  c.repeatedShortEndsReplans = true;
   c.waitsAfterReplans = 0;
   c.invalidGoalEndsPiece = true;
   // The whole dwell_check (10 s by default): a stop checked for less left a rover no time to get
@@ -338,20 +339,28 @@ class Coordinator {
     int zoneTries = 0;       // tries refused for a sample in a keep-out zone
     int unturnableEnds = 0;  // tries refused for ending where the rover cannot turn
     std::size_t zonesBefore = 0;  // keep-out zones of the previous try
-    for (int attempt = 0; attempt <= p_.maxReplans; ++attempt) {
+    bool shortBefore = false;     // the previous try's plan ended short of a cut-off goal
+    bool lastTry = false;         // policy_.repeatedShortEndsReplans
+    for (int attempt = 0; attempt <= p_.maxReplans && !lastTry; ++attempt) {
       if (cancelled()) return Outcome::Cancelled;
       if (attempt > 0) {
         ++rec.replans;
         ++out_.replans;
       }
-      // The last try added no zone (zones are only added): the next is likely this problem again
-      // with the next seed, and a worker plans it meanwhile (on the HiRISE site such runs of
-      // tries were half of a slow mission's RRT* time).
-      if (attempt > 0 && keepOut.size() == zonesBefore && attempt < p_.maxReplans)
-        ahead_->speculate(replan(k, i, piece, attempt + 1, goal, keepOut));
+      // The last try added no keep-out zone (zones are only ever added).
+      const bool sameZones = attempt > 0 && keepOut.size() == zonesBefore;
       zonesBefore = keepOut.size();
+      // Then the next try is likely this problem again with the next seed, and a worker plans it
+      // meanwhile (on the HiRISE site such runs of tries were half of a slow mission's RRT* time);
+      // not when this try is likely the last (repeatedShortEndsReplans).
+      const bool likelyLast = policy_.repeatedShortEndsReplans && shortBefore && sameZones;
+      if (sameZones && !likelyLast && attempt < p_.maxReplans)
+        ahead_->speculate(replan(k, i, piece, attempt + 1, goal, keepOut));
       PathResult path = tryPath(k, i, piece, attempt, goal, keepOut);
       if (path.status == PathStatus::Cancelled) return Outcome::Cancelled;
+      const bool isShort = path.status == PathStatus::Approximate && path.goalCutOff;
+      lastTry = policy_.repeatedShortEndsReplans && isShort && shortBefore && sameZones;
+      shortBefore = isShort;
       if (!path.hasPath() || path.waypoints.size() < 2) {
         noPath = path.status;
         // Without keep-out zones a new seed cannot turn an invalid start or goal valid.

@@ -31,8 +31,13 @@ PathResult GuidedRrtPlanner::plan(const Eigen::Vector2d& from, double heading,
                                   const Eigen::Vector2d& goal, std::uint64_t seed,
                                   const std::vector<KeepOutZone>& keepOut,
                                   const CancelToken* cancel) const {
-  auto guide = lattice_.guidePath(from, goal, keepOut);
-  if (!guide) return boxed(from, heading, goal, seed, keepOut, cancel);
+  bool proven = false;
+  auto guide = lattice_.guidePath(from, goal, keepOut, &proven);
+  if (!guide) {
+    PathResult r = boxed(from, heading, goal, seed, keepOut, cancel);
+    r.goalCutOff = proven;
+    return r;
+  }
   // The corridor holds the paper's box too: never less room than the boxed planner, and on a
   // straight leg the same tree density (a corridor alone packs the 1250 vertices tighter, which
   // costs rewiring time for nothing).

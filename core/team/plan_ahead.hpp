@@ -11,11 +11,11 @@
 // seed, and two threads then plan two tries at once. A plan is a function of its request alone,
 // so the coordinator's results do not depend on which thread made it, or whether one was made
 // ahead at all.
-#include <deque>
 #include <Eigen/Core>
 #include <atomic>
 #include <condition_variable>
 #include <cstdint>
+#include <deque>
 #include <exception>
 #include <memory>
 #include <mutex>

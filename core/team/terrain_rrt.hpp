@@ -216,6 +216,9 @@ struct PathResult {
   double goalDistance = 0;   // m from the last waypoint to the goal (0 when Exact)
   int vertices = 0;          // vertices of the RRT* tree (OMPL PlannerData) when it stopped
   int iterations = 0;        // RRT* iterations (samples drawn)
+  // The planner proved that no path reaches the goal outside the keep-out zones (the guided
+  // planner: none on its lattice); an Approximate path then only ends short of it.
+  bool goalCutOff = false;
   bool hasPath() const { return status == PathStatus::Exact || status == PathStatus::Approximate; }
 };
 

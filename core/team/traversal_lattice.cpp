@@ -126,20 +126,26 @@ struct TraversalLattice::Window {
       : r0(row0), r1(row1), c0(col0), c1(col1), cols(col1 - col0 + 1),
         blocked(static_cast<std::size_t>(row1 - row0 + 1) * static_cast<std::size_t>(cols), 0) {
     for (const auto& z : keepOut) {
-      if (!z.centre.allFinite() || !std::isfinite(z.radius)) continue;
-      // Cells whose centre lies in the disc (as RRT* and the old per-move test read a zone).
+      // Cells whose centre lies in the disc: squared distance <= radius² (so a negative radius
+      // reads as its absolute value, an infinite one blocks the window, a NaN nothing).
+      if (!z.centre.allFinite() || std::isnan(z.radius)) continue;
+      if (std::isinf(z.radius)) {
+        std::fill(blocked.begin(), blocked.end(), 1);
+        continue;
+      }
       const double r2 = z.radius * z.radius;
+      const double radius = std::abs(z.radius);
       // The window's columns and rows a centre in the disc can have (doubles clamped before the
       // casts, so any finite zone is safe).
       auto span = [](double a, double b, int lo, int hi) {
         return std::pair{static_cast<int>(std::clamp(std::floor(a), double(lo), double(hi + 1))),
                          static_cast<int>(std::clamp(std::floor(b), double(lo - 1), double(hi)))};
       };
-      const auto [cFirst, cLast] = span((z.centre.x() - z.radius) / g.cellWidth,
-                                        (z.centre.x() + z.radius) / g.cellWidth, c0, c1);
+      const auto [cFirst, cLast] = span((z.centre.x() - radius) / g.cellWidth,
+                                        (z.centre.x() + radius) / g.cellWidth, c0, c1);
       // Rows count from the top: the disc's north edge gives the first row.
-      const auto [bFirst, bLast] = span((z.centre.y() - z.radius) / g.cellHeight,
-                                        (z.centre.y() + z.radius) / g.cellHeight,
+      const auto [bFirst, bLast] = span((z.centre.y() - radius) / g.cellHeight,
+                                        (z.centre.y() + radius) / g.cellHeight,
                                         g.rows - 1 - r1, g.rows - 1 - r0);
       for (int r = g.rows - 1 - bLast; r <= g.rows - 1 - bFirst; ++r)
         for (int c = cFirst; c <= cLast; ++c)
@@ -159,11 +165,14 @@ struct TraversalLattice::Window {
 
 std::optional<std::vector<Eigen::Vector2d>> TraversalLattice::guidePath(
     const Eigen::Vector2d& start, const Eigen::Vector2d& goal,
-    const std::vector<KeepOutZone>& keepOut) const {
+    const std::vector<KeepOutZone>& keepOut, bool* proven) const {
   const GridGeometry& g = geometry();
   auto goalCell = localToCell(g, goal);
   auto startCell = localToCell(g, start);
   const std::vector<int> from = seeds(start);
+  bool unused = false;
+  bool& certain = proven ? *proven : unused;
+  certain = true;
   if (!goalCell || !startCell || from.empty()) return std::nullopt;
   const int target = g.index(*goalCell);
   // A* in a window round start and goal, widened (×4) until it holds a path or is the whole map:
@@ -179,17 +188,24 @@ std::optional<std::vector<Eigen::Vector2d>> TraversalLattice::guidePath(
     const int r1 = std::min(g.rows - 1, std::max(startCell->row, goalCell->row) + m);
     const int c0 = std::max(0, std::min(startCell->col, goalCell->col) - m);
     const int c1 = std::min(g.cols - 1, std::max(startCell->col, goalCell->col) + m);
-    // Memory: 9 bytes per window cell; windows stop growing past 4 M cells (36 MB), so a guide
-    // on a huge map stays bounded (the leg then falls back to the boxed RRT*).
+    // Memory: 10 bytes per window cell (costs, parents, keep-out mask, the flood's marks) and
+    // the open list; windows stop growing past 4 M cells (40 MB and the list), so a guide on a
+    // huge map stays bounded (the leg then falls back to the boxed RRT*).
     const std::int64_t cells = static_cast<std::int64_t>(r1 - r0 + 1) * (c1 - c0 + 1);
-    if (cells > kMaxWindowCells) return std::nullopt;
+    if (cells > kMaxWindowCells) {
+      certain = false;
+      return std::nullopt;
+    }
     const Window w(g, r0, r1, c0, c1, keepOut);
     bool clipped = false;
     auto chain = search(from, start, target, goal, w, clipped);
-    if (chain) return simplify(*chain, start, goal);
-    if (!clipped || w.whole(g)) return std::nullopt;
+    if (chain) {
+      certain = false;
+      return simplify(*chain, start, goal);
+    }
+    if (!clipped || w.whole(g)) return std::nullopt;  // certain
     bool floodClipped = false;
-    if (!connected(from, target, w, floodClipped) && !floodClipped) return std::nullopt;
+    if (!connected(from, target, w, floodClipped) && !floodClipped) return std::nullopt;  // certain
   }
 }
 

@@ -40,10 +40,11 @@ class TraversalLattice {
   // The cheapest lattice path from `start` to `goal` (A*, eq. 9 per move, see the .cpp), as
   // waypoints: `start`, cell centres, `goal`, simplified to straight valid edges no longer than
   // the range. Nodes inside a keep-out zone are blocked. nullopt when the goal's cell cannot be
-  // reached (or the start's cell has no valid move).
+  // reached (or the start's cell has no valid move); `proven` (optional) then tells whether that
+  // is certain, rather than the search window growing past its bound on a huge map.
   std::optional<std::vector<Eigen::Vector2d>> guidePath(
       const Eigen::Vector2d& start, const Eigen::Vector2d& goal,
-      const std::vector<KeepOutZone>& keepOut = {}) const;
+      const std::vector<KeepOutZone>& keepOut = {}, bool* proven = nullptr) const;
 
   // Cells whose centre is within `radius` of a point of `path` (sampled every half cell), and
   // every cell `box` touches when given, as a corridor for planPath.

@@ -319,11 +319,20 @@ TEST_CASE("stages: the guide searches wider windows for a long detour and proves
     const double a = j * std::numbers::pi / 8;
     ring.push_back({Eigen::Vector2d(20 + 1.5 * std::cos(a), 9 + 1.5 * std::sin(a)), 1.0});
   }
-  CHECK(lattice.guidePath({2, 9}, {20, 9}));
-  CHECK_FALSE(lattice.guidePath({2, 9}, {20, 9}, ring));
-  CHECK_FALSE(lattice.guidePath({2, 9}, {20, 2}));  // inside the walled pen
-  CHECK(lattice.guidePath({19, 2}, {21, 2}));       // within the pen
-  CHECK_FALSE(lattice.guidePath({19, 2}, {2, 9}));  // out of it
+  bool proven = false;
+  CHECK(lattice.guidePath({2, 9}, {20, 9}, {}, &proven));
+  CHECK_FALSE(proven);
+  CHECK_FALSE(lattice.guidePath({2, 9}, {20, 9}, ring, &proven));
+  CHECK(proven);
+  CHECK_FALSE(lattice.guidePath({2, 9}, {20, 2}, {}, &proven));  // inside the walled pen
+  CHECK(proven);
+  CHECK(lattice.guidePath({19, 2}, {21, 2}));  // within the pen
+  CHECK_FALSE(lattice.guidePath({19, 2}, {2, 9}, {}, &proven));  // out of it
+  CHECK(proven);
+  // Zones as the per-cell test reads them: a negative radius as its size, an infinite one
+  // everywhere.
+  CHECK_FALSE(lattice.guidePath({2, 9}, {20, 9}, {{Eigen::Vector2d(20, 9), -2.0}}));
+  CHECK_FALSE(lattice.guidePath({2, 9}, {3, 9}, {{Eigen::Vector2d(30, 1), INFINITY}}));
 }
 
 TEST_CASE("stages: the rover simulator drives to a waypoint at 10 Hz") {
@@ -337,6 +346,56 @@ TEST_CASE("stages: the rover simulator drives to a waypoint at 10 Hz") {
   for (std::size_t i = 1; i < t.samples.size(); ++i)
     CHECK(t.samples[i].time - t.samples[i - 1].time == doctest::Approx(0.1));
   CHECK_THROWS_AS(sim.drive({{6, 3}}, {-3, 3, 0}, 0.0, 1, nullptr), Error);
+}
+
+namespace {
+// A fake planner whose every path ends 1.2 m north of the goal (Approximate, the goal proved
+// cut off), as RRT* does when the zones wall the goal in; goals north of y = 6 it reaches.
+class ShortPlanner final : public LegPlanner {
+ public:
+  PathResult plan(const Eigen::Vector2d& from, double, const Eigen::Vector2d& goal, std::uint64_t,
+                  const std::vector<KeepOutZone>&, const CancelToken*) const override {
+    PathResult r;
+    const bool reaches = goal.y() > 6;
+    r.status = reaches ? PathStatus::Exact : PathStatus::Approximate;
+    r.goalCutOff = !reaches;
+    r.waypoints = {from, reaches ? goal : Eigen::Vector2d(goal + Eigen::Vector2d(0, 1.2))};
+    return r;
+  }
+  bool edgeValid(const Eigen::Vector2d&, const Eigen::Vector2d&) const override { return true; }
+  bool canStop(const Eigen::Vector2d&) const override { return true; }
+};
+}  // namespace
+
+TEST_CASE("stages: timed re-plans end after two short tries with the same keep-out zones") {
+  // Rover 0 parks at (10, 7), 2 m north of rover 1's goal (10, 5) — not in its way by the parking
+  // rule (1.5 m). Rover 1's plans end short, at (10, 6.2), 0.8 m from rover 0, for good: every
+  // try conflicts, and its keep-out zone (3 m round rover 0) would hold the goal, so it is not
+  // added. A second short try with the same zones ends the re-plans; without the rule all 20 run.
+  std::vector<RoverTask> tasks(2);
+  tasks[0].start = {10, 9, -M_PI / 2};
+  tasks[0].legs.push_back({{10, 9.5}, {}, 0});
+  tasks[0].legs.push_back({{10, 7}, {}, 1});
+  tasks[1].start = {2, 5, 0};
+  tasks[1].legs.push_back({{10, 5}, {}, 2});
+  const ShortPlanner planner;
+  const StraightLineRover rover;
+  CoordinationParams p;
+  p.keepOutRadius = 3;
+  ConflictPolicy policy = timedPolicy(p);
+  REQUIRE(policy.repeatedShortEndsReplans);
+  const CoordinationResult timed = coordinateWith(tasks, planner, rover, policy, p, 1);
+  REQUIRE(timed.legs.size() == 3);
+  CHECK(timed.legs[1].status == LegStatus::Reached);
+  CHECK((endOf(timed.trajectories[0]) - Eigen::Vector2d(10, 7)).norm() < 1e-9);
+  CHECK(timed.legs[2].status == LegStatus::Skipped);
+  CHECK(timed.legs[2].replans == 1);
+  policy.repeatedShortEndsReplans = false;
+  const CoordinationResult all = coordinateWith(tasks, planner, rover, policy, p, 1);
+  REQUIRE(all.legs.size() == 3);
+  CHECK(all.legs[2].status == LegStatus::Skipped);
+  CHECK(all.legs[2].replans == p.maxReplans);
+  CHECK_FALSE(paperPolicy(p).repeatedShortEndsReplans);
 }
 
 TEST_CASE("stages: the coordinator with a fake planner and rover: the policy decides a crossing") {
