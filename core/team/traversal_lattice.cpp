@@ -89,6 +89,33 @@ std::vector<int> TraversalLattice::seeds(const Eigen::Vector2d& p) const {
   return out;
 }
 
+// Depth first over the valid moves from the cells on `stack`: `step(i, row, col)` answers each
+// move from cell i to (row, col), on the grid — Skip it, Push the cell (the caller marks it), or
+// Stop the flood; true when stopped.
+template <class Step>
+bool TraversalLattice::flood(std::vector<int> stack, Step step) const {
+  const GridGeometry& g = geometry();
+  while (!stack.empty()) {
+    const int i = stack.back();
+    stack.pop_back();
+    const CellIndex c = g.cell(i);
+    for (int d = 0; d < kDirections; ++d) {
+      if (moveCost(i, d) < 0) continue;
+      const int row = c.row + kDirRow[d], col = c.col + kDirCol[d];
+      switch (step(i, row, col)) {
+        case FloodStep::Skip:
+          break;
+        case FloodStep::Push:
+          stack.push_back(g.index(row, col));
+          break;
+        case FloodStep::Stop:
+          return true;
+      }
+    }
+  }
+  return false;
+}
+
 Raster<std::uint8_t> TraversalLattice::reachable(const std::vector<Eigen::Vector2d>& starts) const {
   const GridGeometry& g = geometry();
   Raster<std::uint8_t> out(g, 0);
@@ -99,18 +126,12 @@ Raster<std::uint8_t> TraversalLattice::reachable(const std::vector<Eigen::Vector
         out.at(i) = 1;
         stack.push_back(i);
       }
-  while (!stack.empty()) {
-    const int i = stack.back();
-    stack.pop_back();
-    const CellIndex c = g.cell(i);
-    for (int d = 0; d < kDirections; ++d) {
-      if (moveCost(i, d) < 0) continue;
-      const int j = g.index(c.row + kDirRow[d], c.col + kDirCol[d]);
-      if (out.at(j) || !node_[j]) continue;
-      out.at(j) = 1;
-      stack.push_back(j);
-    }
-  }
+  flood(std::move(stack), [&](int, int row, int col) {
+    const int j = g.index(row, col);
+    if (out.at(j) || !node_[j]) return FloodStep::Skip;
+    out.at(j) = 1;
+    return FloodStep::Push;
+  });
   return out;
 }
 
@@ -292,27 +313,17 @@ bool TraversalLattice::connected(const std::vector<int>& from, int target, const
   // The search enters the target from any valid move, keep-out zones aside.
   if (w.blocked[w.local(t.row, t.col)]) return false;
   seen[w.local(t.row, t.col)] = 1;
-  std::vector<int> stack{target};
-  while (!stack.empty()) {
-    const int i = stack.back();
-    stack.pop_back();
-    const CellIndex c = g.cell(i);
-    for (int d = 0; d < kDirections; ++d) {
-      if (moveCost(i, d) < 0) continue;
-      const int rr = c.row + kDirRow[d], cc = c.col + kDirCol[d];
-      if (!w.contains(rr, cc)) {
-        clipped = true;
-        continue;
-      }
-      std::uint8_t& s = seen[w.local(rr, cc)];
-      if (s == 2) return true;
-      const int j = g.index(rr, cc);
-      if (s || !node_[j] || w.blocked[w.local(rr, cc)]) continue;
-      s = 1;
-      stack.push_back(j);
+  return flood({target}, [&](int, int row, int col) {
+    if (!w.contains(row, col)) {
+      clipped = true;
+      return FloodStep::Skip;
     }
-  }
-  return false;
+    std::uint8_t& s = seen[w.local(row, col)];
+    if (s == 2) return FloodStep::Stop;
+    if (s || !node_[g.index(row, col)] || w.blocked[w.local(row, col)]) return FloodStep::Skip;
+    s = 1;
+    return FloodStep::Push;
+  });
 }
 
 std::vector<Eigen::Vector2d> TraversalLattice::simplify(const std::vector<Eigen::Vector2d>& chain,

@@ -81,6 +81,9 @@ class TraversalLattice {
     return q == kInvalid ? -1.0f : static_cast<float>(q * costStep_);
   }
   std::vector<int> seeds(const Eigen::Vector2d& p) const;
+  enum class FloodStep { Skip, Push, Stop };
+  template <class Step>
+  bool flood(std::vector<int> stack, Step step) const;
   struct Window;
   // A* from the seeds `from` to the cell `target` inside the window (see the .cpp).
   std::optional<std::vector<Eigen::Vector2d>> search(const std::vector<int>& from,
