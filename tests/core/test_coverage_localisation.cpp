@@ -209,7 +209,7 @@ TEST_CASE("loop closure reduces the localisation error on a fixed case") {
   CHECK(closed.metrics.trueCoverage > drift.metrics.trueCoverage);
 }
 
-TEST_CASE("same noise seed, same run; another seed, another run") {
+TEST_CASE("same noise seed, same run, another seed, another run") {
   World w = hillyWorld(20, 2, 0.05);
   const auto starts = randomStarts(w, 2, 2);
   CoverageParams p = noisy(5.0, 2.0, true);

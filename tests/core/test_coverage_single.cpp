@@ -196,7 +196,7 @@ TEST_CASE("never enters an obstacle, never leaves the grid, moves are 8-adjacent
   }
 }
 
-TEST_CASE("same seed, same result; another seed, another result") {
+TEST_CASE("same seed, same result, another seed, another result") {
   auto run = [](std::uint64_t seed) {
     WorldParams wp;
     wp.seed = seed;
@@ -210,7 +210,7 @@ TEST_CASE("same seed, same result; another seed, another result") {
   CHECK(a.rovers[0].cells != c.rovers[0].cells);
 }
 
-TEST_CASE("distance counts diagonals as √2 cells; path length ratio is moves / n") {
+TEST_CASE("distance counts diagonals as √2 cells, path length ratio is moves / n") {
   World w = test::worldFrom(
       {
           "...",

@@ -68,7 +68,7 @@ TEST_CASE("paper 000 fig. 4: β = 0 drives through the crater, β = 0.7 goes rou
   CHECK(round.energyJ < through.energyJ);
 }
 
-TEST_CASE("impassable and nodata DEM cells become obstacles; heights are kept") {
+TEST_CASE("impassable and nodata DEM cells become obstacles, heights are kept") {
   terrain::Dem d;
   d.z = Raster<float>(GridGeometry{4, 4, 1.0, 1.0}, 0.0f);
   d.z(0, 0) = 5.0f;  // a 5 m step: its cell and its neighbours are impassable (> 15°)
@@ -112,7 +112,7 @@ TEST_CASE("coverage grid: square cells in the local frame on HiRISE-shaped pixel
   }
 }
 
-TEST_CASE("coverage grid: coarser cells average their pixels; one impassable pixel blocks the cell") {
+TEST_CASE("coverage grid: coarser cells average their pixels, one impassable pixel blocks the cell") {
   terrain::Dem d = rampDem(40, 40, 1.0, 1.0, 0.0);
   d.z(5, 6) = 2.0f;  // 63° to its neighbours
   d.z(30, 30) = NAN;

@@ -119,7 +119,7 @@ TEST_CASE(
                        Error);
 }
 
-TEST_CASE("body: detected from the ellipsoid's axis or names; gravity per body") {
+TEST_CASE("body: detected from the ellipsoid's axis or names, gravity per body") {
   using terrain::Body;
   CHECK(terrain::detectBody("Mars_2000_IAU_IAG", "D_Mars_2000", 3396190) == Body::Mars);
   CHECK(terrain::detectBody("", "", 3393400) == Body::Mars);

@@ -64,7 +64,7 @@ TEST_CASE("motion series: the mean speed of each second and the energy used so f
   CHECK(energy.y.back() > flat);
 }
 
-TEST_CASE("motion series: mass and gravity scale the energy; downhill recovers nothing") {
+TEST_CASE("motion series: mass and gravity scale the energy, downhill recovers nothing") {
   Trajectory t = drawnTrajectory(0.3);
   RoverModel light, heavy;
   heavy.mass = 3.0;

@@ -66,7 +66,7 @@ TEST_CASE("rotation turns the long axis") {
   CHECK(upright(15, 30) > 10 * upright(30, 45));
 }
 
-TEST_CASE("nodata cells get no mass; the rest is renormalised") {
+TEST_CASE("nodata cells get no mass, the rest is renormalised") {
   GridGeometry g{10, 10, 1.0, 1.0};
   std::vector<std::uint8_t> valid(100, 1);
   for (int c = 0; c < 10; ++c) valid[g.index(4, c)] = 0;
@@ -112,7 +112,7 @@ TEST_CASE("random PDMs: G components inside the map, seeded") {
   CHECK(sum(discretise(a, g)) == doctest::Approx(1.0).epsilon(1e-4));
 }
 
-TEST_CASE("raster PDMs are normalised; negative or infinite weights are rejected") {
+TEST_CASE("raster PDMs are normalised, negative or infinite weights are rejected") {
   Raster<float> w(GridGeometry{2, 2, 1, 1}, 1.0f);
   w(0, 0) = 3.0f;
   w(1, 1) = NAN;

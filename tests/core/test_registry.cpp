@@ -7,7 +7,7 @@
 
 using namespace rover;
 
-TEST_CASE("planners are found by name; an unknown name is a NotFound on field planner") {
+TEST_CASE("planners are found by name, an unknown name is a NotFound on field planner") {
   PlannerRegistry reg = makeBuiltinRegistry();
   CHECK(reg.get("coverage").name() == "coverage");
   try {

@@ -422,7 +422,7 @@ struct CancelAfterRoute : EventSink {
 };
 }  // namespace
 
-TEST_CASE("team: events stream the route, each accepted path, poses and metrics; cancel stops") {
+TEST_CASE("team: events stream the route, each accepted path, poses and metrics, cancel stops") {
   PlannerRegistry reg = makeBuiltinRegistry();
   const Planner& planner = reg.get("team-search");
   PlanningProblem problem;

@@ -36,7 +36,7 @@ TEST_CASE("Horn slope and aspect of planes") {
   CHECK(slopeHorn(flat)(1, 1) == 0.0f);
 }
 
-TEST_CASE("hillshade: flat ground gets 1 + 254·sin(altitude); a slope facing the sun is brighter") {
+TEST_CASE("hillshade: flat ground gets 1 + 254·sin(altitude), a slope facing the sun is brighter") {
   Dem flat = demFrom(4, 4, 1.0, [](double, double) { return 0.0; });
   CHECK(hillshade(flat)(1, 1) == doctest::Approx(1 + 254 * std::sin(45.0 / kDeg)));
   // Default sun from the north-west (315°): a slope facing north-west beats one facing south-east.

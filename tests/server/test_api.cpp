@@ -149,7 +149,7 @@ TEST_CASE("api: a PDS3 product uploaded as an .IMG + .LBL multipart pair") {
   CHECK(r.json()["rows"] == 720);
 }
 
-TEST_CASE("api: PDMs from Gaussians, random and raster; errors name the field") {
+TEST_CASE("api: PDMs from Gaussians, random and raster, errors name the field") {
   TempDir tmp;
   ApiServer s(tmp.str("data"), options());
   const std::string map = s.defaultMap();
@@ -231,7 +231,7 @@ TEST_CASE("api: a coverage mission runs, reports metrics and exports its results
   checkError(s.get("/api/missions/" + id + "/result.xml"), 404, "file");
 }
 
-TEST_CASE("api: runs carry their map and PDM names and a label; an ended run can be deleted") {
+TEST_CASE("api: runs carry their map and PDM names and a label, an ended run can be deleted") {
   TempDir tmp;
   ApiServer s(tmp.str("data"), options());
   const std::string bytes = smallDemBytes(tmp);
@@ -392,7 +392,7 @@ TEST_CASE("api: a coverage mission under localisation error streams and exports 
   CHECK(snap["rovers"][0]["trail"].size() > 1);
 }
 
-TEST_CASE("api: two WebSocket clients see the same final state; a late joiner replays it") {
+TEST_CASE("api: two WebSocket clients see the same final state, a late joiner replays it") {
   TempDir tmp;
   ApiServer s(tmp.str("data"), options());
   const std::string map = s.defaultMap();
@@ -432,7 +432,7 @@ TEST_CASE("api: two WebSocket clients see the same final state; a late joiner re
   CHECK(request(s.port(), "GET", "/api/missions/nope/stream").status == 404);
 }
 
-TEST_CASE("api: DELETE cancels a running mission promptly; a full queue answers 429") {
+TEST_CASE("api: DELETE cancels a running mission promptly, a full queue answers 429") {
   TempDir tmp;
   auto o = options();
   o.workers = 1;
@@ -468,7 +468,7 @@ TEST_CASE("api: with a token every /api route but health needs it") {
   CHECK(request(s.port(), "GET", "/api/maps", "", "", {{"Authorization", "Bearer wrong"}}).status == 401);
 }
 
-TEST_CASE("api: maps, PDMs and finished missions survive a restart; running ones are interrupted") {
+TEST_CASE("api: maps, PDMs and finished missions survive a restart, running ones are interrupted") {
   TempDir tmp;
   std::string map, pdm, done;
   {

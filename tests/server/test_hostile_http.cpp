@@ -203,7 +203,7 @@ TEST_CASE("framing: a declared length over the route's limit is 413 before any b
   CHECK(bad->message.find("55555555555552") != std::string::npos);
 }
 
-TEST_CASE("framing: Transfer-Encoding must be exactly one final chunked; one Content-Length") {
+TEST_CASE("framing: Transfer-Encoding must be exactly one final chunked, one Content-Length") {
   auto check = [](const std::string& headerLines, unsigned version = 11) {
     bhttp::request_parser<bhttp::empty_body> p;
     http::configureHeaderParser(p, 16 * 1024);
@@ -231,7 +231,7 @@ TEST_CASE("framing: Transfer-Encoding must be exactly one final chunked; one Con
   CHECK(check("Content-Length: 5\r\nTransfer-Encoding: chunked\r\n") != "ok");
 }
 
-TEST_CASE("rate floor: a steady slow body never reaches its deadline; a stall does") {
+TEST_CASE("rate floor: a steady slow body never reaches its deadline, a stall does") {
   const Clock::time_point t0{};
   http::RateFloor floor(1000, 10s);  // 1000 B/s over 10 s: 10 000 B per window
   floor.start(t0);
@@ -272,7 +272,7 @@ TEST_CASE("work pool: bounded queue refuses, jobs run on the pool, stop drops th
   CHECK_FALSE(pool.trySubmit([&] { ++ran; }));
 }
 
-TEST_CASE("multipart: a failed split leaves no part files; plain fields are capped, naming the field") {
+TEST_CASE("multipart: a failed split leaves no part files, plain fields are capped, naming the field") {
   TempDir tmp;
   const std::string out = tmp.str("parts");
   fs::create_directories(out);
@@ -393,7 +393,7 @@ TEST_CASE("hostile: a 70 KB chunk trailer or chunk extension is answered 431 and
   CHECK(test::request(s.port(), "GET", "/api/health").status == 200);
 }
 
-TEST_CASE("hostile: a slow but steady upload is accepted; a stalled one gets 408") {
+TEST_CASE("hostile: a slow but steady upload is accepted, a stalled one gets 408") {
   EdgeServer s;
   s.config.readTimeout = 2s;         // the header deadline: the body below takes longer
   s.config.minBodyRate = 32 * 1024;  // 32 KiB/s over 1 s windows
@@ -442,7 +442,7 @@ TEST_CASE("hostile: a slow but steady upload is accepted; a stalled one gets 408
   }
 }
 
-TEST_CASE("hostile: slowloris with 500 connections is cut at the header deadline; health answers meanwhile") {
+TEST_CASE("hostile: slowloris with 500 connections is cut at the header deadline, health answers meanwhile") {
   const rlim_t fds = ensureDescriptors(4096);
   MESSAGE("descriptor limit " << fds);
   REQUIRE(fds >= 1200);  // 500 client + 500 server ends, and room for the rest
@@ -531,7 +531,7 @@ TEST_CASE("hostile: with the work pool saturated by slow handlers, /api/health s
   CHECK(entered == 4);
 }
 
-TEST_CASE("hostile: failed multipart uploads leave data/tmp empty; a big form field is refused") {
+TEST_CASE("hostile: failed multipart uploads leave data/tmp empty, a big form field is refused") {
   TempDir tmp;
   ApiServer s(tmp.str("data"), unstarted());
   s.start();
@@ -563,7 +563,7 @@ TEST_CASE("hostile: failed multipart uploads leave data/tmp empty; a big form fi
   CHECK(fs::is_empty(s.dir.tmpDir()));
 }
 
-TEST_CASE("hostile: a WebSocket subscriber that never reads is dropped; oversized client messages close") {
+TEST_CASE("hostile: a WebSocket subscriber that never reads is dropped, oversized client messages close") {
   // A source with a 2 MiB frame always ready: a client that does not read leaves a write stuck.
   struct Firehose : http::WsSource {
     std::optional<http::WsFrame> next() override { return http::WsFrame{true, std::string(2 << 20, 'f'), false}; }

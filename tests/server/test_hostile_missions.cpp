@@ -63,7 +63,7 @@ TEST_CASE("hostile missions: one mission over the memory budget is refused with 
   CHECK(s.manager.memoryReserved() == 0);  // released when it finished
 }
 
-TEST_CASE("hostile missions: running + queued missions over the budget get 429 with Retry-After; cancel frees it") {
+TEST_CASE("hostile missions: running + queued missions over the budget get 429 with Retry-After, cancel frees it") {
   TempDir d;
   const auto one = missions::coverageMissionMemory(kDefaultMapCells, 0.25, 1, false, 1.0);
   ApiServer s(d.str("data"), budgetOf(one.bytes * 2 + one.bytes / 2));  // room for two

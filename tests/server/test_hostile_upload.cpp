@@ -154,7 +154,7 @@ TEST_CASE("hostile upload: a /vsicurl/ source is refused and no connection is ma
   CHECK_FALSE(net.contacted(200));
 }
 
-TEST_CASE("hostile upload: zips holding a GeoTIFF or a PDS3 pair import; PDM rasters are confined too") {
+TEST_CASE("hostile upload: zips holding a GeoTIFF or a PDS3 pair import, PDM rasters are confined too") {
   TempDir tmp;
   const std::string data = tmp.str("data");
   Server s(data);
@@ -252,7 +252,7 @@ TEST_CASE("hostile upload: 40 distinct ?max= values make at most the ladder's fi
   CHECK(fs::exists(fs::path(s.dir.mapDir(id)) / "layers" / "slope-512.png"));
 }
 
-TEST_CASE("layer cache: least recently used files go past the cap; each file is made once") {
+TEST_CASE("layer cache: least recently used files go past the cap, each file is made once") {
   TempDir tmp;
   const fs::path maps = tmp.path / "maps";
   fs::create_directories(maps / "m1" / "layers");

@@ -370,7 +370,7 @@ TEST_CASE("http: routes with captures, query decoding, 404 and 405 as JSON error
   CHECK(r.js()["error"]["code"] == "not_found");
 }
 
-TEST_CASE("http: keep-alive serves several requests on one connection; bodies reach handlers") {
+TEST_CASE("http: keep-alive serves several requests on one connection, bodies reach handlers") {
   TestServer s;
   s.router.add("POST", "/api/echo", [](const Request& req) {
     return Response::json(200, {{"body", req.body},
@@ -434,7 +434,7 @@ TEST_CASE("http: a throwing handler gives 500 and the server keeps serving") {
   CHECK(call(s.port(), bhttp::verb::get, "/api/ok").status == 200);
 }
 
-TEST_CASE("http: a handler's file response is sent from disk; a vanished file is a 404") {
+TEST_CASE("http: a handler's file response is sent from disk, a vanished file is a 404") {
   TempDir dir;
   writeFile(dir.path / "result.bin", std::string(100000, 'z'));
   TestServer s;
@@ -733,7 +733,7 @@ TEST_CASE("http: bearer token on /api, open health route, constant answers") {
   CHECK(call(s.port(), bhttp::verb::get, "/api/unknown").status == 401);  // no probing
 }
 
-TEST_CASE("http: CORS headers only with corsOrigin; OPTIONS preflight gives 204") {
+TEST_CASE("http: CORS headers only with corsOrigin, OPTIONS preflight gives 204") {
   SUBCASE("off by default") {
     TestServer s;
     s.router.add("GET", "/api/x", [](const Request&) { return Response::json(200, {}); });
@@ -772,7 +772,7 @@ TEST_CASE("http: CORS headers only with corsOrigin; OPTIONS preflight gives 204"
 
 // ------------------------------------------------------------------------------- lifecycle
 
-TEST_CASE("http: start throws when the port is in use; stop is idempotent") {
+TEST_CASE("http: start throws when the port is in use, stop is idempotent") {
   TestServer a;
   a.start();
   Router router;
@@ -945,7 +945,7 @@ TEST_CASE("websocket: a handler's ApiError is answered as HTTP, before any upgra
   CHECK(call(s.port(), bhttp::verb::get, "/api/missions/zz/events").status == 426);
 }
 
-TEST_CASE("websocket: auth applies to upgrades; ?token= is accepted there") {
+TEST_CASE("websocket: auth applies to upgrades, ?token= is accepted there") {
   TestServer s;
   s.config.token = "tok";
   s.router.addWebSocket("/api/ws", [](const Request&, std::shared_ptr<WsConnection>) {

@@ -524,7 +524,7 @@ TEST_CASE("database: nowIso is UTC with milliseconds") {
 
 // ---- DataDir ----------------------------------------------------------------------------------
 
-TEST_CASE("data dir: creates its layout; ids are 16 lowercase hex") {
+TEST_CASE("data dir: creates its layout, ids are 16 lowercase hex") {
   TempDir t;
   const std::string root = (t.path / "data" / "nested").string();
   DataDir dir(root);
@@ -653,7 +653,7 @@ TEST_CASE("data dir: staging then commitDir, refusing an existing target") {
   CHECK_THROWS_AS(dir.commitDir(dir.tmpDir() + "/missing", dir.pdmDir("x")), std::runtime_error);
 }
 
-TEST_CASE("data dir: cleanTmp empties tmp but keeps it; removeTree") {
+TEST_CASE("data dir: cleanTmp empties tmp but keeps it, removeTree") {
   TempDir t;
   DataDir dir((t.path / "data").string());
   const std::string s1 = dir.stagingDir();

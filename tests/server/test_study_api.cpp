@@ -138,7 +138,7 @@ TEST_CASE("studies API: launch, progress frames, summary, runs.csv, study.sqlite
   checkError(s.api.get("/api/studies/nope/runs.csv"), 404, "id");
 }
 
-TEST_CASE("studies API: bad specs answer 400 naming the field; bounds") {
+TEST_CASE("studies API: bad specs answer 400 naming the field, bounds") {
   TempDir tmp;
   StudyServer s(tmp.str("data"));
   checkError(s.api.postJson("/api/studies", {{"planner", "coverage"}, {"worlds", {{{"grid", {{"rows", 1}}}}}}}), 400,
