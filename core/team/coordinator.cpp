@@ -45,6 +45,7 @@ ConflictPolicy timedPolicy(const CoordinationParams& p) {
   // out of the way when its next leg found no clear try (HiRISE site: a rover stopped 4.4 s before
   // a higher-priority one ran over its spot, 12 collisions in one mission).
   c.dwell = p.dwellCheck;
+  c.lastLegParks = false;
   c.recover = true;
   return c;
 }
@@ -396,7 +397,7 @@ class Coordinator {
         continue;
       }
       // The leg's last piece decides whether the rover parks here for good.
-      const bool parks = lastLeg && reachesGoal(c0, goal);
+      const bool parks = policy_.lastLegParks && lastLeg && reachesGoal(c0, goal);
       std::optional<Conflict> first;
       for (int ticks : policy_.startDelays) {
         conflict = firstConflict(k, c0.samples, ticks, parks ? kForGood : dwellTicks());
@@ -442,7 +443,8 @@ class Coordinator {
       if (cancelled()) return Outcome::Cancelled;
       const int ticks = static_cast<int>(std::lround(w * p_.waitStep / period_));
       Candidate c = simulateTry(k, firstTry->path, ticks, slipSeed(0x3a17ull, k, i, piece, w));
-      conflict = firstConflict(k, c.samples, 0, lastLeg && reachesGoal(c, goal) ? kForGood : dwellTicks());
+      const bool parks = policy_.lastLegParks && lastLeg && reachesGoal(c, goal);
+      conflict = firstConflict(k, c.samples, 0, parks ? kForGood : dwellTicks());
       if (!conflict && !firstExceedance(c.samples) && !firstForbidden(c.samples)) {
         rec.waits = w;
         out_.waits += w;

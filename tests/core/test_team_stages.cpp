@@ -493,6 +493,36 @@ TEST_CASE("stages: a rover whose spot will be run over steps aside, then goes on
   CHECK(paper.conflicts.empty());
 }
 
+TEST_CASE("stages: a last leg whose goal is passed long after the dwell is reached, then parks aside (timed)") {
+  // Rover 1 drives north from (10, 0) to (10, 5), its only leg: there after 10 s. Rover 0 drives
+  // east along y = 5 from x = -60 and passes (10, 5) after 140 s. Paper: the last leg is checked
+  // standing at its goal for good, so every try and re-plan meets rover 0 and the leg is skipped.
+  // Timed: the leg is checked for the dwell like any other and reached at once; the rover then
+  // parks out of rover 0's way before it comes.
+  std::vector<RoverTask> tasks(2);
+  tasks[0].start = {-60, 5, 0};
+  tasks[0].legs = {{{20, 5}, {}, 0}};
+  tasks[1].start = {10, 0, M_PI / 2};
+  tasks[1].legs = {{{10, 5}, {}, 0}};
+  const StraightLinePlanner planner;
+  const StraightLineRover rover;
+  CoordinationParams p;
+  const CoordinationResult timed = coordinateWith(tasks, planner, rover, timedPolicy(p), p, 1);
+  REQUIRE(timed.legs.size() == 3);  // rover 0's leg, rover 1's leg, rover 1 parking aside
+  CHECK(timed.legs[1].status == LegStatus::Reached);
+  CHECK(timed.legs[1].replans == 0);
+  CHECK(timed.legs[1].endTime == doctest::Approx(10.0));
+  CHECK(timed.legs[2].note == "parked out of the way");
+  CHECK(timed.legs[2].startTime < 140.0 - p.safetyDistance / 0.5);
+  CHECK(timed.rrtCalls == 2);
+  CHECK(timed.conflicts.empty());
+  CHECK(checkSeparation(timed.trajectories, p.safetyDistance).minimumDistance >= p.safetyDistance);
+  const CoordinationResult paper = coordinateWith(tasks, planner, rover, paperPolicy(p), p, 1);
+  CHECK(paper.legs[1].status == LegStatus::Skipped);
+  CHECK(paper.legs[1].replans == p.maxReplans);
+  CHECK(paper.conflicts.empty());
+}
+
 namespace {
 // The fake rover on a strip x < 1 steeper than the limit across: turning in place there by more
 // than 45° tilts it to 20°; driving is fine everywhere.
