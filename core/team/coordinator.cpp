@@ -6,6 +6,7 @@
 #include <numbers>
 #include <memory>
 #include <optional>
+#include <utility>
 
 #include "core/common/error.hpp"
 #include "core/common/parallel.hpp"
@@ -39,6 +40,7 @@ ConflictPolicy timedPolicy(const CoordinationParams& p) {
   c.checkTiltedTries = false;
   c.earlyConflictEndsReplans = false;
   c.repeatedShortEndsReplans = true;
+  c.unzonedConflictsEndReplans = 3;
   c.waitsAfterReplans = 0;
   c.invalidGoalEndsPiece = true;
   // The whole dwell_check (10 s by default): a stop checked for less left a rover no time to get
@@ -341,7 +343,8 @@ class Coordinator {
     int unturnableEnds = 0;  // tries refused for ending where the rover cannot turn
     std::size_t zonesBefore = 0;  // keep-out zones of the previous try
     bool shortBefore = false;     // the previous try's plan ended short of a cut-off goal
-    bool lastTry = false;         // policy_.repeatedShortEndsReplans
+    int unzonedRun = 0;           // tries in a row whose conflict gave no keep-out zone
+    bool lastTry = false;         // policy_.repeatedShortEndsReplans, unzonedConflictsEndReplans
     for (int attempt = 0; attempt <= p_.maxReplans && !lastTry; ++attempt) {
       if (cancelled()) return Outcome::Cancelled;
       if (attempt > 0) {
@@ -354,7 +357,11 @@ class Coordinator {
       // Then the next try is likely this problem again with the next seed, and a worker plans it
       // meanwhile (on the HiRISE site such runs of tries were half of a slow mission's RRT* time);
       // not when this try is likely the last (repeatedShortEndsReplans).
-      const bool likelyLast = policy_.repeatedShortEndsReplans && shortBefore && sameZones;
+      // A try that ends other than in an unzoned conflict breaks the run.
+      const int unzonedBefore = std::exchange(unzonedRun, 0);
+      const int unzonedLimit = policy_.unzonedConflictsEndReplans;
+      const bool likelyLast = (policy_.repeatedShortEndsReplans && shortBefore && sameZones) ||
+                              (unzonedLimit > 0 && unzonedBefore + 1 >= unzonedLimit);
       if (sameZones && !likelyLast && attempt < p_.maxReplans)
         ahead_->speculate(replan(k, i, piece, attempt + 1, goal, keepOut));
       PathResult path = tryPath(k, i, piece, attempt, goal, keepOut);
@@ -422,9 +429,15 @@ class Coordinator {
       // A conflict in the first second: no other path can dodge it, only waiting can.
       if (policy_.earlyConflictEndsReplans && conflict && conflict->time - last(k).time < 1.0) break;
       // Keep out of where the other rover was, or of where the simulated rover tilted.
+      const std::size_t zones = keepOut.size();
       keepOutOf(k, goal, conflict ? KeepOutZone{conflict->otherPosition, p_.keepOutRadius}
                                   : KeepOutZone{*steep, 0.5},
                 keepOut);
+      // Only a conflict while the rover stands at the end of the try (started at once) counts:
+      // no path dodges that; one on the way, near the start, another path may.
+      const std::size_t arrival = out_.trajectories[k].samples.size() + c0.samples.size();
+      if (conflict && keepOut.size() == zones && conflict->index >= arrival) unzonedRun = unzonedBefore + 1;
+      if (unzonedLimit > 0 && unzonedRun >= unzonedLimit) lastTry = true;
     }
     if (!firstTry) {
       if (!noPath && zoneTries > 0) {

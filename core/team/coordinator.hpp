@@ -31,6 +31,12 @@ struct ConflictPolicy {
   // tree stops (HiRISE site: 0 of 42 such re-plans reached the goal, at 120 ms each, a fifth of
   // a slow mission's RRT* time).
   bool repeatedShortEndsReplans = false;
+  // This many tries in a row whose conflict gave no keep-out zone (it lies within the zone radius
+  // of the start or the goal: a zone there would wall either in) end the re-plans; 0 = never. Such
+  // a try is the same problem again with a new seed, and a path cannot dodge a rover that stands
+  // by the goal while this one dwells there (HiRISE replicate 13: 9 legs spent 21 RRT* calls each
+  // on such runs, then went on after stepping aside or were skipped).
+  int unzonedConflictsEndReplans = 0;
   // After the re-plans, the first try within the attitude check is tried again this many times,
   // each time one wait step later and simulated anew; then the leg is skipped.
   int waitsAfterReplans = 0;

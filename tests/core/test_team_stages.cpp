@@ -523,6 +523,35 @@ TEST_CASE("stages: a last leg whose goal is passed long after the dwell is reach
   CHECK(paper.conflicts.empty());
 }
 
+TEST_CASE("stages: timed re-plans end after three tries that meet a rover standing by the goal") {
+  // Rover 1 drives north from (10, 0) to (10, 5): there after 10 s, then dwells. Rover 0 comes
+  // west along y = 5.8 and paces between x = 9.5 and 10.5 from 18.8 s for 80 s, within 1 m of
+  // rover 1's goal. Every try meets it while rover 1 stands at the goal (or drives its last metre,
+  // started later), and no keep-out zone can be placed there: it would wall the goal in. Timed:
+  // the re-plans end after three such tries and the leg is skipped; paper: all 20 re-plans.
+  std::vector<RoverTask> tasks(2);
+  tasks[0].start = {20, 5.8, M_PI};
+  tasks[0].legs.push_back({{10.5, 5.8}, {}, 0});
+  for (int j = 0; j < 40; ++j) tasks[0].legs.push_back({{j % 2 == 0 ? 9.5 : 10.5, 5.8}, {}, j + 1});
+  tasks[1].start = {10, 0, M_PI / 2};
+  tasks[1].legs = {{{10, 5}, {}, 0}};
+  const StraightLinePlanner planner;
+  const StraightLineRover rover;
+  CoordinationParams p;
+  const auto leg1 = [](const CoordinationResult& r) {
+    return *std::find_if(r.legs.begin(), r.legs.end(), [](const LegRecord& l) { return l.rover == 1; });
+  };
+  const CoordinationResult timed = coordinateWith(tasks, planner, rover, timedPolicy(p), p, 1);
+  CHECK(leg1(timed).status == LegStatus::Skipped);
+  CHECK(leg1(timed).reason == LegReason::Conflict);
+  CHECK(leg1(timed).replans == timedPolicy(p).unzonedConflictsEndReplans - 1);
+  CHECK(timed.conflicts.empty());
+  ConflictPolicy untiring = timedPolicy(p);
+  untiring.unzonedConflictsEndReplans = 0;
+  CHECK(leg1(coordinateWith(tasks, planner, rover, untiring, p, 1)).replans == p.maxReplans);
+  CHECK(leg1(coordinateWith(tasks, planner, rover, paperPolicy(p), p, 1)).replans == p.maxReplans);
+}
+
 namespace {
 // The fake rover on a strip x < 1 steeper than the limit across: turning in place there by more
 // than 45° tilts it to 20°; driving is fine everywhere.
