@@ -4,9 +4,13 @@
 // RRTstar is GNAT, built for any metric space; in R² with a bounded box a grid answers the same
 // queries with far fewer distance calls (GNAT and its distance calls were about 15 % of a team
 // mission's profile, issue 10). Answers are GNAT's: every element within the radius (inclusive),
-// sorted by distance from the query; distances are the distance function RRTstar sets, so they
-// are the very numbers GNAT compares. Exact ties (duplicate states) come in storage order here and
-// in GNAT's own storage order there; RRT* plans were identical on every mission compared.
+// sorted by distance from the query. Each bucket keeps its elements' positions, and a distance
+// is the Euclidean distance of two positions computed as OMPL's RealVectorStateSpace::distance
+// computes it (the same number, bit for bit, as the distance function RRTstar sets for R²)
+// without the calls through that function, the state space and the states (they were 10 % of a
+// mission's profile). Exact ties (duplicate states) come in storage order here and in GNAT's own
+// storage order there; RRT* plans were identical on every mission compared. Queries reuse
+// scratch buffers: one structure serves one planner, never concurrent queries.
 #include <ompl/datastructures/NearestNeighbors.h>
 #include <ompl/util/Exception.h>
 
@@ -19,6 +23,16 @@
 #include <vector>
 
 namespace rover::team {
+
+// OMPL's RealVectorStateSpace::distance in two dimensions, operation for operation:
+// sqrt((0 + d0²) + d1²) with d = a − b (a test checks the two agree bit for bit).
+inline double planeDistance(const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+  const double d0 = a.x() - b.x(), d1 = a.y() - b.y();
+  double sum = 0.0;
+  sum += d0 * d0;
+  sum += d1 * d1;
+  return std::sqrt(sum);
+}
 
 template <class T>
 class GridNearestNeighbors : public ompl::NearestNeighbors<T> {
@@ -40,34 +54,36 @@ class GridNearestNeighbors : public ompl::NearestNeighbors<T> {
     size_ = 0;
   }
   void add(const T& data) override {
-    buckets_[bucketOf(position_(data))].push_back(data);
+    const Eigen::Vector2d p = position_(data);
+    buckets_[bucketOf(p)].push_back({p, data});
     ++size_;
   }
   bool remove(const T& data) override {
     auto& b = buckets_[bucketOf(position_(data))];
-    auto it = std::find(b.begin(), b.end(), data);
+    auto it = std::find_if(b.begin(), b.end(), [&](const Entry& e) { return e.data == data; });
     if (it == b.end()) return false;
     b.erase(it);
     --size_;
     return true;
   }
   T nearest(const T& data) const override {
-    std::vector<T> one;
-    nearestK(data, 1, one);
-    if (one.empty()) throw ompl::Exception("No elements found in nearest neighbors data structure");
-    return one.front();
+    nearestK(data, 1, one_);
+    if (one_.empty()) throw ompl::Exception("No elements found in nearest neighbors data structure");
+    return one_.front();
   }
   // Rings of buckets around the query's, until the k-th best is closer than any unvisited bucket.
   void nearestK(const T& data, std::size_t k, std::vector<T>& nbh) const override {
     nbh.clear();
     if (k == 0 || size_ == 0) return;
-    const auto [qc, qr] = cellOf(position_(data));
-    std::vector<std::pair<double, const T*>> best;
+    const Eigen::Vector2d q = position_(data);
+    const auto [qc, qr] = cellOf(q);
+    auto& best = found_;
+    best.clear();
     const int rings = std::max(cols_, rows_);
     auto visit = [&](int r, int c) {
       if (r < 0 || c < 0 || r >= rows_ || c >= cols_) return;
-      for (const T& e : buckets_[static_cast<std::size_t>(r) * cols_ + c])
-        best.emplace_back(this->distFun_(data, e), &e);
+      for (const Entry& e : buckets_[static_cast<std::size_t>(r) * cols_ + c])
+        best.emplace_back(distance(q, e.position), &e.data);
     };
     for (int ring = 0; ring <= rings; ++ring) {
       if (ring == 0) {
@@ -98,12 +114,13 @@ class GridNearestNeighbors : public ompl::NearestNeighbors<T> {
     const Eigen::Vector2d p = position_(data);
     const auto [c0, r0] = cellOf(p - Eigen::Vector2d::Constant(radius));
     const auto [c1, r1] = cellOf(p + Eigen::Vector2d::Constant(radius));
-    std::vector<std::pair<double, const T*>> found;
+    auto& found = found_;
+    found.clear();
     for (int r = r0; r <= r1; ++r)
       for (int c = c0; c <= c1; ++c)
-        for (const T& e : buckets_[static_cast<std::size_t>(r) * cols_ + c]) {
-          const double d = this->distFun_(data, e);
-          if (d <= radius) found.emplace_back(d, &e);
+        for (const Entry& e : buckets_[static_cast<std::size_t>(r) * cols_ + c]) {
+          const double d = distance(p, e.position);
+          if (d <= radius) found.emplace_back(d, &e.data);
         }
     std::sort(found.begin(), found.end());
     nbh.reserve(found.size());
@@ -113,10 +130,16 @@ class GridNearestNeighbors : public ompl::NearestNeighbors<T> {
   void list(std::vector<T>& data) const override {
     data.clear();
     data.reserve(size_);
-    for (const auto& b : buckets_) data.insert(data.end(), b.begin(), b.end());
+    for (const auto& b : buckets_)
+      for (const Entry& e : b) data.push_back(e.data);
   }
 
  private:
+  struct Entry {
+    Eigen::Vector2d position;
+    T data;
+  };
+  static double distance(const Eigen::Vector2d& q, const Eigen::Vector2d& e) { return planeDistance(q, e); }
   std::pair<int, int> cellOf(const Eigen::Vector2d& p) const {
     const double fc = std::floor((p.x() - min_.x()) / cell_), fr = std::floor((p.y() - min_.y()) / cell_);
     // Clamped into the grid (±∞ to its edges); NaN to the first bucket.
@@ -132,8 +155,10 @@ class GridNearestNeighbors : public ompl::NearestNeighbors<T> {
   double cell_;
   Position position_;
   int cols_ = 1, rows_ = 1;
-  std::vector<std::vector<T>> buckets_;
+  std::vector<std::vector<Entry>> buckets_;
   std::size_t size_ = 0;
+  mutable std::vector<std::pair<double, const T*>> found_;  // scratch of the queries
+  mutable std::vector<T> one_;                               // nearest()'s answer
 };
 
 }  // namespace rover::team

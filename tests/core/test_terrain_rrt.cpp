@@ -7,6 +7,8 @@
 #include <thread>
 #include <vector>
 
+#include <ompl/base/ScopedState.h>
+#include <ompl/base/spaces/RealVectorStateSpace.h>
 #include <ompl/datastructures/NearestNeighborsLinear.h>
 
 #include "core/common/error.hpp"
@@ -450,7 +452,10 @@ TEST_CASE("rrt: the grid neighbours answer what a linear scan answers, in the sa
   pts.push_back({8, 6});
   pts.push_back({-3, 4});   // outside the box: kept in an edge bucket, still found
   pts.push_back({9.5, 7});
-  auto dist = [](Pt* const& a, Pt* const& b) { return std::hypot(a->x - b->x, a->y - b->y); };
+  // The grid computes distances itself, as OMPL's RealVectorStateSpace does (planeDistance).
+  auto dist = [](Pt* const& a, Pt* const& b) {
+    return planeDistance(Eigen::Vector2d(a->x, a->y), Eigen::Vector2d(b->x, b->y));
+  };
   GridNearestNeighbors<Pt*> grid({1, 2}, {8, 6}, 0.5, [](Pt* const& p) { return Eigen::Vector2d(p->x, p->y); });
   ompl::NearestNeighborsLinear<Pt*> linear;
   grid.setDistanceFunction(dist);
@@ -475,6 +480,17 @@ TEST_CASE("rrt: the grid neighbours answer what a linear scan answers, in the sa
       REQUIRE(a == b);
     }
     CHECK(grid.nearest(&query) == linear.nearest(&query));
+  }
+  // planeDistance is the number RRTstar's own distance function gives in R², bit for bit.
+  auto space = std::make_shared<ompl::base::RealVectorStateSpace>(2);
+  ompl::base::ScopedState<ompl::base::RealVectorStateSpace> s1(space), s2(space);
+  for (int i = 0; i < 10000; ++i) {
+    const Eigen::Vector2d u(-50 + 100 * rng.uniform(), 1e-3 * rng.uniform()), v(100 * rng.uniform(), -7 * rng.uniform());
+    s1[0] = u.x();
+    s1[1] = u.y();
+    s2[0] = v.x();
+    s2[1] = v.y();
+    REQUIRE(planeDistance(u, v) == space->distance(s1.get(), s2.get()));
   }
   CHECK(grid.remove(&pts[7]));
   CHECK_FALSE(grid.remove(&pts[7]));
