@@ -343,7 +343,7 @@ class Coordinator {
     int unturnableEnds = 0;  // tries refused for ending where the rover cannot turn
     std::size_t zonesBefore = 0;  // keep-out zones of the previous try
     bool shortBefore = false;     // the previous try's plan ended short of a cut-off goal
-    int unzonedRun = 0;           // tries in a row whose conflict gave no keep-out zone
+    int unzonedRun = 0;           // policy_.unzonedConflictsEndReplans: such tries in a row
     bool lastTry = false;         // policy_.repeatedShortEndsReplans, unzonedConflictsEndReplans
     for (int attempt = 0; attempt <= p_.maxReplans && !lastTry; ++attempt) {
       if (cancelled()) return Outcome::Cancelled;
@@ -356,8 +356,8 @@ class Coordinator {
       zonesBefore = keepOut.size();
       // Then the next try is likely this problem again with the next seed, and a worker plans it
       // meanwhile (on the HiRISE site such runs of tries were half of a slow mission's RRT* time);
-      // not when this try is likely the last (repeatedShortEndsReplans).
-      // A try that ends other than in an unzoned conflict breaks the run.
+      // not when this try is likely the last (repeatedShortEndsReplans,
+      // unzonedConflictsEndReplans). A try that does not count for the latter breaks its run.
       const int unzonedBefore = std::exchange(unzonedRun, 0);
       const int unzonedLimit = policy_.unzonedConflictsEndReplans;
       const bool likelyLast = (policy_.repeatedShortEndsReplans && shortBefore && sameZones) ||
@@ -433,10 +433,11 @@ class Coordinator {
       keepOutOf(k, goal, conflict ? KeepOutZone{conflict->otherPosition, p_.keepOutRadius}
                                   : KeepOutZone{*steep, 0.5},
                 keepOut);
-      // Only a conflict while the rover stands at the end of the try (started at once) counts:
-      // no path dodges that; one on the way, near the start, another path may.
+      // Only a try that reaches the goal and meets the other rover after its last driving sample
+      // (started at once) counts: no path dodges that; one met on the way another path may.
       const std::size_t arrival = out_.trajectories[k].samples.size() + c0.samples.size();
-      if (conflict && keepOut.size() == zones && conflict->index >= arrival) unzonedRun = unzonedBefore + 1;
+      if (conflict && keepOut.size() == zones && conflict->index >= arrival && reachesGoal(c0, goal))
+        unzonedRun = unzonedBefore + 1;
       if (unzonedLimit > 0 && unzonedRun >= unzonedLimit) lastTry = true;
     }
     if (!firstTry) {
@@ -750,6 +751,10 @@ CoordinationResult coordinateWith(const std::vector<RoverTask>& tasks, const Leg
                          [](int a, int b) { return b <= a; }) != policy.startDelays.end())
     throw Error(ErrorCode::InvalidParameter, "coordination",
                 "coordination: a policy starts each try without delay first, then at ascending delays");
+  if (!policy.lastLegParks && !policy.recover)
+    throw Error(ErrorCode::InvalidParameter, "coordination",
+                "coordination: a policy that does not check last legs for good must recover (park "
+                "steps aside before later passes)");
   if (tasks.size() > TrafficTable::kMaxRovers)
     throw Error(ErrorCode::InvalidInput, "rovers", "between 1 and 64 rovers are supported");
   for (std::size_t k = 0; k < tasks.size(); ++k) {

@@ -31,11 +31,12 @@ struct ConflictPolicy {
   // tree stops (HiRISE site: 0 of 42 such re-plans reached the goal, at 120 ms each, a fifth of
   // a slow mission's RRT* time).
   bool repeatedShortEndsReplans = false;
-  // This many tries in a row whose conflict gave no keep-out zone (it lies within the zone radius
-  // of the start or the goal: a zone there would wall either in) end the re-plans; 0 = never. Such
-  // a try is the same problem again with a new seed, and a path cannot dodge a rover that stands
-  // by the goal while this one dwells there (HiRISE replicate 13: 9 legs spent 21 RRT* calls each
-  // on such runs, then went on after stepping aside or were skipped).
+  // This many tries in a row that reach the goal and, started at once, meet a higher-priority
+  // rover only while standing there, where no keep-out zone can go (it would wall in the start or
+  // the goal), end the re-plans; 0 = never. Such a try is the same problem again with a new seed,
+  // and no path dodges a rover that comes by the goal while this one dwells there (HiRISE
+  // replicate 13: 9 legs spent 21 RRT* calls each on such runs, then went on after stepping aside
+  // or were skipped). Any other try breaks the run.
   int unzonedConflictsEndReplans = 0;
   // After the re-plans, the first try within the attitude check is tried again this many times,
   // each time one wait step later and simulated anew; then the leg is skipped.
@@ -43,11 +44,13 @@ struct ConflictPolicy {
   // An invalid goal ends the piece at the first try that finds it (no keep-out zone can make it
   // valid); false: the re-plans stop and the waits still run for an earlier try.
   bool invalidGoalEndsPiece = false;
-  // s the rover is checked standing at the end of a leg that is not its last.
+  // s the rover is checked standing at the end of a leg (of every leg but its last when
+  // lastLegParks).
   double dwell = 10.0;
   // The try of a rover's last leg is checked standing at its goal for as long as any
   // higher-priority rover moves: it parks there. false: for the dwell, like every other leg, and
-  // park() moves the rover aside before each later pass (recover). Checked for good, a leg whose
+  // park() moves the rover aside before each later pass (needs recover; coordinateWith checks).
+  // Checked for good, a leg whose
   // goal a higher-priority rover passes an hour later failed every try and every re-plan (hybrid,
   // HiRISE replicate 3: 147 of 217 re-plans, 21 to 42 RRT* calls per rover, for a leg that then
   // ended as before).

@@ -9,8 +9,10 @@
 // computes it (the same number, bit for bit, as the distance function RRTstar sets for R²)
 // without the calls through that function, the state space and the states (they were 10 % of a
 // mission's profile). Exact ties (duplicate states) come in storage order here and in GNAT's own
-// storage order there; RRT* plans were identical on every mission compared. Queries reuse
-// scratch buffers: one structure serves one planner, never concurrent queries.
+// storage order there; RRT* plans were identical on every mission compared. The distance
+// function OMPL sets (setDistanceFunction) is not called: this structure is for R² only
+// (RealVectorStateSpace(2)). Queries reuse scratch buffers: one structure serves one planner,
+// never concurrent queries.
 #include <ompl/datastructures/NearestNeighbors.h>
 #include <ompl/util/Exception.h>
 

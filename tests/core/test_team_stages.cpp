@@ -462,6 +462,10 @@ TEST_CASE("stages: the coordinator reports an invalid and an unreachable goal an
   CHECK_THROWS_WITH_AS(coordinateWith(tasks, planner, rover, bad, p, 1), refused, Error);
   bad.startDelays = {0, 10, 5};  // the coordinator stops at the first delay standing conflicts
   CHECK_THROWS_WITH_AS(coordinateWith(tasks, planner, rover, bad, p, 1), refused, Error);
+  // Last legs checked for the dwell only need the moves aside at the end.
+  bad = timedPolicy(p);
+  bad.recover = false;
+  CHECK_THROWS_AS(coordinateWith(tasks, planner, rover, bad, p, 1), Error);
 }
 
 TEST_CASE("stages: a rover whose spot will be run over steps aside, then goes on (timed)") {
@@ -550,6 +554,14 @@ TEST_CASE("stages: timed re-plans end after three tries that meet a rover standi
   untiring.unzonedConflictsEndReplans = 0;
   CHECK(leg1(coordinateWith(tasks, planner, rover, untiring, p, 1)).replans == p.maxReplans);
   CHECK(leg1(coordinateWith(tasks, planner, rover, paperPolicy(p), p, 1)).replans == p.maxReplans);
+  // Rover 0 paces across rover 1's way 1.2 m short of its goal instead (a zone there would still
+  // wall the goal in): met on the way, which another path may dodge, so every re-plan is tried.
+  tasks[0].start = {12, 3.8, M_PI};
+  tasks[0].legs.clear();
+  for (int j = 0; j < 50; ++j) tasks[0].legs.push_back({{j % 2 == 0 ? 9.5 : 10.5, 3.8}, {}, j});
+  const CoordinationResult onTheWay = coordinateWith(tasks, planner, rover, timedPolicy(p), p, 1);
+  CHECK(leg1(onTheWay).status == LegStatus::Skipped);
+  CHECK(leg1(onTheWay).replans == p.maxReplans);
 }
 
 namespace {

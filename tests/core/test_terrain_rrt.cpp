@@ -458,7 +458,6 @@ TEST_CASE("rrt: the grid neighbours answer what a linear scan answers, in the sa
   };
   GridNearestNeighbors<Pt*> grid({1, 2}, {8, 6}, 0.5, [](Pt* const& p) { return Eigen::Vector2d(p->x, p->y); });
   ompl::NearestNeighborsLinear<Pt*> linear;
-  grid.setDistanceFunction(dist);
   linear.setDistanceFunction(dist);
   for (auto& p : pts) {
     grid.add(&p);
