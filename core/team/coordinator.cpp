@@ -436,8 +436,8 @@ class Coordinator {
       // Only a try that reaches the goal and meets the other rover after its last driving sample
       // (started at once) counts: no path dodges that; one met on the way another path may.
       const std::size_t arrival = out_.trajectories[k].samples.size() + c0.samples.size();
-      if (conflict && keepOut.size() == zones && conflict->index >= arrival && reachesGoal(c0, goal))
-        unzonedRun = unzonedBefore + 1;
+      const bool unzoned = conflict && keepOut.size() == zones;
+      if (unzoned && conflict->index >= arrival && reachesGoal(c0, goal)) unzonedRun = unzonedBefore + 1;
       if (unzonedLimit > 0 && unzonedRun >= unzonedLimit) lastTry = true;
     }
     if (!firstTry) {

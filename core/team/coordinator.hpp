@@ -50,10 +50,9 @@ struct ConflictPolicy {
   // The try of a rover's last leg is checked standing at its goal for as long as any
   // higher-priority rover moves: it parks there. false: for the dwell, like every other leg, and
   // park() moves the rover aside before each later pass (needs recover; coordinateWith checks).
-  // Checked for good, a leg whose
-  // goal a higher-priority rover passes an hour later failed every try and every re-plan (hybrid,
-  // HiRISE replicate 3: 147 of 217 re-plans, 21 to 42 RRT* calls per rover, for a leg that then
-  // ended as before).
+  // Checked for good, a leg whose goal a higher-priority rover passes an hour later failed every
+  // try and every re-plan (hybrid, HiRISE replicate 3: 147 of 217 re-plans, 21 to 42 RRT* calls
+  // per rover, for a leg that then ended as before).
   bool lastLegParks = true;
   // Recoveries (ours), for a rover that would otherwise stay stuck where it stands:
   // - a try that would end where the rover cannot stop and turn (canStop) is refused like a

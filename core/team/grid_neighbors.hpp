@@ -4,15 +4,14 @@
 // RRTstar is GNAT, built for any metric space; in R² with a bounded box a grid answers the same
 // queries with far fewer distance calls (GNAT and its distance calls were about 15 % of a team
 // mission's profile, issue 10). Answers are GNAT's: every element within the radius (inclusive),
-// sorted by distance from the query. Each bucket keeps its elements' positions, and a distance
-// is the Euclidean distance of two positions computed as OMPL's RealVectorStateSpace::distance
-// computes it (the same number, bit for bit, as the distance function RRTstar sets for R²)
-// without the calls through that function, the state space and the states (they were 10 % of a
-// mission's profile). Exact ties (duplicate states) come in storage order here and in GNAT's own
-// storage order there; RRT* plans were identical on every mission compared. The distance
-// function OMPL sets (setDistanceFunction) is not called: this structure is for R² only
-// (RealVectorStateSpace(2)). Queries reuse scratch buffers: one structure serves one planner,
-// never concurrent queries.
+// sorted by distance from the query. Each bucket keeps its elements' positions, and distances are
+// planeDistance of two positions: the number RRTstar's distance function gives in R², bit for
+// bit, without the calls through that function, the state space and the states (they were 10 %
+// of a mission's profile). So the function OMPL sets (setDistanceFunction) is never called: this
+// structure is for RealVectorStateSpace(2) only. Exact ties (duplicate states) come in storage
+// order here and in GNAT's own storage order there; RRT* plans were identical on every mission
+// compared. Queries reuse scratch buffers: one structure serves one planner, never concurrent
+// queries.
 #include <ompl/datastructures/NearestNeighbors.h>
 #include <ompl/util/Exception.h>
 
@@ -70,7 +69,8 @@ class GridNearestNeighbors : public ompl::NearestNeighbors<T> {
   }
   T nearest(const T& data) const override {
     nearestK(data, 1, one_);
-    if (one_.empty()) throw ompl::Exception("No elements found in nearest neighbors data structure");
+    if (one_.empty())
+      throw ompl::Exception("No elements found in nearest neighbors data structure");
     return one_.front();
   }
   // Rings of buckets around the query's, until the k-th best is closer than any unvisited bucket.
@@ -85,7 +85,7 @@ class GridNearestNeighbors : public ompl::NearestNeighbors<T> {
     auto visit = [&](int r, int c) {
       if (r < 0 || c < 0 || r >= rows_ || c >= cols_) return;
       for (const Entry& e : buckets_[static_cast<std::size_t>(r) * cols_ + c])
-        best.emplace_back(distance(q, e.position), &e.data);
+        best.emplace_back(planeDistance(q, e.position), &e.data);
     };
     for (int ring = 0; ring <= rings; ++ring) {
       if (ring == 0) {
@@ -121,7 +121,7 @@ class GridNearestNeighbors : public ompl::NearestNeighbors<T> {
     for (int r = r0; r <= r1; ++r)
       for (int c = c0; c <= c1; ++c)
         for (const Entry& e : buckets_[static_cast<std::size_t>(r) * cols_ + c]) {
-          const double d = distance(p, e.position);
+          const double d = planeDistance(p, e.position);
           if (d <= radius) found.emplace_back(d, &e.data);
         }
     std::sort(found.begin(), found.end());
@@ -141,7 +141,6 @@ class GridNearestNeighbors : public ompl::NearestNeighbors<T> {
     Eigen::Vector2d position;
     T data;
   };
-  static double distance(const Eigen::Vector2d& q, const Eigen::Vector2d& e) { return planeDistance(q, e); }
   std::pair<int, int> cellOf(const Eigen::Vector2d& p) const {
     const double fc = std::floor((p.x() - min_.x()) / cell_), fr = std::floor((p.y() - min_.y()) / cell_);
     // Clamped into the grid (±∞ to its edges); NaN to the first bucket.
