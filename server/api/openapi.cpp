@@ -52,10 +52,14 @@ std::string errorText(int status) {
   switch (status) {
     case 400: return "Bad input; the error's field names it.";
     case 401: return "Missing or wrong bearer token (server started with --token).";
+    case 403: return "A state change or live stream asked for by another site's page (its Origin); "
+                     "start the server with --cors ORIGIN to allow one.";
     case 404: return "No such resource (the field names which).";
     case 409: return "Conflict with the resource's state (not ready, not finished, another map).";
     case 413: return "Too large (body, upload or mission memory estimate).";
     case 415: return "The body is not sent as application/json.";
+    case 421: return "The Host header names a host this server does not answer to (a DNS-rebinding "
+                     "guard); start it with --public-name NAME to add one.";
     case 429: return "Mission queue or memory budget full; see Retry-After.";
     case 503: return "Work queue full; see Retry-After.";
     case 507: return "The server's disk is full.";
@@ -359,6 +363,8 @@ json document(const http::Router& router, const PlannerRegistry& planners, const
     if (responses.empty()) responses["200"] = {{"description", "OK"}};
     std::vector<int> errors = extra.value("x-errors", std::vector<int>{});
     if (r.options.requireAuth) errors.push_back(401);
+    if (r.method != "GET") errors.push_back(403);  // request_origin.hpp: state changes and streams
+    errors.push_back(421);
     errors.push_back(500);
     for (int e : errors)
       responses[std::to_string(e)] = {{"description", errorText(e)},

@@ -1,8 +1,12 @@
 // roverplan serve (issue: server): the planning server on Boost.Beast.
 #include <signal.h>
+#include <sys/stat.h>
 
+#include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <iostream>
+#include <sstream>
 
 #include "core/common/parallel.hpp"
 #include "server/api/map_catalog.hpp"
@@ -35,6 +39,49 @@ std::string defaultWebRoot() {
   return holdsPage(ROVER_WEB_DIR) ? std::string(ROVER_WEB_DIR) : std::string();
 }
 
+// The bearer token, from at most one of --token, --token-file and ROVERPLAN_TOKEN. The variable is
+// removed once read, so no child (a study launcher, an import worker) inherits it.
+std::string serverToken(const ArgParser& a) {
+  const char* env = std::getenv("ROVERPLAN_TOKEN");
+  const std::string fromEnv = env ? env : "";
+  ::unsetenv("ROVERPLAN_TOKEN");
+  const int sources = (a.has("token") ? 1 : 0) + (a.has("token-file") ? 1 : 0) + (fromEnv.empty() ? 0 : 1);
+  if (sources > 1) throw UsageError("give the token once: --token, --token-file or ROVERPLAN_TOKEN");
+  std::string token;
+  if (a.has("token-file")) {
+    const std::string path = a.str("token-file", "");
+    std::ifstream in(path);
+    if (!in || !std::getline(in, token)) throw UsageError("--token-file: cannot read " + path);
+    while (!token.empty() && (token.back() == '\r' || token.back() == ' ' || token.back() == '\t')) token.pop_back();
+    if (token.empty()) throw UsageError("--token-file: the first line of " + path + " is empty");
+  } else {
+    token = a.has("token") ? a.str("token", "") : fromEnv;
+  }
+  if (a.has("token") && token.empty()) throw UsageError("--token: the token is empty");
+  for (unsigned char c : token)
+    if (c < 0x21 || c > 0x7e) throw UsageError("the token must be printable ASCII without spaces");
+  return token;
+}
+
+std::vector<std::string> commaList(const std::string& text) {
+  std::vector<std::string> out;
+  std::stringstream in(text);
+  for (std::string item; std::getline(in, item, ',');)
+    if (!item.empty()) out.push_back(item);
+  return out;
+}
+
+// The data directory holds uploads, plans and the database: nobody else's to read. Everything the
+// server creates is 0600/0700 (umask), and a directory made by an older version is tightened.
+void keepDataPrivate(const store::DataDir& dir) {
+  std::error_code ec;
+  fs::permissions(dir.root(), fs::perms::owner_all, fs::perm_options::replace, ec);
+  for (const char* suffix : {"", "-wal", "-shm"})
+    if (fs::exists(dir.databasePath() + suffix, ec))
+      fs::permissions(dir.databasePath() + suffix, fs::perms::owner_read | fs::perms::owner_write,
+                      fs::perm_options::replace, ec);
+}
+
 }  // namespace
 
 int serveCommand(const std::vector<std::string>& argv, std::ostream& out) {
@@ -45,7 +92,10 @@ int serveCommand(const std::vector<std::string>& argv, std::ostream& out) {
   a.option("web", "DIR", "installed",
            "Static web root served at /. Default: PREFIX/share/roverplan/web next to an installed "
            "binary, else the source tree's web/.");
-  a.option("token", "T", "", "Require 'Authorization: Bearer T' on every /api route except health.");
+  a.option("token", "T", "",
+           "Require 'Authorization: Bearer T' on every /api route except health. Visible to every "
+           "local user in `ps`: prefer ROVERPLAN_TOKEN or --token-file.");
+  a.option("token-file", "F", "", "Read the token from the first line of F (keep it 0600).");
   a.option("workers", "N", "cores", "Missions run in parallel.");
   a.option("queue", "N", "64", "Missions that may wait; more are refused with 429.");
   a.option("mission-memory-mb", "M", "half the RAM",
@@ -58,7 +108,14 @@ int serveCommand(const std::vector<std::string>& argv, std::ostream& out) {
   a.option("work-queue", "N", "32", "Slow requests that may wait for a work thread; more get 503.");
   a.option("min-upload-kibps", "K", "16",
            "Slowest accepted request body: K KiB/s averaged over any 10 s (slower: 408).");
-  a.option("cors", "ORIGIN", "", "Allow cross-origin requests from ORIGIN (off by default).");
+  a.option("cors", "ORIGIN", "",
+           "Allow cross-origin requests, state changes and live streams from pages of ORIGIN (e.g. "
+           "http://localhost:5173). Without it only the server's own page may change state: a "
+           "POST/PUT/PATCH/DELETE or WebSocket with a foreign Origin gets 403.");
+  a.option("public-name", "NAMES", "",
+           "Comma-separated host names (or addresses) clients use to reach the server, answered "
+           "besides localhost, 127.0.0.0/8, ::1 and --host; any other Host gets 421 (a DNS-rebinding "
+           "guard). '*' answers every name.");
   a.option("study-launcher", "CMD", "",
            "Run each study as CMD + `roverplan study run --spec F --out DB` (e.g. \"mpirun -np 16 "
            "--hostfile H\"; split into words like a shell, run without one); default: in the server.");
@@ -77,8 +134,9 @@ int serveCommand(const std::vector<std::string>& argv, std::ostream& out) {
   } else {
     config.webRoot = defaultWebRoot();  // "" = API only, said at start
   }
-  config.token = a.str("token", "");
+  config.token = serverToken(a);
   config.corsOrigin = a.str("cors", "");
+  config.publicNames = commaList(a.str("public-name", ""));
   config.maxUploadBytes = static_cast<std::uint64_t>(a.integer("max-upload-mb", 512, 1, 1 << 20)) << 20;
   config.logRequests = !a.isSet("quiet");
   config.workThreads = static_cast<unsigned>(a.integer("work-threads", 2, 1, 256));
@@ -97,7 +155,9 @@ int serveCommand(const std::vector<std::string>& argv, std::ostream& out) {
   sigaddset(&stopSignals, SIGTERM);
   pthread_sigmask(SIG_BLOCK, &stopSignals, nullptr);
 
+  ::umask(077);
   store::DataDir dir(a.str("data", "roverplan-data"));
+  keepDataPrivate(dir);
   dir.cleanTmp();  // uploads in flight when the server last died: never visible
   config.uploadDir = dir.tmpDir();
   store::Database db(dir.databasePath());
@@ -146,6 +206,9 @@ int serveCommand(const std::vector<std::string>& argv, std::ostream& out) {
       << missions::formatBytes(missionMemory) << " mission memory"
       << (config.token.empty() ? "" : ", token required")
       << (launcher.empty() ? "" : ", studies launched by " + launcher[0]) << ")" << std::endl;
+  if (a.has("token"))
+    out << "warning: --token is visible to every local user in `ps`; prefer ROVERPLAN_TOKEN or --token-file"
+        << std::endl;
   if (config.webRoot.empty())
     out << "warning: no web page found (pass --web DIR); serving the API only" << std::endl;
   if (!fullDisk.empty()) out << "warning: " << fullDisk << std::endl;

@@ -7,6 +7,7 @@
 #include <cstddef>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "server/http/router.hpp"
 
@@ -19,6 +20,8 @@ struct ServerConfig {
   std::string webRoot;                          // static files for "/" ("" = none)
   std::string token;                            // non-empty: bearer auth on /api (except health)
   std::string corsOrigin;                       // non-empty: CORS for this origin
+  // Host names answered besides the loopback names and `host` (request_origin.hpp); "*" = any.
+  std::vector<std::string> publicNames;
   std::string uploadDir;                        // where streamed bodies are written
   std::uint64_t maxUploadBytes = 512ull << 20;  // streamed routes
   std::uint64_t maxBodyBytes = 4ull << 20;      // in-memory routes

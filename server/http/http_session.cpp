@@ -24,8 +24,17 @@ namespace fs = std::filesystem;
 
 // ---------------------------------------------------------------- ServerState
 
+namespace {
+OriginPolicy originPolicy(const ServerConfig& c) {
+  OriginPolicy p{c.publicNames, c.corsOrigin};
+  // A wildcard bind names no host; a named one (an interface address or name) is one of ours.
+  if (!c.host.empty() && c.host != "0.0.0.0" && c.host != "::" && c.host != "[::]") p.extraHosts.push_back(c.host);
+  return p;
+}
+}  // namespace
+
 ServerState::ServerState(ServerConfig c, const Router& r, WorkPool& p)
-    : config(std::move(c)), router(r), statics(config.webRoot), pool(p) {
+    : config(std::move(c)), origins(originPolicy(config)), router(r), statics(config.webRoot), pool(p) {
   std::random_device rd;
   tempSalt_ = (static_cast<std::uint64_t>(rd()) << 32) ^ rd();
 }
@@ -416,6 +425,27 @@ void HttpSession::routeRequest() {
   const bool isUpgrade = beast::websocket::is_upgrade(h);
   const std::string& path = request_.path;
   const bool api = isApiPath(path);
+
+  // Before anything else, even a preflight: a request for another host name (DNS rebinding) or a
+  // state change from a foreign page is not ours to answer (request_origin.hpp).
+  const std::string host = request_.header("host");
+  // HTTP/1.1 requires Host (RFC 9112 §3.2: 400 without one); an HTTP/1.0 tool may omit it, and no
+  // browser does, so its absence opens no rebinding.
+  if (host.empty() && version_ >= 11)
+    return sendError(400, "bad_request", "the request has no Host header", "host", bodyPending);
+  if (!host.empty() && !hostAllowed(state_->origins, host))
+    return sendError(421, "misdirected_request",
+                     "this server does not answer to that Host name (start it with --public-name NAME to add one)",
+                     "host", bodyPending);
+  const bool safeMethod = h.method() == bhttp::verb::get || h.method() == bhttp::verb::head ||
+                          h.method() == bhttp::verb::options;
+  if ((isUpgrade || !safeMethod) &&
+      foreignOrigin(state_->origins, request_.header("origin"), request_.header("sec-fetch-site"),
+                    host))
+    return sendError(403, "foreign_origin",
+                     "state-changing requests and live streams are refused from another site's page "
+                     "(start the server with --cors ORIGIN to allow one)",
+                     "origin", bodyPending);
 
   if (!cfg.corsOrigin.empty() && h.method() == bhttp::verb::options) {
     Response r;

@@ -26,6 +26,7 @@
 
 #include "server/http/http_server.hpp"
 #include "server/http/rate_floor.hpp"
+#include "server/http/request_origin.hpp"
 #include "server/http/router.hpp"
 #include "server/http/static_files.hpp"
 #include "server/http/work_pool.hpp"
@@ -51,6 +52,7 @@ class ServerState {
   ServerState(ServerConfig config, const Router& router, WorkPool& pool);
 
   const ServerConfig config;
+  const OriginPolicy origins;  // from config: the Host allow-list and the CORS origin
   const Router& router;
   const StaticFiles statics;
   WorkPool& pool;  // owned by HttpServer, stopped after the io threads

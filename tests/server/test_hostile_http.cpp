@@ -183,7 +183,7 @@ std::string smuggled(const std::string& te, const std::string& hidden) {
     std::snprintf(size, sizeof size, "%zx\r\n", hidden.size());
     body = size + hidden + "\r\n0\r\n\r\n";
   }
-  return "POST /api/things HTTP/1.1\r\nHost: x\r\nTransfer-Encoding: " + te + "\r\n\r\n" + body;
+  return "POST /api/things HTTP/1.1\r\nHost: localhost\r\nTransfer-Encoding: " + te + "\r\n\r\n" + body;
 }
 
 }  // namespace
@@ -207,7 +207,7 @@ TEST_CASE("framing: Transfer-Encoding must be exactly one final chunked, one Con
   auto check = [](const std::string& headerLines, unsigned version = 11) {
     bhttp::request_parser<bhttp::empty_body> p;
     http::configureHeaderParser(p, 16 * 1024);
-    const std::string raw = "POST / HTTP/1." + std::to_string(version % 10) + "\r\nHost: x\r\n" + headerLines + "\r\n";
+    const std::string raw = "POST / HTTP/1." + std::to_string(version % 10) + "\r\nHost: localhost\r\n" + headerLines + "\r\n";
     boost::beast::error_code ec;
     p.put(boost::asio::buffer(raw), ec);
     if (ec && ec != bhttp::error::need_more) return std::string("parser:") + ec.message();
@@ -330,7 +330,7 @@ TEST_CASE("multipart: a failed split leaves no part files, plain fields are capp
 TEST_CASE("hostile: a request hidden in a body by Transfer-Encoding is never run (400, close)") {
   EdgeServer s;
   s.start();
-  const std::string hidden = "DELETE /api/things/1 HTTP/1.1\r\nHost: x\r\nContent-Length: 0\r\n\r\n";
+  const std::string hidden = "DELETE /api/things/1 HTTP/1.1\r\nHost: localhost\r\nContent-Length: 0\r\n\r\n";
   for (const std::string te : {"gzip", "identity", "chunked, identity", "gzip, chunked", "chunked, chunked"}) {
     CAPTURE(te);
     Raw c(s.port());
@@ -347,7 +347,7 @@ TEST_CASE("hostile: a request hidden in a body by Transfer-Encoding is never run
                                     "Content-Length: 2\r\nContent-Length: 60\r\n"}) {
     CAPTURE(framing);
     Raw c(s.port());
-    c.send("POST /api/things HTTP/1.1\r\nHost: x\r\n" + framing + "\r\n{}" + hidden);
+    c.send("POST /api/things HTTP/1.1\r\nHost: localhost\r\n" + framing + "\r\n{}" + hidden);
     const std::string raw = c.readAll();
     CHECK(statuses(raw) == std::vector<int>{400});
   }
@@ -355,8 +355,8 @@ TEST_CASE("hostile: a request hidden in a body by Transfer-Encoding is never run
   CHECK(s.posts == 0);
   // A proper chunked request still works, and a request pipelined after it is run as such.
   Raw ok(s.port());
-  ok.send("POST /api/things HTTP/1.1\r\nHost: x\r\nTransfer-Encoding: chunked\r\n\r\n2\r\n{}\r\n0\r\n\r\n"
-          "DELETE /api/things/1 HTTP/1.1\r\nHost: x\r\nConnection: close\r\n\r\n");
+  ok.send("POST /api/things HTTP/1.1\r\nHost: localhost\r\nTransfer-Encoding: chunked\r\n\r\n2\r\n{}\r\n0\r\n\r\n"
+          "DELETE /api/things/1 HTTP/1.1\r\nHost: localhost\r\nConnection: close\r\n\r\n");
   CHECK(statuses(ok.readAll()) == std::vector<int>{200, 200});
   CHECK(s.posts == 1);
   CHECK(s.deletes == 1);
@@ -365,7 +365,7 @@ TEST_CASE("hostile: a request hidden in a body by Transfer-Encoding is never run
 TEST_CASE("hostile: a 70 KB chunk trailer or chunk extension is answered 431 and closed") {
   EdgeServer s;
   s.start();
-  const std::string head = "POST /api/things HTTP/1.1\r\nHost: x\r\nTransfer-Encoding: chunked\r\n\r\n";
+  const std::string head = "POST /api/things HTTP/1.1\r\nHost: localhost\r\nTransfer-Encoding: chunked\r\n\r\n";
   for (const std::string& body : {"2\r\n{}\r\n0\r\nX-T: " + std::string(70000, 'a') + "\r\n\r\n",
                                  "2;ext=" + std::string(70000, 'b') + "\r\n{}\r\n0\r\n\r\n",
                                  "2\r\n{}\r\n0\r\n" + [] {
@@ -387,7 +387,7 @@ TEST_CASE("hostile: a 70 KB chunk trailer or chunk extension is answered 431 and
   CHECK(s.posts == 0);
   // A modest trailer is fine.
   Raw c(s.port());
-  c.send("POST /api/things HTTP/1.1\r\nHost: x\r\nConnection: close\r\nTransfer-Encoding: chunked\r\n\r\n"
+  c.send("POST /api/things HTTP/1.1\r\nHost: localhost\r\nConnection: close\r\nTransfer-Encoding: chunked\r\n\r\n"
          "2\r\n{}\r\n0\r\nX-Checksum: abc\r\n\r\n");
   CHECK(statuses(c.readAll()) == std::vector<int>{200});
   CHECK(test::request(s.port(), "GET", "/api/health").status == 200);
@@ -403,7 +403,7 @@ TEST_CASE("hostile: a slow but steady upload is accepted, a stalled one gets 408
     // 320 KiB at ~64 KiB/s: 5 s, more than the 2 s a single deadline would have allowed.
     const std::size_t total = 320 * 1024, piece = 8 * 1024;
     Raw c(s.port(), 10000ms);
-    c.send("POST /api/upload HTTP/1.1\r\nHost: x\r\nConnection: close\r\nContent-Length: " +
+    c.send("POST /api/upload HTTP/1.1\r\nHost: localhost\r\nConnection: close\r\nContent-Length: " +
            std::to_string(total) + "\r\n\r\n");
     const auto t0 = Clock::now();
     bool sent = true;
@@ -420,7 +420,7 @@ TEST_CASE("hostile: a slow but steady upload is accepted, a stalled one gets 408
   {
     // 4 KiB then nothing: cut after one window with a 408 naming the body.
     Raw c(s.port(), 10000ms);
-    c.send("POST /api/upload HTTP/1.1\r\nHost: x\r\nContent-Length: 1000000\r\n\r\n" + std::string(4096, 's'));
+    c.send("POST /api/upload HTTP/1.1\r\nHost: localhost\r\nContent-Length: 1000000\r\n\r\n" + std::string(4096, 's'));
     const auto t0 = Clock::now();
     const std::string raw = c.readAll();
     MESSAGE("stalled upload answered after " << msSince(t0) << " ms");
@@ -430,7 +430,7 @@ TEST_CASE("hostile: a slow but steady upload is accepted, a stalled one gets 408
   {
     // A trickle (2 KiB/s) below the floor: also cut.
     Raw c(s.port(), 10000ms);
-    c.send("POST /api/things HTTP/1.1\r\nHost: x\r\nContent-Length: 100000\r\n\r\n");
+    c.send("POST /api/things HTTP/1.1\r\nHost: localhost\r\nContent-Length: 100000\r\n\r\n");
     bool cut = false;
     for (int i = 0; i < 40 && !cut; ++i) {
       cut = !c.send(std::string(200, 't'));
@@ -453,7 +453,7 @@ TEST_CASE("hostile: slowloris with 500 connections is cut at the header deadline
   for (int i = 0; i < 500; ++i) {
     auto c = std::make_unique<Raw>(s.port(), 100ms);
     if (!c->connected()) break;
-    c->send("GET /api/health HTTP/1.1\r\nHost: x\r\n");  // never finished
+    c->send("GET /api/health HTTP/1.1\r\nHost: localhost\r\n");  // never finished
     held.push_back(std::move(c));
   }
   REQUIRE(held.size() == 500);

@@ -1,0 +1,76 @@
+#include "server/http/request_origin.hpp"
+
+#include <algorithm>
+#include <cctype>
+
+namespace rover::http {
+
+namespace {
+
+std::string lower(std::string_view s) {
+  std::string out(s);
+  std::transform(out.begin(), out.end(), out.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return out;
+}
+
+bool allDigits(std::string_view s) {
+  return !s.empty() && s.size() <= 5 && std::all_of(s.begin(), s.end(), [](unsigned char c) { return std::isdigit(c); });
+}
+
+// 127.0.0.0/8 written as a dotted quad: the whole block is loopback.
+bool loopbackV4(std::string_view host) {
+  if (host.rfind("127.", 0) != 0) return false;
+  int dots = 0;
+  for (char c : host) {
+    if (c == '.') ++dots;
+    else if (!std::isdigit(static_cast<unsigned char>(c))) return false;
+  }
+  return dots == 3;
+}
+
+}  // namespace
+
+std::optional<std::string> hostName(std::string_view value) {
+  while (!value.empty() && (value.back() == ' ' || value.back() == '\t')) value.remove_suffix(1);
+  while (!value.empty() && (value.front() == ' ' || value.front() == '\t')) value.remove_prefix(1);
+  if (value.empty() || value.size() > 255) return std::nullopt;
+  std::string_view host = value;
+  if (value.front() == '[') {  // an IPv6 literal, port optional
+    const std::size_t close = value.find(']');
+    if (close == std::string_view::npos) return std::nullopt;
+    host = value.substr(1, close - 1);
+    const std::string_view rest = value.substr(close + 1);
+    if (!rest.empty() && (rest.front() != ':' || !allDigits(rest.substr(1)))) return std::nullopt;
+  } else if (const std::size_t colon = value.find(':'); colon != std::string_view::npos) {
+    host = value.substr(0, colon);
+    if (!allDigits(value.substr(colon + 1))) return std::nullopt;
+  }
+  if (host.empty()) return std::nullopt;
+  for (unsigned char c : host)
+    if (!(std::isalnum(c) || c == '.' || c == '-' || c == '_' || c == ':')) return std::nullopt;
+  std::string name = lower(host);
+  if (name.back() == '.') name.pop_back();  // "localhost." is "localhost"
+  return name;
+}
+
+bool hostAllowed(const OriginPolicy& policy, std::string_view hostHeader) {
+  const std::optional<std::string> name = hostName(hostHeader);
+  if (!name) return false;
+  if (*name == "localhost" || *name == "::1" || loopbackV4(*name)) return true;
+  return std::any_of(policy.extraHosts.begin(), policy.extraHosts.end(),
+                     [&](const std::string& h) { return h == "*" || lower(h) == *name; });
+}
+
+bool foreignOrigin(const OriginPolicy& policy, std::string_view origin, std::string_view secFetchSite,
+                   std::string_view hostHeader) {
+  if (origin.empty()) {
+    const std::string site = lower(secFetchSite);
+    return site == "cross-site" || site == "same-site";
+  }
+  if (!policy.corsOrigin.empty() && origin == policy.corsOrigin) return false;
+  const std::string own = lower(hostHeader);
+  const std::string o = lower(origin);
+  return o != "http://" + own && o != "https://" + own;
+}
+
+}  // namespace rover::http

@@ -1,0 +1,40 @@
+#pragma once
+// Who may talk to this server (issue 22, "same-origin by default"): the Host names it answers to,
+// and the origins whose pages may change state. Two browser attacks on a server bound to loopback
+// without a token:
+//   - a page on another origin POSTs a form, a text/plain body or a WebSocket upgrade at it (a
+//     "simple" request needs no CORS preflight, so the browser sends it and only hides the answer);
+//   - DNS rebinding: evil.example resolves to 127.0.0.1 after the page loads, so its requests reach
+//     this server as same-origin, with `Host: evil.example:8080`.
+// The first is refused by the Origin check, the second by the Host allow-list. Non-browser clients
+// (curl, the CLI, scripts) send no Origin and a loopback or configured Host, and are unaffected.
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace rover::http {
+
+struct OriginPolicy {
+  // Host names (no port) answered besides the loopback names (localhost, 127.0.0.0/8, ::1): the
+  // bound address when it is not a wildcard, and every --public-name. "*" answers any Host.
+  std::vector<std::string> extraHosts;
+  // The one foreign origin allowed to change state (--cors), "" for none.
+  std::string corsOrigin;
+};
+
+// The host part of a Host header value ("Example.org:8080" -> "example.org", "[::1]:80" -> "::1"),
+// lower-cased; nullopt when the value is malformed (empty, a bad port, spaces, a userinfo '@').
+std::optional<std::string> hostName(std::string_view hostHeader);
+
+// Whether a request with this Host header is for this server.
+bool hostAllowed(const OriginPolicy& policy, std::string_view hostHeader);
+
+// Whether a state-changing request (or WebSocket upgrade) with these headers comes from a page of a
+// foreign origin: an Origin header that is neither this server's own (scheme://Host) nor the CORS
+// origin ("null" included, as sandboxed frames and file: pages send it), or, without an Origin, a
+// browser's `Sec-Fetch-Site: cross-site`/`same-site`.
+bool foreignOrigin(const OriginPolicy& policy, std::string_view origin, std::string_view secFetchSite,
+                   std::string_view hostHeader);
+
+}  // namespace rover::http
