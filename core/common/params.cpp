@@ -53,7 +53,9 @@ std::int64_t paramAsInt(const ParamInfo& info, const ParamValue& v) {
   if (const auto* p = std::get_if<std::int64_t>(&v)) {
     i = *p;
   } else if (const auto* d = std::get_if<double>(&v);
-             d && std::isfinite(*d) && std::trunc(*d) == *d && std::fabs(*d) < 9.0e15) {
+             // Every whole double in (-2^63, 2^63) converts exactly: 9e18, inside the seed's
+             // documented range, is a number a client may write as a float.
+             d && std::isfinite(*d) && std::trunc(*d) == *d && std::fabs(*d) < 9.223372036854775808e18) {
     i = static_cast<std::int64_t>(*d);
   } else {
     throwInvalidParameter(info.key, "expected an integer");

@@ -1,5 +1,6 @@
 // /api/studies (issue 12): launch, list, watch, download and cancel studies; a run opened as a
 // mission. The studies themselves are run by studies::StudyManager.
+#include <charconv>
 #include <cmath>
 
 #include "core/common/error.hpp"
@@ -90,13 +91,17 @@ json runMission(ApiContext& ctx, const studies::StudySpec& spec, std::size_t run
   return out;
 }
 
+// A run is named by its index in plain decimal digits ("7", never "7.0", "1e3", "+7" or "07"): one
+// run, one address.
 std::size_t runIndexOf(const Request& req, const studies::StudySpec& spec) {
   const std::string& text = req.params.at("run");
-  char* end = nullptr;
-  const double v = std::strtod(text.c_str(), &end);
-  if (text.empty() || *end != '\0' || !(v >= 0) || v >= static_cast<double>(spec.runCount()) || std::trunc(v) != v)
+  std::size_t v = 0;
+  const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), v);
+  const bool canonical = !text.empty() && ec == std::errc() && end == text.data() + text.size() &&
+                         (text[0] != '0' || text.size() == 1);
+  if (!canonical || v >= spec.runCount())
     throw ApiError(404, "not_found", "run must be an index in [0, " + std::to_string(spec.runCount()) + ")", "run");
-  return static_cast<std::size_t>(v);
+  return v;
 }
 
 json configurationsJson(const studies::StudySpec& spec) {

@@ -2,6 +2,8 @@
 
 #include <cstdint>
 #include <string>
+#include <unordered_set>
+#include <vector>
 
 #include "server/http/http_types.hpp"
 
@@ -54,8 +56,28 @@ nlohmann::json parseJsonLimited(std::string_view text, const JsonLimits& limits,
                    "the JSON body is " + std::to_string(text.size()) + " bytes, over the limit of " +
                        std::to_string(limits.maxBytes),
                    "body");
-  nlohmann::json j = nlohmann::json::parse(text.begin(), text.end(), nullptr, false);
+  // One set of seen keys per open object; the first key seen twice is reported after the parse
+  // (the callback must not throw through nlohmann's parser).
+  std::vector<std::unordered_set<std::string>> open;
+  std::string duplicate;
+  bool hasDuplicate = false;
+  const nlohmann::json::parser_callback_t noteKeys = [&](int, nlohmann::json::parse_event_t event,
+                                                         nlohmann::json& parsed) {
+    using E = nlohmann::json::parse_event_t;
+    if (event == E::object_start) open.emplace_back();
+    else if (event == E::object_end && !open.empty()) open.pop_back();
+    else if (event == E::key && !open.empty() && !hasDuplicate &&
+             !open.back().insert(parsed.get<std::string>()).second) {
+      hasDuplicate = true;
+      duplicate = parsed.get<std::string>();
+    }
+    return true;
+  };
+  nlohmann::json j = nlohmann::json::parse(text.begin(), text.end(), noteKeys, false);
   if (j.is_discarded()) throw ApiError(400, "bad_json", "the request body is not valid JSON", "body");
+  if (hasDuplicate)
+    throw ApiError(400, "bad_json", "the request body names the key '" + shown(duplicate) + "' twice in one object",
+                   shown(duplicate));
   if (requireObject && !j.is_object())
     throw ApiError(400, "bad_json", "the request body must be a JSON object", "body");
   return j;
@@ -101,22 +123,23 @@ bool isHiddenControl(std::uint32_t cp) {
          (cp >= 0x2028 && cp <= 0x202E) || (cp >= 0x2066 && cp <= 0x2069) || cp == 0xFEFF;
 }
 
-void checkName(std::string_view name, const std::string& field) {
+std::string nameProblem(std::string_view name) {
   std::size_t chars = 0;
   for (std::size_t i = 0; i < name.size(); ++chars) {
     const CodePoint c = decode(name, i);
-    if (c.len == 0) throw ApiError(400, "invalid_field", field + " must be valid UTF-8 text", field);
+    if (c.len == 0) return "must be valid UTF-8 text";
     // No control characters (NUL among them): a name is shown in lists, logs and file headers.
-    if (isHiddenControl(c.cp))
-      throw ApiError(400, "invalid_field",
-                     field + " must not hold control, zero-width or text-direction characters", field);
+    if (isHiddenControl(c.cp)) return "must not hold control, zero-width or text-direction characters";
     i += c.len;
   }
   if (chars > kMaxNameChars)
-    throw ApiError(400, "invalid_field",
-                   field + " is " + std::to_string(chars) + " characters long, over the limit of " +
-                       std::to_string(kMaxNameChars),
-                   field);
+    return "is " + std::to_string(chars) + " characters long, over the limit of " + std::to_string(kMaxNameChars);
+  return {};
+}
+
+void checkName(std::string_view name, const std::string& field) {
+  if (std::string problem = nameProblem(name); !problem.empty())
+    throw ApiError(400, "invalid_field", field + " " + problem, field);
 }
 
 std::string cleanName(std::string_view raw, std::size_t maxChars) {

@@ -30,13 +30,18 @@ int jsonNestingDepth(std::string_view text, int stopAt);
 
 // Parses a request body under `limits`. Throws http::ApiError with field "body":
 // 400 too_deep, 413 payload_too_large, 400 bad_json (not JSON, or not an object when
-// `requireObject`).
+// `requireObject`, or an object that names a key twice: RFC 8259 leaves the meaning of duplicate
+// names open, and nlohmann keeps the last one, so `{"rovers":1,"rovers":64}` would be read
+// differently by us and by a proxy or validator that keeps the first).
 nlohmann::json parseJsonLimited(std::string_view text, const JsonLimits& limits, bool requireObject = true);
 
-// Names of maps, PDMs and missions: valid UTF-8 of at most kMaxNameChars characters (code points),
-// none of them a hidden control (isHiddenControl). Throws http::ApiError 400 invalid_field naming
+// The one name rule, for every named object (maps, PDMs, zones, missions, studies and their worlds
+// and configurations): valid UTF-8 of at most kMaxNameChars characters (code points), none of them a
+// hidden control (isHiddenControl). nameProblem says what is wrong ("" when nothing is), for
+// callers with their own error type; checkName throws http::ApiError 400 invalid_field naming
 // `field`.
 inline constexpr std::size_t kMaxNameChars = 200;
+std::string nameProblem(std::string_view name);
 void checkName(std::string_view name, const std::string& field);
 // C0/C1 controls, DEL, zero-width and bidi marks/overrides/isolates, U+2028/2029, U+FEFF.
 bool isHiddenControl(std::uint32_t codePoint);

@@ -45,8 +45,8 @@ json documentOf(const json& body) {
   if (!body.is_object()) throw http::ApiError(400, "bad_json", "the request body must be a JSON object", "body");
   if (body.contains("preset")) {
     for (const auto& item : body.items())
-      if (item.key() != "preset" && item.key() != "runs" && item.key() != "master_seed")
-        throw http::ApiError(400, "unknown_field", "with a preset only runs and master_seed may be given",
+      if (item.key() != "preset" && item.key() != "runs" && item.key() != "master_seed" && item.key() != "name")
+        throw http::ApiError(400, "unknown_field", "with a preset only runs, master_seed and name may be given",
                              item.key().substr(0, 64));
     if (!body["preset"].is_string()) throw http::ApiError(400, "invalid_field", "preset must be a string", "preset");
     PresetOptions o;
@@ -62,7 +62,9 @@ json documentOf(const json& body) {
         throw http::ApiError(400, "invalid_field", "master_seed must be a non-negative integer", "master_seed");
       o.masterSeed = body["master_seed"].get<std::uint64_t>();
     }
-    return presetSpecJson(body["preset"].get<std::string>(), o);
+    json spec = presetSpecJson(body["preset"].get<std::string>(), o);
+    if (body.contains("name")) spec["name"] = body["name"];  // checked with the spec, by the name rule
+    return spec;
   }
   if (const auto w = body.find("worlds"); w != body.end() && w->is_array())
     for (std::size_t i = 0; i < w->size(); ++i)

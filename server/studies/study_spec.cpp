@@ -8,6 +8,7 @@
 #include "core/coverage/coverage_params.hpp"
 #include "core/planning/planner.hpp"
 #include "core/team/team_entry.hpp"
+#include "server/json/json_edge.hpp"
 #include "server/json/plan_json.hpp"
 
 namespace rover::studies {
@@ -54,6 +55,13 @@ long long integer(const json& v, const std::string& field, long long lo, long lo
 std::string text(const json& v, const std::string& field, std::size_t maxLength = 200) {
   if (!v.is_string() || v.get<std::string>().empty() || v.get<std::string>().size() > maxLength)
     bad(field, "must be a non-empty string of at most " + std::to_string(maxLength) + " characters");
+  return v.get<std::string>();
+}
+
+// A study's, world's or configuration's name: the name rule every named object follows.
+std::string name(const json& v, const std::string& field) {
+  if (!v.is_string() || v.get<std::string>().empty()) bad(field, "must be a non-empty string");
+  if (std::string problem = rover::json::nameProblem(v.get<std::string>()); !problem.empty()) bad(field, problem);
   return v.get<std::string>();
 }
 
@@ -184,7 +192,7 @@ WorldSpec parseWorld(const json& w, const std::string& field, bool team) {
     if (!dem) bad(dot(field, "crop_m"), "only for a dem world");
     out.cropM = number(*v, dot(field, "crop_m"), 0, 1e7);
   }
-  if (const json* v = find(w, "name")) out.name = text(*v, dot(field, "name"), 64);
+  if (const json* v = find(w, "name")) out.name = name(*v, dot(field, "name"));
   return out;
 }
 
@@ -207,7 +215,7 @@ StudySpec parseStudySpec(const json& spec) {
   plannerAt(s.planner, "planner");
   const bool team = isTeamPlanner(s.planner);
   s.name = s.planner + " study";
-  if (const json* v = find(spec, "name")) s.name = text(*v, "name", 64);
+  if (const json* v = find(spec, "name")) s.name = name(*v, "name");
   if (const json* v = find(spec, "runs")) s.runs = static_cast<int>(integer(*v, "runs", 1, kMaxRuns));
   if (const json* v = find(spec, "master_seed"))
     s.masterSeed = static_cast<std::uint64_t>(integer(*v, "master_seed", 0, INT64_MAX));
@@ -278,7 +286,7 @@ StudySpec parseStudySpec(const json& spec) {
         }
       }
       if (!find(c, "name")) bad(dot(f, "name"), "is required");
-      d.point.name = text(c["name"], dot(f, "name"), 64);
+      d.point.name = name(c["name"], dot(f, "name"));
       if (const json* p = find(c, "params")) setParams(d, *p, dot(f, "params"));
       for (const auto& other : points)
         if (other.point.name == d.point.name) bad(dot(f, "name"), "'" + d.point.name + "' is used twice");

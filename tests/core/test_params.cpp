@@ -5,6 +5,7 @@
 #include "core/team/team_entry.hpp"
 
 #include <algorithm>
+#include <cmath>
 
 using namespace rover;
 using namespace rover::coverage;
@@ -118,4 +119,17 @@ TEST_CASE("every planner's table sorts its parameters into sections, a few commo
   CHECK(std::get<std::int64_t>(team[0].values.at("max_vertices")) == 1250);
   CHECK(std::get<std::string>(team[0].values.at("coordination")) == "paper");
   CHECK(registry.get("coverage").presets()[0].name == "paper 002");
+}
+
+TEST_CASE("an integer parameter written as a float is read exactly up to its documented maximum") {
+  // The seed's documented range is [0, 9e18]; a client that writes 9e18 (a JSON float) means the
+  // integer 9 000 000 000 000 000 000, which a double holds exactly (issue 22).
+  const ParamInfo seed = intParam("seed", 0, 9.0e18, "", "");
+  CHECK(paramAsInt(seed, ParamValue{9.0e18}) == 9000000000000000000LL);
+  CHECK(paramAsInt(seed, ParamValue{std::int64_t{9000000000000000000LL}}) == 9000000000000000000LL);
+  CHECK(paramAsInt(seed, ParamValue{4.0e15}) == 4000000000000000LL);
+  CHECK_THROWS_AS(paramAsInt(seed, ParamValue{9.1e18}), Error);        // over the range
+  CHECK_THROWS_AS(paramAsInt(seed, ParamValue{1.0e19}), Error);        // over int64: never converted
+  CHECK_THROWS_AS(paramAsInt(seed, ParamValue{3.5}), Error);           // not whole
+  CHECK_THROWS_AS(paramAsInt(seed, ParamValue{std::nan("")}), Error);  // not a number
 }

@@ -284,4 +284,21 @@ TEST_CASE("splitCommandLine: words, quotes, escapes, no shell") {
   CHECK_THROWS(splitCommandLine("mpirun 'open"));
 }
 
+TEST_CASE("studies API: names follow the one name rule, runs are addressed by canonical indices only") {
+  TempDir d;
+  // One name rule for every named object (issue 22): a right-to-left override that would show
+  // "evil\u202Etxt.exe" as "evilexe.txt" is refused here as in map and mission names.
+  StudyServer s(d.str("data"));
+  checkError(s.api.postJson("/api/studies", {{"preset", "laine-fig6"}, {"runs", 3}, {"name", "evil\u202Etxt.exe"}}), 400,
+             "name");
+  checkError(s.api.postJson("/api/studies", {{"preset", "laine-fig6"}, {"runs", 3}, {"name", std::string(201, 'a')}}),
+             400, "name");
+  const auto launched = s.api.postJson("/api/studies", {{"preset", "laine-fig6"}, {"runs", 3}, {"name", "fig. 6 \u00e9t\u00e9"}});
+  REQUIRE(launched.status == 202);
+  const std::string id = launched.json()["id"];
+  CHECK(s.api.get("/api/studies/" + id + "/runs/1").status == 200);
+  for (const char* run : {"1e0", "1.0", "+1", "01", "%201", "0x1", "-0", "18446744073709551617"})
+    checkError(s.api.get("/api/studies/" + id + "/runs/" + std::string(run)), 404, "run");
+}
+
 }  // namespace rover::test
