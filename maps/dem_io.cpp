@@ -480,7 +480,10 @@ void writeAtomically(const std::string& path, GDALDataType type, const GridGeome
                      const GeoReference& geo, Fill&& fill) {
   ensureGdal();
   const std::string tmp = path + ".tmp";
-  const char* options[] = {"COMPRESS=DEFLATE", "ZLEVEL=1", "TILED=YES", "BIGTIFF=IF_SAFER", nullptr};
+  // Floats with the floating-point predictor (byte planes of differences compress far better:
+  // issue 22, a smooth PDM raster); the class bytes without.
+  const char* options[] = {"COMPRESS=DEFLATE", "ZLEVEL=1", "TILED=YES", "BIGTIFF=IF_SAFER",
+                           type == GDT_Float32 ? "PREDICTOR=3" : nullptr, nullptr};
   GDALDriverH drv = GDALGetDriverByName("GTiff");
   CPLErrorReset();
   errno = 0;

@@ -8,9 +8,14 @@ namespace rover::api {
 
 namespace fs = std::filesystem;
 
+namespace {
+// The map a layer file belongs to: maps/ID/layers/FILE.
+std::string mapOf(const std::string& path) { return fs::path(path).parent_path().parent_path().filename().string(); }
+}  // namespace
+
 LayerCache::LayerCache(const std::string& mapsRoot, std::uint64_t capBytes,
-                       const std::function<bool(const std::string&)>& stale)
-    : cap_(capBytes) {
+                       const std::function<bool(const std::string&)>& stale, store::DiskBudget* budget)
+    : budget_(budget), cap_(capBytes) {
   std::vector<std::pair<fs::file_time_type, std::pair<std::string, std::uint64_t>>> found;
   std::error_code ec;
   for (const auto& map : fs::directory_iterator(mapsRoot, ec)) {
@@ -27,7 +32,10 @@ LayerCache::LayerCache(const std::string& mapsRoot, std::uint64_t capBytes,
   }
   std::sort(found.begin(), found.end());
   std::lock_guard lock(mutex_);
-  for (const auto& [when, file] : found) addLocked(file.first, file.second);
+  for (const auto& [when, file] : found) {
+    addLocked(file.first, file.second);
+    if (budget_) budget_->record(file.first, store::DiskUse::Layer, mapOf(file.first), file.second);
+  }
   evictLocked("");
 }
 
@@ -38,16 +46,40 @@ void LayerCache::addLocked(const std::string& path, std::uint64_t size) {
   total_ += size;
 }
 
+bool LayerCache::evictOldestLocked(const std::string& keep, const std::string& ofMap) {
+  auto oldest = entries_.end();
+  for (auto it = entries_.begin(); it != entries_.end(); ++it)
+    if (it->first != keep && (ofMap.empty() || mapOf(it->first) == ofMap) &&
+        (oldest == entries_.end() || it->second.lastUse < oldest->second.lastUse))
+      oldest = it;
+  if (oldest == entries_.end()) return false;
+  std::error_code ec;
+  fs::remove(oldest->first, ec);
+  if (budget_) budget_->release(oldest->first);
+  total_ -= oldest->second.size;
+  entries_.erase(oldest);
+  return true;
+}
+
 void LayerCache::evictLocked(const std::string& keep) {
-  while (total_ > cap_ && entries_.size() > (keep.empty() ? 0u : 1u)) {
-    auto oldest = entries_.end();
-    for (auto it = entries_.begin(); it != entries_.end(); ++it)
-      if (it->first != keep && (oldest == entries_.end() || it->second.lastUse < oldest->second.lastUse)) oldest = it;
-    if (oldest == entries_.end()) break;
-    std::error_code ec;
-    fs::remove(oldest->first, ec);
-    total_ -= oldest->second.size;
-    entries_.erase(oldest);
+  while (total_ > cap_ && evictOldestLocked(keep)) {
+  }
+}
+
+void LayerCache::chargeLocked(const std::string& path, std::uint64_t size) {
+  if (!budget_) return;
+  for (;;) {
+    try {
+      budget_->charge(path, store::DiskUse::Layer, mapOf(path), size, "layer");
+      return;
+    } catch (const store::OverBudget& e) {
+      // A cache makes room by forgetting (the map's own files when its budget is full, any when
+      // the server's is); what cannot fit even then is refused.
+      if (e.status() == 507 && evictOldestLocked(path, e.serverWide() ? std::string() : mapOf(path))) continue;
+      std::error_code ec;
+      fs::remove(path, ec);
+      throw;
+    }
   }
 }
 
@@ -86,10 +118,14 @@ std::string LayerCache::get(const std::string& path, const std::function<void(co
   }
   std::error_code ec;
   const std::uint64_t size = fs::file_size(path, ec);
-  {
+  try {
     std::lock_guard lock(mutex_);
+    chargeLocked(path, ec ? 0 : size);
     addLocked(path, ec ? 0 : size);
     evictLocked(path);
+  } catch (...) {
+    release();
+    throw;
   }
   release();
   return path;
@@ -101,6 +137,7 @@ void LayerCache::forgetUnder(const std::string& dir) {
   std::lock_guard lock(mutex_);
   for (auto it = entries_.begin(); it != entries_.end();) {
     if (it->first.rfind(prefix, 0) == 0) {
+      if (budget_) budget_->release(it->first);
       total_ -= it->second.size;
       it = entries_.erase(it);
     } else {

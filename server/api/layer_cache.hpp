@@ -4,12 +4,17 @@
 // recently used files are deleted (issue 14: 40 distinct ?max= values once wrote 686 MB). Each file
 // is produced once however many requests ask for it at the same time (a once-lock per file), and
 // producing one blocks neither other layers nor other maps.
+// With a DiskBudget the files are charged to their map (DiskUse::Layer): a new file that does not
+// fit first evicts older ones (of any map), then is refused (OverBudget 507/413, field "layer")
+// and deleted.
 #include <cstdint>
 #include <functional>
 #include <memory>
 #include <mutex>
 #include <string>
 #include <unordered_map>
+
+#include "server/store/disk_budget.hpp"
 
 namespace rover::api {
 
@@ -18,7 +23,8 @@ class LayerCache {
   // Counts the layer files already under mapsRoot/*/layers/ (oldest first by modification time),
   // deleting those `stale` says no request can name any more (an older naming scheme).
   LayerCache(const std::string& mapsRoot, std::uint64_t capBytes,
-             const std::function<bool(const std::string& fileName)>& stale = {});
+             const std::function<bool(const std::string& fileName)>& stale = {},
+             store::DiskBudget* budget = nullptr);
 
   // `path`, made by `make(path)` (which writes it atomically) unless it is there already. A file
   // larger than the cap on its own is still kept until the next one arrives.
@@ -36,7 +42,13 @@ class LayerCache {
   };
   void addLocked(const std::string& path, std::uint64_t size);
   void evictLocked(const std::string& keep);
+  // The least recently used file but `keep` (of map `ofMap` when given); false when none is left.
+  bool evictOldestLocked(const std::string& keep, const std::string& ofMap = "");
+  // Charges a new file to the budget, evicting older files while it does not fit; throws
+  // OverBudget (the file is deleted) when it cannot fit.
+  void chargeLocked(const std::string& path, std::uint64_t size);
 
+  store::DiskBudget* budget_;
   const std::uint64_t cap_;
   mutable std::mutex mutex_;  // guards everything below; never held while a file is made
   std::unordered_map<std::string, Entry> entries_;

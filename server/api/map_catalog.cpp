@@ -20,6 +20,7 @@
 #include "maps/synthetic_terrain.hpp"
 #include "server/http/http_types.hpp"
 #include "server/json/json_edge.hpp"
+#include "server/json/pdm_json.hpp"
 
 namespace rover::api {
 
@@ -165,7 +166,7 @@ nlohmann::json metaFor(const maps::LoadedDem& d, const terrain::Traversability& 
 MapCatalog::MapCatalog(store::Database& db, store::DataDir& dir, std::int64_t maxCells,
                        std::uint64_t layerCacheBytes)
     : db_(db), dir_(dir), maxCells_(maxCells),
-      layers_(fs::path(dir.mapDir("x")).parent_path().string(), layerCacheBytes, offLadderOverview) {}
+      layers_(fs::path(dir.mapDir("x")).parent_path().string(), layerCacheBytes, offLadderOverview, &dir.budget()) {}
 
 store::MapRecord MapCatalog::importDem(const std::vector<UploadedFile>& files, const std::string& name,
                                        const maps::DemImport& options) {
@@ -262,7 +263,7 @@ store::MapRecord MapCatalog::importDem(const std::vector<UploadedFile>& files, c
     if (options.load.crop) rec.meta["crop"] = *options.load.crop;
     if (options.load.cropPixels) rec.meta["crop_px"] = *options.load.cropPixels;
     // Files first, then the row: a crash in between leaves an orphan folder nobody lists.
-    dir_.commitDir(staging, dir_.mapDir(rec.id));
+    dir_.commitDir(staging, dir_.mapDir(rec.id), store::DiskCharge{store::DiskUse::Map, rec.id, "file"});
     db_.insertMap(rec);
     return rec;
   } catch (...) {
@@ -345,9 +346,9 @@ void MapCatalog::remove(const std::string& id) {
     cache_.remove_if([&](const auto& m) { return m->record.id == id; });
     cellCache_.remove_if([&](const auto& e) { return e.first.rfind(id + "@", 0) == 0; });
   }
-  for (const auto& p : pdms) store::DataDir::removeTree(dir_.pdmDir(p.id));
+  for (const auto& p : pdms) dir_.remove(dir_.pdmDir(p.id));
   layers_.forgetUnder(dir_.mapDir(id));
-  store::DataDir::removeTree(dir_.mapDir(id));
+  dir_.remove(dir_.mapDir(id));
 }
 
 std::shared_ptr<const terrain::Dem> MapCatalog::demAtCell(const std::string& id, double cellSize) {
@@ -425,7 +426,7 @@ void MapCatalog::renderLayerFile(const MapData& mapData, const std::string& laye
   if (layer == "elevation") values = dem.z;
   else if (layer == "hillshade") values = terrain::hillshade(dem);
   else if (layer == "slope") values = terrain::slopeHorn(dem);
-  else if (layer == "pdm") values = maps::loadDem(pdmFile(pdm)).dem.z;
+  else if (layer == "pdm") values = *pdmMass(pdm);
   values.geo = dem.z.geo;
   if (format == "tif") {
     storingGeoTiff([&] {
@@ -467,6 +468,9 @@ store::PdmRecord MapCatalog::createPdm(const std::string& mapId, const std::stri
                                        const std::vector<pdm::Gaussian>& components,
                                        const nlohmann::json& meta) {
   auto map = get(mapId);
+  dir_.budget().requireRoom(store::DiskUse::Pdm, mapId, "body");
+  // Discretised now to refuse components that put no mass on the map (400), as every later use
+  // would; what is stored is the components (the mass is kept in memory for a while).
   Raster<float> mass;
   try {
     mass = pdm::discretise(components, map->dem.geometry(), map->valid);
@@ -474,22 +478,28 @@ store::PdmRecord MapCatalog::createPdm(const std::string& mapId, const std::stri
     throw ApiError(400, "invalid_parameter", e.what(), e.field());
   }
   mass.geo = map->dem.z.geo;
-  return storePdm(mapId, name.empty() ? "PDM " + store::nowIso() : name, mass, meta);
+  const std::string stored = rover::json::toStoredJson(components).dump();
+  const store::PdmRecord rec =
+      storePdm(mapId, name.empty() ? "PDM " + store::nowIso() : name, meta, [&](const std::string& staging) {
+        store::DataDir::writeFileAtomic((fs::path(staging) / "components.json").string(), stored);
+      });
+  keepMass(rec.id, std::make_shared<const Raster<float>>(std::move(mass)));  // a mission often follows
+  return rec;
 }
 
-store::PdmRecord MapCatalog::storePdm(const std::string& mapId, const std::string& name,
-                                      const Raster<float>& mass, const nlohmann::json& meta) {
+store::PdmRecord MapCatalog::storePdm(const std::string& mapId, const std::string& name, const nlohmann::json& meta,
+                                      const std::function<void(const std::string&)>& write) {
   // Files first, then the row, as for maps.
   const std::string staging = dir_.stagingDir();
   try {
-    storingGeoTiff([&] { maps::writeGeoTiff((fs::path(staging) / "pdm.tif").string(), mass); });
+    write(staging);
     store::PdmRecord rec;
     rec.id = store::DataDir::newId();
     rec.mapId = mapId;
     rec.name = name;
     rec.createdAt = store::nowIso();
     rec.meta = meta;
-    dir_.commitDir(staging, dir_.pdmDir(rec.id));
+    dir_.commitDir(staging, dir_.pdmDir(rec.id), store::DiskCharge{store::DiskUse::Pdm, mapId, "body"});
     db_.insertPdm(rec);
     return rec;
   } catch (...) {
@@ -540,11 +550,50 @@ store::PdmRecord MapCatalog::createPdmFromRaster(const std::string& mapId, const
     throw ApiError(400, "invalid_pdm", e.what(), "file");
   }
   mass.geo = map->dem.z.geo;
-  return storePdm(mapId, name.empty() ? "raster PDM" : name, mass, {{"kind", "raster"}});
+  return storePdm(mapId, name.empty() ? "raster PDM" : name, {{"kind", "raster"}}, [&](const std::string& staging) {
+    storingGeoTiff([&] { maps::writeGeoTiff((fs::path(staging) / "pdm.tif").string(), mass); });
+  });
 }
 
-Raster<float> MapCatalog::pdmMass(const std::string& pdmId) {
-  return maps::loadDem(pdmFile(pdmId)).dem.z;
+void MapCatalog::keepMass(const std::string& pdmId, std::shared_ptr<const Raster<float>> mass) {
+  std::lock_guard lock(mutex_);
+  massCache_.remove_if([&](const auto& e) { return e.first == pdmId; });
+  massCache_.emplace_front(pdmId, std::move(mass));
+  std::int64_t cells = 0;
+  for (auto it = massCache_.begin(); it != massCache_.end();) {
+    cells += it->second->geometry.cellCount();
+    // The newest is kept whatever its size; older ones while they fit.
+    if (it != massCache_.begin() && cells > kMassCacheCells) it = massCache_.erase(it);
+    else ++it;
+  }
+}
+
+std::shared_ptr<const Raster<float>> MapCatalog::pdmMass(const std::string& pdmId) {
+  {
+    std::lock_guard lock(mutex_);
+    for (auto it = massCache_.begin(); it != massCache_.end(); ++it)
+      if (it->first == pdmId) {
+        massCache_.splice(massCache_.begin(), massCache_, it);
+        return massCache_.front().second;
+      }
+  }
+  std::shared_ptr<const Raster<float>> mass;
+  std::error_code ec;
+  if (fs::exists(pdmFile(pdmId), ec)) {
+    mass = std::make_shared<const Raster<float>>(maps::loadDem(pdmFile(pdmId)).dem.z);  // raster, or older
+  } else {
+    const auto rec = db_.getPdm(pdmId);
+    if (!rec) throw ApiError(404, "not_found", "no PDM '" + rover::json::shown(pdmId) + "'", "pdm");
+    std::ifstream in(fs::path(dir_.pdmDir(pdmId)) / "components.json");
+    if (!in) throw std::runtime_error("PDM " + pdmId + ": neither pdm.tif nor components.json is stored");
+    const auto components = rover::json::gaussiansFromStoredJson(nlohmann::json::parse(in));
+    auto map = get(rec->mapId);
+    Raster<float> m = pdm::discretise(components, map->dem.geometry(), map->valid);
+    m.geo = map->dem.z.geo;
+    mass = std::make_shared<const Raster<float>>(std::move(m));
+  }
+  keepMass(pdmId, mass);
+  return mass;
 }
 
 }  // namespace rover::api

@@ -3,6 +3,7 @@
 // into the data dir, keeps recently used maps loaded, and produces layers (PNG/GeoTIFF/raw float32)
 // on demand, cached as files next to the map (LayerCache: a size cap, made once per file). Every
 // user-supplied raster is read through maps::openUpload inside its own staging folder.
+#include <functional>
 #include <list>
 #include <memory>
 #include <mutex>
@@ -61,19 +62,30 @@ class MapCatalog {
                         int max, const std::string& pdmId);
 
   // PDMs: from JSON ({"components":[...]} or {"random": G, "seed": S}) or a raster upload.
+  // Stored compactly (issue 22: a random 3-component PDM on a 49 M-cell map was a 164 MB GeoTIFF):
+  // a Gaussian PDM as its components (components.json, under 1 KB), discretised again on the map's
+  // grid when a mission or a layer needs it (pdm::discretise is deterministic: the same mass every
+  // time); a raster PDM as a DEFLATE GeoTIFF with the floating-point predictor (pdm.tif). A PDM
+  // stored as pdm.tif by an older version is read as it is. Each PDM is charged to its map's disk
+  // budget (413/507 beyond it, field "body").
   store::PdmRecord createPdm(const std::string& mapId, const std::string& name,
                              const std::vector<pdm::Gaussian>& components, const nlohmann::json& meta);
   store::PdmRecord createPdmFromRaster(const std::string& mapId, const std::string& name,
                                        const std::string& rasterPath);
-  Raster<float> pdmMass(const std::string& pdmId);
+  // The PDM's probability mass on its map's grid. The last few are kept in memory (at most
+  // kMassCacheCells cells together: one PDM of a 50 M-cell map), so launching missions with a PDM
+  // just made or viewed costs no second discretisation.
+  std::shared_ptr<const Raster<float>> pdmMass(const std::string& pdmId);
+  static constexpr std::int64_t kMassCacheCells = 64'000'000;
   std::string pdmFile(const std::string& pdmId) const;
 
  private:
   std::shared_ptr<const MapData> loadFromDisk(const store::MapRecord& r);
   void renderLayerFile(const MapData& map, const std::string& layer, const std::string& format, int side,
                        const std::string& pdm, const std::string& path);
-  store::PdmRecord storePdm(const std::string& mapId, const std::string& name,
-                            const Raster<float>& mass, const nlohmann::json& meta);
+  // Writes the PDM's files (`write` fills the staging folder) and its row, charged to the map.
+  store::PdmRecord storePdm(const std::string& mapId, const std::string& name, const nlohmann::json& meta,
+                            const std::function<void(const std::string& staging)>& write);
 
   store::Database& db_;
   store::DataDir& dir_;
@@ -82,6 +94,8 @@ class MapCatalog {
   LayerCache layers_;
   std::list<std::shared_ptr<const MapData>> cache_;  // most recent first, a few maps
   std::list<std::pair<std::string, std::shared_ptr<const terrain::Dem>>> cellCache_;
+  std::list<std::pair<std::string, std::shared_ptr<const Raster<float>>>> massCache_;  // most recent first
+  void keepMass(const std::string& pdmId, std::shared_ptr<const Raster<float>> mass);
 };
 
 }  // namespace rover::api

@@ -24,6 +24,7 @@
 #include "server/json/pdm_json.hpp"
 #include "server/json/plan_json.hpp"
 #include "server/json/zones_json.hpp"
+#include "server/store/disk_budget.hpp"
 #include "server/api/zone_routes.hpp"
 
 namespace rover::api {
@@ -247,6 +248,8 @@ missions::MissionJob buildMission(ApiContext& ctx, const json& body) {
   const Planner* planner = &ctx.planners.get(job.record.planner);
   if (!ctx.db.getMap(job.record.mapId))
     throw ApiError(400, "not_found", "no map '" + rj::shown(job.record.mapId) + "'", "map");
+  // Its result is charged to the map: refused now (507) when the map's budget is already full.
+  ctx.dir.budget().requireRoom(store::DiskUse::Result, job.record.mapId, "map");
   // The grid the run plans on, recorded with it (its mission file names this DEM even if the
   // map is deleted or its digest computed differently later).
   const std::string digest = mapDigest(ctx, job.record.mapId);
@@ -291,7 +294,7 @@ missions::MissionJob buildMission(ApiContext& ctx, const json& body) {
     const terrain::Body body = maps.get(j.record.mapId)->body;
     std::shared_ptr<const Raster<float>> pdm;
     if (!ground.coverageGrid && !j.record.pdmId.empty())
-      pdm = std::make_shared<Raster<float>>(maps.pdmMass(j.record.pdmId));
+      pdm = maps.pdmMass(j.record.pdmId);
     PlanningProblem built = problems::problemOnMap(ground, dem, std::move(pdm), body);
     built.rovers = std::move(j.problem.rovers);  // the request's, kept
     built.keepOut = std::move(j.problem.keepOut);
@@ -547,6 +550,7 @@ void addApiRoutes(http::Router& router, ApiContext& ctx) {
   router.add("POST", "/api/maps/{id}/pdms", guarded([&ctx](const Request& req) {
     const std::string mapId = req.params.at("id");
     ctx.maps.get(mapId);  // 404 for an unknown map
+    ctx.dir.budget().requireRoom(store::DiskUse::Pdm, mapId, "body");  // 507 before any work
     InvalidateMapAfter after{ctx, mapId};
     if (req.bodyFile.empty() || req.bodySize == 0) throw ApiError(400, "invalid_input", "the request has no body", "body");
     std::string type = req.header("content-type");
@@ -612,7 +616,7 @@ void addApiRoutes(http::Router& router, ApiContext& ctx) {
     if (!p || p->mapId != req.params.at("id")) throw ApiError(404, "not_found", "no PDM '" + rj::shown(req.params.at("pdm")) + "' on this map", "pdm");
     InvalidateMapAfter after{ctx, p->mapId};
     ctx.db.deletePdm(p->id);
-    store::DataDir::removeTree(ctx.dir.pdmDir(p->id));
+    ctx.dir.remove(ctx.dir.pdmDir(p->id));
     return Response::json(200, {{"deleted", p->id}});
   }), doc("Delete a PDM.", Operation().returns(200, "Deleted.", ref("Deleted")).errors({404})));
 
@@ -659,7 +663,7 @@ void addApiRoutes(http::Router& router, ApiContext& ctx) {
     // Only the request whose delete removed the row says so; a concurrent one finds nothing.
     if (!ctx.db.deleteMission(id)) throw ApiError(404, "not_found", "no mission '" + rj::shown(id) + "'", "id");
     ctx.missions.forget(id);
-    store::DataDir::removeTree(ctx.dir.missionDir(id));
+    ctx.dir.remove(ctx.dir.missionDir(id));
     return Response::json(200, {{"deleted", id}});
   }), doc("Cancel a queued or running mission (202; the planner stops within one step), or delete "
           "an ended one with its result files (200).",

@@ -15,6 +15,7 @@
 #include "server/cli/commands.hpp"
 #include "server/http/http_server.hpp"
 #include "server/missions/mission_manager.hpp"
+#include "server/store/disk_budget.hpp"
 
 namespace rover::cli {
 
@@ -102,6 +103,15 @@ int serveCommand(const std::vector<std::string>& argv, std::ostream& out) {
            "Memory the running + queued missions may take together (their estimates): one larger "
            "is refused with 413, more with 429.");
   a.option("max-upload-mb", "M", "512", "Largest accepted upload.");
+  a.option("disk-budget-mb", "M", "90% of the data directory's file system",
+           "Disk the data directory may fill: maps, PDMs, layer files, mission results and studies "
+           "together. Beyond it a write is refused with 507 disk_budget_full, a mission or study fails.");
+  a.option("map-disk-budget-mb", "M", "2048",
+           "Disk one map's PDMs, layer files and mission results may take together; beyond it 507 "
+           "disk_budget_full, and 413 too_large for one object larger than the whole budget.");
+  a.option("layer-cache-mb", "M", "1024",
+           "Rendered layer files kept (PNG/GeoTIFF/f32 of every map); the least recently used are "
+           "deleted beyond it.");
   a.option("work-threads", "N", "2",
            "Threads for slow requests (DEM imports, layer renders, PDMs, mission validation), "
            "apart from the 2 HTTP threads.");
@@ -169,8 +179,16 @@ int serveCommand(const std::vector<std::string>& argv, std::ostream& out) {
   } catch (const store::StorageFull& e) {
     fullDisk = e.what();  // they are marked at the next start with room
   }
-  api::MapCatalog maps(db, dir);
+  store::DiskBudgetLimits budget;
+  budget.globalBytes = a.has("disk-budget-mb")
+                           ? static_cast<std::uint64_t>(a.integer("disk-budget-mb", 0, 1, 1ll << 40)) << 20
+                           : store::defaultDiskBudget(dir.root());
+  budget.perMapBytes = static_cast<std::uint64_t>(a.integer("map-disk-budget-mb", 2048, 1, 1ll << 40)) << 20;
+  dir.budget().setLimits(budget);
+  api::MapCatalog maps(db, dir, 50'000'000,
+                       static_cast<std::uint64_t>(a.integer("layer-cache-mb", 1024, 1, 1ll << 40)) << 20);
   const int orphans = maps.sweepOrphans();
+  store::recountDiskUse(dir, db);  // the layer files were counted by the catalog
   try {
     maps.ensureDefaultMap();
   } catch (const store::StorageFull& e) {

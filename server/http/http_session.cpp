@@ -599,6 +599,9 @@ void HttpSession::runOnPool() {
   // The session does nothing else while the job runs (no read is pending), so the job may read
   // request_ and route_; the response comes back through the strand.
   auto self = shared_from_this();
+  // The pool takes turns between clients, a client being its address (without the port, so
+  // opening more connections buys no more turns).
+  const std::string client = remote_.substr(0, remote_.rfind(':'));
   const bool queued = state_->pool.trySubmit([self] {
     Response res = invokeHandler(*self->route_, self->request_, *self->state_);
     auto done = [self, res = std::move(res)]() mutable {
@@ -611,7 +614,7 @@ void HttpSession::runOnPool() {
       }
     };
     net::post(self->executor_, std::move(done));
-  });
+  }, client);
   if (queued) return;
   removeTempFile();
   Response r = Response::error(503, "busy",

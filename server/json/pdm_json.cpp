@@ -75,4 +75,38 @@ nlohmann::json toJson(const std::vector<pdm::Gaussian>& components) {
   return {{"components", arr}};
 }
 
+nlohmann::json toStoredJson(const std::vector<pdm::Gaussian>& components) {
+  nlohmann::json arr = nlohmann::json::array();
+  for (const auto& g : components)
+    arr.push_back({{"x", g.mean.x()},
+                   {"y", g.mean.y()},
+                   {"sigma_x", g.sigmaX},
+                   {"sigma_y", g.sigmaY},
+                   {"rotation_rad", g.rotation},
+                   {"weight", g.weight}});
+  return {{"format", "gaussians/1"}, {"components", arr}};
+}
+
+std::vector<pdm::Gaussian> gaussiansFromStoredJson(const nlohmann::json& j) {
+  if (!j.is_object() || j.value("format", "") != "gaussians/1" || !j.contains("components") ||
+      !j["components"].is_array())
+    throw Error(ErrorCode::InvalidInput, "components", "not a stored Gaussian PDM (gaussians/1)");
+  std::vector<pdm::Gaussian> out;
+  try {
+    for (const auto& c : j["components"]) {
+      pdm::Gaussian g;
+      g.mean = {c.at("x").get<double>(), c.at("y").get<double>()};
+      g.sigmaX = c.at("sigma_x").get<double>();
+      g.sigmaY = c.at("sigma_y").get<double>();
+      g.rotation = c.at("rotation_rad").get<double>();
+      g.weight = c.at("weight").get<double>();
+      out.push_back(g);
+    }
+  } catch (const nlohmann::json::exception& e) {
+    throw Error(ErrorCode::InvalidInput, "components", std::string("a stored Gaussian PDM: ") + e.what());
+  }
+  pdm::validateGaussians(out);
+  return out;
+}
+
 }  // namespace rover::json

@@ -279,7 +279,8 @@ void MissionManager::saveResult(const MissionJob& job, const PlanResult& result,
   const std::string staging = dir_.stagingDir();
   try {
     writeResultFiles(job, result, std::move(resultJson), stream, staging);
-    dir_.commitDir(staging, dir_.missionDir(job.record.id));
+    // Charged to the map's disk budget: beyond it the mission fails as on a full disk.
+    dir_.commitDir(staging, dir_.missionDir(job.record.id), store::DiskCharge{store::DiskUse::Result, job.record.mapId, ""});
   } catch (...) {
     store::DataDir::removeTree(staging);  // a full disk must not also keep the half-written files
     throw;

@@ -15,6 +15,8 @@
 #include <utility>
 #include <vector>
 
+#include "server/store/disk_budget.hpp"
+
 namespace fs = std::filesystem;
 
 namespace rover::store {
@@ -69,7 +71,9 @@ void fsyncTree(const fs::path& dir) {
 
 bool isStorageFullErrno(int err) { return err == ENOSPC || err == EDQUOT || err == EFBIG; }
 
-DataDir::DataDir(std::string root) : root_(std::move(root)) {
+DataDir::~DataDir() = default;
+
+DataDir::DataDir(std::string root) : root_(std::move(root)), budget_(std::make_unique<DiskBudget>()) {
   if (root_.empty()) throw std::runtime_error("data directory: empty path");
   const fs::path r(root_);
   for (const fs::path& dir : {r, r / "maps", r / "pdms", r / "missions", r / "tmp"}) {
@@ -145,7 +149,8 @@ std::string DataDir::stagingDir() const {
   throw std::runtime_error("cannot create a unique staging folder in '" + tmp.string() + "'");
 }
 
-void DataDir::commitDir(const std::string& staged, const std::string& finalDir) const {
+void DataDir::commitDir(const std::string& staged, const std::string& finalDir,
+                        const std::optional<DiskCharge>& charge) const {
   std::error_code ec;
   if (!fs::is_directory(staged, ec))
     throw std::runtime_error("commit: staged folder '" + staged + "' does not exist");
@@ -161,11 +166,13 @@ void DataDir::commitDir(const std::string& staged, const std::string& finalDir) 
                                "': " + ec.message());
   }
   fsyncTree(staged);
+  if (charge) budget_->charge(finalDir, charge->use, charge->mapId, bytesUnder(staged), charge->field);
   fs::rename(staged, target, ec);
-  if (ec && isStorageFullErrno(ec.value())) throw StorageFull("cannot commit " + target.filename().string());
-  if (ec)
-    throw std::runtime_error("commit: cannot move '" + staged + "' to '" + finalDir +
-                             "': " + ec.message());
+  if (ec) {
+    budget_->release(finalDir);
+    if (isStorageFullErrno(ec.value())) throw StorageFull("cannot commit " + target.filename().string());
+    throw std::runtime_error("commit: cannot move '" + staged + "' to '" + finalDir + "': " + ec.message());
+  }
   // Make the rename itself durable: flush both parent folders.
   fsyncDirBestEffort(target.parent_path());
   fsyncDirBestEffort(fs::path(staged).parent_path());
@@ -210,6 +217,11 @@ void DataDir::writeFileAtomic(const std::string& path, const std::string& bytes)
   if (::close(fd) != 0) failWith("close", errno);
   if (::rename(tmp.c_str(), target.c_str()) != 0) failWith("rename", errno);
   fsyncDirBestEffort(dir);
+}
+
+void DataDir::remove(const std::string& path) const {
+  removeTree(path);
+  budget_->release(path);
 }
 
 void DataDir::removeTree(const std::string& path) {

@@ -6,6 +6,8 @@
 //   DATA/pdms/ID/         one folder per PDM (components, mass raster)
 //   DATA/missions/ID/     one folder per mission (result.json, result.geojson, result.csv)
 //   DATA/tmp/             uploads in flight and folders being built; emptied at start-up
+#include <memory>
+#include <optional>
 #include <string>
 
 #include "server/http/http_types.hpp"
@@ -19,7 +21,35 @@ class StorageFull : public http::ApiError {
   explicit StorageFull(const std::string& what)
       : http::ApiError(507, "insufficient_storage",
                        "the server's disk is full: " + what + "; free space or try again later") {}
+
+ protected:
+  StorageFull(int status, const std::string& code, const std::string& message, const std::string& field)
+      : http::ApiError(status, code, message, field) {}
 };
+
+// Beyond a disk budget (DiskBudget, server/store/disk_budget.hpp): a StorageFull, so a mission or
+// study that meets it fails as on a full disk; answered 507 disk_budget_full, or 413 too_large for
+// one object no per-map budget could hold.
+class OverBudget : public StorageFull {
+ public:
+  OverBudget(int status, const std::string& code, const std::string& message, const std::string& field,
+             bool serverWide)
+      : StorageFull(status, code, message, field), serverWide_(serverWide) {}
+  // The global budget is full (not only the map's): freeing any map's files makes room.
+  bool serverWide() const { return serverWide_; }
+
+ private:
+  bool serverWide_;
+};
+
+// What a stored folder is, for the disk budgets.
+enum class DiskUse { Map, Pdm, Layer, Result, Study };
+struct DiskCharge {
+  DiskUse use;
+  std::string mapId;  // "" for none (studies)
+  std::string field;  // named in a refusal
+};
+class DiskBudget;
 
 // True for the errno values of a full disk or an exceeded size limit (ENOSPC, EDQUOT, EFBIG).
 bool isStorageFullErrno(int err);
@@ -30,7 +60,12 @@ class DataDir {
   // folder on a full disk is accepted (startedFull() says so): reads work and writes answer 507 until
   // space frees, so a restart with a full disk still starts.
   explicit DataDir(std::string root);
+  ~DataDir();
+  DataDir(const DataDir&) = delete;
+  DataDir& operator=(const DataDir&) = delete;
   bool startedFull() const { return startedFull_; }
+  // What is stored, against the disk budgets (unlimited until setLimits).
+  DiskBudget& budget() const { return *budget_; }
   const std::string& root() const { return root_; }
   std::string databasePath() const;
   std::string mapDir(const std::string& id) const;
@@ -43,7 +78,12 @@ class DataDir {
   // A fresh empty folder under tmp/ to build something in before commitDir().
   std::string stagingDir() const;
   // Atomically moves a staged folder to its final place (rename); throws if the target exists.
-  void commitDir(const std::string& staged, const std::string& finalDir) const;
+  // With a charge, the staged folder's bytes are charged to the disk budgets first (OverBudget,
+  // and nothing moved, when they do not fit) under the key `finalDir`.
+  void commitDir(const std::string& staged, const std::string& finalDir,
+                 const std::optional<DiskCharge>& charge = std::nullopt) const;
+  // Removes a stored folder or file and releases its charge.
+  void remove(const std::string& path) const;
   // Writes bytes to `path` atomically (temp file in the same folder, fsync, rename). A full disk
   // throws StorageFull (and leaves nothing behind).
   static void writeFileAtomic(const std::string& path, const std::string& bytes);
@@ -55,6 +95,7 @@ class DataDir {
  private:
   std::string root_;
   bool startedFull_ = false;
+  std::unique_ptr<DiskBudget> budget_;
 };
 
 }  // namespace rover::store

@@ -11,6 +11,7 @@
 
 #include "server/json/plan_json.hpp"
 #include "server/store/sqlite_stmt.hpp"
+#include "server/studies/study_summary.hpp"
 #include "server/studies/study_version.hpp"
 
 namespace rover::studies {
@@ -313,48 +314,27 @@ void StudyDb::mergeFrom(const std::string& path) {
   exec(db_, "DETACH DATABASE src");
 }
 
-StudySummary StudyDb::summary(bool timing) const {
-  StudySummary out;
-  const StudySpec spec = parseStudySpec(specJson());
-  out.name = spec.name;
-  out.runsTotal = spec.runCount();
+void StudyDb::accumulate(SummaryAccumulator& acc) const {
+  // The metrics in the table's order first, so the rows come in the order the runs reported them.
   const std::vector<std::string> keys = metricKeys();
-  std::string cols = "config_id, wall_s, cpu_s";
+  std::vector<std::size_t> index;
+  for (const auto& k : keys) index.push_back(acc.metricIndex(k));
+  std::string cols = "run_index, config_id, wall_s, cpu_s";
   for (const auto& k : keys) cols += ", " + quoted(columnOf(k));
-  // Per configuration: each metric's values over its runs (NULL left out), then the timings.
-  const std::size_t nConfigs = spec.configurations.size();
-  std::vector<std::vector<std::vector<double>>> values(nConfigs, std::vector<std::vector<double>>(keys.size() + 2));
-  std::vector<std::vector<bool>> present(nConfigs, std::vector<bool>(keys.size(), false));
-  std::vector<std::size_t> runs(nConfigs, 0);
-  Stmt s(db_, ("SELECT " + cols + " FROM runs ORDER BY run_index").c_str());
+  Stmt s(db_, ("SELECT " + cols + " FROM runs").c_str());
+  std::vector<std::pair<std::size_t, double>> values;
   while (s.step()) {
-    const auto c = static_cast<std::size_t>(s.integer(0));
-    if (c >= nConfigs) continue;
-    ++runs[c];
-    ++out.runsDone;
-    out.wallSeconds += s.real(1);
-    values[c][keys.size()].push_back(s.real(1));
-    values[c][keys.size() + 1].push_back(s.real(2));
-    for (std::size_t k = 0; k < keys.size(); ++k) {
-      if (s.isNull(static_cast<int>(k) + 3)) continue;
-      values[c][k].push_back(s.real(static_cast<int>(k) + 3));
-      present[c][k] = true;
-    }
+    values.clear();
+    for (std::size_t k = 0; k < keys.size(); ++k)
+      if (!s.isNull(static_cast<int>(k) + 4)) values.emplace_back(index[k], s.real(static_cast<int>(k) + 4));
+    acc.add(s.integer(0), static_cast<int>(s.integer(1)), s.real(2), s.real(3), values);
   }
-  // A metric a configuration never reported (another planner's) is left out of its rows; one it
-  // reported without a value (a level never reached) stays with n = 0.
-  for (std::size_t c = 0; c < nConfigs; ++c) {
-    if (runs[c] == 0) continue;
-    const std::string& name = spec.configurations[c].name;
-    for (std::size_t k = 0; k < keys.size(); ++k) {
-      if (!present[c][k] && keys[k].find('@') == std::string::npos && keys[k].rfind("p_at_", 0) != 0) continue;
-      out.rows.push_back({name, keys[k], runs[c], summarize(values[c][k])});
-    }
-    if (!timing) continue;
-    out.rows.push_back({name, "wall_s", runs[c], summarize(values[c][keys.size()])});
-    out.rows.push_back({name, "cpu_s", runs[c], summarize(values[c][keys.size() + 1])});
-  }
-  return out;
+}
+
+StudySummary StudyDb::summary(bool timing) const {
+  SummaryAccumulator acc(parseStudySpec(specJson()));
+  accumulate(acc);
+  return acc.summary(timing);
 }
 
 std::string StudyDb::runsCsv() const {

@@ -49,6 +49,8 @@ struct RunRow {
   int rank = 0;
 };
 
+class SummaryAccumulator;
+
 struct SummaryRow {
   std::string config;
   std::string metric;
@@ -88,7 +90,10 @@ class StudyDb {
 
   // With `timing`, each configuration also gets wall_s and cpu_s rows (they differ between runs
   // of the same rows: leave them out to compare summaries).
+  // Built by a SummaryAccumulator over every run (one pass over the table).
   StudySummary summary(bool timing = true) const;
+  // Adds every run of the table to `acc` (a running study's summary starts from what is stored).
+  void accumulate(SummaryAccumulator& acc) const;
   // runs as CSV: run_index,config,replicate,seed,status,wall_s,cpu_s,host,rank,<metrics...>
   std::string runsCsv() const;
   void runsCsv(std::ostream& out) const;  // streamed: a big study's CSV need not fit in memory

@@ -16,7 +16,9 @@
 
 #include "core/common/error.hpp"
 #include "server/store/database.hpp"
+#include "server/store/disk_budget.hpp"
 #include "server/studies/studies.hpp"
+#include "server/studies/study_summary.hpp"
 
 extern char** environ;
 
@@ -278,13 +280,17 @@ void StudyManager::loadStored() {
       s.etaSeconds = -1;
       queue_.push_back(s.id);
     }
-    Entry e{s, std::make_shared<StudyStream>(), std::make_shared<CancelToken>()};
+    Entry e;
+    e.state = s;
+    e.stream = std::make_shared<StudyStream>();
+    e.cancel = std::make_shared<CancelToken>();
     e.stream->update(s);
     studies_.emplace(s.id, std::move(e));
   }
 }
 
 StudyState StudyManager::submit(const json& body) {
+  dir_.budget().requireRoom(store::DiskUse::Study, "");  // 507 when the disk budget is full
   const json doc = documentOf(body);
   const StudySpec spec = parseStudySpec(doc);  // rover::Error naming the field
   if (spec.runCount() > kMaxServerRuns)
@@ -324,7 +330,10 @@ StudyState StudyManager::submit(const json& body) {
   }
   {
     std::lock_guard lock(mutex_);
-    Entry e{s, std::make_shared<StudyStream>(), std::make_shared<CancelToken>()};
+    Entry e;
+    e.state = s;
+    e.stream = std::make_shared<StudyStream>();
+    e.cancel = std::make_shared<CancelToken>();
     e.stream->update(s);
     studies_.emplace(s.id, std::move(e));
     queue_.push_back(s.id);
@@ -358,12 +367,68 @@ std::string StudyManager::databasePath(const std::string& id) const {
   return fs::is_regular_file(p, ec) ? p.string() : std::string();
 }
 
-json StudyManager::summary(const std::string& id) const {
+json StudyManager::storedSummary(const std::string& id) const {
+  std::error_code ec;
+  const fs::path saved = fs::path(folder(id)) / "summary.json";
+  if (fs::is_regular_file(saved, ec)) {
+    try {
+      return readJsonFile(saved.string());
+    } catch (const std::exception&) {
+      // Unreadable (cut short by a full disk): the database still has every run.
+    }
+  }
   const std::string path = databasePath(id);
   if (path.empty()) return nullptr;
   StudyDb db = StudyDb::open(path);  // a second connection: WAL readers do not block the writer
   if (!db.hasSpec()) return nullptr;
   return toJson(db.summary());
+}
+
+json StudyManager::summary(const std::string& id) {
+  std::shared_ptr<std::mutex> once;
+  {
+    std::lock_guard lock(mutex_);
+    auto it = studies_.find(id);
+    if (it == studies_.end()) return nullptr;
+    if (it->second.summary) return *it->second.summary;
+    once = it->second.summaryOnce;
+  }
+  std::lock_guard reading(*once);  // a second reader waits here, then finds it
+  std::uint64_t version = 0;
+  bool ended = false;
+  {
+    std::lock_guard lock(mutex_);
+    auto it = studies_.find(id);
+    if (it == studies_.end()) return nullptr;
+    if (it->second.summary) return *it->second.summary;
+    version = it->second.summaryVersion;
+    ended = isEnded(it->second.state.status);
+  }
+  const fs::path saved = fs::path(folder(id)) / "summary.json";
+  std::error_code ec;
+  const bool wasSaved = fs::exists(saved, ec);
+  json s = storedSummary(id);
+  if (ended && !wasSaved && !s.is_null()) {
+    try {  // an ended study of an older version: read once, kept for the next start
+      store::DataDir::writeFileAtomic(saved.string(), s.dump());
+    } catch (const std::exception&) {
+    }
+  }
+  std::lock_guard lock(mutex_);
+  auto it = studies_.find(id);
+  // Kept unless the study published a newer one meanwhile.
+  if (it != studies_.end() && it->second.summaryVersion == version)
+    it->second.summary = std::make_shared<const json>(s);
+  return s;
+}
+
+void StudyManager::publishSummary(const std::string& id, const json& summary) {
+  auto shared = std::make_shared<const json>(summary);
+  std::lock_guard lock(mutex_);
+  auto it = studies_.find(id);
+  if (it == studies_.end()) return;
+  it->second.summary = std::move(shared);
+  ++it->second.summaryVersion;
 }
 
 std::string StudyManager::runsCsvFile(const std::string& id) const {
@@ -414,7 +479,7 @@ StudyManager::Removal StudyManager::remove(const std::string& id) {
   }
   studies_.erase(it);
   lock.unlock();
-  store::DataDir::removeTree(folder(id));
+  dir_.remove(folder(id));
   return Removal::Deleted;
 }
 
@@ -430,6 +495,15 @@ void StudyManager::stop() {
 }
 
 void StudyManager::finish(const std::string& id, const std::string& status, const std::string& message) {
+  // An ended study's summary never changes: kept beside it (before it is seen ended), so a restart
+  // need not read its runs.
+  json final = nullptr;
+  try {
+    final = summary(id);
+    if (!final.is_null()) store::DataDir::writeFileAtomic((fs::path(folder(id)) / "summary.json").string(), final.dump());
+  } catch (const std::exception&) {
+    // A full disk: the summary stays in memory; after a restart it is read from the database.
+  }
   StudyState s;
   std::shared_ptr<StudyStream> stream;
   {
@@ -443,12 +517,15 @@ void StudyManager::finish(const std::string& id, const std::string& status, cons
     s = it->second.state;
     stream = it->second.stream;
   }
-  try {
-    stream->setSummary(summary(id));
-  } catch (const std::exception&) {
-  }
+  stream->setSummary(final);
   saveState(s);
+  dir_.budget().record(folder(id), store::DiskUse::Study, "", store::bytesUnder(folder(id)));
   stream->update(s);
+}
+
+void StudyManager::chargeDisk(const std::string& id) const {
+  // A stat of the few files in the folder: cheap enough at every commit.
+  dir_.budget().charge(folder(id), store::DiskUse::Study, "", store::bytesUnder(folder(id)));
 }
 
 void StudyManager::report(const std::string& id, std::size_t done, std::size_t total, std::size_t doneAtStart,
@@ -505,6 +582,9 @@ void StudyManager::work() {
     } catch (const Error& e) {
       status = "failed";
       message = e.what();
+    } catch (const store::StorageFull& e) {  // the disk, or the disk budget, is full
+      status = "failed";
+      message = std::string("insufficient storage: ") + e.what() + " (the runs stored are kept)";
     } catch (const std::exception& e) {
       status = "failed";
       message = "the study stopped on an internal error (details are in the server log)";
@@ -541,15 +621,25 @@ void StudyManager::runInProcess(const std::string& id, const CancelToken& cancel
   const auto start = Clock::now();
   auto lastSummary = Clock::now() - kSummaryEvery;
   auto lastCommit = Clock::now();
-  const auto summaryOf = [&db] { return toJson(db.summary()); };
+  // The summary follows the commits (what is stored, nothing more): built from the runs stored
+  // at the start, then each batch merged in.
+  SummaryAccumulator acc(spec);
+  db.accumulate(acc);
+  json latest = toJson(acc.summary());
+  publishSummary(id, latest);
+  const auto summaryOf = [&latest] { return latest; };
   report(id, done, total, doneAtStart, start, summaryOf, lastSummary);
   std::vector<RunRow> batch;
   const auto commit = [&] {
     db.insert(batch);
+    acc.add(batch);
+    latest = toJson(acc.summary());
+    publishSummary(id, latest);
     done += batch.size();
     batch.clear();
     lastCommit = Clock::now();
     report(id, done, total, doneAtStart, start, summaryOf, lastSummary);
+    chargeDisk(id);  // OverBudget ends the study (failed) with the runs committed so far
   };
   for (const std::size_t index : todo) {
     // Below the missions: wait (committing what is done) while they want the machine.
@@ -609,15 +699,31 @@ void StudyManager::runLaunched(const std::string& id, const CancelToken& cancel)
   bool first = true;
   const auto start = Clock::now();
   auto lastSummary = Clock::now() - kSummaryEvery;
-  const auto summaryOf = [&db] { return db && db->hasSpec() ? toJson(db->summary()) : json(nullptr); };
+  // The child writes the database: its summary is read from it every few seconds (report) and
+  // published for the GETs.
+  const auto summaryOf = [&] {
+    json s = db && db->hasSpec() ? toJson(db->summary()) : json(nullptr);
+    publishSummary(id, s);
+    return s;
+  };
   int status = 0;
   bool signalled = false;
+  std::optional<store::OverBudget> overBudget;  // the child was stopped for it
   for (;;) {
     const pid_t w = waitpid(pid, &status, WNOHANG);
     if (w == pid) break;
     if (cancel.cancelled() && !signalled) {
       kill(pid, SIGTERM);  // mpirun forwards it to its ranks
       signalled = true;
+    }
+    if (!overBudget) {
+      try {
+        chargeDisk(id);
+      } catch (const store::OverBudget& e) {
+        overBudget.emplace(e);
+        kill(pid, SIGTERM);
+        signalled = true;
+      }
     }
     try {
       if (!db && !databasePath(id).empty()) db.emplace(StudyDb::open(dbPath));
@@ -636,6 +742,7 @@ void StudyManager::runLaunched(const std::string& id, const CancelToken& cancel)
   done = db && db->hasSpec() ? db->runCount() : 0;
   lastSummary = Clock::now() - kSummaryEvery;
   report(id, done, total, first ? done : doneAtStart, start, summaryOf, lastSummary);
+  if (overBudget) throw *overBudget;
   if (signalled) return;
   const int code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
   if (code != 0)

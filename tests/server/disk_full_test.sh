@@ -85,16 +85,16 @@ grep -q "$MNT" "$TMP/body" && fail "the PDM's 507 shows a server path: $(cat "$T
 alive || fail "the server died writing GeoTIFFs on a full disk"
 pass "a .tif layer and a PDM on the full disk answer 507 insufficient_storage, no path shown"
 
-# 48 KiB free: a PDM's small body fits, its pdm.tif does not (libtiff says only "Error fetching
-# directory count"). 507 naming pdm.tif, no path, nothing left in tmp/; then the disk fills again.
+# 48 KiB free: a Gaussian PDM is stored as its components (a few hundred bytes, issue 22), so it
+# fits where its GeoTIFF (1.4 MB) used to answer 507; nothing is left in tmp/; then the disk fills again.
 truncate -s -48k "$MNT/filler1"
 c=$(code "/api/maps/$MAP/pdms" -H 'Content-Type: application/json' -d '{"random":2,"seed":6}')
-[ "$c" = 507 ] || fail "a PDM whose GeoTIFF does not fit: $c $(cat "$TMP/body")"
-grep -q 'cannot write pdm.tif' "$TMP/body" || fail "the PDM's 507 is not about its GeoTIFF: $(cat "$TMP/body")"
-grep -q "$MNT" "$TMP/body" && fail "the pdm.tif 507 shows a server path: $(cat "$TMP/body")"
-[ -z "$(ls -A "$MNT/data/tmp")" ] || fail "a half-written PDM left in tmp/: $(ls "$MNT/data/tmp")"
+[ "$c" = 201 ] || fail "a Gaussian PDM in the last 48 KiB: $c $(cat "$TMP/body")"
+P6=$(json 'd["id"]' < "$TMP/body")
+[ "$(du -sk "$MNT/data/pdms/$P6" | cut -f1)" -le 8 ] || fail "the PDM takes $(du -sk "$MNT/data/pdms/$P6") KiB"
+[ -z "$(ls -A "$MNT/data/tmp")" ] || fail "a PDM's staging left in tmp/: $(ls "$MNT/data/tmp")"
 fill 3
-pass "a PDM whose GeoTIFF does not fit in the last 48 KiB answers 507 (\"$(json 'd["error"]["message"]' < "$TMP/body" | cut -c1-50)...\")"
+pass "a Gaussian PDM fits in the last 48 KiB: stored as its components ($(du -sb "$MNT/data/pdms/$P6" | cut -f1) bytes)"
 
 # The running mission ends (cancelled) and cannot store its result: failed, with the reason.
 [ "$(code "/api/missions/$RUN" -X DELETE)" = 202 ] || fail "cancel on a full disk"

@@ -3,6 +3,8 @@
 // missions, a run opened as a mission, and a restart that resumes a study with only its missing runs.
 #include <doctest/doctest.h>
 
+#include <sqlite3.h>
+
 #include <atomic>
 #include <set>
 #include <sstream>
@@ -136,6 +138,32 @@ TEST_CASE("studies API: launch, progress frames, summary, runs.csv, study.sqlite
   checkError(s.api.get("/api/studies/" + id), 404, "id");
   CHECK(!std::filesystem::exists(tmp.path / "data" / "studies" / id));
   checkError(s.api.get("/api/studies/nope/runs.csv"), 404, "id");
+}
+
+TEST_CASE("studies API: GET serves the summary kept with the study, not a pass over its runs") {
+  TempDir tmp;
+  StudyServer s(tmp.str("data"));
+  const HttpResult launched = s.api.postJson("/api/studies", tinySpec(4));
+  REQUIRE(launched.status == 202);
+  const std::string id = launched.json()["id"];
+  const json ended = s.waitEnded(id);
+  REQUIRE(ended["status"] == "succeeded");
+  const json summary = ended["summary"];
+  CHECK(summary["runs_done"] == 8);
+  // The published summary is the database's.
+  const std::string dbPath = (tmp.path / "data" / "studies" / id / "study.sqlite").string();
+  {
+    studies::StudyDb db = studies::StudyDb::open(dbPath);
+    CHECK(studies::toJson(db.summary()).dump() == summary.dump());
+  }
+  CHECK(std::filesystem::exists(tmp.path / "data" / "studies" / id / "summary.json"));
+  // Emptied behind the server's back, the runs table no longer gives that summary; the GET still
+  // does: it reads no run.
+  sqlite3* raw = nullptr;
+  REQUIRE(sqlite3_open(dbPath.c_str(), &raw) == SQLITE_OK);
+  CHECK(sqlite3_exec(raw, "DELETE FROM runs", nullptr, nullptr, nullptr) == SQLITE_OK);
+  sqlite3_close(raw);
+  CHECK(s.study(id)["summary"].dump() == summary.dump());
 }
 
 TEST_CASE("studies API: bad specs answer 400 naming the field, bounds") {
