@@ -6,6 +6,7 @@
 
 #include "core/common/parallel.hpp"
 #include "server/api/map_catalog.hpp"
+#include "server/jail/import_jail.hpp"
 #include "server/api/routes.hpp"
 #include "server/cli/arg_parser.hpp"
 #include "server/cli/commands.hpp"
@@ -146,6 +147,7 @@ int serveCommand(const std::vector<std::string>& argv, std::ostream& out) {
       << missions::formatBytes(missionMemory) << " mission memory"
       << (config.token.empty() ? "" : ", token required")
       << (launcher.empty() ? "" : ", studies launched by " + launcher[0]) << ")" << std::endl;
+  out << "imports: client files are parsed in " << jail::isolationInWords(jail::isolation()) << std::endl;
   if (config.webRoot.empty())
     out << "warning: no web page found (pass --web DIR); serving the API only" << std::endl;
   if (!fullDisk.empty()) out << "warning: " << fullDisk << std::endl;
