@@ -6,11 +6,11 @@
 
 #include "core/common/parallel.hpp"
 #include "server/api/map_catalog.hpp"
-#include "server/jail/import_jail.hpp"
 #include "server/api/routes.hpp"
 #include "server/cli/arg_parser.hpp"
 #include "server/cli/commands.hpp"
 #include "server/http/http_server.hpp"
+#include "server/jail/import_jail.hpp"
 #include "server/missions/mission_manager.hpp"
 
 namespace rover::cli {
