@@ -23,8 +23,11 @@ test_pkgs=(
   chromium   # the browser tests drive Debian's Chromium through playwright-core
   curl python3
   clang libclang-rt-14-dev   # libFuzzer harnesses (tests/fuzz/run.sh)
+  bubblewrap   # the import jail the server parses uploads in (server/jail/import_jail.hpp)
 )
-runtime_pkgs=(libompl16 libgdal32 libsqlite3-0 libssl3 libopenmpi3 gdal-data curl ca-certificates)  # curl: HEALTHCHECK
+# curl: HEALTHCHECK; bubblewrap: the import jail (without it imports run with rlimits only, and
+# netCDF-4 is refused; `serve` says which at start).
+runtime_pkgs=(libompl16 libgdal32 libsqlite3-0 libssl3 libopenmpi3 gdal-data curl ca-certificates bubblewrap)
 bench_pkgs=(wrk nginx-light time curl)  # tests/bench/*: load generator and the nginx baseline
 
 mode=${1:-all}

@@ -21,6 +21,7 @@
 #include "core/common/error.hpp"
 #include "core/terrain/layers.hpp"
 #include "maps/gdal_env.hpp"
+#include "maps/georef.hpp"
 
 namespace rover::maps {
 
@@ -274,6 +275,13 @@ LoadedDem loadDem(const std::string& path, const LoadOptions& opt) {
     info.crsName = OSRGetName(srs) ? OSRGetName(srs) : "";
     info.geographic = OSRIsGeographic(srs);
   }
+  // The file's georeferencing is the client's word: checked before any of it is used (issue 22).
+  auto checkGeotransform = [&](const double* t, int r, int c, OGRSpatialReferenceH crs) {
+    std::array<double, 6> a;
+    std::copy(t, t + 6, a.begin());
+    if (auto p = georefProblem(a, r, c, crsUnits(crs))) fail(shown, p->reason, p->field);
+  };
+  if (info.georeferenced) checkGeotransform(gt, info.sourceRows, info.sourceCols, srs);
 
   // Decide whether the warper has to build the grid: resampling, cropping, a rotated or south-up
   // geotransform. Otherwise band 1 is read as is.
@@ -372,6 +380,7 @@ LoadedDem loadDem(const std::string& path, const LoadOptions& opt) {
     grid = warped.get();
     GDALGetGeoTransform(grid, gt);
     srs = GDALGetSpatialRef(grid);
+    checkGeotransform(gt, GDALGetRasterYSize(grid), GDALGetRasterXSize(grid), srs);
   }
 
   const int cols = GDALGetRasterXSize(grid), rows = GDALGetRasterYSize(grid);
@@ -432,6 +441,11 @@ LoadedDem loadDem(const std::string& path, const LoadOptions& opt) {
     }
   }
 
+  // Whatever the CRS, the grid's cells must be a real size in metres (no planner can use a map
+  // whose cell is NaN, zero or infinite: core refuses it too, checkGridGeometry).
+  if (!(dx > 0 && dy > 0 && std::isfinite(dx) && std::isfinite(dy)))
+    fail(shown, "the georeferencing gives cells of " + num(dx) + " x " + num(dy) + " m, not a positive size",
+         "geotransform.pixel_width");
   GridGeometry g{rows, cols, dx, dy};
   dem.z = Raster<float>(g, 0.0f);
   CPLErrorReset();

@@ -11,6 +11,7 @@
 #include <ogr_srs_api.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -27,6 +28,7 @@ namespace fs = std::filesystem;
 struct UploadSandbox::State {
   std::string root;     // canonical (local) or lexically normal (/vsimem/), no trailing '/'
   bool memory = false;  // a /vsimem/ root (the fuzz harness)
+  bool allowHdf5 = false;
   std::vector<std::string> refusedFiles, refusedDrivers;
 };
 
@@ -314,8 +316,11 @@ void gateDrivers() {
   }
 }
 
-void captureError(CPLErr cls, CPLErrorNum, const char* msg) {
+std::atomic<bool> ranOutOfMemory{false};
+
+void captureError(CPLErr cls, CPLErrorNum num, const char* msg) {
   if (cls < CE_Failure) return;  // warnings and debug output are not reasons
+  if (num == CPLE_OutOfMemory) ranOutOfMemory = true;
   if (auto* log = static_cast<GdalErrorLog*>(CPLGetErrorHandlerUserData())) log->add(msg ? msg : "");
 }
 
@@ -364,13 +369,14 @@ std::string formatInWords(const std::string& driver) {
 }
 
 std::string uploadFormatsInWords() {
-  return "GeoTIFF, PDS3 (.IMG with its .LBL), PDS4, ISIS2/3 cubes, VICAR, classic netCDF, ENVI, "
+  return "GeoTIFF, PDS3 (.IMG with its .LBL), PDS4, ISIS2/3 cubes, VICAR, netCDF, ENVI, "
          "ESRI .hdr, ASCII grid, XYZ, USGS DEM, SRTM .hgt, DTED, Erdas Imagine, Surfer grids, PNG — "
          "also inside a .zip or .tar";
 }
 
-UploadSandbox::UploadSandbox(const std::string& root) : state_(std::make_unique<State>()) {
+UploadSandbox::UploadSandbox(const std::string& root, bool allowHdf5) : state_(std::make_unique<State>()) {
   ensureGdal();
+  state_->allowHdf5 = allowHdf5;
   state_->memory = startsWith(root, "/vsimem/");
   state_->root = state_->memory ? lexicalNormal(root) : canonicalLocal(root);
   if (state_->root.empty() || state_->root == "/" || state_->root == "/vsimem")
@@ -382,6 +388,7 @@ UploadSandbox::UploadSandbox(const std::string& root) : state_(std::make_unique<
 UploadSandbox::~UploadSandbox() { tlsSandbox = nullptr; }
 
 const std::string& UploadSandbox::root() const { return state_->root; }
+bool UploadSandbox::allowsHdf5() const { return state_->allowHdf5; }
 bool UploadSandbox::live() const { return tlsSandbox == state_.get(); }
 bool UploadSandbox::contains(const std::string& path) const { return containsPath(*state_, path); }
 const std::vector<std::string>& UploadSandbox::refusedFiles() const { return state_->refusedFiles; }
@@ -443,8 +450,10 @@ Dataset openUpload(const std::string& path, const UploadSandbox& sandbox, std::s
   }
   std::vector<std::string> drivers = uploadDrivers();
   // netCDF-4 files are HDF5, whose datasets may be stored in (or link to) other files, which
-  // libhdf5 opens itself: only classic netCDF ("CDF\1", "CDF\2", "CDF\5") is accepted.
-  if (firstBytes(path, 3) != "CDF") drivers.erase(std::find(drivers.begin(), drivers.end(), "netCDF"));
+  // libhdf5 opens itself: only classic netCDF ("CDF\1", "CDF\2", "CDF\5") is accepted, unless
+  // the process cannot see other files (the import jail says so).
+  if (!sandbox.allowsHdf5() && firstBytes(path, 3) != "CDF")
+    drivers.erase(std::find(drivers.begin(), drivers.end(), "netCDF"));
   std::vector<const char*> allowed;
   for (const auto& d : drivers) allowed.push_back(d.c_str());
   allowed.push_back(nullptr);
@@ -463,8 +472,11 @@ Dataset openUpload(const std::string& path, const UploadSandbox& sandbox, std::s
     } else if (GDALDriverH d = GDALIdentifyDriverEx(path.c_str(), GDAL_OF_RASTER, nullptr, nullptr)) {
       const std::string driver = GDALGetDriverShortName(d);
       if (std::find(drivers.begin(), drivers.end(), driver) == drivers.end())
-        refusal = name + " is a " + (driver == "netCDF" ? "netCDF-4 (HDF5) file" : formatInWords(driver)) +
-                  ", which uploads may not use (accepted: " + uploadFormatsInWords() + ")";
+        refusal = driver == "netCDF"
+                      ? name + " is a netCDF-4 (HDF5) file, which this server reads only where its import "
+                               "jail (bubblewrap) runs; classic netCDF is read everywhere"
+                      : name + " is a " + formatInWords(driver) + ", which uploads may not use (accepted: " +
+                            uploadFormatsInWords() + ")";
     }
     return nullptr;
   }
@@ -480,6 +492,8 @@ Dataset openUpload(const std::string& path, const UploadSandbox& sandbox, std::s
   }
   return ds;
 }
+
+bool gdalRanOutOfMemory() { return ranOutOfMemory; }
 
 GdalErrorLog::GdalErrorLog() { CPLPushErrorHandlerEx(captureError, this); }
 GdalErrorLog::~GdalErrorLog() { CPLPopErrorHandler(); }

@@ -17,7 +17,7 @@ void ensureGdal();
 std::string gdalVersion();
 
 // The raster drivers an upload may be read with: GTiff (also COG), PDS (PDS3), PDS4, ISIS3, ISIS2,
-// VICAR, netCDF (classic only: netCDF-4/HDF5 files may name other files), ENVI, EHdr, AAIGrid,
+// VICAR, netCDF (classic; netCDF-4/HDF5 only under an UploadSandbox that allows it), ENVI, EHdr, AAIGrid,
 // XYZ, USGSDEM, SRTMHGT, DTED, HFA, GS7BG, GSBG, GSAG, PNG. No VRT (sources are any path), no
 // MEM, no network drivers (WMS, WCS, WMTS, HTTP, DAAS, …), nothing that is not a raster.
 const std::vector<std::string>& uploadDrivers();
@@ -34,7 +34,11 @@ std::string formatInWords(const std::string& driver);
 // prints each refused path to stderr (to see what a format probes).
 class UploadSandbox {
  public:
-  explicit UploadSandbox(const std::string& root);
+  // `allowHdf5`: netCDF-4 (HDF5) files may be opened. libhdf5 opens the files a dataset links to
+  // itself, past GDAL's file guards, so only a process that sees nothing but the upload (the
+  // bubblewrap import jail, server/jail/) may allow it.
+  explicit UploadSandbox(const std::string& root, bool allowHdf5 = false);
+  bool allowsHdf5() const;
   ~UploadSandbox();
   UploadSandbox(const UploadSandbox&) = delete;
   UploadSandbox& operator=(const UploadSandbox&) = delete;
@@ -85,6 +89,10 @@ class GdalErrorLog {
  private:
   std::vector<std::string> messages_;
 };
+
+// Whether GDAL reported running out of memory (CPLE_OutOfMemory) under any GdalErrorLog of this
+// process so far: the import worker, under RLIMIT_AS, answers such a failure 413, not "corrupt".
+bool gdalRanOutOfMemory();
 
 // `text` with every absolute path replaced by its last component.
 std::string withoutPaths(const std::string& text);

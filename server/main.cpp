@@ -7,6 +7,7 @@
 #include "maps/gdal_env.hpp"
 #include "server/cli/arg_parser.hpp"
 #include "server/cli/commands.hpp"
+#include "server/jail/import_worker.hpp"
 
 namespace {
 
@@ -44,6 +45,8 @@ int main(int argc, char** argv) {
   const std::string command = args[0];
   args.erase(args.begin());
   try {
+    // Not in the usage: the process the server parses a client's file in (server/jail/).
+    if (command == "import-worker") return rover::jail::importWorkerMain(args);
     if (command == "serve") return rover::cli::serveCommand(args, std::cout);
     if (command == "coverage") return rover::cli::coverageCommand(args, std::cout);
     if (command == "mission") return rover::cli::missionCommand(args, std::cout);

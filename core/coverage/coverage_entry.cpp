@@ -193,6 +193,7 @@ class CoveragePlanner final : public Planner {
     // The one start check of every planner (core/planning/mission_check.hpp): against the map
     // at its own resolution when there is one, then the coverage grid.
     terrain::Traversability trav;
+    if (problem.dem) checkGridGeometry(problem.dem->geometry(), "map");  // before slopes divide by it
     if (problem.dem) trav = terrain::traversability(*problem.dem, p.traversability());
     planning::MissionGround ground;
     ground.dem = problem.dem.get();

@@ -31,7 +31,7 @@ void validateWorld(const World& world) {
   const GridGeometry& g = world.geometry();
   if (g.rows < 2 || g.cols < 2)
     throw Error(ErrorCode::InvalidInput, "rows", "the coverage grid needs at least 2×2 cells");
-  if (!(g.cellWidth > 0) || std::fabs(g.cellWidth - g.cellHeight) > 1e-9 * g.cellWidth)
+  if (!(g.cellWidth > 0) || !std::isfinite(g.cellWidth) || std::fabs(g.cellWidth - g.cellHeight) > 1e-9 * g.cellWidth)
     throw Error(ErrorCode::InvalidInput, "cell", "coverage cells must be square and positive");
   if (world.hasHeights()) {
     const GridGeometry& h = world.heights.geometry;

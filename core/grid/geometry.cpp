@@ -2,8 +2,22 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+
+#include "core/common/error.hpp"
 
 namespace rover {
+
+void checkGridGeometry(const GridGeometry& g, const std::string& field) {
+  if (g.rows < 1 || g.cols < 1)
+    throw Error(ErrorCode::InvalidInput, field, field + ": the grid has no cells");
+  if (!(g.cellWidth > 0 && g.cellHeight > 0 && std::isfinite(g.cellWidth) && std::isfinite(g.cellHeight))) {
+    char buf[96];
+    std::snprintf(buf, sizeof buf, "%g x %g m", g.cellWidth, g.cellHeight);
+    throw Error(ErrorCode::InvalidInput, field,
+                field + ": the cell size must be finite positive metres, not " + std::string(buf));
+  }
+}
 
 Eigen::Vector2d cellToLocal(const GridGeometry& g, CellIndex c) {
   return {(c.col + 0.5) * g.cellWidth, (g.rows - c.row - 0.5) * g.cellHeight};

@@ -5,6 +5,7 @@
 #include <Eigen/Core>
 #include <cstdint>
 #include <optional>
+#include <string>
 #include <vector>
 
 namespace rover {
@@ -30,6 +31,12 @@ struct GridGeometry {
   double widthMetres() const { return cols * cellWidth; }
   double heightMetres() const { return rows * cellHeight; }
 };
+
+// Throws rover::Error (InvalidInput, `field`) unless the grid has cells and its cell sizes are
+// finite positive metres. The boundary every planner is reached through (planning::
+// checkMissionStarts) calls it, so a map whose georeferencing gave a NaN or zero cell size (issue
+// 22: a segfault in the start check) is refused as bad input, never planned on.
+void checkGridGeometry(const GridGeometry& g, const std::string& field = "map");
 
 // Centre of a cell in the local frame.
 Eigen::Vector2d cellToLocal(const GridGeometry& g, CellIndex c);

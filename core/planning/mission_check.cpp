@@ -27,6 +27,9 @@ void checkMissionStarts(const MissionGround& ground, const std::vector<RoverStar
                             : ground.grid ? &ground.grid->geometry()
                                           : nullptr;
   if (!map) throw Error(ErrorCode::InvalidInput, "map", "the mission has no map");
+  // Cell sizes divide every position below: a NaN one would make cells out of nothing.
+  if (ground.dem) checkGridGeometry(ground.dem->geometry(), "map");
+  if (ground.grid) checkGridGeometry(ground.grid->geometry(), "map");
   std::vector<int> gridCells;
   for (std::size_t k = 0; k < rovers.size(); ++k) {
     const std::string field = "rovers[" + std::to_string(k) + "]";

@@ -34,6 +34,7 @@ class TeamPlanner final : public Planner {
     if (!problem.dem || problem.dem->geometry().cellCount() == 0)
       throw Error(ErrorCode::InvalidInput, "map", "the team planners need a DEM");
     const GridGeometry& g = problem.dem->geometry();
+    checkGridGeometry(g, "map");  // before the cell size is compared or used
     if (problem.pdm && (problem.pdm->geometry.rows != g.rows || problem.pdm->geometry.cols != g.cols))
       throw Error(ErrorCode::InvalidInput, "pdm", "the PDM must have the DEM's rows and columns");
     if (problem.rovers.empty() || problem.rovers.size() > 64)

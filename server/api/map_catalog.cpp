@@ -9,7 +9,10 @@
 #include <filesystem>
 #include <cstring>
 #include <fstream>
+#include <csignal>
+#include <iostream>
 #include <set>
+#include <thread>
 
 #include "core/common/error.hpp"
 #include "maps/dem_digest.hpp"
@@ -19,6 +22,7 @@
 #include "maps/render.hpp"
 #include "maps/synthetic_terrain.hpp"
 #include "server/http/http_types.hpp"
+#include "server/jail/worker_output.hpp"
 #include "server/json/json_edge.hpp"
 #include "server/json/pdm_json.hpp"
 
@@ -54,11 +58,6 @@ std::string safeName(const std::string& name, const std::string& fallback) {
   return out;
 }
 
-std::string lower(std::string s) {
-  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return std::tolower(c); });
-  return s;
-}
-
 // PNG overviews come in a fixed ladder of sizes: ?max= rounds up to the next rung, and a rung at
 // least the map's own size is the full-size rendering, so a layer has at most 6 PNG files.
 constexpr int kOverviewLadder[] = {256, 512, 1024, 2048, 4096};
@@ -82,59 +81,6 @@ bool offLadderOverview(const std::string& file) {
   if (n.empty() || n.size() > 6 || !std::all_of(n.begin(), n.end(), [](unsigned char c) { return std::isdigit(c); }))
     return false;
   return std::find(std::begin(kOverviewLadder), std::end(kOverviewLadder), std::stoi(n)) == std::end(kOverviewLadder);
-}
-
-constexpr std::size_t kMaxArchiveMembers = 100;  // files a zip or tar upload may hold
-
-// The file GDAL should open among the ones given (all under the live sandbox): a PDS3 label
-// first, then any raster, sidecars last (a PDS4 .xml label). A file refused for what it is or
-// where it reads (a VRT, a label pointing outside the upload) refuses the whole upload.
-std::string pickRaster(const std::vector<std::string>& candidates, const maps::UploadSandbox& sandbox) {
-  auto opens = [&](const std::string& c) {
-    std::string refusal;
-    maps::Dataset ds = maps::openUpload(c, sandbox, refusal);
-    if (!refusal.empty()) throw ApiError(400, "refused_file", refusal, "file");
-    return ds && GDALGetRasterCount(ds.get()) > 0;
-  };
-  auto ext = [](const std::string& c) { return lower(fs::path(c).extension().string()); };
-  for (const auto& c : candidates)
-    if (ext(c) == ".lbl" && opens(c)) return c;
-  for (const auto& c : candidates) {
-    const std::string e = ext(c);
-    if (e == ".hdr" || e == ".xml" || e == ".aux" || e == ".txt" || e == ".prj" || e == ".lbl") continue;
-    if (opens(c)) return c;
-  }
-  for (const auto& c : candidates)  // PDS4 (.xml labels) and anything else GDAL opens
-    if (opens(c)) return c;
-  return "";
-}
-
-// "/vsizip/" or "/vsitar/" for an archive upload, "" otherwise.
-std::string archivePrefix(const std::string& fname) {
-  const std::string n = lower(fname);
-  auto ends = [&](const std::string& e) { return n.size() > e.size() && n.compare(n.size() - e.size(), e.size(), e) == 0; };
-  if (ends(".zip")) return "/vsizip/";
-  if (ends(".tar") || ends(".tgz") || ends(".tar.gz")) return "/vsitar/";
-  return "";
-}
-
-std::vector<std::string> archiveMembers(const std::string& prefix, const std::string& archivePath,
-                                        const std::string& shownName) {
-  std::vector<std::string> out;
-  const std::string root = prefix + archivePath;
-  char** list = VSIReadDirRecursive(root.c_str());
-  for (char** p = list; p && *p; ++p) {
-    std::string member = root + "/" + *p;
-    VSIStatBufL st;
-    if (VSIStatL(member.c_str(), &st) == 0 && !VSI_ISDIR(st.st_mode)) out.push_back(member);
-  }
-  CSLDestroy(list);
-  if (out.size() > kMaxArchiveMembers)
-    throw ApiError(400, "invalid_dem", shownName + ": the archive holds " + std::to_string(out.size()) +
-                   " files, more than the " + std::to_string(kMaxArchiveMembers) + " an upload may hold", "file");
-  if (out.empty()) throw ApiError(400, "invalid_dem", shownName + ": not a readable archive, or an empty one", "file");
-  std::sort(out.begin(), out.end());
-  return out;
 }
 
 nlohmann::json metaFor(const maps::LoadedDem& d, const terrain::Traversability& t,
@@ -166,7 +112,91 @@ nlohmann::json metaFor(const maps::LoadedDem& d, const terrain::Traversability& 
 MapCatalog::MapCatalog(store::Database& db, store::DataDir& dir, std::int64_t maxCells,
                        std::uint64_t layerCacheBytes)
     : db_(db), dir_(dir), maxCells_(maxCells),
-      layers_(fs::path(dir.mapDir("x")).parent_path().string(), layerCacheBytes, offLadderOverview, &dir.budget()) {}
+      layers_(fs::path(dir.mapDir("x")).parent_path().string(), layerCacheBytes, offLadderOverview, &dir.budget()) {
+  jail_.limits = defaultImportLimits(maxCells);
+}
+
+jail::JailLimits MapCatalog::defaultImportLimits(std::int64_t maxCells) {
+  jail::JailLimits l;
+  const auto cells = static_cast<std::uint64_t>(std::max<std::int64_t>(maxCells, 0));
+  // Address space: 1 GiB for the program, GDAL and its block cache, 24 bytes a cell for the grid
+  // and the warper's buffers, and 96 MiB a core for the warper's threads (stack + malloc arena).
+  l.memoryBytes = (1ull << 30) + 24 * cells + (96ull << 20) * std::max(1u, std::thread::hardware_concurrency());
+  l.fileBytes = 4 * cells + (64ull << 20);  // the float32 grid it writes back, and its JSON
+  l.cpuSeconds = 600;
+  l.deadlineSeconds = 300;
+  return l;
+}
+
+void MapCatalog::setImportJail(jail::JailConfig config) {
+  std::lock_guard lock(mutex_);
+  jail_ = std::move(config);
+}
+
+jail::JailConfig MapCatalog::importJail() const {
+  std::lock_guard lock(mutex_);
+  return jail_;
+}
+
+maps::LoadedDem MapCatalog::importJailed(const std::string& inDir, jail::ImportRequest req, std::string& rasterName) {
+  const jail::JailConfig config = importJail();
+  const bool pdm = req.kind == "pdm";
+  const std::string invalid = pdm ? "invalid_pdm" : "invalid_dem";
+  const std::string what = pdm ? "the PDM raster" : "the file";
+  req.allowHdf5 = jail::isolation() == jail::Isolation::Bubblewrap;
+  const std::string out = dir_.stagingDir();
+  struct RemoveOut {
+    std::string path;
+    ~RemoveOut() { store::DataDir::removeTree(path); }
+  } removeOut{out};
+  jail::writeImportRequest(out, req);
+  const jail::JailRun run = jail::runJailed(config, inDir, out);
+  auto logWorker = [&](const std::string& why) {
+    // What the worker said on stderr stays in the server's log; the client gets our words.
+    std::ifstream log(fs::path(out) / "worker.log");
+    std::string tail((std::istreambuf_iterator<char>(log)), {});
+    if (tail.size() > 2000) tail = tail.substr(tail.size() - 2000);
+    std::cerr << "import worker: " << why << (tail.empty() ? "" : ": " + tail) << std::endl;
+  };
+  switch (run.end) {
+    case jail::JailRun::End::NotStarted:
+      throw std::runtime_error("the import worker did not start: " + run.detail);
+    case jail::JailRun::End::DeadlinePassed:
+      throw ApiError(400, "import_timeout",
+                     "the importer did not finish reading " + what + " within " +
+                         std::to_string(static_cast<long long>(config.limits.deadlineSeconds)) + " s",
+                     "file");
+    case jail::JailRun::End::Signalled:
+      if (run.signal == SIGXCPU)
+        throw ApiError(413, "too_large", what + " needs more than the " + std::to_string(config.limits.cpuSeconds) +
+                                             " s of CPU time an import may use", "file");
+      if (run.signal == SIGXFSZ)
+        throw ApiError(413, "too_large", what + " makes a grid larger than an import may write", "file");
+      logWorker("ended by signal " + std::to_string(run.signal));
+      throw ApiError(400, "import_crashed",
+                     "the importer crashed (signal " + std::to_string(run.signal) + ") reading " + what, "file");
+    case jail::JailRun::End::Exited:
+      break;
+  }
+  if (run.exitStatus == 1) {
+    if (auto e = jail::readWorkerError(out)) throw ApiError(e->status, e->code, e->message, e->field);
+  }
+  if (run.exitStatus != 0) {
+    logWorker("exit status " + std::to_string(run.exitStatus));
+    throw ApiError(400, "import_failed", "the importer failed reading " + what + " (exit status " +
+                                             std::to_string(run.exitStatus) + ")", "file");
+  }
+  try {
+    jail::WorkerResult r = jail::readWorkerResult(out, req.load.maxCells);
+    rasterName = r.rasterName;
+    return std::move(r.dem);
+  } catch (const Error& e) {
+    throw ApiError(400, invalid, e.what(), e.field());
+  } catch (const std::runtime_error& e) {
+    logWorker(e.what());
+    throw ApiError(400, invalid, "the importer's output for " + what + " does not read", "file");
+  }
+}
 
 store::MapRecord MapCatalog::importDem(const std::vector<UploadedFile>& files, const std::string& name,
                                        const maps::DemImport& options) {
@@ -197,50 +227,15 @@ store::MapRecord MapCatalog::importDem(const std::vector<UploadedFile>& files, c
       fs::rename(files[i].path, fs::path(staging) / fname);
       sources.push_back(fname);
     }
-    maps::LoadedDem d;
+    // The client's files are parsed in the import jail (server/jail/): a crash, hang or memory
+    // bomb in GDAL ends that worker, never this process.
+    jail::ImportRequest req;
+    req.kind = "dem";
+    req.sources = sources;
+    req.load = options.load;
+    req.load.maxCells = maxCells_;
     std::string raster;
-    {
-      // Everything GDAL reads from here on must be one of the uploaded files (issue 14).
-      maps::UploadSandbox sandbox(staging);
-      std::vector<std::string> candidates;
-      for (const auto& fname : sources) {
-        const std::string target = (fs::path(staging) / fname).string();
-        const std::string prefix = archivePrefix(fname);
-        if (prefix.empty()) {
-          candidates.push_back(target);
-          continue;
-        }
-        auto members = archiveMembers(prefix, target, fname);
-        candidates.insert(candidates.end(), members.begin(), members.end());
-      }
-      raster = pickRaster(candidates, sandbox);
-      if (raster.empty()) {
-        // One file we cannot read: say why in words (a lone PDS3 .IMG, a damaged GeoTIFF).
-        if (candidates.size() == 1) {
-          maps::LoadOptions probe;
-          probe.upload = &sandbox;
-          try {
-            maps::loadDem(candidates[0], probe);
-          } catch (const Error& e) {
-            throw ApiError(400, "invalid_dem", e.what(), "file");
-          }
-        }
-        throw ApiError(400, "invalid_dem",
-                       "no raster roverplan reads in the upload (" + std::to_string(candidates.size()) +
-                           " file(s); accepted: " + maps::uploadFormatsInWords() + ")",
-                       "file");
-      }
-      maps::LoadOptions o = options.load;
-      o.maxCells = maxCells_;
-      o.upload = &sandbox;
-      try {
-        d = maps::loadDem(raster, o);
-      } catch (const Error& e) {
-        const bool tooLarge = e.field() == "max_cells";
-        throw ApiError(400, tooLarge ? "too_large" : "invalid_dem", e.what(), tooLarge ? "file" : e.field());
-      }
-      raster = sandbox.uploadName(raster);
-    }
+    maps::LoadedDem d = importJailed(staging, req, raster);
     terrain::Traversability t = terrain::traversability(d.dem);
     storingGeoTiff([&] { maps::writeGeoTiff((fs::path(staging) / "dem.tif").string(), d.dem.z); });
     store::MapRecord rec;
@@ -517,21 +512,19 @@ store::PdmRecord MapCatalog::createPdmFromRaster(const std::string& mapId, const
   const auto& gt = map->dem.z.geo.geotransform;
   if (map->dem.z.geo.valid && !map->record.meta.value("geographic", false))
     o.crop = std::array<double, 4>{gt[0], gt[3] + g.rows * gt[5], g.cols * gt[1], -g.rows * gt[5]};
-  // The raster is read in a folder of its own, so that it can read nothing else.
+  // The raster is read in a folder of its own, so that it can read nothing else, by the import
+  // jail (server/jail/).
   const std::string staging = dir_.stagingDir();
-  const std::string staged = (fs::path(staging) / ("pdm-raster" + fs::path(rasterPath).extension().string())).string();
+  const std::string stagedName = "pdm-raster" + fs::path(rasterPath).extension().string();
   maps::LoadedDem w;
   try {
-    fs::rename(rasterPath, staged);
-    maps::UploadSandbox sandbox(staging);
-    o.upload = &sandbox;
-    w = maps::loadDem(staged, o);
-  } catch (const Error& e) {
-    store::DataDir::removeTree(staging);
-    std::string msg = e.what();
-    const std::string shown = fs::path(staged).filename().string();
-    if (msg.rfind(shown, 0) == 0) msg = "PDM raster" + msg.substr(shown.size());
-    throw ApiError(400, "invalid_pdm", msg, "file");
+    fs::rename(rasterPath, fs::path(staging) / stagedName);
+    jail::ImportRequest req;
+    req.kind = "pdm";
+    req.sources = {stagedName};
+    req.load = o;
+    std::string shown;
+    w = importJailed(staging, req, shown);
   } catch (...) {
     store::DataDir::removeTree(staging);
     throw;

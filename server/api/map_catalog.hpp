@@ -14,6 +14,8 @@
 #include "core/terrain/layers.hpp"
 #include "maps/dem_import_options.hpp"
 #include "server/api/layer_cache.hpp"
+#include "server/jail/import_jail.hpp"
+#include "server/jail/worker_output.hpp"
 #include "server/store/data_dir.hpp"
 #include "server/store/database.hpp"
 
@@ -79,7 +81,17 @@ class MapCatalog {
   static constexpr std::int64_t kMassCacheCells = 64'000'000;
   std::string pdmFile(const std::string& pdmId) const;
 
+  // How client files are parsed: DEM and PDM-raster uploads run GDAL in an import worker
+  // (server/jail/import_jail.hpp) with these limits, never in this process. Tests swap the worker.
+  void setImportJail(jail::JailConfig config);
+  jail::JailConfig importJail() const;
+  // The limits for a cell budget: memory, file size, CPU time and wall clock (stated in README).
+  static jail::JailLimits defaultImportLimits(std::int64_t maxCells);
+
  private:
+  // Runs the import worker on the client's files in `inDir`; answers ApiError 400/413 for the
+  // file's faults (its own message, a crash with the signal, a deadline), 500 when it cannot start.
+  maps::LoadedDem importJailed(const std::string& inDir, jail::ImportRequest req, std::string& rasterName);
   std::shared_ptr<const MapData> loadFromDisk(const store::MapRecord& r);
   void renderLayerFile(const MapData& map, const std::string& layer, const std::string& format, int side,
                        const std::string& pdm, const std::string& path);
@@ -90,7 +102,8 @@ class MapCatalog {
   store::Database& db_;
   store::DataDir& dir_;
   std::int64_t maxCells_;
-  std::mutex mutex_;  // guards the map caches
+  mutable std::mutex mutex_;  // guards the map caches and jail_
+  jail::JailConfig jail_;
   LayerCache layers_;
   std::list<std::shared_ptr<const MapData>> cache_;  // most recent first, a few maps
   std::list<std::pair<std::string, std::shared_ptr<const terrain::Dem>>> cellCache_;

@@ -14,6 +14,7 @@
 #include "server/cli/arg_parser.hpp"
 #include "server/cli/commands.hpp"
 #include "server/http/http_server.hpp"
+#include "server/jail/import_jail.hpp"
 #include "server/missions/mission_manager.hpp"
 #include "server/store/disk_budget.hpp"
 
@@ -224,6 +225,7 @@ int serveCommand(const std::vector<std::string>& argv, std::ostream& out) {
       << missions::formatBytes(missionMemory) << " mission memory"
       << (config.token.empty() ? "" : ", token required")
       << (launcher.empty() ? "" : ", studies launched by " + launcher[0]) << ")" << std::endl;
+  out << "imports: client files are parsed in " << jail::isolationInWords(jail::isolation()) << std::endl;
   if (a.has("token"))
     out << "warning: --token is visible to every local user in `ps`; prefer ROVERPLAN_TOKEN or --token-file"
         << std::endl;

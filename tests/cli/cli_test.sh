@@ -161,6 +161,23 @@ assert abs(total - 100) < 1e-6, total
 [ -s "$TMP/classes.tif" ] || fail "traversability --out: no classes GeoTIFF"
 pass "traversability prints the class shares and writes the classes"
 
+# A DEM whose georeferencing is not a place (issue 22): a NaN pixel size and a latitude of 95° are
+# one line naming the geotransform's part and exit status 2, as an upload is a 400 naming it.
+if command -v gdal_translate >/dev/null && command -v gdal_edit.py >/dev/null; then
+  cp "$TMP/t.tif" "$TMP/nan.tif" && gdal_edit.py -a_ullr 0 nan 100 0 "$TMP/nan.tif"
+  run traversability "$TMP/nan.tif" --json
+  expect_status 2 "traversability on a NaN geotransform"
+  [ "$(lines "$ERR")" -eq 1 ] || fail "NaN geotransform: expected one stderr line, got $(lines "$ERR")"
+  grep -q "pixel_height is nan" "$ERR" || fail "NaN geotransform: the message does not name pixel_height"
+  gdal_translate -q -a_srs EPSG:4326 -a_ullr 10 95 10.01 94.99 "$TMP/t.tif" "$TMP/lat95.tif"
+  run traversability "$TMP/lat95.tif" --json
+  expect_status 2 "traversability at latitude 95"
+  grep -q "latitude of 95° is outside \[-90, 90\]°" "$ERR" || fail "latitude 95: not named"
+  pass "a NaN pixel size or latitude 95 is one line and exit status 2"
+else
+  echo "skip: gdal_translate/gdal_edit.py not found (Debian gdal-bin)"
+fi
+
 # The DEM import options the upload route shares (maps/dem_import_options): a pixel window, a
 # body, and bad values naming their option.
 run traversability "$TMP/t.tif" --crop-px 8,4,32,16 --vertical-scale 2 --json

@@ -160,3 +160,36 @@ TEST_CASE("body: coverage energy uses the map's body's gravity unless the user g
   CHECK(std::get<double>(d["coverage_cell"]) == 1.0);
   CHECK(std::get<double>(d["gravity"]) == 3.71);
 }
+
+TEST_CASE("mission check: a map whose cell size is NaN, zero or infinite is refused, never planned on") {
+  // Issue 22: a GeoTIFF with a NaN pixel size became a map with NaN cells, and a team-search or
+  // hybrid mission on it segfaulted in checkMissionStarts. The core boundary refuses it by itself.
+  for (double bad : {static_cast<double>(NAN), 0.0, -1.0, static_cast<double>(INFINITY)}) {
+    CAPTURE(bad);
+    for (const char* planner : {"coverage", "team-search", "hybrid"}) {
+      CAPTURE(planner);
+      PlanningProblem p = problemFor(planner, {kFine});
+      auto dem = std::make_shared<terrain::Dem>(*p.dem);
+      dem->z.geometry.cellWidth = bad;
+      p.dem = dem;
+      PlannerRegistry reg = makeBuiltinRegistry();
+      try {
+        reg.get(planner).validate(p, {});
+        FAIL("accepted a map with cells of ", bad, " m");
+      } catch (const Error& e) {
+        CHECK(e.code() == ErrorCode::InvalidInput);
+        CHECK(e.field() == "map");
+        CHECK(std::string(e.what()).find("the cell size must be finite positive metres") != std::string::npos);
+      }
+    }
+  }
+  // The start check on its own, as the server calls it.
+  terrain::Dem nanCells = *siteDem();
+  nanCells.z.geometry.cellHeight = NAN;
+  planning::MissionGround ground;
+  ground.dem = &nanCells;
+  CHECK_THROWS_WITH_AS(planning::checkMissionStarts(ground, {kFine}, {}),
+                       "map: the cell size must be finite positive metres, not 1 x nan m", Error);
+  CHECK_THROWS_AS(checkGridGeometry(GridGeometry{0, 4, 1.0, 1.0}), Error);
+  CHECK_NOTHROW(checkGridGeometry(GridGeometry{4, 4, 0.25, 0.25}));
+}
