@@ -23,6 +23,7 @@ test_pkgs=(
   chromium   # the browser tests drive Debian's Chromium through playwright-core
   curl python3
   clang libclang-rt-14-dev   # libFuzzer harnesses (tests/fuzz/run.sh)
+  stress-ng  # CPU load for tests/server/hostile_ws_under_load.sh (the hostile WebSocket tests, 20 runs)
 )
 runtime_pkgs=(libompl16 libgdal32 libsqlite3-0 libssl3 libopenmpi3 gdal-data curl ca-certificates)  # curl: HEALTHCHECK
 bench_pkgs=(wrk nginx-light time curl)  # tests/bench/*: load generator and the nginx baseline

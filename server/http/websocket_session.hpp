@@ -55,6 +55,9 @@ void configureServerWebsocket(boost::beast::websocket::stream<NextLayer>& ws, co
   // No size limit in Beast: WebsocketSession reads in pieces and closes a message over
   // kMaxClientMessageBytes itself (with the close handshake, see above).
   ws.read_message_max(0);
+  // A message goes out as one frame (one gathered write), not as 4 KiB fragments each with a
+  // write and a completion: a 1.8 MB grid to 1000 subscribers is 1000 writes, not 450 000.
+  ws.auto_fragment(false);
 }
 
 // Takes a place for an upgrade of `path` under config.maxStreamSubscribers / maxSubscribers; the
