@@ -24,6 +24,7 @@ test_pkgs=(
   curl python3
   clang libclang-rt-14-dev   # libFuzzer harnesses (tests/fuzz/run.sh)
   bubblewrap   # the import jail the server parses uploads in (server/jail/import_jail.hpp)
+  stress-ng    # CPU load for tests/server/hostile_ws_under_load.sh (the hostile WebSocket tests, 20 runs)
 )
 # curl: HEALTHCHECK; bubblewrap: the import jail (without it imports run with rlimits only, and
 # netCDF-4 is refused; `serve` says which at start).

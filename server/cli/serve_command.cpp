@@ -130,6 +130,9 @@ int serveCommand(const std::vector<std::string>& argv, std::ostream& out) {
   a.option("study-launcher", "CMD", "",
            "Run each study as CMD + `roverplan study run --spec F --out DB` (e.g. \"mpirun -np 16 "
            "--hostfile H\"; split into words like a shell, run without one); default: in the server.");
+  a.option("max-stream-subscribers", "N", "64",
+           "WebSocket subscribers one mission or study stream may have; more get 503 with Retry-After.");
+  a.option("max-subscribers", "N", "1024", "WebSocket subscribers of all streams together; more get 503.");
   a.flag("quiet", "Do not log one line per request.");
   if (!a.parse(argv)) {
     out << a.help();
@@ -153,6 +156,8 @@ int serveCommand(const std::vector<std::string>& argv, std::ostream& out) {
   config.workThreads = static_cast<unsigned>(a.integer("work-threads", 2, 1, 256));
   config.workQueue = static_cast<std::size_t>(a.integer("work-queue", 32, 0, 100000));
   config.minBodyRate = static_cast<std::uint64_t>(a.integer("min-upload-kibps", 16, 0, 1 << 20)) << 10;
+  config.maxStreamSubscribers = static_cast<std::size_t>(a.integer("max-stream-subscribers", 64, 1, 1000000));
+  config.maxSubscribers = static_cast<std::size_t>(a.integer("max-subscribers", 1024, 1, 1000000));
   const unsigned workers = static_cast<unsigned>(a.integer("workers", hardwareThreads(), 1, 256));
   const std::size_t queue = static_cast<std::size_t>(a.integer("queue", 64, 0, 100000));
   const std::uint64_t defaultBudgetMb = missions::defaultMissionMemoryBudget() >> 20;

@@ -38,6 +38,10 @@ struct ServerConfig {
   unsigned workThreads = 2;
   std::size_t workQueue = 32;
   bool logRequests = true;  // one line per request on stderr
+  // WebSocket subscribers (issue 22): at most this many on one stream and on the whole server;
+  // an upgrade beyond either is answered 503 with Retry-After.
+  std::size_t maxStreamSubscribers = 64;
+  std::size_t maxSubscribers = 1024;
 };
 
 class HttpServer {

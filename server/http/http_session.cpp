@@ -632,13 +632,17 @@ void HttpSession::respond(Response res) {
 void HttpSession::upgrade() {
   if (!headerParser_->is_done())
     return sendError(400, "bad_request", "a WebSocket upgrade cannot carry a body", "body", true);
+  std::shared_ptr<void> place;  // under the subscriber limits, before anything subscribes
+  if (auto refused = admitSubscriber(*state_, request_.path, place)) return send(std::move(*refused));
   auto connection = std::make_shared<WsConnectionImpl>(state_);
   std::shared_ptr<WsSource> source;
   try {
     try {
       source = route_->wsHandler(request_, connection);
     } catch (const ApiError& e) {
-      return send(Response::error(e.status(), e.code(), e.what(), e.field()));
+      Response r = Response::error(e.status(), e.code(), e.what(), e.field());
+      r.headers = e.headers();
+      return send(std::move(r));
     } catch (const std::exception& e) {
       return sendError(500, "internal", e.what(), "");
     }
@@ -648,7 +652,7 @@ void HttpSession::upgrade() {
   if (!source) return sendError(500, "internal", "the WebSocket handler returned no source", "");
 
   auto ws = std::make_shared<WebsocketSession>(std::move(stream_), state_, std::move(connection),
-                                               std::move(source), request_.path);
+                                               std::move(source), request_.path, std::move(place));
   handedOff_ = true;
   unregister();
   ws->run(headerParser_->release());

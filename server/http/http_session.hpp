@@ -30,6 +30,7 @@
 #include "server/http/router.hpp"
 #include "server/http/static_files.hpp"
 #include "server/http/work_pool.hpp"
+#include "server/http/ws_admission.hpp"
 
 namespace rover::http {
 
@@ -56,6 +57,7 @@ class ServerState {
   const Router& router;
   const StaticFiles statics;
   WorkPool& pool;  // owned by HttpServer, stopped after the io threads
+  const std::shared_ptr<WsAdmission> websockets = std::make_shared<WsAdmission>();
 
   // Registry of live sessions. add() refuses (nullopt) once stopping.
   std::optional<std::uint64_t> add(std::weak_ptr<Closable> session);

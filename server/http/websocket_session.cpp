@@ -36,17 +36,30 @@ void WsConnectionImpl::wake() {
   }
 }
 
+// ---------------------------------------------------------------- admission
+
+std::optional<Response> admitSubscriber(ServerState& state, const std::string& path, std::shared_ptr<void>& place) {
+  std::string refusal;
+  place = state.websockets->admit(path, state.config.maxStreamSubscribers, state.config.maxSubscribers, refusal);
+  if (place) return std::nullopt;
+  Response r = Response::error(503, "too_many_subscribers", refusal, "");
+  r.headers.emplace_back("Retry-After", "5");
+  return r;
+}
+
 // ---------------------------------------------------------------- WebsocketSession
 
 WebsocketSession::WebsocketSession(beast::tcp_stream&& stream, std::shared_ptr<ServerState> state,
                                    std::shared_ptr<WsConnectionImpl> connection,
-                                   std::shared_ptr<WsSource> source, std::string path)
+                                   std::shared_ptr<WsSource> source, std::string path,
+                                   std::shared_ptr<void> place)
     : ws_(std::move(stream)),
       executor_(ws_.get_executor()),
       state_(std::move(state)),
       connection_(std::move(connection)),
       source_(std::move(source)),
       path_(std::move(path)),
+      place_(std::move(place)),
       pace_(executor_),
       writeTimer_(executor_) {}
 
@@ -90,17 +103,24 @@ void WebsocketSession::onAccept(beast::error_code ec) {
 }
 
 void WebsocketSession::readLoop() {
-  ws_.async_read(readBuffer_,
-                 beast::bind_front_handler(&WebsocketSession::onRead, shared_from_this()));
+  ws_.async_read_some(readBuffer_, 16 * 1024,
+                      beast::bind_front_handler(&WebsocketSession::onRead, shared_from_this()));
 }
 
-void WebsocketSession::onRead(beast::error_code ec, std::size_t) {
+void WebsocketSession::onRead(beast::error_code ec, std::size_t bytes) {
   if (ec) {
     // The client closed, the socket failed, or stop(): this ends the session (writes, the pace
     // timer and the parked state all stop holding it once their handlers return).
     return finish(ec == websocket::error::closed ? "closed" : ec.message());
   }
   readBuffer_.consume(readBuffer_.size());
+  messageBytes_ += bytes;
+  if (messageBytes_ > kMaxClientMessageBytes) {
+    // No further read: the close handshake reads (and drops) the rest up to the close reply.
+    if (state_->config.logRequests) state_->log("WS " + path_ + " client message over the limit: closing (1009)");
+    return closeWith(websocket::close_code::too_big);
+  }
+  if (ws_.is_message_done()) messageBytes_ = 0;
   readLoop();
 }
 
@@ -178,15 +198,22 @@ void WebsocketSession::onPaced(beast::error_code ec) {
 void WebsocketSession::closeWith(websocket::close_code code) {
   if (closing_ || !open_) return;
   closing_ = true;
+  pace_.cancel();
+  // The close handshake is bounded by Beast's handshake timeout: kCloseReplyWait from here.
+  auto timeouts = websocket::stream_base::timeout::suggested(beast::role_type::server);
+  timeouts.handshake_timeout = kCloseReplyWait;
+  timeouts.idle_timeout = websocket::stream_base::none();
+  ws_.set_option(timeouts);
   ws_.async_close(code, beast::bind_front_handler(&WebsocketSession::onClose, shared_from_this()));
 }
 
 void WebsocketSession::onClose(beast::error_code ec) {
-  // The read loop sees the peer's close reply (or the failure) and finishes the session.
+  // Beast has read the client's close reply (or given up waiting) and shut the connection down.
   if (ec) {
     beast::error_code ignored;
     beast::get_lowest_layer(ws_).socket().close(ignored);
   }
+  finish(ec ? "close: " + ec.message() : "closed by the server");
 }
 
 void WebsocketSession::finish(const std::string& why) {

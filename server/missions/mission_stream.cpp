@@ -28,7 +28,8 @@ nlohmann::json poseJson(float x, float y, float headingDeg) {
 
 }  // namespace
 
-// One WebSocket client's cursors over the stream.
+// One WebSocket client's place in the stream: the cut it stands at, and the shared batch it is
+// sending.
 class MissionStream::Subscription : public http::WsSource {
  public:
   explicit Subscription(std::shared_ptr<MissionStream> s) : stream_(std::move(s)) {}
@@ -36,120 +37,48 @@ class MissionStream::Subscription : public http::WsSource {
   std::optional<http::WsFrame> next() override {
     MissionStream& s = *stream_;
     if (!snapshotSent_) {
-      // Built (or reused) outside the stream's lock; the cursors are those of the shared state.
+      // Built (or reused) outside the stream's lock; the cursors are those of its cut.
       std::shared_ptr<const Snapshot> snap = s.snapshot();
       snapshotSent_ = true;
-      trailSent_ = snap->trailLengths;
-      beliefSent_ = snap->beliefLengths;
-      pathSent_ = snap->pathLengths;
-      routeSeen_ = snap->routeVersion;
-      progressSeen_ = snap->progressVersion;
-      statusSeen_ = snap->statusVersion;
+      at_ = snap->at;
       pendingGrid_ = snap->grid;
-      if (pendingGrid_) gridSeen_ = snap->gridVersion;
       return http::WsFrame{false, snap->json, false};
     }
-    if (pendingGrid_) {
-      // The snapshot's full grid, shared: the first grid frame, then diffs from its version.
-      gridSent_ = true;
-      lastKind_ = 0;
-      return http::WsFrame{true, std::move(pendingGrid_), false};
-    }
+    if (pendingGrid_) return http::WsFrame{true, std::move(pendingGrid_), false};
+    if (batch_ && sent_ < batch_->size()) return (*batch_)[sent_++];
+    batch_.reset();
+
     std::lock_guard lock(s.mutex_);
-    const std::uint64_t gridVersion = s.gridVersionLocked();
-    // Grid diffs, poses, progress and overlays take turns, so a planner that changes cells every
-    // step cannot starve the trails and the progress bar.
-    for (int tries = 0; tries < 4; ++tries) {
-      const int kind = (lastKind_ + 1 + tries) % 4;
-      if (kind == 3) {
-        if (pathSent_.size() < s.paths_.size()) pathSent_.resize(s.paths_.size(), 0);
-        nlohmann::json j{{"type", "overlay"}};
-        if (routeSeen_ != s.routeVersion_) {
-          routeSeen_ = s.routeVersion_;
-          j["route"] = s.route_;
-        }
-        nlohmann::json paths = nlohmann::json::array();
-        for (std::size_t k = 0; k < s.paths_.size(); ++k) {
-          if (pathSent_[k] == s.paths_[k].size()) continue;
-          nlohmann::json append(std::vector<std::array<float, 2>>(s.paths_[k].begin() + pathSent_[k], s.paths_[k].end()));
-          paths.push_back({{"rover", k}, {"append", append}});
-          pathSent_[k] = s.paths_[k].size();
-        }
-        if (j.contains("route") || !paths.empty()) {
-          j["paths"] = paths;
-          lastKind_ = 3;
-          return http::WsFrame{false, j.dump(), false};
-        }
-      }
-      if (kind == 0 && s.grid_.cellCount() > 0 && (!gridSent_ || gridSeen_ != gridVersion)) {
-        // A full grid (shared with every client at this version) for a new client, or when it
-        // fell behind the compacted log, or when the diff would be bigger than the grid.
-        const bool full = !gridSent_ || gridSeen_ < s.logBase_ ||
-                          gridVersion - gridSeen_ > static_cast<std::uint64_t>(s.grid_.cellCount()) / 2;
-        gridSent_ = true;
-        const std::uint64_t since = gridSeen_;
-        gridSeen_ = gridVersion;
-        lastKind_ = 0;
-        if (full) return http::WsFrame{true, s.sharedFullGridLocked(), false};
-        return http::WsFrame{true, s.gridDiffFrame(since), false};
-      }
-      if (kind == 1) {
-        if (trailSent_.size() < s.trails_.size()) trailSent_.resize(s.trails_.size(), 0);
-        if (beliefSent_.size() < s.beliefs_.size()) beliefSent_.resize(s.beliefs_.size(), 0);
-        nlohmann::json rovers = nlohmann::json::array();
-        for (std::size_t k = 0; k < s.trails_.size(); ++k) {
-          const bool newBelief = k < s.beliefs_.size() && beliefSent_[k] < s.beliefs_[k].size();
-          if (trailSent_[k] == s.trails_[k].size() && !newBelief) continue;
-          nlohmann::json append = nlohmann::json::array();
-          for (std::size_t i = trailSent_[k]; i < s.trails_[k].size(); ++i)
-            append.push_back({s.trails_[k][i].x, s.trails_[k][i].y});
-          nlohmann::json r{{"rover", k}, {"append", append}, {"pose", nullptr}};
-          if (!s.trails_[k].empty()) {
-            const Pose& p = s.trails_[k].back();
-            r["pose"] = poseJson(p.x, p.y, p.headingDeg);
-          }
-          if (newBelief) {
-            r["believed"] = std::vector<std::array<float, 2>>(s.beliefs_[k].begin() + beliefSent_[k], s.beliefs_[k].end());
-            beliefSent_[k] = s.beliefs_[k].size();
-          }
-          rovers.push_back(std::move(r));
-          trailSent_[k] = s.trails_[k].size();
-        }
-        if (!rovers.empty()) {
-          lastKind_ = 1;
-          return http::WsFrame{false, nlohmann::json{{"type", "poses"}, {"step", s.step_}, {"rovers", rovers}}.dump(), false};
-        }
-      }
-      if (kind == 2 && progressSeen_ != s.progressVersion_) {
-        progressSeen_ = s.progressVersion_;
-        nlohmann::json j = s.progress_;
-        j["type"] = "progress";
-        if (!s.liveMetrics_.is_null()) j["metrics"] = s.liveMetrics_;
-        lastKind_ = 2;
-        return http::WsFrame{false, j.dump(), false};
-      }
-    }
-    if (statusSeen_ != s.statusVersion_ && !s.finished_) {
-      statusSeen_ = s.statusVersion_;
-      return http::WsFrame{false, nlohmann::json{{"type", "status"}, {"status", s.status_}}.dump(), false};
+    if (s.finished_ && s.dirtyLocked()) s.cutLocked();  // the end is published whole
+    if (at_.cut != s.head_.cut) {
+      std::shared_ptr<const Batch>& b = s.batches_[at_.cut];
+      if (!b) b = s.batchLocked(at_);
+      at_ = s.head_;
+      batch_ = b;
+      sent_ = 0;
+      if (!batch_->empty()) return (*batch_)[sent_++];
     }
     if (s.finished_ && !doneSent_) {
       doneSent_ = true;
-      nlohmann::json j{{"type", "done"}, {"mission", s.id_}, {"status", s.status_},
-                       {"message", s.message_}, {"metrics", s.metrics_}, {"step", s.step_}};
-      return http::WsFrame{false, j.dump(), true};
+      if (!s.doneFrame_) {
+        s.doneFrame_ = std::make_shared<const std::string>(
+            nlohmann::json{{"type", "done"}, {"mission", s.id_}, {"status", s.status_}, {"message", s.message_},
+                           {"metrics", s.metrics_}, {"step", s.step_}}
+                .dump());
+        ++s.frameEncodes_;
+      }
+      return http::WsFrame{false, s.doneFrame_, true};
     }
     return std::nullopt;
   }
 
  private:
   std::shared_ptr<MissionStream> stream_;
-  bool snapshotSent_ = false, gridSent_ = false, doneSent_ = false;
-  std::uint64_t gridSeen_ = 0, progressSeen_ = 0, statusSeen_ = 0;
-  std::vector<std::size_t> trailSent_, pathSent_, beliefSent_;
-  std::uint64_t routeSeen_ = 0;
+  bool snapshotSent_ = false, doneSent_ = false;
+  Cursors at_;
   std::shared_ptr<const std::string> pendingGrid_;  // the snapshot's grid, sent right after it
-  int lastKind_ = 3;  // 0 grid, 1 poses, 2 progress, 3 overlays: the kind sent last, for taking turns
+  std::shared_ptr<const Batch> batch_;              // shared with the others at the same cut
+  std::size_t sent_ = 0;                            // frames of batch_ sent
 };
 
 MissionStream::MissionStream(std::string missionId, const GridGeometry& grid, int rovers,
@@ -184,16 +113,15 @@ std::shared_ptr<const MissionStream::Snapshot> MissionStream::snapshot() {
   nlohmann::json j;
   {
     std::lock_guard lock(mutex_);
-    if (snapshot_ && snapshot_->version == stateVersion_) return snapshot_;
-    snap->version = stateVersion_;
-    snap->gridVersion = gridVersionLocked();
-    snap->routeVersion = routeVersion_;
-    snap->progressVersion = progressVersion_;
-    snap->statusVersion = statusVersion_;
-    for (const auto& t : trails_) snap->trailLengths.push_back(t.size());
-    for (const auto& b : beliefs_) snap->beliefLengths.push_back(b.size());
+    const auto now = std::chrono::steady_clock::now();
+    // The newest state, or one young enough: the joiner catches up from its cut by one batch.
+    if (snapshot_ && ((snapshot_->at.cut == head_.cut && !dirtyLocked()) ||
+                      (!finished_ && now - snapshot_->builtAt < kSnapshotReuse)))
+      return snapshot_;
+    if (dirtyLocked()) cutLocked();  // the snapshot stands at a cut, as every subscriber does
+    snap->at = head_;
+    snap->builtAt = now;
     beliefs = beliefs_;
-    for (const auto& p : paths_) snap->pathLengths.push_back(p.size());
     trails = trails_;
     if (grid_.cellCount() > 0) snap->grid = sharedFullGridLocked();
     nlohmann::json grid = nullptr;
@@ -237,6 +165,98 @@ std::shared_ptr<const MissionStream::Snapshot> MissionStream::snapshot() {
   std::lock_guard lock(mutex_);
   snapshot_ = snap;
   return snap;
+}
+
+void MissionStream::cutLocked() {
+  Cursors c;
+  c.cut = head_.cut + 1;
+  c.state = stateVersion_;
+  c.grid = gridVersionLocked();
+  c.route = routeVersion_;
+  c.progress = progressVersion_;
+  c.status = statusVersion_;
+  c.step = step_;
+  for (const auto& t : trails_) c.trails.push_back(t.size());
+  for (const auto& b : beliefs_) c.beliefs.push_back(b.size());
+  for (const auto& p : paths_) c.paths.push_back(p.size());
+  // Progress and status are overwritten in place: their frames are taken now, as of this cut.
+  if (c.progress != head_.progress) {
+    nlohmann::json j = progress_;
+    j["type"] = "progress";
+    if (!liveMetrics_.is_null()) j["metrics"] = liveMetrics_;
+    progressFrame_ = std::make_shared<const std::string>(j.dump());
+    ++frameEncodes_;
+  }
+  if (c.status != head_.status) {
+    statusFrame_ = std::make_shared<const std::string>(nlohmann::json{{"type", "status"}, {"status", status_}}.dump());
+    ++frameEncodes_;
+  }
+  head_ = std::move(c);
+  headAt_ = std::chrono::steady_clock::now();
+  batches_.clear();  // the subscribers holding one keep it alive until sent
+}
+
+std::shared_ptr<const MissionStream::Batch> MissionStream::batchLocked(const Cursors& from) {
+  const Cursors& h = head_;
+  auto at = [](const std::vector<std::size_t>& v, std::size_t k) { return k < v.size() ? v[k] : 0; };
+  auto batch = std::make_shared<Batch>();
+  auto text = [&](const nlohmann::json& j) {
+    batch->emplace_back(false, std::make_shared<const std::string>(j.dump()), false);
+    ++frameEncodes_;
+  };
+
+  // The team route (replaced whole) and the planned paths' new points.
+  nlohmann::json overlay{{"type", "overlay"}};
+  if (from.route != h.route) overlay["route"] = route_;
+  nlohmann::json paths = nlohmann::json::array();
+  for (std::size_t k = 0; k < h.paths.size(); ++k) {
+    const std::size_t a = std::min(at(from.paths, k), h.paths[k]);
+    if (a == h.paths[k]) continue;
+    nlohmann::json append(std::vector<std::array<float, 2>>(paths_[k].begin() + static_cast<std::ptrdiff_t>(a),
+                                                            paths_[k].begin() + static_cast<std::ptrdiff_t>(h.paths[k])));
+    paths.push_back({{"rover", k}, {"append", std::move(append)}});
+  }
+  if (overlay.contains("route") || !paths.empty()) {
+    overlay["paths"] = std::move(paths);
+    text(overlay);
+  }
+
+  // The grid: a diff, or the full grid (shared) when the diff would be bigger or the log no
+  // longer reaches back to `from`.
+  if (grid_.cellCount() > 0 && from.grid != h.grid) {
+    const bool full = from.grid < logBase_ || h.grid - from.grid > static_cast<std::uint64_t>(grid_.cellCount()) / 2;
+    if (full) {
+      batch->emplace_back(true, sharedFullGridLocked(), false);
+    } else {
+      batch->emplace_back(true, std::make_shared<const std::string>(gridDiffFrame(from.grid, h.grid)), false);
+      ++frameEncodes_;
+    }
+  }
+
+  // The rovers' new trail points (and believed points), each rover's pose as of the cut.
+  nlohmann::json rovers = nlohmann::json::array();
+  for (std::size_t k = 0; k < h.trails.size(); ++k) {
+    const std::size_t a = std::min(at(from.trails, k), h.trails[k]);
+    const std::size_t hb = at(h.beliefs, k), b = std::min(at(from.beliefs, k), hb);
+    if (a == h.trails[k] && b == hb) continue;
+    nlohmann::json append = nlohmann::json::array();
+    for (std::size_t i = a; i < h.trails[k]; ++i) append.push_back({trails_[k][i].x, trails_[k][i].y});
+    nlohmann::json r{{"rover", k}, {"append", std::move(append)}, {"pose", nullptr}};
+    if (h.trails[k] > 0) {
+      const Pose& p = trails_[k][h.trails[k] - 1];
+      r["pose"] = poseJson(p.x, p.y, p.headingDeg);
+    }
+    if (b < hb)
+      r["believed"] = std::vector<std::array<float, 2>>(beliefs_[k].begin() + static_cast<std::ptrdiff_t>(b),
+                                                        beliefs_[k].begin() + static_cast<std::ptrdiff_t>(hb));
+    rovers.push_back(std::move(r));
+  }
+  if (!rovers.empty()) text({{"type", "poses"}, {"step", h.step}, {"rovers", std::move(rovers)}});
+
+  if (from.progress != h.progress && progressFrame_) batch->emplace_back(false, progressFrame_, false);
+  // After the end the done frame carries the status.
+  if (from.status != h.status && statusFrame_ && !finished_) batch->emplace_back(false, statusFrame_, false);
+  return batch;
 }
 
 void MissionStream::cellsChanged(std::span<const CellUpdate> cells) {
@@ -434,14 +454,15 @@ std::string MissionStream::fullGridFrameLocked() const {
   return out;
 }
 
-std::string MissionStream::gridDiffFrame(std::uint64_t since) const {
-  // Latest state of every cell changed since `since`, each cell once.
+std::string MissionStream::gridDiffFrame(std::uint64_t since, std::uint64_t until) const {
+  // Latest state of every cell changed in [since, until), each cell once.
   std::vector<std::int32_t> cells;
-  std::vector<std::uint8_t> seen(grid_.cellCount(), 0);
-  for (std::size_t i = since - logBase_; i < changeLog_.size(); ++i) {
-    std::int32_t c = changeLog_[i];
-    if (!seen[c]) seen[c] = 1, cells.push_back(c);
+  diffSeen_.resize(static_cast<std::size_t>(grid_.cellCount()), 0);
+  for (std::size_t i = since - logBase_; i < until - logBase_; ++i) {
+    const std::int32_t c = changeLog_[i];
+    if (!diffSeen_[c]) diffSeen_[c] = 1, cells.push_back(c);
   }
+  for (std::int32_t c : cells) diffSeen_[c] = 0;
   std::string out;
   out.reserve(16 + 12 * cells.size());
   putU32(out, kCellUpdates);
@@ -513,11 +534,12 @@ void MissionStream::wakeAll(bool force) {
   std::vector<std::shared_ptr<http::WsConnection>> live;
   {
     std::lock_guard lock(mutex_);
-    // The planner may emit thousands of events a second; waking clients every few ms is plenty
-    // (they pull whatever accumulated). Lifecycle changes always wake.
-    auto now = std::chrono::steady_clock::now();
-    if (!force && now - lastWake_ < std::chrono::milliseconds(5)) return;
-    lastWake_ = now;
+    // The planner may emit thousands of events a second: they are published as a cut at most
+    // every kCutEvery, and only a cut wakes the subscribers (who then find a batch to send).
+    // Lifecycle changes cut and wake at once.
+    if (subscribers_.empty() || !dirtyLocked()) return;
+    if (!force && std::chrono::steady_clock::now() - headAt_ < kCutEvery) return;
+    cutLocked();
     for (const auto& w : subscribers_)
       if (auto c = w.lock()) live.push_back(std::move(c));
   }

@@ -142,31 +142,41 @@ class StudyStream::Subscription : public http::WsSource {
     StudyStream& s = *stream_;
     std::lock_guard lock(s.mutex_);
     if (doneSent_) return std::nullopt;
+    const auto progressJson = [&s] {
+      return json{{"type", "progress"}, {"status", s.state_.status},     {"message", s.state_.message},
+                  {"runs_done", s.state_.done}, {"runs_total", s.state_.total},
+                  {"eta_s", s.state_.etaSeconds < 0 ? json(nullptr) : json(std::round(s.state_.etaSeconds))},
+                  {"runs_per_s", s.state_.runsPerSecond}};
+    };
     if (!snapshotSent_) {
       snapshotSent_ = true;
       seen_ = s.version_;
       summarySeen_ = s.summaryVersion_;
-      return http::WsFrame{false, json{{"type", "snapshot"}, {"study", toJson(s.state_)}, {"summary", s.summary_}}.dump()};
+      return http::WsFrame{false, s.encodedLocked(s.snapshot_, true, [&s] {
+                             return json{{"type", "snapshot"}, {"study", toJson(s.state_)}, {"summary", s.summary_}};
+                           })};
     }
     if (isEnded(s.state_.status)) {
       doneSent_ = true;
       return http::WsFrame{false,
-                           json{{"type", "done"}, {"status", s.state_.status}, {"message", s.state_.message},
-                                {"runs_done", s.state_.done}, {"runs_total", s.state_.total}, {"summary", s.summary_}}
-                               .dump(),
+                           s.encodedLocked(s.done_, true, [&s] {
+                             return json{{"type", "done"}, {"status", s.state_.status}, {"message", s.state_.message},
+                                         {"runs_done", s.state_.done}, {"runs_total", s.state_.total},
+                                         {"summary", s.summary_}};
+                           }),
                            true};
     }
     if (seen_ == s.version_ && summarySeen_ == s.summaryVersion_) return std::nullopt;
     seen_ = s.version_;
-    json j{{"type", "progress"}, {"status", s.state_.status},     {"message", s.state_.message},
-           {"runs_done", s.state_.done}, {"runs_total", s.state_.total},
-           {"eta_s", s.state_.etaSeconds < 0 ? json(nullptr) : json(std::round(s.state_.etaSeconds))},
-           {"runs_per_s", s.state_.runsPerSecond}};
     if (summarySeen_ != s.summaryVersion_) {
       summarySeen_ = s.summaryVersion_;
-      j["summary"] = s.summary_;
+      return http::WsFrame{false, s.encodedLocked(s.progressWithSummary_, true, [&] {
+                             json j = progressJson();
+                             j["summary"] = s.summary_;
+                             return j;
+                           })};
     }
-    return http::WsFrame{false, j.dump()};
+    return http::WsFrame{false, s.encodedLocked(s.progress_, false, progressJson)};
   }
   std::chrono::milliseconds minInterval() const override { return std::chrono::milliseconds(250); }
 
@@ -175,6 +185,23 @@ class StudyStream::Subscription : public http::WsSource {
   bool snapshotSent_ = false, doneSent_ = false;
   std::uint64_t seen_ = 0, summarySeen_ = 0;
 };
+
+std::shared_ptr<const std::string> StudyStream::encodedLocked(Encoded& slot, bool withSummary,
+                                                              const std::function<json()>& make) const {
+  const std::uint64_t summaryVersion = withSummary ? summaryVersion_ : 0;
+  if (!slot.bytes || slot.version != version_ || slot.summaryVersion != summaryVersion) {
+    slot.bytes = std::make_shared<const std::string>(make().dump());
+    slot.version = version_;
+    slot.summaryVersion = summaryVersion;
+    ++encodes_;
+  }
+  return slot.bytes;
+}
+
+std::uint64_t StudyStream::frameEncodes() const {
+  std::lock_guard lock(mutex_);
+  return encodes_;
+}
 
 void StudyStream::update(const StudyState& state) {
   {

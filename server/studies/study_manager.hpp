@@ -69,6 +69,8 @@ bool isEnded(const std::string& status);
 //   {"type":"snapshot", study{...state}, summary}           first
 //   {"type":"progress", done, total, eta_s, runs_per_s, status, summary?}  summary: when it changed
 //   {"type":"done", status, message, done, total, summary}  last, then a normal close
+// Each frame is encoded once per version and shared by every subscriber (issue 22): a crowd of
+// readers costs the study thread nothing but the wake-ups.
 class StudyStream : public std::enable_shared_from_this<StudyStream> {
  public:
   void update(const StudyState& state);                 // progress / status
@@ -83,6 +85,18 @@ class StudyStream : public std::enable_shared_from_this<StudyStream> {
   nlohmann::json summary_ = nullptr;
   std::uint64_t version_ = 0, summaryVersion_ = 0;
   std::vector<std::weak_ptr<http::WsConnection>> subscribers_;
+  // Encoded frames and the versions they are of (caller holds mutex_).
+  struct Encoded {
+    std::uint64_t version = ~0ull, summaryVersion = ~0ull;
+    std::shared_ptr<const std::string> bytes;
+  };
+  Encoded snapshot_, progress_, progressWithSummary_, done_;
+  std::shared_ptr<const std::string> encodedLocked(Encoded& slot, bool withSummary,
+                                                   const std::function<nlohmann::json()>& make) const;
+  mutable std::uint64_t encodes_ = 0;
+
+ public:
+  std::uint64_t frameEncodes() const;  // frames encoded so far (shared by every subscriber)
 };
 
 class StudyManager {

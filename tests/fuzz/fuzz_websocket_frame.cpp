@@ -33,11 +33,19 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   client.write_some(net::buffer(data, size));
   client.close();  // EOF after the fuzzed frames
   beast::flat_buffer buffer;
-  // As WebsocketSession::readLoop: read and discard until the stream fails or closes; every
-  // message or frame consumes input, so this ends (bounded again for safety).
-  for (std::size_t i = 0; i <= size && !ec; ++i) {
-    ws.read(buffer, ec);
+  // As WebsocketSession::readLoop: read in pieces and discard until the stream fails or closes,
+  // counting the message's size; one over the limit is closed with 1009 as the session does.
+  // Every piece or frame consumes input, so this ends (bounded again for safety).
+  std::size_t message = 0;
+  for (std::size_t i = 0; i <= size + 1 && !ec; ++i) {
+    message += ws.read_some(buffer, 16 * 1024, ec);
     buffer.consume(buffer.size());
+    if (ec) break;
+    if (message > rover::http::kMaxClientMessageBytes) {
+      ws.close(websocket::close_code::too_big, ec);
+      break;
+    }
+    if (ws.is_message_done()) message = 0;
   }
   return 0;
 }

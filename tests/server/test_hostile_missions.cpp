@@ -16,6 +16,7 @@ using rover::test::checkError;
 using rover::test::request;
 using rover::test::TempDir;
 using nlohmann::json;
+using namespace std::chrono_literals;
 
 namespace {
 
@@ -181,3 +182,38 @@ TEST_CASE("hostile missions: every WebSocket subscriber gets the same snapshot b
   REQUIRE(a.size() == 3);
   CHECK(a[0].data == seen[0][0].data);
 }
+
+TEST_CASE("hostile missions: a subscriber that never reads is dropped while a reading one gets every frame") {
+  TempDir d;
+  test::ApiServerOptions o = budgetOf(64ull << 30);
+  o.http.readTimeout = 1s;  // a stuck write is given up after 1 s + 1 s per 256 KiB
+  ApiServer s(d.str("data"), o);
+  // 600×600 coverage cells: the snapshot's full grid alone (1.8 MB) cannot pass a 4 KiB window.
+  auto r = s.postJson("/api/missions", coverageMission(s.defaultMap(), 0.25, 400, 0.02));
+  REQUIRE(r.status == 202);
+  const std::string id = r.json()["id"];
+  const std::string target = "/api/missions/" + id + "/stream";
+
+  test::net::io_context ioc;
+  test::beast::websocket::stream<test::tcp::socket> stuck(ioc);
+  stuck.next_layer().open(test::tcp::v4());
+  stuck.next_layer().set_option(test::net::socket_base::receive_buffer_size(4096));
+  stuck.next_layer().connect(test::tcp::endpoint(test::net::ip::make_address("127.0.0.1"), s.port()));
+  stuck.handshake("127.0.0.1", target);  // then never reads
+
+  const auto frames = test::readAllFrames(s.port(), target, std::chrono::seconds(120));
+  REQUIRE(frames.size() >= 3);
+  CHECK(json::parse(frames.front().data)["type"] == "snapshot");
+  CHECK(json::parse(frames.back().data)["type"] == "done");
+  // The reader is gone; the stuck one is dropped at its write deadline (polled, bounded: the
+  // stream holds its subscribers weakly, so the count falls when the session ends).
+  auto stream = s.manager.stream(id);
+  REQUIRE(stream);
+  bool dropped = false;
+  for (int i = 0; i < 600 && !dropped; ++i) {
+    dropped = stream->subscriberCount() == 0;
+    if (!dropped) std::this_thread::sleep_for(100ms);
+  }
+  CHECK(dropped);
+}
+
