@@ -28,6 +28,7 @@ def rovers(n, x0=60.5, y0=60.5, step=4.0, per_row=8):
 MISSIONS = [
     ("issue-22 coverage (no max_steps)", "coverage", rovers(4), {"frontier": False, "coverage": 1}, None),
     ("issue-22 coverage max_steps 1e9", "coverage", rovers(4), {"frontier": False, "coverage": 1, "max_steps": 1e9}, 3),
+    ("issue-22 coverage max_steps 1e6, cancelled", "coverage", rovers(4), {"frontier": False, "coverage": 1, "max_steps": 1000000}, 3),
     ("coverage overlap 4 rovers", "coverage", rovers(4), {"frontier": False, "coverage": 1, "max_steps": 20000}, None),
     ("coverage voronoi 4 rovers", "coverage", rovers(4), {"frontier": False, "coverage": 1, "mode": "voronoi", "max_steps": 20000}, None),
     ("coverage frontier 2 rovers", "coverage", rovers(2), {"frontier": True, "coverage": 1}, None),
