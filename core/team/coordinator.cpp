@@ -99,7 +99,9 @@ class Coordinator {
       traffic_.add(out_.trajectories[k]);  // rover k is done: the next ones plan round it
     }
     out_.rrtCalls += ahead_->finish();  // every leg's plan, used or not: as many whatever the threads
-    out_.conflicts = checkSeparation(out_.trajectories, p_.safetyDistance).conflicts;
+    // Every pair of rovers over every sample: skipped once cancelled (the plan is unfinished
+    // anyway, and for 64 rovers far into a long route it is seconds the cancel would wait for).
+    if (!cancelled()) out_.conflicts = checkSeparation(out_.trajectories, p_.safetyDistance).conflicts;
     return std::move(out_);
   }
 

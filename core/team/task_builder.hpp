@@ -60,7 +60,8 @@ class HybridTasks final : public GroundTaskBuilder {
 std::vector<RoverTask> teamSearchTasks(const terrain::Dem& dem, const Raster<std::uint8_t>& classes,
                                        const std::vector<Pose>& starts, const Route& route,
                                        const TeamMissionParams& params,
-                                       const Raster<std::uint8_t>* reachable = nullptr);
+                                       const Raster<std::uint8_t>* reachable = nullptr,
+                                       const CancelToken* cancel = nullptr);
 std::vector<RoverTask> hybridTasks(const terrain::Dem& dem, const Raster<std::uint8_t>& classes,
                                    const std::vector<Pose>& starts, const Route& route,
                                    const TeamMissionParams& params, const CancelToken* cancel,

@@ -127,12 +127,18 @@ TeamMissionResult runTeamMission(const terrain::Dem& dem, const Raster<std::uint
   if (hybrid) builder = std::make_unique<HybridTasks>(dem, zoned, params, goalsOn);
   else builder = std::make_unique<SlotTasks>(dem, zoned, params, goalsOn);
   const std::vector<RoverTask> tasks = builder->build(starts, out.route, cancel);
-  for (std::size_t k = 0; k < tasks.size(); ++k)
-    for (int t = 0; t < static_cast<int>(out.route.cells.size()); ++t) {
-      const auto& legs = tasks[k].legs;
-      if (std::none_of(legs.begin(), legs.end(), [t](const Leg& l) { return l.target == t; }))
-        out.noSlot.emplace_back(static_cast<int>(k), t);
-    }
+  // The (rover, target) pairs without a leg: one pass over each rover's legs (a search of its
+  // legs per target was rovers × targets² — 6.4·10⁹ steps, tens of seconds nothing could cancel,
+  // for 64 rovers and 10 000 targets).
+  const int targetCount = static_cast<int>(out.route.cells.size());
+  std::vector<std::uint8_t> served(static_cast<std::size_t>(targetCount));
+  for (std::size_t k = 0; k < tasks.size() && !(cancel && cancel->cancelled()); ++k) {
+    std::fill(served.begin(), served.end(), 0);
+    for (const Leg& l : tasks[k].legs)
+      if (l.target >= 0 && l.target < targetCount) served[static_cast<std::size_t>(l.target)] = 1;
+    for (int t = 0; t < targetCount; ++t)
+      if (!served[static_cast<std::size_t>(t)]) out.noSlot.emplace_back(static_cast<int>(k), t);
+  }
   TeamMissionParams p = params;
   p.coordination.slip.seed = deriveSeed(params.seed, 0x511b);
   out.plan = coordinate(dem, zoned, tasks, p.coordination, params.seed, observer, cancel,

@@ -282,11 +282,19 @@ missions::MissionJob buildMission(ApiContext& ctx, const json& body) {
     const double cell = ground.cell;
     const double cells = std::ceil(mapGeometry.heightMetres() / cell - 1e-9) *
                          std::ceil(mapGeometry.widthMetres() / cell - 1e-9);
+    // The steps bound the moves, so the estimate covers the mission however long it runs.
+    const auto steps = missions::coverageStepBudget(job.params, ground.coverage.maxSteps,
+                                                    static_cast<std::int64_t>(cells), roverCount);
     job.memory = missions::coverageMissionMemory(static_cast<std::int64_t>(cells), cell, roverCount,
                                                  ground.coverage.mode == coverage::TeamMode::Voronoi,
-                                                 ground.coverage.coverage, ground.coverage.localisation.active());
+                                                 steps, ground.coverage.localisation.active());
   } else {
-    job.memory = missions::teamMissionMemory(mapGeometry.cellCount(), roverCount, !job.record.pdmId.empty());
+    try {
+      job.memory = missions::teamMissionMemory(mapGeometry.cellCount(), roverCount, !job.record.pdmId.empty(),
+                                               job.params, job.record.planner == "hybrid");
+    } catch (const Error& e) {
+      throw fromCore(e, "params.");
+    }
   }
   ctx.missions.admit(job.memory);
   job.build = [&maps = ctx.maps, ground](missions::MissionJob& j) {

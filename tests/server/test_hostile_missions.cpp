@@ -31,6 +31,12 @@ test::ApiServerOptions budgetOf(std::uint64_t budget, std::size_t queue = 8) {
   return o;
 }
 
+// The estimate of a coverage mission with the server's default step budget (no max_steps given).
+missions::MemoryEstimate defaultStepsEstimate(std::int64_t cells, double cell, int rovers) {
+  ParamSet none;
+  return missions::coverageMissionMemory(cells, cell, rovers, false, missions::coverageStepBudget(none, 0, cells, rovers));
+}
+
 json coverageMission(const std::string& map, double cell, double pace = 0, double goal = 0.05) {
   json j{{"map", map}, {"planner", "coverage"}, {"rovers", {{{"x", 20.5}, {"y", 20.5}, {"heading", 0}}}},
          {"params", {{"coverage_cell", cell}, {"coverage", goal}}}};
@@ -45,7 +51,7 @@ TEST_CASE("hostile missions: one mission over the memory budget is refused with 
   // The budget fits two missions on the map's own 0.25 m cells, not one on 0.16 m cells (2.4 times
   // the cells, still under the coverage grid's own cell limit): that one must be refused before its
   // world is built.
-  const auto native = missions::coverageMissionMemory(kDefaultMapCells, 0.25, 1, false, 0.05);
+  const auto native = defaultStepsEstimate(kDefaultMapCells, 0.25, 1);
   ApiServer s(d.str("data"), budgetOf(native.bytes * 2));
   const std::string map = s.defaultMap();
   auto r = s.postJson("/api/missions", coverageMission(map, 0.16));
@@ -66,7 +72,7 @@ TEST_CASE("hostile missions: one mission over the memory budget is refused with 
 
 TEST_CASE("hostile missions: running + queued missions over the budget get 429 with Retry-After, cancel frees it") {
   TempDir d;
-  const auto one = missions::coverageMissionMemory(kDefaultMapCells, 0.25, 1, false, 1.0);
+  const auto one = defaultStepsEstimate(kDefaultMapCells, 0.25, 1);
   ApiServer s(d.str("data"), budgetOf(one.bytes * 2 + one.bytes / 2));  // room for two
   const std::string map = s.defaultMap();
   const auto slow = coverageMission(map, 0.25, 5, 1.0);  // 5 steps a second: runs until cancelled
@@ -217,3 +223,61 @@ TEST_CASE("hostile missions: a subscriber that never reads is dropped while a re
   CHECK(dropped);
 }
 
+namespace {
+
+// The issue's mission: four rovers, frontier off and a goal of 1 (never met on a DEM, whose
+// unsensed pockets count as free), so only the step budget ends it.
+json neverEndingMission(const std::string& map) {
+  json rovers = json::array();
+  for (int k = 0; k < 4; ++k) rovers.push_back({{"x", 70.5 + 3 * k}, {"y", 70.5}, {"heading", 0}});
+  return {{"map", map}, {"planner", "coverage"}, {"rovers", rovers},
+          {"params", {{"frontier", false}, {"coverage", 1}}}};
+}
+
+}  // namespace
+
+TEST_CASE("hostile missions: max_steps whose moves cannot fit the budget is refused with 413 naming it") {
+  TempDir d;
+  ApiServer s(d.str("data"), budgetOf(256ull << 20));
+  const std::string map = s.defaultMap();
+  json body = neverEndingMission(map);
+  body["params"]["max_steps"] = 1e9;  // issue 22: admitted at ~60 MiB, grew to 2.46 GB
+  auto r = s.postJson("/api/missions", body);
+  checkError(r, 413, "mission_too_large", "params.max_steps");
+  const std::string message = r.json()["error"]["message"];
+  MESSAGE(message);
+  CHECK(message.find("up to 1000000000 steps") != std::string::npos);
+  CHECK(s.manager.memoryReserved() == 0);
+  // The message says which max_steps fits; that one is admitted, within the budget, and
+  // cancelling it ends it (a deadline that only catches a hang).
+  const auto at = message.find("give max_steps ");
+  REQUIRE(at != std::string::npos);
+  const long long fits = std::stoll(message.substr(at + 15));
+  CHECK(fits > 0);
+  body["params"]["max_steps"] = fits;
+  auto ok = s.postJson("/api/missions", body);
+  REQUIRE(ok.status == 202);
+  CHECK(s.manager.memoryReserved() <= s.manager.memoryBudget());
+  body["params"]["max_steps"] = fits + 1;
+  checkError(s.postJson("/api/missions", body), 413, "mission_too_large", "params.max_steps");
+  CHECK(request(s.port(), "DELETE", "/api/missions/" + ok.json()["id"].get<std::string>()).status == 202);
+  CHECK(s.waitFinished(ok.json()["id"])["status"] == "cancelled");
+  CHECK(s.manager.memoryReserved() == 0);
+}
+
+TEST_CASE("hostile missions: without max_steps a mission that never meets its goal ends at the steps its estimate counts") {
+  TempDir d;
+  ApiServer s(d.str("data"), budgetOf(1ull << 30));
+  auto r = s.postJson("/api/missions", neverEndingMission(s.defaultMap()));
+  REQUIRE(r.status == 202);
+  const json m = s.waitFinished(r.json()["id"], 120);
+  CHECK(m["status"] == "succeeded");
+  // The default coverage grid of the map keeps 40 000 cells: four moves a cell for the team of
+  // four is 40 000 steps (the planner's own default would be 20 × 40 000 steps of 4 moves).
+  const double cells = m["metrics"]["cells"];
+  CHECK(m["metrics"]["steps"].get<double>() == std::ceil(missions::kDefaultMovesPerCell * cells / 4));
+  CHECK(m["metrics"]["moves"].get<double>() <= missions::kDefaultMovesPerCell * cells);
+  const json result = s.get("/api/missions/" + r.json()["id"].get<std::string>() + "/result.json").json();
+  CHECK(result["stop_reason"] == "step_budget");
+  CHECK(s.manager.memoryReserved() == 0);
+}
