@@ -56,13 +56,14 @@ std::string errorText(int status) {
                      "start the server with --cors ORIGIN to allow one.";
     case 404: return "No such resource (the field names which).";
     case 409: return "Conflict with the resource's state (not ready, not finished, another map).";
-    case 413: return "Too large (body, upload or mission memory estimate).";
+    case 413: return "Too large (body, upload, mission memory estimate, an import's memory/CPU/file limits, "
+                     "or one object larger than a map's disk budget).";
     case 415: return "The body is not sent as application/json.";
     case 421: return "The Host header names a host this server does not answer to (a DNS-rebinding "
                      "guard); start it with --public-name NAME to add one.";
     case 429: return "Mission queue or memory budget full; see Retry-After.";
-    case 503: return "Work queue full; see Retry-After.";
-    case 507: return "The server's disk is full.";
+    case 503: return "Work queue full, or a stream's or the server's subscriber limit reached; see Retry-After.";
+    case 507: return "The server's disk is full, or a disk budget (per map or in all) is: the message says which.";
     default: return "Internal error (details in the server log).";
   }
 }

@@ -757,7 +757,7 @@ void addApiRoutes(http::Router& router, ApiContext& ctx) {
           onPool));
 
   http::RouteOptions ws;
-  ws.openapi = Operation().errors({404}).toJson();
+  ws.openapi = Operation().errors({404, 503}).toJson();  // 503: subscriber limits (ws_admission.hpp)
   ws.summary = "WebSocket: a snapshot, then live events (binary grid frames, JSON poses/progress), "
                "then {\"type\":\"done\"}; see README for the protocol.";
   router.addWebSocket("/api/missions/{id}/stream", [&ctx](const Request& req, std::shared_ptr<http::WsConnection> c) {

@@ -138,9 +138,9 @@ void addStudyRoutes(http::Router& router, ApiContext& ctx) {
     const studies::StudyState s = ctx.studies->submit(body);
     return Response::json(202, studies::toJson(s));
   }), routeDoc("Launch a study: a study document (see README \"Studies\") or {\"preset\": NAME, \"runs\": N, "
-               "\"master_seed\"?}; validated (400 naming the field), stored and queued (202). At most " +
+               "\"master_seed\"?, \"name\"?}; validated (400 naming the field), stored and queued (202). At most " +
                std::to_string(studies::kMaxServerRuns) + " runs per study, " + std::to_string(studies::kMaxActive) +
-               " studies queued or running, " + std::to_string(studies::kMaxStored) + " kept (429).", Operation().body(obj).returns(202, "Queued", obj).errors({400, 413, 415, 429}), true));
+               " studies queued or running, " + std::to_string(studies::kMaxStored) + " kept (429).", Operation().body(obj).returns(202, "Queued", obj).errors({400, 413, 415, 429, 507}), true));
 
   router.add("GET", "/api/studies", guardedRoute([&ctx](const Request&) {
     json out = json::array();
@@ -227,7 +227,7 @@ void addStudyRoutes(http::Router& router, ApiContext& ctx) {
                "is no stored map.", Operation().returns(202, "Queued mission", obj).errors({404, 409, 429}), true));
 
   http::RouteOptions ws = routeDoc("WebSocket: {\"type\":\"snapshot\"}, then progress frames (runs done/total, "
-                                   "ETA, a partial summary every few seconds), then {\"type\":\"done\"}.", Operation().returns(101, "Switching protocols").errors({404}));
+                                   "ETA, a partial summary every few seconds), then {\"type\":\"done\"}.", Operation().returns(101, "Switching protocols").errors({404, 503}));
   router.addWebSocket("/api/studies/{id}/stream", [&ctx](const Request& req, std::shared_ptr<http::WsConnection> c) {
     auto s = ctx.studies->stream(req.params.at("id"));
     if (!s) throw ApiError(404, "not_found", "no study '" + req.params.at("id") + "'", "id");

@@ -218,6 +218,9 @@ int serveCommand(const std::vector<std::string>& argv, std::ostream& out) {
   api::ApiContext ctx{db, dir, maps, manager, planners};
   ctx.studies = &studyManager;
   api::addApiRoutes(router, ctx);
+  // Probed before the first request can arrive (it starts a few test jails), so the lines below
+  // follow the URL at once.
+  const jail::Isolation isolation = jail::isolation();
   http::HttpServer server(config, router);
   try {
     server.start();
@@ -230,7 +233,7 @@ int serveCommand(const std::vector<std::string>& argv, std::ostream& out) {
       << missions::formatBytes(missionMemory) << " mission memory"
       << (config.token.empty() ? "" : ", token required")
       << (launcher.empty() ? "" : ", studies launched by " + launcher[0]) << ")" << std::endl;
-  out << "imports: client files are parsed in " << jail::isolationInWords(jail::isolation()) << std::endl;
+  out << "imports: client files are parsed in " << jail::isolationInWords(isolation) << std::endl;
   if (a.has("token"))
     out << "warning: --token is visible to every local user in `ps`; prefer ROVERPLAN_TOKEN or --token-file"
         << std::endl;
