@@ -54,7 +54,7 @@ struct ChildSetup {
     struct rlimit r {soft, hard};
     ::setrlimit(resource, &r);
   };
-  limit(RLIMIT_AS, s.limits.memoryBytes, s.limits.memoryBytes);
+  if (kAddressSpaceLimited) limit(RLIMIT_AS, s.limits.memoryBytes, s.limits.memoryBytes);
   limit(RLIMIT_CPU, s.limits.cpuSeconds, s.limits.cpuSeconds + 5);  // SIGXCPU first, SIGKILL 5 s later
   limit(RLIMIT_FSIZE, s.limits.fileBytes, s.limits.fileBytes);
   limit(RLIMIT_CORE, 0, 0);  // a crash leaves no core file of a client's data behind

@@ -23,6 +23,16 @@
 
 namespace rover::jail {
 
+// AddressSanitizer reserves terabytes of shadow address space at start, so a sanitizer build's
+// worker cannot run under RLIMIT_AS at all: there the memory limit is not set (CPU, file size and the
+// deadline still are). Release builds, the ones `serve` runs, always set it.
+// ROVER_SANITIZED is defined by CMake for the sanitizer and fuzz builds.
+#ifdef ROVER_SANITIZED
+inline constexpr bool kAddressSpaceLimited = false;
+#else
+inline constexpr bool kAddressSpaceLimited = true;
+#endif
+
 enum class Isolation { Bubblewrap, Namespaces, Rlimits };
 
 // The isolation workers get in this process: probed on first use (a `bwrap ... true`, then an
