@@ -28,15 +28,13 @@ struct ConflictPolicy {
   bool earlyConflictEndsReplans = false;
   // Two tries in a row with the same keep-out zones whose plans end short of a goal the planner
   // proved cut off (PathResult::goalCutOff) end the re-plans: a new seed only moves where the
-  // tree stops (HiRISE site: 0 of 42 such re-plans reached the goal, at 120 ms each, a fifth of
-  // a slow mission's RRT* time).
+  // tree stops (figures: docs/decisions/0002).
   bool repeatedShortEndsReplans = false;
   // This many tries in a row that reach the goal and, started at once, meet a higher-priority
   // rover only while standing there, where no keep-out zone can go (it would wall in the start or
   // the goal), end the re-plans; 0 = never. Such a try is the same problem again with a new seed,
-  // and no path dodges a rover that comes by the goal while this one dwells there (HiRISE
-  // replicate 13: 9 legs spent 21 RRT* calls each on such runs, then went on after stepping aside
-  // or were skipped). Any other try breaks the run.
+  // and no path dodges a rover that comes by the goal while this one dwells there
+  // (docs/decisions/0002). Any other try breaks the run.
   int unzonedConflictsEndReplans = 0;
   // After the re-plans, the first try within the attitude check is tried again this many times,
   // each time one wait step later and simulated anew; then the leg is skipped.
@@ -50,9 +48,8 @@ struct ConflictPolicy {
   // The try of a rover's last leg is checked standing at its goal for as long as any
   // higher-priority rover moves: it parks there. false: for the dwell, like every other leg, and
   // park() moves the rover aside before each later pass (needs recover; coordinateWith checks).
-  // Checked for good, a leg whose goal a higher-priority rover passes an hour later failed every
-  // try and every re-plan (hybrid, HiRISE replicate 3: 147 of 217 re-plans, 21 to 42 RRT* calls
-  // per rover, for a leg that then ended as before).
+  // Checked for good, a leg whose goal a higher-priority rover passes much later fails every try
+  // and every re-plan (docs/decisions/0002).
   bool lastLegParks = true;
   // Recoveries (ours), for a rover that would otherwise stay stuck where it stands:
   // - a try that would end where the rover cannot stop and turn (canStop) is refused like a
@@ -63,8 +60,8 @@ struct ConflictPolicy {
   //   rover later, first steps aside (a spot clear for good, else the nearest clear for 20 s),
   //   then tries the leg again; at most two recoveries per leg;
   // - parking at the end moves again until the rover is clear for good (at most 8 moves).
-  // Before them, on the HiRISE site, a rover stuck on a 15° spot ended 26–57 legs short in one
-  // mission, and one left standing in another's way made the plan's only collisions.
+  // Without them a rover stuck on a steep spot ends many legs short, and one left standing in
+  // another's way collides (docs/decisions/0002).
   bool recover = false;
 };
 
