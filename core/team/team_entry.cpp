@@ -7,7 +7,9 @@
 
 #include "core/common/error.hpp"
 #include "core/planning/mission_check.hpp"
+#include "core/team/team_memory.hpp"
 #include "core/team/team_replay.hpp"
+#include "core/team/team_specs.hpp"
 #include "core/terrain/body.hpp"
 
 namespace rover::team {
@@ -28,6 +30,19 @@ class TeamPlanner final : public Planner {
   }
   std::vector<ParamInfo> params() const override { return teamParamTable().infos(); }
   std::vector<ParamPreset> presets() const override { return teamParamTable().presets(); }
+  const PlannerSpecs& specs() const override { return teamSpecs(hybrid_); }
+  void checkParams(const ParamSet& params) const override { (void)parseTeamParams(params); }
+  MemoryEstimate memoryEstimate(const GridGeometry& map, const MapGround& ground, int rovers, bool pdm,
+                                ParamSet& params) const override {
+    (void)ground;  // the map itself
+    return missionMemory(map.cellCount(), rovers, pdm, params, hybrid_);
+  }
+  std::vector<RoverStart> defaultStarts(const PlanningProblem& problem, const ParamSet& params, int rovers,
+                                        std::uint64_t seed) const override {
+    (void)seed;  // the formation is the same for every seed
+    if (!problem.dem) throw Error(ErrorCode::InvalidInput, "map", "the team planners need a DEM");
+    return formationStarts(*problem.dem, params, rovers);
+  }
 
   void validate(const PlanningProblem& problem, const ParamSet& params) const override {
     const TeamPlannerParams p = parseTeamParams(params);

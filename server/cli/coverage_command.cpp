@@ -101,13 +101,13 @@ int coverageCommand(const std::vector<std::string>& argv, std::ostream& out) {
     typed = coverage::parseCoverageParams(params);
     if (dem) {
       // Square cells of coverage_cell metres in the map's local frame, whatever its pixels.
-      problem = problems::problemOnMap(problems::groundOnMap("coverage", dem->dem.geometry(), params),
+      problem = problems::problemOnMap(planner.groundOnMap(dem->dem.geometry(), params),
                                        std::make_shared<terrain::Dem>(dem->dem), nullptr, import.body);
     } else {
       problem = problems::problemOnGrid(wp);
     }
     problem.keepOut = readKeepOutOption(args, dem ? dem->dem.geometry() : problem.world.geometry());
-    problem.rovers = !starts.empty() ? starts : problems::randomValidStarts(planner, problem, params, rovers, wp.seed);
+    problem.rovers = !starts.empty() ? starts : planner.defaultStarts(problem, params, rovers, wp.seed);
     planner.validate(problem, params);
   } catch (const Error& e) {
     if (e.field().rfind("rovers", 0) == 0 && !starts.empty())

@@ -81,7 +81,8 @@ int sweepCommand(const std::vector<std::string>& argv, std::ostream& out) {
       << " runs = " << spec.runCount() << " runs, " << threads << " threads\n" << std::flush;
   studies::RunOptions ro;
   ro.threads = threads;
-  const bool slow = spec.planner != "coverage";  // team missions take seconds each: show progress
+  // Runs that take seconds each (team missions): show progress.
+  const bool slow = makeBuiltinRegistry().get(spec.planner).specs().secondsPerRun;
   const studies::RunReport r = runner.run(db, ro, [&](std::size_t done, std::size_t total) {
     if (slow) out << "  [" << done << "/" << total << "]\n" << std::flush;
   });
