@@ -11,6 +11,7 @@
 #include "core/team/team_replay.hpp"
 #include "core/team/team_specs.hpp"
 #include "core/terrain/body.hpp"
+#include "core/planning/rover_limits.hpp"
 
 namespace rover::team {
 
@@ -52,8 +53,7 @@ class TeamPlanner final : public Planner {
     checkGridGeometry(g, "map");  // before the cell size is compared or used
     if (problem.pdm && (problem.pdm->geometry.rows != g.rows || problem.pdm->geometry.cols != g.cols))
       throw Error(ErrorCode::InvalidInput, "pdm", "the PDM must have the DEM's rows and columns");
-    if (problem.rovers.empty() || problem.rovers.size() > 64)
-      throw Error(ErrorCode::InvalidInput, "rovers", "between 1 and 64 rovers are supported");
+    planning::checkRoverCount(problem.rovers.size());
     if (p.mission.footprint < std::max(g.cellWidth, g.cellHeight))
       throwInvalidParameter("footprint_m", "must be at least the map cell size");
     const auto classes = classesFor(problem, p.mission.traversability);

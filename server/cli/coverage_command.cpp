@@ -12,6 +12,7 @@
 #include <fstream>
 
 #include "core/coverage/terrain_world.hpp"
+#include "core/planning/rover_limits.hpp"
 #include "maps/geojson.hpp"
 #include "maps/georef.hpp"
 #include "server/cli/coverage_options.hpp"
@@ -85,7 +86,7 @@ int coverageCommand(const std::vector<std::string>& argv, std::ostream& out) {
     return 0;
   }
   coverage::WorldParams wp = readWorldOptions(args);
-  int rovers = static_cast<int>(args.integer("rovers", 1, 1, 64));
+  int rovers = static_cast<int>(args.integer("rovers", 1, 1, planning::kMaxRovers));
   ParamSet params = readCoverageParamOptions(args);
   std::vector<RoverStart> starts = readStartOption(args);
   if (!starts.empty()) rovers = static_cast<int>(starts.size());

@@ -2,6 +2,7 @@
 
 #include "core/common/strings.hpp"
 #include "core/team/team_entry.hpp"
+#include "core/planning/rover_limits.hpp"
 #include "maps/georef.hpp"
 #include "server/cli/coverage_options.hpp"
 #include "server/cli/dem_options.hpp"
@@ -80,7 +81,7 @@ MissionSetup readMissionOptions(const ArgParser& a) {
   s.problem.keepOut = readKeepOutOption(a, dem->geometry());
   std::vector<RoverStart> starts = readStartOption(a);
   if (starts.empty()) {
-    const int n = static_cast<int>(a.integer("rovers", 5, 1, 64));
+    const int n = static_cast<int>(a.integer("rovers", 5, 1, planning::kMaxRovers));
     starts = orUsage([&] { return planner->defaultStarts(s.problem, s.params, n, 0); });
   }
   s.problem.rovers = starts;

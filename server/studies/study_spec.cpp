@@ -6,6 +6,7 @@
 
 #include "core/common/random.hpp"
 #include "core/planning/planner.hpp"
+#include "core/planning/rover_limits.hpp"
 #include "server/json/json_edge.hpp"
 #include "server/json/plan_json.hpp"
 #include "server/json/planner_json.hpp"
@@ -235,9 +236,9 @@ StudySpec parseStudySpec(const json& spec) {
     s.rovers.clear();
     if (v->is_array()) {
       if (v->empty() || v->size() > 32) bad("rovers", "must be a team size or an array of 1 to 32 of them");
-      for (std::size_t i = 0; i < v->size(); ++i) s.rovers.push_back(static_cast<int>(integer((*v)[i], at("rovers", i), 1, 64)));
+      for (std::size_t i = 0; i < v->size(); ++i) s.rovers.push_back(static_cast<int>(integer((*v)[i], at("rovers", i), 1, planning::kMaxRovers)));
     } else {
-      s.rovers.push_back(static_cast<int>(integer(*v, "rovers", 1, 64)));
+      s.rovers.push_back(static_cast<int>(integer(*v, "rovers", 1, planning::kMaxRovers)));
     }
   }
   const std::string starts = rover::json::startPlacementName(specs.starts);
