@@ -92,7 +92,7 @@ json missionJson(const store::MissionRecord& m) {
           {"label", m.label},
           {"map_name", m.mapName.empty() ? json(nullptr) : json(m.mapName)},
           {"pdm_name", m.pdmName.empty() ? json(nullptr) : json(m.pdmName)},
-          {"planner", m.planner}, {"status", m.status},      {"message", m.message},
+          {"planner", m.planner}, {"status", enumName(m.status)},      {"message", m.message},
           {"created_at", m.createdAt}, {"started_at", m.startedAt}, {"finished_at", m.finishedAt},
           {"metrics", m.metrics}, {"spec", m.spec},
           {"links",
@@ -666,8 +666,8 @@ void addApiRoutes(http::Router& router, ApiContext& ctx) {
     if (ctx.missions.cancel(id)) return Response::json(202, {{"id", id}, {"status", "cancelling"}});
     // Not running (any more): the run is deleted, its row first so no listing shows a run whose
     // files are half gone. A mission that is still finishing cannot be deleted yet.
-    if (!store::isFinal(m->status))
-      throw ApiError(409, "not_finished", "mission " + rj::shown(id) + " is " + m->status + ": try again when it has ended", "id");
+    if (!isFinal(m->status))
+      throw ApiError(409, "not_finished", "mission " + rj::shown(id) + " is " + std::string(enumName(m->status)) + ": try again when it has ended", "id");
     // Only the request whose delete removed the row says so; a concurrent one finds nothing.
     if (!ctx.db.deleteMission(id)) throw ApiError(404, "not_found", "no mission '" + rj::shown(id) + "'", "id");
     ctx.missions.forget(id);
@@ -731,12 +731,12 @@ void addApiRoutes(http::Router& router, ApiContext& ctx) {
     if (!fs::exists(path)) {
       // An ended run without files (failed, cancelled before it stored anything) will never
       // have them: say so, with the reason it ended.
-      if (store::isFinal(m->status))
+      if (isFinal(m->status))
         throw ApiError(409, "no_result",
-                       "mission " + rj::shown(id) + " ended " + m->status + " without a result" +
+                       "mission " + rj::shown(id) + " ended " + std::string(enumName(m->status)) + " without a result" +
                            (m->message.empty() ? std::string() : ": " + m->message),
                        "id");
-      throw ApiError(409, "not_ready", "mission " + rj::shown(id) + " is " + m->status + ": no result yet", "id");
+      throw ApiError(409, "not_ready", "mission " + rj::shown(id) + " is " + std::string(enumName(m->status)) + ": no result yet", "id");
     }
     Response r = fileResponse(path.string(), t->second);
     r.headers.emplace_back("Content-Disposition", "attachment; filename=\"mission-" + id + "-" + file + "\"");
@@ -748,7 +748,7 @@ void addApiRoutes(http::Router& router, ApiContext& ctx) {
           "map's CRS).",
           Operation()
               .returns(200, "mission.json (MissionFile), result.json, result.geojson or result.csv.",
-                       {{"oneOf", {ref("MissionFile"), {{"type", "object"}, {"required", {"planner", "metrics"}}}}}})
+                       {{"oneOf", {ref("MissionFile"), ref("PlanResult")}}})
               .returns(200, "result.geojson.", {{"type", "object"}}, "application/geo+json")
               .returns(200, "result.csv.", {{"type", "string"}}, "text/csv")
               .returns(200, "map.png.", nullptr, "image/png")

@@ -62,7 +62,7 @@ class MissionStream::Subscription : public http::WsSource {
       doneSent_ = true;
       if (!s.doneFrame_) {
         s.doneFrame_ = std::make_shared<const std::string>(
-            nlohmann::json{{"type", "done"}, {"mission", s.id_}, {"status", s.status_}, {"message", s.message_},
+            nlohmann::json{{"type", "done"}, {"mission", s.id_}, {"status", enumName(s.status_)}, {"message", s.message_},
                            {"metrics", s.metrics_}, {"step", s.step_}}
                 .dump());
         ++s.frameEncodes_;
@@ -127,7 +127,7 @@ std::shared_ptr<const MissionStream::Snapshot> MissionStream::snapshot() {
     nlohmann::json grid = nullptr;
     if (grid_.cellCount() > 0)
       grid = {{"rows", grid_.rows}, {"cols", grid_.cols}, {"cell_size_m", grid_.cellWidth}};
-    j = {{"type", "snapshot"}, {"mission", id_},     {"status", status_},  {"grid", grid},
+    j = {{"type", "snapshot"}, {"mission", id_},     {"status", enumName(status_)},  {"grid", grid},
          {"rovers", nullptr},  {"step", step_},      {"progress", progress_}, {"metrics", metrics_}};
     if (!route_.empty() || !paths_.empty()) {
       j["route"] = route_;
@@ -188,7 +188,7 @@ void MissionStream::cutLocked() {
     ++frameEncodes_;
   }
   if (c.status != head_.status) {
-    statusFrame_ = std::make_shared<const std::string>(nlohmann::json{{"type", "status"}, {"status", status_}}.dump());
+    statusFrame_ = std::make_shared<const std::string>(nlohmann::json{{"type", "status"}, {"status", enumName(status_)}}.dump());
     ++frameEncodes_;
   }
   head_ = std::move(c);
@@ -397,7 +397,7 @@ void MissionStream::restoreBeliefs(const nlohmann::json& b) {
   }
 }
 
-void MissionStream::setStatus(const std::string& status) {
+void MissionStream::setStatus(RunStatus status) {
   {
     std::lock_guard lock(mutex_);
     status_ = status;
@@ -407,7 +407,7 @@ void MissionStream::setStatus(const std::string& status) {
   wakeAll(true);
 }
 
-void MissionStream::finish(const std::string& status, const std::string& message,
+void MissionStream::finish(RunStatus status, const std::string& message,
                            const nlohmann::json& metrics) {
   {
     std::lock_guard lock(mutex_);
@@ -428,7 +428,7 @@ bool MissionStream::finished() const {
 
 nlohmann::json MissionStream::summary() const {
   std::lock_guard lock(mutex_);
-  return {{"status", status_}, {"step", step_}, {"progress", progress_}, {"metrics", metrics_},
+  return {{"status", enumName(status_)}, {"step", step_}, {"progress", progress_}, {"metrics", metrics_},
           {"message", message_}, {"subscribers", subscribers_.size()}};
 }
 
@@ -492,7 +492,7 @@ nlohmann::json MissionStream::trailsJson() const {
 std::shared_ptr<MissionStream> MissionStream::fromStored(const std::string& missionId,
                                                          const std::string& gridFrame,
                                                          const nlohmann::json& trails,
-                                                         const std::string& status,
+                                                         RunStatus status,
                                                          const std::string& message,
                                                          const nlohmann::json& metrics) {
   GridGeometry g{};

@@ -51,6 +51,7 @@
 #include "core/grid/geometry.hpp"
 #include "core/planning/events.hpp"
 #include "server/http/http_types.hpp"
+#include "server/store/run_status.hpp"
 
 namespace rover::missions {
 
@@ -68,9 +69,9 @@ class MissionStream : public EventSink, public std::enable_shared_from_this<Miss
   void overlay(std::string_view kind, int rover, std::span<const Point2> points) override;
   void metrics(std::span<const Metric> metrics) override;
 
-  void setStatus(const std::string& status);
+  void setStatus(RunStatus status);
   // The final frame's content; wakes every subscriber.
-  void finish(const std::string& status, const std::string& message, const nlohmann::json& metrics);
+  void finish(RunStatus status, const std::string& message, const nlohmann::json& metrics);
   bool finished() const;
   // Called by the manager's thread, read by the planner's (pacing): atomic.
   void setCancelled() { cancelRequested_.store(true, std::memory_order_relaxed); }
@@ -90,7 +91,7 @@ class MissionStream : public EventSink, public std::enable_shared_from_this<Miss
   static std::shared_ptr<MissionStream> fromStored(const std::string& missionId,
                                                    const std::string& gridFrame,
                                                    const nlohmann::json& trails,
-                                                   const std::string& status,
+                                                   RunStatus status,
                                                    const std::string& message,
                                                    const nlohmann::json& metrics);
 
@@ -159,7 +160,7 @@ class MissionStream : public EventSink, public std::enable_shared_from_this<Miss
   std::int64_t step_ = 0;
   nlohmann::json progress_ = nullptr;
   std::uint64_t progressVersion_ = 0;
-  std::string status_ = "queued";
+  RunStatus status_ = RunStatus::Queued;
   std::uint64_t statusVersion_ = 0;
   bool finished_ = false;
   std::string message_;

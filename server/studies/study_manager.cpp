@@ -110,14 +110,10 @@ std::vector<std::string> splitCommandLine(const std::string& line) {
   return out;
 }
 
-bool isEnded(const std::string& status) {
-  return status == "succeeded" || status == "cancelled" || status == "failed";
-}
-
 json toJson(const StudyState& s) {
   return {{"id", s.id},
           {"name", s.name},
-          {"status", s.status},
+          {"status", enumName(s.status)},
           {"message", s.message},
           {"created_at", s.createdAt},
           {"started_at", s.startedAt},
@@ -143,7 +139,7 @@ class StudyStream::Subscription : public http::WsSource {
     std::lock_guard lock(s.mutex_);
     if (doneSent_) return std::nullopt;
     const auto progressJson = [&s] {
-      return json{{"type", "progress"}, {"status", s.state_.status},     {"message", s.state_.message},
+      return json{{"type", "progress"}, {"status", enumName(s.state_.status)},     {"message", s.state_.message},
                   {"runs_done", s.state_.done}, {"runs_total", s.state_.total},
                   {"eta_s", s.state_.etaSeconds < 0 ? json(nullptr) : json(std::round(s.state_.etaSeconds))},
                   {"runs_per_s", s.state_.runsPerSecond}};
@@ -156,11 +152,11 @@ class StudyStream::Subscription : public http::WsSource {
                              return json{{"type", "snapshot"}, {"study", toJson(s.state_)}, {"summary", s.summary_}};
                            })};
     }
-    if (isEnded(s.state_.status)) {
+    if (isFinal(s.state_.status)) {
       doneSent_ = true;
       return http::WsFrame{false,
                            s.encodedLocked(s.done_, true, [&s] {
-                             return json{{"type", "done"}, {"status", s.state_.status}, {"message", s.state_.message},
+                             return json{{"type", "done"}, {"status", enumName(s.state_.status)}, {"message", s.state_.message},
                                          {"runs_done", s.state_.done}, {"runs_total", s.state_.total},
                                          {"summary", s.summary_}};
                            }),
@@ -285,7 +281,8 @@ void StudyManager::loadStored() {
       s.id = j.at("id").get<std::string>();
       if (s.id != e.path().filename().string()) continue;
       s.name = j.value("name", "");
-      s.status = j.value("status", "queued");
+      // A name this server does not know counts as unfinished: queued again, as before.
+      s.status = parseEnum<RunStatus>(j.value("status", "")).value_or(RunStatus::Queued);
       s.message = j.value("message", "");
       s.createdAt = j.value("created_at", "");
       s.startedAt = j.value("started_at", "");
@@ -300,9 +297,9 @@ void StudyManager::loadStored() {
   }
   std::sort(found.begin(), found.end(), [](const auto& a, const auto& b) { return a.createdAt < b.createdAt; });
   for (auto& s : found) {
-    if (!isEnded(s.status)) {
+    if (!isFinal(s.status)) {
       // Unfinished at the last stop: queued again; the engine runs only the missing runs.
-      s.status = "queued";
+      s.status = RunStatus::Queued;
       s.message = "resumed after a server restart";
       s.etaSeconds = -1;
       queue_.push_back(s.id);
@@ -335,7 +332,7 @@ StudyState StudyManager::submit(const json& body) {
   {
     std::lock_guard lock(mutex_);
     std::size_t active = 0;
-    for (const auto& [id, e] : studies_) active += !isEnded(e.state.status);
+    for (const auto& [id, e] : studies_) active += !isFinal(e.state.status);
     if (active >= kMaxActive)
       throw http::ApiError(429, "too_many_studies",
                            std::to_string(kMaxActive) + " studies are queued or running: wait for one to end or cancel one", "")
@@ -429,7 +426,7 @@ json StudyManager::summary(const std::string& id) {
     if (it == studies_.end()) return nullptr;
     if (it->second.summary) return *it->second.summary;
     version = it->second.summaryVersion;
-    ended = isEnded(it->second.state.status);
+    ended = isFinal(it->second.state.status);
   }
   const fs::path saved = fs::path(folder(id)) / "summary.json";
   std::error_code ec;
@@ -493,14 +490,14 @@ StudyManager::Removal StudyManager::remove(const std::string& id) {
   auto it = studies_.find(id);
   if (it == studies_.end()) return Removal::NotFound;
   Entry& e = it->second;
-  if (!isEnded(e.state.status)) {
+  if (!isFinal(e.state.status)) {
     e.state.cancelRequested = true;
     e.cancel->cancel();
     if (auto q = std::find(queue_.begin(), queue_.end(), id); q != queue_.end()) {
       // Never started in this session: it ends here.
       queue_.erase(q);
       lock.unlock();
-      finish(id, "cancelled", "cancelled before it started");
+      finish(id, RunStatus::Cancelled, "cancelled before it started");
     }
     return Removal::Cancelling;
   }
@@ -521,7 +518,7 @@ void StudyManager::stop() {
   if (worker_.joinable()) worker_.join();
 }
 
-void StudyManager::finish(const std::string& id, const std::string& status, const std::string& message) {
+void StudyManager::finish(const std::string& id, RunStatus status, const std::string& message) {
   // An ended study's summary never changes: kept beside it (before it is seen ended), so a restart
   // need not read its runs.
   json final = nullptr;
@@ -540,7 +537,7 @@ void StudyManager::finish(const std::string& id, const std::string& status, cons
     it->second.state.status = status;
     it->second.state.message = message;
     it->second.state.finishedAt = store::nowIso();
-    it->second.state.etaSeconds = status == "succeeded" ? 0 : -1;
+    it->second.state.etaSeconds = status == RunStatus::Succeeded ? 0 : -1;
     s = it->second.state;
     stream = it->second.stream;
   }
@@ -597,23 +594,24 @@ void StudyManager::work() {
       queue_.pop_front();
       Entry& e = studies_.at(id);
       cancel = e.cancel;
-      e.state.status = "running";
+      e.state.status = RunStatus::Running;
       if (e.state.startedAt.empty()) e.state.startedAt = store::nowIso();
       saveState(e.state);
       e.stream->update(e.state);
     }
-    std::string status = "succeeded", message;
+    RunStatus status = RunStatus::Succeeded;
+    std::string message;
     try {
       if (launcher_.empty()) runInProcess(id, *cancel);
       else runLaunched(id, *cancel);
     } catch (const Error& e) {
-      status = "failed";
+      status = RunStatus::Failed;
       message = e.what();
     } catch (const store::StorageFull& e) {  // the disk, or the disk budget, is full
-      status = "failed";
+      status = RunStatus::Failed;
       message = std::string("insufficient storage: ") + e.what() + " (the runs stored are kept)";
     } catch (const std::exception& e) {
-      status = "failed";
+      status = RunStatus::Failed;
       message = "the study stopped on an internal error (details are in the server log)";
       std::cerr << "roverplan: study " << id << ": " << e.what() << "\n";
     }
@@ -624,13 +622,13 @@ void StudyManager::work() {
       auto it = studies_.find(id);
       if (it == studies_.end()) continue;
       userCancel = it->second.state.cancelRequested;
-      if (status == "succeeded" && it->second.state.done < it->second.state.total && !userCancel) {
-        status = "failed";
+      if (status == RunStatus::Succeeded && it->second.state.done < it->second.state.total && !userCancel) {
+        status = RunStatus::Failed;
         if (message.empty()) message = "the study ended with runs missing";
       }
     }
-    if (userCancel && status != "failed") {
-      status = "cancelled";
+    if (userCancel && status != RunStatus::Failed) {
+      status = RunStatus::Cancelled;
       message = "cancelled; the runs done are kept";
     }
     finish(id, status, message);

@@ -39,6 +39,7 @@
 #include "core/common/cancel.hpp"
 #include "server/http/http_types.hpp"
 #include "server/store/data_dir.hpp"
+#include "server/store/run_status.hpp"
 
 namespace rover::studies {
 
@@ -52,7 +53,7 @@ std::vector<std::string> splitCommandLine(const std::string& line);
 
 struct StudyState {
   std::string id, name;
-  std::string status = "queued";  // queued | running | succeeded | cancelled | failed
+  RunStatus status = RunStatus::Queued;  // one of kStudyStatuses
   std::string message;
   std::string createdAt, startedAt, finishedAt;
   std::size_t done = 0, total = 0;
@@ -61,7 +62,6 @@ struct StudyState {
   bool cancelRequested = false;
 };
 nlohmann::json toJson(const StudyState& s);
-bool isEnded(const std::string& status);
 
 // The live state of one study and its WebSocket subscribers, in the pull model of the mission
 // streams (MissionStream): each subscriber keeps a version cursor, so a slow client costs two
@@ -154,7 +154,7 @@ class StudyManager {
   void report(const std::string& id, std::size_t done, std::size_t total, std::size_t doneAtStart,
               std::chrono::steady_clock::time_point start, const std::function<nlohmann::json()>& summary,
               std::chrono::steady_clock::time_point& lastSummary);
-  void finish(const std::string& id, const std::string& status, const std::string& message);
+  void finish(const std::string& id, RunStatus status, const std::string& message);
   // Charges the study's folder (its database as it grew) to the global disk budget; throws
   // store::OverBudget past it.
   void chargeDisk(const std::string& id) const;
