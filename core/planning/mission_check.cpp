@@ -6,6 +6,7 @@
 
 #include "core/common/error.hpp"
 #include "core/terrain/layers.hpp"
+#include "core/planning/rover_limits.hpp"
 
 namespace rover::planning {
 
@@ -21,8 +22,7 @@ std::string metres(double v) {
 
 void checkMissionStarts(const MissionGround& ground, const std::vector<RoverStart>& rovers,
                         const StartRules& rules) {
-  if (rovers.empty() || rovers.size() > 64)
-    throw Error(ErrorCode::InvalidInput, "rovers", "between 1 and 64 rovers are supported");
+  checkRoverCount(rovers.size());
   const GridGeometry* map = ground.dem    ? &ground.dem->geometry()
                             : ground.grid ? &ground.grid->geometry()
                                           : nullptr;

@@ -13,6 +13,7 @@
 #include "core/common/random.hpp"
 #include "core/team/plan_ahead.hpp"
 #include "core/team/separation.hpp"
+#include "core/planning/rover_limits.hpp"
 
 namespace rover::team {
 
@@ -756,8 +757,7 @@ CoordinationResult coordinateWith(const std::vector<RoverTask>& tasks, const Leg
     throw Error(ErrorCode::InvalidParameter, "coordination",
                 "coordination: a policy that does not check last legs for good must recover (park "
                 "steps aside before later passes)");
-  if (tasks.size() > TrafficTable::kMaxRovers)
-    throw Error(ErrorCode::InvalidInput, "rovers", "between 1 and 64 rovers are supported");
+  planning::checkRoverCount(tasks.size());
   for (std::size_t k = 0; k < tasks.size(); ++k) {
     const std::string field = "rovers[" + std::to_string(k) + "]";
     const Pose& s = tasks[k].start;

@@ -57,9 +57,9 @@ void fromResult(const json& r, maps::MissionMapInput& in) {
 }
 
 // The final coverage grid from grid.bin (a full frame: u32 type 2, rows, cols, count, then
-// rows·cols states), with the coverage cell from the result's metrics.
+// rows·cols states), with the coverage cell from the result's metrics. Only a planner that plans
+// on a coverage grid draws it: a team's grid is its route search grid.
 void coverageGrid(const fs::path& dir, const json& r, maps::MissionMapInput& in) {
-  if (r.value("planner", "") != "coverage") return;  // the team's grid is its route search grid
   const double cell = r.value("metrics", json::object()).value("coverage_cell_m", 0.0);
   const std::string bytes = readAll(dir / "grid.bin");
   if (cell <= 0 || bytes.size() < 16) return;
@@ -97,7 +97,8 @@ std::string missionMapFile(ApiContext& ctx, const store::MissionRecord& m, const
   in.dem = dem;
   in.title = "mission " + m.id + " - " + m.planner;
   fromResult(result, in);
-  coverageGrid(dir, result, in);
+  if (const Planner* p = ctx.planners.find(m.planner); p && p->specs().ground == Ground::CoverageGrid)
+    coverageGrid(dir, result, in);
   in.zones = missions::keepOutZones(m.spec);
   const maps::MissionMap picture = maps::renderMissionMap(in);
   const std::vector<std::uint8_t> bytes =

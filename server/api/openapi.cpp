@@ -10,6 +10,7 @@
 #include "server/json/json_edge.hpp"
 #include "server/json/mission_request.hpp"
 #include "server/json/plan_json.hpp"
+#include "server/json/planner_json.hpp"
 #include "server/json/zones_json.hpp"
 #include "server/store/run_status.hpp"
 
@@ -160,6 +161,9 @@ json schemas(const PlannerRegistry& planners) {
 
   // Parameters of each planner, from its own table (the same one the request is checked with).
   std::vector<std::string> names = planners.names();
+  std::string pdmPlanners;
+  for (const auto& n : names)
+    if (planners.get(n).specs().ground == Ground::DemAndPdm) pdmPlanners += (pdmPlanners.empty() ? "" : ", ") + n;
   json anyParams = json::array();
   for (const auto& n : names) {
     json props = json::object();
@@ -180,7 +184,8 @@ json schemas(const PlannerRegistry& planners) {
                       {"x", "y"});
   json request = object(
       {{"map", str("Map id.")},
-       {"pdm", nullable(str("PDM id on that map (team planners: the probability to search).") )},
+       {"pdm", nullable(str("PDM id on that map: the probability to search, for the planners whose ground is "
+                            "dem_pdm (" + pdmPlanners + ")."))},
        {"planner", {{"type", "string"}, {"enum", names}}},
        {"rovers", {{"type", "array"}, {"minItems", 1}, {"maxItems", rover::json::kMaxRovers}, {"items", rover}}},
        {"params", {{"anyOf", anyParams}}},
@@ -308,12 +313,31 @@ json schemas(const PlannerRegistry& planners) {
 
   s["ParamInfo"] = paramInfoSchema();
   s["Preset"] = object({{"name", str()}, {"doc", str()}, {"params", {{"type", "object"}}}}, {"name", "doc", "params"});
-  s["Planner"] = object({{"name", {{"type", "string"}, {"enum", names}}},
-                         {"summary", str()},
-                         {"params", {{"type", "array"}, {"items", openapi::ref("ParamInfo")}}},
-                         {"presets", {{"type", "array"}, {"items", openapi::ref("Preset")}}},
-                         {"map_defaults", {{"type", "object"}, {"description", "With ?map=: map, body and the defaults it sets."}}}},
-                        {"name", "summary", "params", "presets"});
+  // What each planner describes of itself (core/planning/planner_specs.hpp), with the enums'
+  // names from the JSON edge (server/json/planner_json.hpp).
+  s["PlannerMetric"] = object({{"key", str()}, {"unit", str("Empty when dimensionless.")}, {"doc", str()}},
+                              {"key", "unit", "doc"});
+  s["PlannerStage"] = object({{"name", str()}, {"doc", str()}}, {"name", "doc"});
+  s["Planner"] = object(
+      {{"name", {{"type", "string"}, {"enum", names}}},
+       {"summary", str()},
+       {"params", {{"type", "array"}, {"items", openapi::ref("ParamInfo")}}},
+       {"presets", {{"type", "array"}, {"items", openapi::ref("Preset")}}},
+       {"map_defaults", {{"type", "object"}, {"description", "With ?map=: map, body and the defaults it sets."}}},
+       {"ground", {{"type", "string"},
+                   {"enum", rover::json::groundNames()},
+                   {"description", "What it plans on: coverage_grid (the map resampled to its coverage cell, or "
+                                   "a random obstacle grid) or dem_pdm (the map at its own resolution and a PDM)."}}},
+       {"starts", {{"type", "string"},
+                   {"enum", rover::json::startPlacementNames()},
+                   {"description", "Where its rovers start when none are placed (a study's runs)."}}},
+       {"progress", object({{"measure", {{"type", "string"}, {"enum", rover::json::progressNames()}}},
+                            {"series", str("The result's series that records it.")}},
+                           {"measure", "series"})},
+       {"seconds_per_run", {{"type", "boolean"}, {"description", "A run takes seconds (a simulated mission)."}}},
+       {"metrics", {{"type", "array"}, {"items", openapi::ref("PlannerMetric")}}},
+       {"stages", {{"type", "array"}, {"items", openapi::ref("PlannerStage")}}}},
+      {"name", "summary", "params", "presets", "ground", "starts", "progress", "seconds_per_run", "metrics", "stages"});
   s["Health"] = object({{"status", {{"type", "string"}, {"enum", {"ok"}}}},
                         {"version", str()},
                         {"maps", {{"type", "integer"}}},

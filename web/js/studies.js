@@ -158,9 +158,10 @@ export class StudiesPanel {
   renderGrid() {
     const planner = this.planners.find((p) => p.name === $('st-planner').value);
     if (!planner) return;
-    const team = planner.name !== 'coverage';
+    // Random obstacle grids only for a planner that plans on a coverage grid (GET /api/planners: ground).
+    const grids = planner.ground === 'coverage_grid';
     $('st-world').replaceChildren(
-      ...(team ? [] : [el('option', { value: 'grid60' }, 'random 60×60 grids, 5 % obstacles (a new one per run)')]),
+      ...(grids ? [el('option', { value: 'grid60' }, 'random 60×60 grids, 5 % obstacles (a new one per run)')] : []),
       el('option', { value: 'mars' }, 'the default map\'s synthetic Mars (150 m; runs open as missions)'));
     const rows = planner.params
       .filter((p) => ['choice', 'bool', 'int', 'real'].includes(p.type))
@@ -178,7 +179,7 @@ export class StudiesPanel {
     const seed = Number($('st-seed').value);
     if (src !== 'grid') return { preset: src, runs, master_seed: seed };
     const planner = $('st-planner').value;
-    const team = planner !== 'coverage';
+    const described = this.planners.find((p) => p.name === planner);
     const world = $('st-world').value === 'mars' ? { name: 'mars', terrain: {} }
       : { name: '60x60', grid: { rows: 60, cols: 60, obstacle_fraction: 0.05 } };
     const grid = {}, params = {};
@@ -196,12 +197,12 @@ export class StudiesPanel {
     if (rovers.length) doc.rovers = rovers;
     if (Object.keys(params).length) doc.params = params;
     if (Object.keys(grid).length) doc.grid = grid;
-    if (team) {
-      doc.starts = 'formation';
-      doc.pdm = { random_gaussians: 4 };
-    } else {
-      doc.levels = [0.9, 0.95, 0.97, 0.99, 1.0];
-    }
+    // What the study reads follows the planner's description: where its rovers start, whether it
+    // searches a PDM, and how its progress is read out (coverage levels; a detection curve is read
+    // at the server's default distances).
+    if (described?.starts === 'formation') doc.starts = 'formation';
+    if (described?.ground === 'dem_pdm') doc.pdm = { random_gaussians: 4 };
+    if (described?.progress?.measure === 'coverage') doc.levels = [0.9, 0.95, 0.97, 0.99, 1.0];
     return doc;
   }
 
