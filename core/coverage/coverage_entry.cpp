@@ -34,7 +34,7 @@ std::vector<RoverStart> cellsToStarts(const GridGeometry& g, const std::vector<S
 PlanResult toPlanResult(const CoverageResult& r, const GridGeometry& g, bool metricsOnly) {
   PlanResult out;
   out.planner = "coverage";
-  out.stopReason = stopReasonName(r.stop);
+  out.stopReason = r.stop;
   out.cancelled = r.stop == StopReason::Cancelled;
   const CoverageMetrics& m = r.metrics;
   out.metrics = {
@@ -76,7 +76,7 @@ PlanResult toPlanResult(const CoverageResult& r, const GridGeometry& g, bool met
                     static_cast<long long>(b.step),
                     b.offField ? "the move would have left the field" : "drove into an obstacle its map held free",
                     cell.x(), cell.y());
-      Incident inc{"bump", b.rover, -1, 0.0, b.truePosition, static_cast<double>(b.cell), note};
+      Incident inc{IncidentKind::Bump, b.rover, -1, 0.0, b.truePosition, static_cast<double>(b.cell), note};
       inc.step = b.step;
       out.incidents.push_back(std::move(inc));
     }

@@ -18,20 +18,6 @@
 
 namespace rover::coverage {
 
-const char* stopReasonName(StopReason r) {
-  switch (r) {
-    case StopReason::GoalReached:
-      return "goal_reached";
-    case StopReason::NothingLeft:
-      return "nothing_left";
-    case StopReason::StepBudget:
-      return "step_budget";
-    case StopReason::Cancelled:
-      return "cancelled";
-  }
-  return "?";
-}
-
 std::vector<StartCell> randomStarts(const World& world, int count, std::uint64_t seed) {
   std::vector<int> sizes;
   std::vector<int> label = freeComponents(world, sizes);

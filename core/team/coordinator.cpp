@@ -452,7 +452,7 @@ class Coordinator {
                                       : "every try tilts past the attitude limit";
         return Outcome::Steep;
       }
-      rec.note = std::string("no path: ") + pathStatusName(*noPath);
+      rec.note = "no path: " + std::string(enumName(*noPath));
       return *noPath == PathStatus::InvalidGoal ? Outcome::InvalidGoal : Outcome::NoPath;
     }
     for (int w = 1; w <= policy_.waitsAfterReplans; ++w) {

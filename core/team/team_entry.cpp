@@ -105,7 +105,7 @@ class TeamPlanner final : public Planner {
       observer->replay(r, p.poseInterval, p.mission.coordination.controller.samplePeriod, cancel);
       if (cancel && cancel->cancelled()) {
         out.cancelled = true;
-        out.stopReason = "cancelled";
+        out.stopReason = StopReason::Cancelled;
       }
     }
     return out;

@@ -51,8 +51,8 @@ Response cancelOrDeleteMission(ApiContext& ctx, const Request& req) {
   if (ctx.missions.cancel(id)) return Response::json(202, {{"id", id}, {"status", "cancelling"}});
   // Not running (any more): the run is deleted, its row first so no listing shows a run whose
   // files are half gone. A mission that is still finishing cannot be deleted yet.
-  if (!store::isFinal(m.status))
-    throw ApiError(409, "not_finished", "mission " + rj::shown(id) + " is " + m.status + ": try again when it has ended", "id");
+  if (!isFinal(m.status))
+    throw ApiError(409, "not_finished", "mission " + rj::shown(id) + " is " + std::string(enumName(m.status)) + ": try again when it has ended", "id");
   // Only the request whose delete removed the row says so; a concurrent one finds nothing.
   if (!ctx.db.deleteMission(id)) throw missionNotFound(id);
   ctx.missions.forget(id);
@@ -111,12 +111,12 @@ Response getMissionFile(ApiContext& ctx, const Request& req) {
   if (!fs::exists(path)) {
     // An ended run without files (failed, cancelled before it stored anything) will never
     // have them: say so, with the reason it ended.
-    if (store::isFinal(m.status))
+    if (isFinal(m.status))
       throw ApiError(409, "no_result",
-                     "mission " + rj::shown(id) + " ended " + m.status + " without a result" +
+                     "mission " + rj::shown(id) + " ended " + std::string(enumName(m.status)) + " without a result" +
                          (m.message.empty() ? std::string() : ": " + m.message),
                      "id");
-    throw ApiError(409, "not_ready", "mission " + rj::shown(id) + " is " + m.status + ": no result yet", "id");
+    throw ApiError(409, "not_ready", "mission " + rj::shown(id) + " is " + std::string(enumName(m.status)) + ": no result yet", "id");
   }
   return withAttachment(fileResponse(path.string(), t->second), attachment);
 }
@@ -156,7 +156,7 @@ void addMissionRoutes(http::Router& router, ApiContext& ctx) {
                       "map's CRS).",
                       Operation()
                           .returns(200, "mission.json (MissionFile), result.json, result.geojson or result.csv.",
-                                   {{"oneOf", {ref("MissionFile"), {{"type", "object"}, {"required", {"planner", "metrics"}}}}}})
+                                   {{"oneOf", {ref("MissionFile"), ref("PlanResult")}}})
                           .returns(200, "result.geojson.", {{"type", "object"}}, "application/geo+json")
                           .returns(200, "result.csv.", {{"type", "string"}}, "text/csv")
                           .returns(200, "map.png.", nullptr, "image/png")

@@ -141,7 +141,7 @@ json missionJson(const store::MissionRecord& m) {
           {"label", m.label},
           {"map_name", m.mapName.empty() ? json(nullptr) : json(m.mapName)},
           {"pdm_name", m.pdmName.empty() ? json(nullptr) : json(m.pdmName)},
-          {"planner", m.planner}, {"status", m.status},      {"message", m.message},
+          {"planner", m.planner}, {"status", enumName(m.status)},      {"message", m.message},
           {"created_at", m.createdAt}, {"started_at", m.startedAt}, {"finished_at", m.finishedAt},
           {"metrics", m.metrics}, {"spec", m.spec},
           {"links",

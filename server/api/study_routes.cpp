@@ -112,7 +112,6 @@ json configurationsJson(const studies::StudySpec& spec) {
 
 using openapi::Operation;
 const nlohmann::json obj = {{"type", "object"}};
-const nlohmann::json arr = {{"type", "array"}, {"items", {{"type", "object"}}}};
 
 }  // namespace
 
@@ -141,7 +140,7 @@ void addStudyRoutes(http::Router& router, ApiContext& ctx) {
     json out = json::array();
     for (const auto& s : ctx.studies->list()) out.push_back(studies::toJson(s));
     return Response::json(200, out);
-  }), routeDoc("List studies, newest first: status, runs done/total, ETA.", Operation().returns(200, "Studies", arr)));
+  }), routeDoc("List studies, newest first: status, runs done/total, ETA.", Operation().returns(200, "Studies", {{"type", "array"}, {"items", openapi::ref("Study")}})));
 
   router.add("GET", "/api/studies/{id}", guardedRoute([&ctx](const Request& req) {
     const studies::StudyState s = studyOr404(ctx, req.params.at("id"));

@@ -39,7 +39,7 @@ void printSummary(std::ostream& out, const coverage::World& world, const coverag
       << (rovers > 1 ? (p.mode == coverage::TeamMode::Overlap ? ", overlap" : ", voronoi") : "")
       << ", sense radius " << p.senseRadius << ", goal " << std::setprecision(1) << p.coverage * 100
       << " %\n";
-  out << "stopped    " << r.stopReason << " after " << static_cast<long>(m("steps")) << " steps\n";
+  out << "stopped    " << enumName(r.stopReason) << " after " << static_cast<long>(m("steps")) << " steps\n";
   out << std::setprecision(2) << "coverage   " << m("coverage") * 100 << " % of free cells, "
       << m("coverage_reachable") * 100 << " % of reachable\n";
   out << std::setprecision(3) << "moves      " << static_cast<long>(m("moves"))

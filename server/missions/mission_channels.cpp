@@ -300,12 +300,12 @@ nlohmann::json ProgressChannel::frameJson() const {
   return j;
 }
 
-void StatusChannel::set(const std::string& status) {
+void StatusChannel::set(RunStatus status) {
   status_ = status;
   changed();
 }
 
-void StatusChannel::finish(const std::string& status, const std::string& message, const nlohmann::json& metrics) {
+void StatusChannel::finish(RunStatus status, const std::string& message, const nlohmann::json& metrics) {
   status_ = status;
   message_ = message;
   metrics_ = metrics;

@@ -15,6 +15,7 @@
 
 #include "core/grid/geometry.hpp"
 #include "core/planning/events.hpp"
+#include "server/store/run_status.hpp"
 #include "server/streams/channel_stream.hpp"
 
 namespace rover::missions {
@@ -140,17 +141,17 @@ class ProgressChannel : public ValueChannel {
 class StatusChannel : public ValueChannel {
  public:
   StatusChannel() : ValueChannel("status") {}
-  void set(const std::string& status);
-  void finish(const std::string& status, const std::string& message, const nlohmann::json& metrics);
-  const std::string& status() const { return status_; }
+  void set(RunStatus status);
+  void finish(RunStatus status, const std::string& message, const nlohmann::json& metrics);
+  RunStatus status() const { return status_; }
   const std::string& message() const { return message_; }
   const nlohmann::json& metrics() const { return metrics_; }
   bool finished() const { return finished_; }
 
  private:
-  nlohmann::json frameJson() const override { return {{"type", "status"}, {"status", status_}}; }
+  nlohmann::json frameJson() const override { return {{"type", "status"}, {"status", enumName(status_)}}; }
   bool silent() const override { return finished_; }
-  std::string status_ = "queued";
+  RunStatus status_ = RunStatus::Queued;
   std::string message_;
   nlohmann::json metrics_ = nullptr;
   bool finished_ = false;

@@ -25,7 +25,7 @@ std::function<streams::Batch()> MissionStream::captureSnapshotLocked() {
     const GridGeometry& g = grid_.geometry();
     grid = {{"rows", g.rows}, {"cols", g.cols}, {"cell_size_m", g.cellWidth}};
   }
-  nlohmann::json j = {{"type", "snapshot"}, {"mission", id_},          {"status", status_.status()},
+  nlohmann::json j = {{"type", "snapshot"}, {"mission", id_},          {"status", enumName(status_.status())},
                       {"grid", grid},       {"rovers", nullptr},       {"step", poses_.step()},
                       {"progress", progress_.progress()}, {"metrics", status_.metrics()}};
   if (!overlay_.empty()) {
@@ -68,7 +68,7 @@ std::function<streams::Batch()> MissionStream::captureSnapshotLocked() {
 std::shared_ptr<const std::string> MissionStream::doneFrameLocked() {
   if (!doneFrame_) {
     doneFrame_ = std::make_shared<const std::string>(
-        nlohmann::json{{"type", "done"}, {"mission", id_}, {"status", status_.status()}, {"message", status_.message()},
+        nlohmann::json{{"type", "done"}, {"mission", id_}, {"status", enumName(status_.status())}, {"message", status_.message()},
                        {"metrics", status_.metrics()}, {"step", poses_.step()}}
             .dump());
     countEncodes(1);
@@ -154,7 +154,7 @@ void MissionStream::restoreBeliefs(const nlohmann::json& b) {
   poses_.restoreBeliefs(b);
 }
 
-void MissionStream::setStatus(const std::string& status) {
+void MissionStream::setStatus(RunStatus status) {
   {
     std::lock_guard lock(mutex_);
     status_.set(status);
@@ -163,7 +163,7 @@ void MissionStream::setStatus(const std::string& status) {
   wakeAll(true);
 }
 
-void MissionStream::finish(const std::string& status, const std::string& message,
+void MissionStream::finish(RunStatus status, const std::string& message,
                            const nlohmann::json& metrics) {
   {
     std::lock_guard lock(mutex_);
@@ -180,7 +180,7 @@ bool MissionStream::finished() const {
 
 nlohmann::json MissionStream::summary() const {
   std::lock_guard lock(mutex_);
-  return {{"status", status_.status()}, {"step", poses_.step()},       {"progress", progress_.progress()},
+  return {{"status", enumName(status_.status())}, {"step", poses_.step()},       {"progress", progress_.progress()},
           {"metrics", status_.metrics()}, {"message", status_.message()}, {"subscribers", subscriberSlotsLocked()}};
 }
 
@@ -197,7 +197,7 @@ nlohmann::json MissionStream::trailsJson() const {
 std::shared_ptr<MissionStream> MissionStream::fromStored(const std::string& missionId,
                                                          const std::string& gridFrame,
                                                          const nlohmann::json& trails,
-                                                         const std::string& status,
+                                                         RunStatus status,
                                                          const std::string& message,
                                                          const nlohmann::json& metrics) {
   const GridGeometry g = GridChannel::geometryOf(gridFrame);

@@ -63,9 +63,9 @@ class MissionStream : public EventSink, public streams::ChannelStream {
   void overlay(std::string_view kind, int rover, std::span<const Point2> points) override;
   void metrics(std::span<const Metric> metrics) override;
 
-  void setStatus(const std::string& status);
+  void setStatus(RunStatus status);
   // The final frame's content; wakes every subscriber.
-  void finish(const std::string& status, const std::string& message, const nlohmann::json& metrics);
+  void finish(RunStatus status, const std::string& message, const nlohmann::json& metrics);
   bool finished() const;
   // Called by the manager's thread, read by the planner's (pacing): atomic.
   void setCancelled() { cancelRequested_.store(true, std::memory_order_relaxed); }
@@ -85,7 +85,7 @@ class MissionStream : public EventSink, public streams::ChannelStream {
   static std::shared_ptr<MissionStream> fromStored(const std::string& missionId,
                                                    const std::string& gridFrame,
                                                    const nlohmann::json& trails,
-                                                   const std::string& status,
+                                                   RunStatus status,
                                                    const std::string& message,
                                                    const nlohmann::json& metrics);
 

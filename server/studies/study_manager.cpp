@@ -58,9 +58,9 @@ StudyManager::StudyManager(store::DataDir& dir, std::function<bool()> missionsBu
   if (launcher.empty()) executor_ = std::make_unique<InProcessExecutor>(store_, std::move(missionsBusy));
   else executor_ = std::make_unique<LaunchedExecutor>(store_, std::move(launcher), std::move(selfExe));
   for (StudyState& s : store_.load()) {
-    if (!isEnded(s.status)) {
+    if (!isFinal(s.status)) {
       // Unfinished at the last stop: queued again; the engine runs only the missing runs.
-      s.status = "queued";
+      s.status = RunStatus::Queued;
       s.message = "resumed after a server restart";
       s.etaSeconds = -1;
       scheduler_.push(s.id);
@@ -96,7 +96,7 @@ StudyState StudyManager::submit(const json& body) {
   {
     std::lock_guard lock(mutex_);
     std::size_t active = 0;
-    for (const auto& [id, e] : studies_) active += !isEnded(e.state.status);
+    for (const auto& [id, e] : studies_) active += !isFinal(e.state.status);
     if (active >= kMaxActive)
       throw http::ApiError(429, "too_many_studies",
                            std::to_string(kMaxActive) + " studies are queued or running: wait for one to end or cancel one", "")
@@ -160,7 +160,7 @@ json StudyManager::summary(const std::string& id) {
     if (it == studies_.end()) return nullptr;
     if (it->second.summary) return *it->second.summary;
     version = it->second.summaryVersion;
-    ended = isEnded(it->second.state.status);
+    ended = isFinal(it->second.state.status);
   }
   const bool wasSaved = store_.hasSavedSummary(id);
   json s = store_.storedSummary(id);
@@ -198,13 +198,13 @@ StudyManager::Removal StudyManager::remove(const std::string& id) {
   auto it = studies_.find(id);
   if (it == studies_.end()) return Removal::NotFound;
   Entry& e = it->second;
-  if (!isEnded(e.state.status)) {
+  if (!isFinal(e.state.status)) {
     e.state.cancelRequested = true;
     e.cancel->cancel();
     if (scheduler_.withdraw(id)) {
       // Never started in this session: it ends here.
       lock.unlock();
-      finish(id, "cancelled", "cancelled before it started");
+      finish(id, RunStatus::Cancelled, "cancelled before it started");
     }
     return Removal::Cancelling;
   }
@@ -223,7 +223,7 @@ void StudyManager::stop() {
   scheduler_.stop();
 }
 
-void StudyManager::finish(const std::string& id, const std::string& status, const std::string& message) {
+void StudyManager::finish(const std::string& id, RunStatus status, const std::string& message) {
   // An ended study's summary never changes: kept beside it (before it is seen ended), so a restart
   // need not read its runs.
   json final = nullptr;
@@ -242,7 +242,7 @@ void StudyManager::finish(const std::string& id, const std::string& status, cons
     it->second.state.status = status;
     it->second.state.message = message;
     it->second.state.finishedAt = store::nowIso();
-    it->second.state.etaSeconds = status == "succeeded" ? 0 : -1;
+    it->second.state.etaSeconds = status == RunStatus::Succeeded ? 0 : -1;
     s = it->second.state;
     stream = it->second.stream;
   }
@@ -290,22 +290,23 @@ void StudyManager::runOne(const std::string& id) {
     if (it == studies_.end()) return;
     Entry& e = it->second;
     cancel = e.cancel;
-    e.state.status = "running";
+    e.state.status = RunStatus::Running;
     if (e.state.startedAt.empty()) e.state.startedAt = store::nowIso();
     store_.saveState(e.state);
     e.stream->update(e.state);
   }
-  std::string status = "succeeded", message;
+  RunStatus status = RunStatus::Succeeded;
+  std::string message;
   try {
     executor_->run(id, *cancel, *this);
   } catch (const Error& e) {
-    status = "failed";
+    status = RunStatus::Failed;
     message = e.what();
   } catch (const store::StorageFull& e) {  // the disk, or the disk budget, is full
-    status = "failed";
+    status = RunStatus::Failed;
     message = std::string("insufficient storage: ") + e.what() + " (the runs stored are kept)";
   } catch (const std::exception& e) {
-    status = "failed";
+    status = RunStatus::Failed;
     message = "the study stopped on an internal error (details are in the server log)";
     std::cerr << "roverplan: study " << id << ": " << e.what() << "\n";
   }
@@ -316,13 +317,13 @@ void StudyManager::runOne(const std::string& id) {
     auto it = studies_.find(id);
     if (it == studies_.end()) return;
     userCancel = it->second.state.cancelRequested;
-    if (status == "succeeded" && it->second.state.done < it->second.state.total && !userCancel) {
-      status = "failed";
+    if (status == RunStatus::Succeeded && it->second.state.done < it->second.state.total && !userCancel) {
+      status = RunStatus::Failed;
       if (message.empty()) message = "the study ended with runs missing";
     }
   }
-  if (userCancel && status != "failed") {
-    status = "cancelled";
+  if (userCancel && status != RunStatus::Failed) {
+    status = RunStatus::Cancelled;
     message = "cancelled; the runs done are kept";
   }
   finish(id, status, message);

@@ -89,7 +89,7 @@ class StudyManager : private StudyReporter {
               StudyClock::time_point start, const std::function<nlohmann::json()>& summaryOf,
               StudyClock::time_point& lastSummary) override;
   void runOne(const std::string& id);  // the scheduler's: running, executed, ended
-  void finish(const std::string& id, const std::string& status, const std::string& message);
+  void finish(const std::string& id, RunStatus status, const std::string& message);
 
   StudyStore store_;
   std::unique_ptr<StudyExecutor> executor_;

@@ -170,7 +170,7 @@ std::optional<RunRow> StudyRunner::runOne(std::size_t runIndex, const CancelToke
   row.cpuSeconds = threadCpuSeconds() - c0;
   row.wallSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - w0).count();
   if (r.cancelled) return std::nullopt;
-  row.status = r.stopReason;
+  row.status = enumName(r.stopReason);
 
   // Metrics: the study's read-outs of the curves, then every metric the planner reports (its
   // wall time is the row's wall_s, not a metric: it differs between runs of the same row).
@@ -191,7 +191,7 @@ std::optional<RunRow> StudyRunner::runOne(std::size_t runIndex, const CancelToke
         row.metrics.push_back({"path_length_ratio@" + levelLabel(level), ratio});
       }
       // Paper 002's runs end at the goal; one that hit the 20·n step budget is counted.
-      row.metrics.push_back({"stopped_by_budget", r.stopReason == "step_budget" ? 1.0 : 0.0});
+      row.metrics.push_back({"stopped_by_budget", r.stopReason == StopReason::StepBudget ? 1.0 : 0.0});
       row.curves.push_back(sampled(*curve, spec_.curvePoints));
     }
   }

@@ -6,14 +6,10 @@ namespace rover::studies {
 
 using nlohmann::json;
 
-bool isEnded(const std::string& status) {
-  return status == "succeeded" || status == "cancelled" || status == "failed";
-}
-
 json toJson(const StudyState& s) {
   return {{"id", s.id},
           {"name", s.name},
-          {"status", s.status},
+          {"status", enumName(s.status)},
           {"message", s.message},
           {"created_at", s.createdAt},
           {"started_at", s.startedAt},

@@ -6,11 +6,13 @@
 
 #include <nlohmann/json.hpp>
 
+#include "server/store/run_status.hpp"
+
 namespace rover::studies {
 
 struct StudyState {
   std::string id, name;
-  std::string status = "queued";  // queued | running | succeeded | cancelled | failed
+  RunStatus status = RunStatus::Queued;  // one of kStudyStatuses
   std::string message;
   std::string createdAt, startedAt, finishedAt;
   std::size_t done = 0, total = 0;
@@ -19,6 +21,5 @@ struct StudyState {
   bool cancelRequested = false;
 };
 nlohmann::json toJson(const StudyState& s);
-bool isEnded(const std::string& status);
 
 }  // namespace rover::studies

@@ -53,7 +53,8 @@ std::vector<StudyState> StudyStore::load() const {
       s.id = j.at("id").get<std::string>();
       if (s.id != e.path().filename().string()) continue;
       s.name = j.value("name", "");
-      s.status = j.value("status", "queued");
+      // A name this server does not know counts as unfinished: queued again, as before.
+      s.status = parseEnum<RunStatus>(j.value("status", "")).value_or(RunStatus::Queued);
       s.message = j.value("message", "");
       s.createdAt = j.value("created_at", "");
       s.startedAt = j.value("started_at", "");

@@ -9,7 +9,7 @@ using nlohmann::json;
 namespace {
 
 json progressJson(const StudyState& s) {
-  return json{{"type", "progress"}, {"status", s.status},     {"message", s.message},
+  return json{{"type", "progress"}, {"status", enumName(s.status)},     {"message", s.message},
               {"runs_done", s.done}, {"runs_total", s.total},
               {"eta_s", s.etaSeconds < 0 ? json(nullptr) : json(std::round(s.etaSeconds))},
               {"runs_per_s", s.runsPerSecond}};
@@ -27,7 +27,7 @@ StudyStream::StudyStream()
 std::size_t StudyStream::Progress::frames(const streams::Position& from, const streams::Position& to,
                                           streams::Batch& out) {
   // After the end the done frame carries the state.
-  if (from == to || isEnded(state.status)) return 0;
+  if (from == to || isFinal(state.status)) return 0;
   std::size_t encoded = 0;
   if (encodedAt_ != to) plain_.reset(), withSummary_.reset(), encodedAt_ = to;
   const bool summaryChanged = streams::lengthAt(from, 1) != streams::lengthAt(to, 1);
@@ -52,7 +52,7 @@ std::shared_ptr<const std::string> StudyStream::doneFrameLocked() {
   const streams::Position at = progress_.position();
   if (!done_ || doneAt_ != at) {
     const StudyState& s = progress_.state;
-    done_ = std::make_shared<const std::string>(json{{"type", "done"}, {"status", s.status}, {"message", s.message},
+    done_ = std::make_shared<const std::string>(json{{"type", "done"}, {"status", enumName(s.status)}, {"message", s.message},
                                                      {"runs_done", s.done}, {"runs_total", s.total},
                                                      {"summary", progress_.summary}}
                                                     .dump());

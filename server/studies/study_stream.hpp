@@ -41,7 +41,7 @@ class StudyStream : public streams::ChannelStream {
     std::shared_ptr<const std::string> plain_, withSummary_;
   };
   std::function<streams::Batch()> captureSnapshotLocked() override;
-  bool endedLocked() const override { return isEnded(progress_.state.status); }
+  bool endedLocked() const override { return isFinal(progress_.state.status); }
   std::shared_ptr<const std::string> doneFrameLocked() override;
 
   Progress progress_;

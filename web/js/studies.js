@@ -9,6 +9,7 @@
 // Reference values (SPEC.md §1, paper 002) are drawn on the same axes where the paper gives them.
 
 import { ApiError, downloadWithToken, getJson, request, sendJson } from './api.js';
+import { RunStatus, isActive } from './outcomes.js';
 import { $, el, fmt, report } from './util.js';
 
 const PRESET_HINTS = {
@@ -234,9 +235,9 @@ export class StudiesPanel {
       el('button', { class: 'name', title: `show study ${s.id}`, onclick: () => this.show(s.id) }, `${s.name} · ${s.id.slice(0, 6)}`),
       el('span', { class: `badge ${s.status}` }, s.status),
       el('span', { class: 'muted small' }, ` ${s.runs_done}/${s.runs_total}`),
-      el('button', { title: s.status === 'running' || s.status === 'queued' ? 'cancel' : 'delete the study and its database',
+      el('button', { title: isActive(s.status) ? 'cancel' : 'delete the study and its database',
         onclick: async () => { try { await sendJson('DELETE', `/api/studies/${s.id}`); } catch (err) { report(err); } this.reload(); } },
-      s.status === 'running' || s.status === 'queued' ? 'cancel' : 'delete'))));
+      isActive(s.status) ? 'cancel' : 'delete'))));
   }
 
   async show(id) {
@@ -272,8 +273,8 @@ export class StudiesPanel {
     $('st-status').className = `badge ${s.status}`;
     $('st-counters').textContent = `${done.toLocaleString('en-US')} / ${total.toLocaleString('en-US')} runs` +
       (s.runs_per_s ? ` · ${fmt(s.runs_per_s)} runs/s` : '') +
-      (s.status === 'running' ? ` · ETA ${duration(s.eta_s)}` : '') + (s.message ? ` · ${s.message}` : '');
-    $('st-cancel').hidden = !(s.status === 'running' || s.status === 'queued');
+      (s.status === RunStatus.Running ? ` · ETA ${duration(s.eta_s)}` : '') + (s.message ? ` · ${s.message}` : '');
+    $('st-cancel').hidden = !isActive(s.status);
   }
 
   async cancel() {
