@@ -3,7 +3,6 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
-#include <iostream>
 #include <numbers>
 
 #include "core/common/error.hpp"
@@ -38,31 +37,11 @@ namespace rj = rover::json;
 
 namespace {
 
-// An ApiError for a core validation error; `prefix` qualifies the field (e.g. "params."), and an
-// error that names no field is attributed to `fallback` (every error names its field).
-ApiError fromCore(const Error& e, const std::string& prefix = "", const std::string& fallback = "body") {
-  std::string field = e.field().empty() ? fallback : prefix + e.field();
-  return ApiError(400, errorCodeName(e.code()), e.what(), field);
-}
-
-// Every handler runs inside this: expected failures leave as ApiError; a core Error is bad input
-// (400 with its field); a JSON type error is a body of the wrong shape; anything else is a 500
-// whose message shows no server paths (the detail goes to the server's log).
-http::Handler guarded(http::Handler handler) {
-  return [handler = std::move(handler)](const Request& req) -> Response {
-    try {
-      return handler(req);
-    } catch (const ApiError&) {
-      throw;
-    } catch (const Error& e) {
-      throw fromCore(e);
-    } catch (const nlohmann::json::exception&) {
-      throw ApiError(400, "bad_json", "the request body has a value of the wrong type", "body");
-    } catch (const std::exception& e) {
-      std::cerr << "roverplan: " << req.method << " " << req.path << ": internal error: " << e.what() << "\n";
-      throw ApiError(500, "internal", "internal error (details are in the server log)", "");
-    }
-  };
+// A core validation error with its field qualified by `prefix` (e.g. "params."); an error that
+// names no field is attributed to `fallback` (every error names its field). The error table
+// (error_table.hpp) answers it.
+Error qualified(const Error& e, const std::string& prefix = "", const std::string& fallback = "body") {
+  return Error(e.code(), e.field().empty() ? fallback : prefix + e.field(), e.what());
 }
 
 json mapJson(const store::MapRecord& m) {
@@ -276,7 +255,7 @@ missions::MissionJob buildMission(ApiContext& ctx, const json& body) {
   try {
     ground = problems::groundOnMap(job.record.planner, mapGeometry, job.params);
   } catch (const Error& e) {
-    throw fromCore(e, "params.");
+    throw qualified(e, "params.");
   }
   if (ground.coverageGrid) {
     const double cell = ground.cell;
@@ -293,7 +272,7 @@ missions::MissionJob buildMission(ApiContext& ctx, const json& body) {
       job.memory = missions::teamMissionMemory(mapGeometry.cellCount(), roverCount, !job.record.pdmId.empty(),
                                                job.params, job.record.planner == "hybrid");
     } catch (const Error& e) {
-      throw fromCore(e, "params.");
+      throw qualified(e, "params.");
     }
   }
   ctx.missions.admit(job.memory);
@@ -317,7 +296,7 @@ missions::MissionJob buildMission(ApiContext& ctx, const json& body) {
     job.eventGrid = planner->eventGrid(job.problem, job.params);
   } catch (const Error& e) {
     bool roverField = e.field().rfind("rovers", 0) == 0 || e.field() == "map" || e.field() == "pdm";
-    throw fromCore(e, roverField || e.field().empty() ? "" : "params.");
+    throw qualified(e, roverField || e.field().empty() ? "" : "params.");
   }
   job.record.spec = std::move(request.spec);
   job.record.spec["dem_sha256"] = digest;
@@ -383,7 +362,7 @@ void addApiRoutes(http::Router& router, ApiContext& ctx) {
     return Response::json(200, openapi::document(router, ctx.planners, ctx.version));
   }, doc("This document.", Operation().returns(200, "The OpenAPI 3.0.3 document.", {{"type", "object"}})));
 
-  router.add("GET", "/api/planners", guarded([&ctx](const Request& req) {
+  router.add("GET", "/api/planners", [&ctx](const Request& req) {
     // ?map=ID: the defaults that come from that map (coverage cell, the body's gravity) filled in.
     ParamSet mapDefaults;
     json mapInfo;
@@ -408,7 +387,7 @@ void addApiRoutes(http::Router& router, ApiContext& ctx) {
       out.push_back(std::move(entry));
     }
     return Response::json(200, out);
-  }), doc("Registered planners with every parameter, its default, unit and range; ?map=ID fills in "
+  }, doc("Registered planners with every parameter, its default, unit and range; ?map=ID fills in "
          "the defaults that come from the map (coverage_cell, gravity) and its body.",
          Operation()
              .query("map", kId, "A map id: fill in the defaults that come from it.")
@@ -417,12 +396,12 @@ void addApiRoutes(http::Router& router, ApiContext& ctx) {
          onPool));
 
   // --- maps ---
-  router.add("GET", "/api/maps", guarded([&ctx](const Request& req) {
+  router.add("GET", "/api/maps", [&ctx](const Request& req) {
     const Page page = pageOf(req);
     json out = json::array();
     for (const auto& m : ctx.db.listMaps(page.limit, page.offset)) out.push_back(mapJson(m));
     return pageResponse(req, page, std::move(out), ctx.db.countMaps());
-  }), doc("List maps, oldest first: ?limit= (50, at most 500), ?offset=; X-Total-Count and Link rel=next.",
+  }, doc("List maps, oldest first: ?limit= (50, at most 500), ?offset=; X-Total-Count and Link rel=next.",
           Operation().listing("Map")));
 
   http::RouteOptions upload;
@@ -443,7 +422,7 @@ void addApiRoutes(http::Router& router, ApiContext& ctx) {
         .errors({400, 413, 503, 507});
     upload.openapi = op.toJson();
   }
-  router.add("POST", "/api/maps", guarded([&ctx](const Request& req) {
+  router.add("POST", "/api/maps", [&ctx](const Request& req) {
     // The DEM options (maps/dem_import_options: cell, crop, crop_px, vertical_scale, body) as
     // query parameters or plain multipart fields, read by the CLI's own parser.
     std::string name = queryString(req, "name");
@@ -458,16 +437,16 @@ void addApiRoutes(http::Router& router, ApiContext& ctx) {
       try {
         import = maps::parseDemImportOptions(options);
       } catch (const Error& e) {
-        throw fromCore(e);
+        throw qualified(e);
       }
       return Response::json(201, mapJson(ctx.maps.importDem(files, name, import)));
     } catch (...) {
       for (auto& f : files) store::DataDir::removeTree(f.path);
       throw;
     }
-  }), upload);
+  }, upload);
 
-  router.add("GET", "/api/maps/{id}", guarded([&ctx](const Request& req) {
+  router.add("GET", "/api/maps/{id}", [&ctx](const Request& req) {
     const std::string& id = req.params.at("id");
     Response r;
     {
@@ -488,18 +467,18 @@ void addApiRoutes(http::Router& router, ApiContext& ctx) {
     r = Response::json(200, j);
     ctx.cacheMapBody(id, r.body, ticket);
     return r;
-  }), doc("One map: size, cell size, CRS, elevation range, class percentages, its first 500 PDMs "
+  }, doc("One map: size, cell size, CRS, elevation range, class percentages, its first 500 PDMs "
           "(pdms_total counts them all).",
           Operation().returns(200, "The map.", ref("Map")).errors({404})));
 
-  router.add("DELETE", "/api/maps/{id}", guarded([&ctx](const Request& req) {
+  router.add("DELETE", "/api/maps/{id}", [&ctx](const Request& req) {
     InvalidateMapAfter after{ctx, req.params.at("id")};
     ctx.maps.remove(req.params.at("id"));
     return Response::json(200, {{"deleted", req.params.at("id")}});
-  }), doc("Delete a map and its PDMs (missions keep their records and results).",
+  }, doc("Delete a map and its PDMs (missions keep their records and results).",
           Operation().returns(200, "Deleted.", ref("Deleted")).errors({404, 503}), onPool));
 
-  router.add("GET", "/api/maps/{id}/layers/{file}", guarded([&ctx](const Request& req) {
+  router.add("GET", "/api/maps/{id}/layers/{file}", [&ctx](const Request& req) {
     const std::string file = req.params.at("file");
     auto dot = file.rfind('.');
     if (dot == std::string::npos) throw ApiError(404, "not_found", "layer files are NAME.png|tif|f32", "file");
@@ -517,7 +496,7 @@ void addApiRoutes(http::Router& router, ApiContext& ctx) {
     }
     r.headers.emplace_back("Cache-Control", "max-age=3600");
     return r;
-  }), doc("A layer (elevation|hillshade|slope|traversability|pdm) as .png (?max= overview), "
+  }, doc("A layer (elevation|hillshade|slope|traversability|pdm) as .png (?max= overview), "
                    ".tif (GeoTIFF) or .f32 (raw little-endian float32, size in X-Rows/X-Cols); ?pdm=ID for pdm.",
           Operation()
               .query("max", {{"type", "integer"}, {"minimum", 0}, {"maximum", 16384}},
@@ -532,14 +511,14 @@ void addApiRoutes(http::Router& router, ApiContext& ctx) {
   addZoneRoutes(router, ctx);  // GET|PUT /api/maps/{id}/zones
 
   // --- PDMs ---
-  router.add("GET", "/api/maps/{id}/pdms", guarded([&ctx](const Request& req) {
+  router.add("GET", "/api/maps/{id}/pdms", [&ctx](const Request& req) {
     const std::string& id = req.params.at("id");
     if (!ctx.db.getMap(id)) throw ApiError(404, "not_found", "no map '" + rj::shown(id) + "'", "id");
     const Page page = pageOf(req);
     json out = json::array();
     for (const auto& p : ctx.db.listPdms(id, page.limit, page.offset)) out.push_back(pdmJson(p));
     return pageResponse(req, page, std::move(out), ctx.db.countPdms(id));
-  }), doc("List a map's PDMs, oldest first: ?limit= (50, at most 500), ?offset=; X-Total-Count and Link rel=next.",
+  }, doc("List a map's PDMs, oldest first: ?limit= (50, at most 500), ?offset=; X-Total-Count and Link rel=next.",
           Operation().listing("Pdm").errors({404})));
 
   http::RouteOptions pdmUpload;
@@ -555,7 +534,7 @@ void addApiRoutes(http::Router& router, ApiContext& ctx) {
                           .returns(201, "Created.", ref("Pdm"))
                           .errors({400, 404, 413, 503, 507})
                           .toJson();
-  router.add("POST", "/api/maps/{id}/pdms", guarded([&ctx](const Request& req) {
+  router.add("POST", "/api/maps/{id}/pdms", [&ctx](const Request& req) {
     const std::string mapId = req.params.at("id");
     ctx.maps.get(mapId);  // 404 for an unknown map
     ctx.dir.budget().requireRoom(store::DiskUse::Pdm, mapId, "body");  // 507 before any work
@@ -592,7 +571,7 @@ void addApiRoutes(http::Router& router, ApiContext& ctx) {
         try {
           comps = rj::gaussiansFromJson(j);
         } catch (const Error& e) {
-          throw fromCore(e, "", "components");
+          throw qualified(e, "", "components");
         }
         meta = {{"kind", "gaussians"}};
       }
@@ -611,27 +590,27 @@ void addApiRoutes(http::Router& router, ApiContext& ctx) {
       store::DataDir::removeTree(moved);
       throw;
     }
-  }), pdmUpload);
+  }, pdmUpload);
 
-  router.add("GET", "/api/maps/{id}/pdms/{pdm}", guarded([&ctx](const Request& req) {
+  router.add("GET", "/api/maps/{id}/pdms/{pdm}", [&ctx](const Request& req) {
     auto p = ctx.db.getPdm(req.params.at("pdm"));
     if (!p || p->mapId != req.params.at("id")) throw ApiError(404, "not_found", "no PDM '" + rj::shown(req.params.at("pdm")) + "' on this map", "pdm");
     return Response::json(200, pdmJson(*p));
-  }), doc("One PDM.", Operation().returns(200, "The PDM.", ref("Pdm")).errors({404})));
+  }, doc("One PDM.", Operation().returns(200, "The PDM.", ref("Pdm")).errors({404})));
 
-  router.add("DELETE", "/api/maps/{id}/pdms/{pdm}", guarded([&ctx](const Request& req) {
+  router.add("DELETE", "/api/maps/{id}/pdms/{pdm}", [&ctx](const Request& req) {
     auto p = ctx.db.getPdm(req.params.at("pdm"));
     if (!p || p->mapId != req.params.at("id")) throw ApiError(404, "not_found", "no PDM '" + rj::shown(req.params.at("pdm")) + "' on this map", "pdm");
     InvalidateMapAfter after{ctx, p->mapId};
     ctx.db.deletePdm(p->id);
     ctx.dir.remove(ctx.dir.pdmDir(p->id));
     return Response::json(200, {{"deleted", p->id}});
-  }), doc("Delete a PDM.", Operation().returns(200, "Deleted.", ref("Deleted")).errors({404})));
+  }, doc("Delete a PDM.", Operation().returns(200, "Deleted.", ref("Deleted")).errors({404})));
 
   // --- missions ---
-  router.add("POST", "/api/missions", guarded([&ctx](const Request& req) {
+  router.add("POST", "/api/missions", [&ctx](const Request& req) {
     return submitMission(ctx, jsonBody(req, rj::kMissionJsonLimits));
-  }), doc("Launch a mission {map, pdm?, planner, rovers:[{x,y,heading}], params:{...}, pace?}; "
+  }, doc("Launch a mission {map, pdm?, planner, rovers:[{x,y,heading}], params:{...}, pace?}; "
                    "validated fully, then queued (202). A mission file (GET .../mission.json) is accepted as it is.",
           Operation()
               .body({{"anyOf", {ref("MissionRequest"), ref("MissionFile")}}})
@@ -639,15 +618,15 @@ void addApiRoutes(http::Router& router, ApiContext& ctx) {
               .errors({400, 409, 413, 415, 429, 503, 507}),
           onPool));
 
-  router.add("GET", "/api/missions", guarded([&ctx](const Request& req) {
+  router.add("GET", "/api/missions", [&ctx](const Request& req) {
     const Page page = pageOf(req);
     json out = json::array();
     for (const auto& m : ctx.db.listMissions(page.limit, page.offset)) out.push_back(missionJson(m));
     return pageResponse(req, page, std::move(out), ctx.db.countMissions());
-  }), doc("List missions, newest first: ?limit= (50, at most 500), ?offset=; X-Total-Count and Link rel=next.",
+  }, doc("List missions, newest first: ?limit= (50, at most 500), ?offset=; X-Total-Count and Link rel=next.",
           Operation().listing("Mission")));
 
-  router.add("GET", "/api/missions/{id}", guarded([&ctx](const Request& req) {
+  router.add("GET", "/api/missions/{id}", [&ctx](const Request& req) {
     auto m = ctx.db.getMission(req.params.at("id"));
     if (!m) throw ApiError(404, "not_found", "no mission '" + rj::shown(req.params.at("id")) + "'", "id");
     json j = missionJson(*m);
@@ -657,9 +636,9 @@ void addApiRoutes(http::Router& router, ApiContext& ctx) {
       j["step"] = live["step"];
     }
     return Response::json(200, j);
-  }), doc("One mission: status, progress, metrics.", Operation().returns(200, "The mission.", ref("Mission")).errors({404})));
+  }, doc("One mission: status, progress, metrics.", Operation().returns(200, "The mission.", ref("Mission")).errors({404})));
 
-  router.add("DELETE", "/api/missions/{id}", guarded([&ctx](const Request& req) {
+  router.add("DELETE", "/api/missions/{id}", [&ctx](const Request& req) {
     const std::string id = req.params.at("id");
     auto m = ctx.db.getMission(id);
     if (!m) throw ApiError(404, "not_found", "no mission '" + rj::shown(id) + "'", "id");
@@ -673,14 +652,14 @@ void addApiRoutes(http::Router& router, ApiContext& ctx) {
     ctx.missions.forget(id);
     ctx.dir.remove(ctx.dir.missionDir(id));
     return Response::json(200, {{"deleted", id}});
-  }), doc("Cancel a queued or running mission (202; the planner stops within one step), or delete "
+  }, doc("Cancel a queued or running mission (202; the planner stops within one step), or delete "
           "an ended one with its result files (200).",
           Operation()
               .returns(200, "Deleted (it had ended).", ref("Deleted"))
               .returns(202, "Cancelling (it was queued or running).", ref("Cancelling"))
               .errors({404, 409})));
 
-  router.add("PATCH", "/api/missions/{id}", guarded([&ctx](const Request& req) {
+  router.add("PATCH", "/api/missions/{id}", [&ctx](const Request& req) {
     const std::string id = req.params.at("id");
     json body = jsonBody(req, rj::kMissionJsonLimits);
     if (!body.is_object()) throw ApiError(400, "bad_json", "the request body must be a JSON object", "body");
@@ -696,10 +675,10 @@ void addApiRoutes(http::Router& router, ApiContext& ctx) {
     auto m = ctx.db.setMissionLabel(id, label->get<std::string>()) ? ctx.db.getMission(id) : std::nullopt;
     if (!m) throw ApiError(404, "not_found", "no mission '" + rj::shown(id) + "'", "id");
     return Response::json(200, missionJson(*m));
-  }), doc("Rename a run: {\"label\": \"...\"} (at most 200 characters, no control characters).",
+  }, doc("Rename a run: {\"label\": \"...\"} (at most 200 characters, no control characters).",
           Operation().body(ref("MissionLabel")).returns(200, "Renamed.", ref("Mission")).errors({400, 404, 415})));
 
-  router.add("GET", "/api/missions/{id}/{file}", guarded([&ctx](const Request& req) {
+  router.add("GET", "/api/missions/{id}/{file}", [&ctx](const Request& req) {
     const std::string id = req.params.at("id"), file = req.params.at("file");
     auto m = ctx.db.getMission(id);
     if (!m) throw ApiError(404, "not_found", "no mission '" + rj::shown(id) + "'", "id");
@@ -741,7 +720,7 @@ void addApiRoutes(http::Router& router, ApiContext& ctx) {
     Response r = fileResponse(path.string(), t->second);
     r.headers.emplace_back("Content-Disposition", "attachment; filename=\"mission-" + id + "-" + file + "\"");
     return r;
-  }), doc("A mission's file (mission.json: everything to run it again, POST it to /api/missions), or "
+  }, doc("A mission's file (mission.json: everything to run it again, POST it to /api/missions), or "
           "a finished mission's result: result.json, result.geojson (map CRS: tracks, route, targets, "
           "zones, incidents), result.csv (every sample, both frames), map.png (the map with its "
           "legend and scale bar, at most 4096 px a side), map.tif (the same map as a GeoTIFF in the "
@@ -768,7 +747,5 @@ void addApiRoutes(http::Router& router, ApiContext& ctx) {
 
   if (ctx.studies) addStudyRoutes(router, ctx);
 }
-
-http::Handler guardedRoute(http::Handler handler) { return guarded(std::move(handler)); }
 
 }  // namespace rover::api

@@ -53,14 +53,12 @@ struct ApiContext {
 
 // Registers every /api route on `router` (the study routes too when ctx.studies is set).
 void addApiRoutes(http::Router& router, ApiContext& ctx);
-// `handler` with the API's error mapping (core Error -> 400 naming its field, JSON type errors ->
-// 400, anything else -> 500 without details), for routes registered outside routes.cpp.
-http::Handler guardedRoute(http::Handler handler);
-// /api/studies (study_routes.cpp), with the handler wrapper and doc() of routes.cpp.
+// /api/studies (study_routes.cpp), with the doc() of routes.cpp.
 void addStudyRoutes(http::Router& router, ApiContext& ctx);
 http::RouteOptions routeDoc(const std::string& summary, const openapi::Operation& op,
                             bool blocking = false);
-// POST /api/missions with a parsed body: validated, queued, answered 202 (throws ApiError).
+// POST /api/missions with a parsed body: validated, queued, answered 202 (throws what the error
+// table answers: ApiError, DomainError, rover::Error).
 http::Response submitMission(ApiContext& ctx, const nlohmann::json& body);
 
 }  // namespace rover::api
