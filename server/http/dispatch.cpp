@@ -133,6 +133,11 @@ std::variant<std::shared_ptr<WsSource>, Response> openStream(const Route& route,
     std::shared_ptr<WsSource> source = route.wsHandler(req, std::move(connection));
     if (source) return source;
     return Response::error(500, "internal", "the WebSocket handler returned no source");
+  } catch (const std::exception& e) {
+    Response r = failed(req, state, "WebSocket handler failed");
+    // An upgrade's failure has always shown its text (the stream handlers' messages hold no paths).
+    if (r.status == 500) r = Response::error(500, "internal", e.what());
+    return r;
   } catch (...) {
     return failed(req, state, "WebSocket handler failed");
   }
