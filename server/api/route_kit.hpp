@@ -39,7 +39,7 @@ struct Page {
 Page pageOf(const http::Request& req);
 http::Response pageResponse(const http::Request& req, const Page& page, nlohmann::json items, long long total);
 
-// A named handler of a route file, with the API's error mapping (guardedRoute).
+// A named handler of a route file; what it throws is answered by the error table (error_table.hpp).
 using ApiHandler = http::Response (*)(ApiContext& ctx, const http::Request& req);
 http::Handler handler(ApiContext& ctx, ApiHandler fn);
 
