@@ -12,74 +12,32 @@
 
 #include "core/common/error.hpp"
 #include "core/terrain/layers.hpp"
-#include "maps/bitmap_font.hpp"
+#include "maps/painter.hpp"
 #include "maps/gdal_env.hpp"
 
 namespace rover::maps {
 
 namespace {
 
-struct Colour {
-  std::uint8_t r = 0, g = 0, b = 0, a = 255;
-};
-
 // The page's rover colours (web/js/util.js ROVER_COLOURS), so the picture matches the screen.
-constexpr Colour kRover[] = {{255, 79, 154}, {58, 214, 255}, {255, 210, 63}, {157, 255, 92},
+constexpr Rgba kRover[] = {{255, 79, 154}, {58, 214, 255}, {255, 210, 63}, {157, 255, 92},
                              {192, 139, 255}, {255, 138, 61}, {255, 255, 255}, {92, 255, 200}};
-constexpr Colour kInk{25, 25, 25};
-constexpr Colour kPaper{255, 255, 255};
-constexpr Colour kVisited{40, 120, 255, 90};
-constexpr Colour kRoute{255, 255, 255, 230};
-constexpr Colour kZone{230, 30, 30, 70};
-constexpr Colour kZoneEdge{230, 30, 30, 255};
-constexpr Colour kIncident{255, 40, 40};
+constexpr Rgba kPaper{255, 255, 255};
+constexpr Rgba kVisited{40, 120, 255, 90};
+constexpr Rgba kRoute{255, 255, 255, 230};
+constexpr Rgba kZone{230, 30, 30, 70};
+constexpr Rgba kZoneEdge{230, 30, 30, 255};
+constexpr Rgba kIncident{255, 40, 40};
 
-Colour statusColour(const std::string& s) {
+Rgba statusColour(const std::string& s) {
   if (s == "reached") return {40, 200, 90};
   if (s == "short") return {255, 170, 0};
   if (s == "skipped") return {230, 40, 40};
   return {120, 120, 120};  // unreachable
 }
 
-// Painting on an RGBA image (alpha blending, clipped), in pixel coordinates.
-class Painter {
- public:
-  explicit Painter(Image& img) : img_(img) {}
-  void blend(int x, int y, Colour c) {
-    if (x < 0 || y < 0 || x >= img_.width || y >= img_.height) return;
-    std::uint8_t* p = &img_.rgba[(std::size_t(y) * img_.width + x) * 4];
-    const int a = c.a;
-    p[0] = static_cast<std::uint8_t>((c.r * a + p[0] * (255 - a)) / 255);
-    p[1] = static_cast<std::uint8_t>((c.g * a + p[1] * (255 - a)) / 255);
-    p[2] = static_cast<std::uint8_t>((c.b * a + p[2] * (255 - a)) / 255);
-    p[3] = static_cast<std::uint8_t>(std::max<int>(p[3], a));
-  }
-  void rect(int x0, int y0, int w, int h, Colour c) {
-    for (int y = std::max(0, y0); y < std::min(img_.height, y0 + h); ++y)
-      for (int x = std::max(0, x0); x < std::min(img_.width, x0 + w); ++x) blend(x, y, c);
-  }
-  void disc(double cx, double cy, double r, Colour c) {
-    for (int y = static_cast<int>(std::floor(cy - r)); y <= static_cast<int>(std::ceil(cy + r)); ++y)
-      for (int x = static_cast<int>(std::floor(cx - r)); x <= static_cast<int>(std::ceil(cx + r)); ++x)
-        if ((x + 0.5 - cx) * (x + 0.5 - cx) + (y + 0.5 - cy) * (y + 0.5 - cy) <= r * r) blend(x, y, c);
-  }
-  // A segment `width` pixels wide: discs along it, one a pixel (opaque colours only: a
-  // translucent one would darken where the discs overlap).
-  void line(double x0, double y0, double x1, double y1, double width, Colour c) {
-    const double len = std::hypot(x1 - x0, y1 - y0);
-    const int n = std::max(1, static_cast<int>(std::ceil(len)));
-    for (int i = 0; i <= n; ++i) disc(x0 + (x1 - x0) * i / n, y0 + (y1 - y0) * i / n, width / 2, c);
-  }
-  void text(const std::string& s, int x, int y, Colour c = kInk) {
-    font::drawText(s, x, y, [&](int px, int py) { blend(px, py, c); });
-  }
-
- private:
-  Image& img_;
-};
-
 // Even-odd fill of a polygon's rings (pixel coordinates), scanline by scanline.
-void fillPolygon(Painter& p, const std::vector<std::vector<Eigen::Vector2d>>& rings, int height, Colour c) {
+void fillPolygon(Painter& p, const std::vector<std::vector<Eigen::Vector2d>>& rings, int height, Rgba c) {
   for (int y = 0; y < height; ++y) {
     const double sy = y + 0.5;
     std::vector<double> xs;
@@ -125,7 +83,7 @@ void enlargeInto(Image& dst, const Image& src, int x0, int y0, int k) {
 
 struct LegendItem {
   enum class Mark { Box, Line, Dot, Cross } mark;
-  Colour colour;
+  Rgba colour;
   std::string label;
 };
 
@@ -185,7 +143,7 @@ MissionMap renderMissionMap(const MissionMapInput& in) {
     paint.line(a.x(), a.y(), b.x(), b.y(), 1.0 * scale, kRoute);
   }
   for (const Track& t : in.tracks) {
-    const Colour c = kRover[static_cast<std::size_t>(std::max(0, t.rover)) % std::size(kRover)];
+    const Rgba c = kRover[static_cast<std::size_t>(std::max(0, t.rover)) % std::size(kRover)];
     for (std::size_t i = 1; i < t.points.size(); ++i) {
       const auto a = px(t.points[i - 1]), b = px(t.points[i]);
       paint.line(a.x(), a.y(), b.x(), b.y(), 1.5 * scale, c);

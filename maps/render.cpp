@@ -14,7 +14,7 @@
 
 #include "core/common/error.hpp"
 #include "core/terrain/layers.hpp"
-#include "maps/bitmap_font.hpp"
+#include "maps/painter.hpp"
 #include "maps/gdal_env.hpp"
 
 namespace rover::maps {
@@ -22,10 +22,6 @@ namespace rover::maps {
 namespace {
 
 constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
-
-struct Rgba {
-  std::uint8_t r = 0, g = 0, b = 0, a = 0;
-};
 
 // ---------------------------------------------------------------------------------------------
 // Colour ramps: piecewise linear in RGB between hand-picked stops (position, r, g, b).
@@ -184,7 +180,6 @@ constexpr int kMinLegendWidth = 160;
 constexpr int kRampLegendHeight = 32;
 constexpr int kPad = 3;
 constexpr Rgba kLegendBackground = {255, 255, 255, 255};
-constexpr Rgba kInk = {25, 25, 25, 255};
 
 // "1234", "12.5", "0.125", "3.1e-5": short labels for the 5×7 font.
 std::string formatValue(double v) {
@@ -212,38 +207,14 @@ std::string formatValue(double v) {
   return mant + "e" + (neg ? "-" : "") + exp;
 }
 
-class Canvas {
- public:
-  explicit Canvas(Image& img) : img_(img) {}
-  void blend(int x, int y, Rgba c) {
-    if (x < 0 || y < 0 || x >= img_.width || y >= img_.height) return;
-    std::uint8_t* p = &img_.rgba[(std::size_t(y) * img_.width + x) * 4];
-    const int a = c.a;
-    p[0] = static_cast<std::uint8_t>((c.r * a + p[0] * (255 - a)) / 255);
-    p[1] = static_cast<std::uint8_t>((c.g * a + p[1] * (255 - a)) / 255);
-    p[2] = static_cast<std::uint8_t>((c.b * a + p[2] * (255 - a)) / 255);
-    p[3] = static_cast<std::uint8_t>(std::max<int>(p[3], a));
-  }
-  void fill(int x0, int y0, int w, int h, Rgba c) {
-    for (int y = y0; y < y0 + h; ++y)
-      for (int x = x0; x < x0 + w; ++x) blend(x, y, c);
-  }
-  void text(const std::string& s, int x, int y, Rgba c = kInk) {
-    font::drawText(s, x, y, [&](int px, int py) { blend(px, py, c); });
-  }
-
- private:
-  Image& img_;
-};
-
 void drawRampLegend(Image& img, int y0, const RampLegend& lg) {
-  Canvas cv(img);
-  cv.fill(0, y0, img.width, kRampLegendHeight, kLegendBackground);
+  Painter cv(img);
+  cv.rect(0, y0, img.width, kRampLegendHeight, kLegendBackground);
   cv.text(lg.title, kPad, y0 + 3);
   const int barX = kPad, barW = img.width - 2 * kPad, barY = y0 + 12;
   for (int i = 0; i < barW; ++i) {
     const double v = lg.lo + (lg.hi - lg.lo) * (i + 0.5) / barW;
-    cv.fill(barX + i, barY, 1, 8, lg.colour(v, lg));
+    cv.rect(barX + i, barY, 1, 8, lg.colour(v, lg));
   }
   // Ticks under the bar and their labels; a label that would overlap one already placed is
   // dropped (the end labels are placed first).
@@ -257,7 +228,7 @@ void drawRampLegend(Image& img, int y0, const RampLegend& lg) {
     for (const auto& [a, b] : taken)
       if (lx < b + 4 && lx + w > a - 4) return;
     taken.emplace_back(lx, lx + w);
-    cv.fill(x, barY + 8, 1, 2, kInk);
+    cv.rect(x, barY + 8, 1, 2, kInk);
     cv.text(s, lx, y0 + 24);
   };
   place(lg.lo, -1);
@@ -284,16 +255,16 @@ int layoutClassLegend(int width, const std::vector<ClassItem>& items,
 
 void drawClassLegend(Image& img, int y0, int height, const std::string& title,
                      const std::vector<ClassItem>& items) {
-  Canvas cv(img);
-  cv.fill(0, y0, img.width, height, kLegendBackground);
+  Painter cv(img);
+  cv.rect(0, y0, img.width, height, kLegendBackground);
   cv.text(title, kPad, y0 + 3);
   std::vector<std::pair<int, int>> pos;
   layoutClassLegend(img.width, items, &pos);
   for (std::size_t i = 0; i < items.size(); ++i) {
     const auto [x, y] = pos[i];
-    cv.fill(x, y0 + y, 8, 8, kInk);
-    cv.fill(x + 1, y0 + y + 1, 6, 6, kLegendBackground);  // a translucent colour shows as on paper
-    cv.fill(x + 1, y0 + y + 1, 6, 6, items[i].colour);
+    cv.rect(x, y0 + y, 8, 8, kInk);
+    cv.rect(x + 1, y0 + y + 1, 6, 6, kLegendBackground);  // a translucent colour shows as on paper
+    cv.rect(x + 1, y0 + y + 1, 6, 6, items[i].colour);
     cv.text(items[i].label, x + 11, y0 + y + 1);
   }
 }
@@ -462,7 +433,7 @@ Image renderLayer(RenderLayer layer, const RenderInput& input, const RenderOptio
     std::uint8_t* p = &img.rgba[std::size_t(r) * width * 4];
     for (int c = 0; c < outCols; ++c, p += 4) {
       const float v = grid.at(r, c);
-      Rgba px;  // transparent unless set
+      Rgba px = kTransparent;  // transparent unless set
       switch (layer) {
         case RenderLayer::Elevation:
           if (std::isfinite(v)) {
