@@ -1,3 +1,4 @@
+cmake_policy(SET CMP0057 NEW)  # if(IN_LIST) in ctest, which sets no policies
 # CTest labels (issue 23), read by ctest after the doctest cases are registered (a
 # TEST_INCLUDE_FILES script, see tests/CMakeLists.txt, which sets the test_*_exe paths).
 #   unit         core/ and maps/ cases, and the server's cases that start no server or process
@@ -51,8 +52,19 @@ endfunction()
 
 rover_label("${test_core_exe}" "core/" "*" unit)
 rover_label("${test_maps_exe}" "maps/" "*" unit)
-# The server's cases are integration unless their file is one of these (a new file starts there).
-rover_label("${test_server_exe}" "server/" "*" integration)
+# The server's cases are integration unless their file is one of these (a new file starts there;
+# ctest adds labels to those a test has, so each case is labelled once).
+set(unit_cases "")
 foreach(file arg_parser plan_json cli_commands router store work_pool studies mission_stream)
-  rover_label("${test_server_exe}" "server/" "*test_${file}.cpp" unit)
+  rover_cases(cases "${test_server_exe}" "*test_${file}.cpp")
+  list(APPEND unit_cases ${cases})
+endforeach()
+rover_cases(server_cases "${test_server_exe}" "*")
+foreach(name IN LISTS server_cases)
+  if(name IN_LIST unit_cases)
+    rover_labels_of(labels "server/${name}" unit)
+  else()
+    rover_labels_of(labels "server/${name}" integration)
+  endif()
+  set_tests_properties("server/${name}" PROPERTIES LABELS "${labels}")
 endforeach()
