@@ -45,7 +45,7 @@ ConflictPolicy timedPolicy(const CoordinationParams& p) {
   c.waitsAfterReplans = 0;
   c.invalidGoalEndsPiece = true;
   // The whole dwell_check (10 s by default): a stop checked for less left a rover no time to get
-  // out of the way when its next leg found no clear try (docs/decisions/0002).
+  // out of the way when its next leg found no clear try (.decisions/0002).
   c.dwell = p.dwellCheck;
   c.lastLegParks = false;
   c.recover = true;
@@ -357,7 +357,7 @@ class Coordinator {
       const bool sameZones = attempt > 0 && keepOut.size() == zonesBefore;
       zonesBefore = keepOut.size();
       // Then the next try is likely this problem again with the next seed, and a worker plans it
-      // meanwhile (such runs of tries are much of a slow mission's RRT* time: docs/decisions/0002);
+      // meanwhile (such runs of tries are much of a slow mission's RRT* time: .decisions/0002);
       // not when this try is likely the last (repeatedShortEndsReplans,
       // unzonedConflictsEndReplans). A try that does not count for the latter breaks its run.
       const int unzonedBefore = std::exchange(unzonedRun, 0);
@@ -481,7 +481,7 @@ class Coordinator {
   // end).
   void park(int k) {
     // Timed: where no spot stays clear for good the rover moves again before each next pass
-    // (ours: higher-priority rovers may roam round a stopped one for long: docs/decisions/0002).
+    // (ours: higher-priority rovers may roam round a stopped one for long: .decisions/0002).
     // Paper: one move to a spot clear for good, as before.
     const int moves = policy_.recover ? kMaxAsideMoves : 1;
     for (int move = 0; move < moves; ++move) {

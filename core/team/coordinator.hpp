@@ -28,13 +28,13 @@ struct ConflictPolicy {
   bool earlyConflictEndsReplans = false;
   // Two tries in a row with the same keep-out zones whose plans end short of a goal the planner
   // proved cut off (PathResult::goalCutOff) end the re-plans: a new seed only moves where the
-  // tree stops (figures: docs/decisions/0002).
+  // tree stops (figures: .decisions/0002).
   bool repeatedShortEndsReplans = false;
   // This many tries in a row that reach the goal and, started at once, meet a higher-priority
   // rover only while standing there, where no keep-out zone can go (it would wall in the start or
   // the goal), end the re-plans; 0 = never. Such a try is the same problem again with a new seed,
   // and no path dodges a rover that comes by the goal while this one dwells there
-  // (docs/decisions/0002). Any other try breaks the run.
+  // (.decisions/0002). Any other try breaks the run.
   int unzonedConflictsEndReplans = 0;
   // After the re-plans, the first try within the attitude check is tried again this many times,
   // each time one wait step later and simulated anew; then the leg is skipped.
@@ -49,7 +49,7 @@ struct ConflictPolicy {
   // higher-priority rover moves: it parks there. false: for the dwell, like every other leg, and
   // park() moves the rover aside before each later pass (needs recover; coordinateWith checks).
   // Checked for good, a leg whose goal a higher-priority rover passes much later fails every try
-  // and every re-plan (docs/decisions/0002).
+  // and every re-plan (.decisions/0002).
   bool lastLegParks = true;
   // Recoveries (ours), for a rover that would otherwise stay stuck where it stands:
   // - a try that would end where the rover cannot stop and turn (canStop) is refused like a
@@ -61,7 +61,7 @@ struct ConflictPolicy {
   //   then tries the leg again; at most two recoveries per leg;
   // - parking at the end moves again until the rover is clear for good (at most 8 moves).
   // Without them a rover stuck on a steep spot ends many legs short, and one left standing in
-  // another's way collides (docs/decisions/0002).
+  // another's way collides (.decisions/0002).
   bool recover = false;
 };
 
