@@ -10,11 +10,6 @@
 
 namespace rover::api {
 
-using http::ApiError;
-using http::Request;
-using http::Response;
-using nlohmann::json;
-namespace rj = rover::json;
 
 const json kIdSchema = {{"type", "string"}};
 

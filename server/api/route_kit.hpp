@@ -11,7 +11,18 @@
 #include "server/http/http_types.hpp"
 #include "server/store/database.hpp"
 
+namespace rover::json {}
+
 namespace rover::api {
+
+// The names every route file uses, declared once here.
+using http::ApiError;
+using http::Request;
+using http::Response;
+using nlohmann::json;
+using openapi::Operation;
+using openapi::ref;
+namespace rj = rover::json;
 
 // The request's media type: Content-Type without its parameters, lower case, trimmed.
 std::string mediaType(const http::Request& req);

@@ -14,11 +14,6 @@
 
 namespace rover::api {
 
-using http::ApiError;
-using http::Request;
-using http::Response;
-using nlohmann::json;
-namespace rj = rover::json;
 
 namespace {
 
@@ -110,7 +105,6 @@ json configurationsJson(const studies::StudySpec& spec) {
   return out;
 }
 
-using openapi::Operation;
 const nlohmann::json obj = {{"type", "object"}};
 
 }  // namespace

@@ -7,11 +7,6 @@
 
 namespace rover::api {
 
-using http::ApiError;
-using http::Request;
-using http::Response;
-using nlohmann::json;
-namespace rj = rover::json;
 
 void addZoneRoutes(http::Router& router, ApiContext& ctx) {
   http::RouteOptions get;
