@@ -323,6 +323,33 @@ TEST_CASE("team: a whole mission is collision-free and the same for a seed") {
   CHECK(differs);
 }
 
+TEST_CASE("team: a 3×3 block at the safety distance leaves without a collision, the same on 1 and 2 threads") {
+  // Issue 25: nine rovers on a 1 m lattice (exactly the safety distance) on rolling ground. Every
+  // rover stands at its start until it is planned, and the centre one, boxed in, is planned after
+  // its neighbours: no collision, and the plan does not depend on the threads.
+  const terrain::Dem dem = rollingDem();  // 30 × 30 m
+  TeamMissionParams p;
+  p.route.targets = 2;
+  const Raster<float> pdm = uniformPdm(dem);
+  std::vector<Pose> starts;
+  for (int k = 0; k < 9; ++k) starts.push_back({14.0 + k % 3, 14.0 + k / 3, 0});
+  p.coordination.threads = 2;
+  const TeamMissionResult two = runTeamMission(dem, pdm, starts, p, false);
+  CHECK(two.metrics.collisions == 0);
+  CHECK(two.plan.conflicts.empty());
+  p.coordination.threads = 1;
+  const TeamMissionResult one = runTeamMission(dem, pdm, starts, p, false);
+  REQUIRE(one.plan.trajectories.size() == two.plan.trajectories.size());
+  for (std::size_t k = 0; k < one.plan.trajectories.size(); ++k) {
+    const auto &a = one.plan.trajectories[k].samples, &b = two.plan.trajectories[k].samples;
+    REQUIRE(a.size() == b.size());
+    for (std::size_t i = 0; i < a.size(); ++i) {
+      CHECK(a[i].x == b[i].x);
+      CHECK(a[i].y == b[i].y);
+    }
+  }
+}
+
 TEST_CASE("team: the hybrid mission covers each footprint and senses more of it") {
   const terrain::Dem dem = rollingDem();
   TeamMissionParams p;
