@@ -1,6 +1,7 @@
 // Prioritised multi-rover planning (SPEC §3.4) and the team mission (SPEC §3.5, §4).
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <optional>
 
@@ -9,6 +10,7 @@
 #include "core/common/random.hpp"
 #include "core/planning/planner.hpp"
 #include "core/team/coordination.hpp"
+#include "core/team/formation.hpp"
 #include "core/team/team_entry.hpp"
 #include "core/team/team_mission.hpp"
 #include "core/terrain/layers.hpp"
@@ -260,6 +262,19 @@ TEST_CASE("team: formation slots for five rovers are the centre and the four cor
   }
   CHECK(formationSlots(1, 5.0).size() == 1);
   CHECK(formationSlots(9, 5.0).size() == 9);
+}
+
+TEST_CASE("team: start slots keep two safety distances and a lane apart, five rovers as before") {
+  // Issue 25: disjoint safety discs round the standing rovers, so every one can drive out.
+  CHECK(startSlots(5, 5.0, 1.0) == formationSlots(5, 5.0));  // 2.36 m apart already
+  for (int n : {10, 20, 40, 64}) {
+    const auto s = startSlots(n, 5.0, 1.0);
+    REQUIRE(static_cast<int>(s.size()) == n);
+    double nearest = 1e9;
+    for (std::size_t a = 0; a < s.size(); ++a)
+      for (std::size_t b = a + 1; b < s.size(); ++b) nearest = std::min(nearest, (s[a] - s[b]).norm());
+    CHECK(nearest == doctest::Approx(startSpacing(1.0)));
+  }
 }
 
 TEST_CASE("team: accumulated probability is the PDM mass under the sensed discs") {
