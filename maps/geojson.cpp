@@ -132,7 +132,7 @@ std::vector<PendingFeature> missionFeatures(const PlanResult& v, const std::vect
   for (const RouteTarget& t : v.targets) {
     PendingFeature f;
     f.props = {{"layer", std::string("target")},   {"target", std::int64_t{t.index}},
-               {"status", t.status},               {"legs_reached", std::int64_t{t.reached}},
+               {"status", std::string(enumName(t.status))}, {"legs_reached", std::int64_t{t.reached}},
                {"legs_short", std::int64_t{t.shortLegs}}, {"legs_skipped", std::int64_t{t.skipped}},
                {"legs_no_slot", std::int64_t{t.noSlot}}};
     f.shape = PendingFeature::Shape::Point;
@@ -151,7 +151,7 @@ std::vector<PendingFeature> missionFeatures(const PlanResult& v, const std::vect
   }
   for (const Incident& inc : v.incidents) {
     PendingFeature f;
-    f.props = {{"layer", std::string("incident")}, {"rover", std::int64_t{inc.rover}}, {"kind", inc.kind}};
+    f.props = {{"layer", std::string("incident")}, {"rover", std::int64_t{inc.rover}}, {"kind", std::string(enumName(inc.kind))}};
     if (inc.step >= 0)
       f.props.emplace_back("step", std::int64_t{inc.step});  // a planner without a clock
     else

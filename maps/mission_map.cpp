@@ -29,11 +29,14 @@ constexpr Rgba kZone{230, 30, 30, 70};
 constexpr Rgba kZoneEdge{230, 30, 30, 255};
 constexpr Rgba kIncident{255, 40, 40};
 
-Rgba statusColour(const std::string& s) {
-  if (s == "reached") return {40, 200, 90};
-  if (s == "short") return {255, 170, 0};
-  if (s == "skipped") return {230, 40, 40};
-  return {120, 120, 120};  // unreachable
+Rgba statusColour(TargetStatus s) {
+  switch (s) {
+    case TargetStatus::Reached: return {40, 200, 90};
+    case TargetStatus::Short: return {255, 170, 0};
+    case TargetStatus::Skipped: return {230, 40, 40};
+    case TargetStatus::Unreachable: break;
+  }
+  return {120, 120, 120};
 }
 
 // Even-odd fill of a polygon's rings (pixel coordinates), scanline by scanline.
@@ -193,10 +196,10 @@ MissionMap renderMissionMap(const MissionMapInput& in) {
                        "rover " + std::to_string(t.rover)});
   if (!in.coverageStates.empty()) items.push_back({LegendItem::Mark::Box, kVisited, "covered cell"});
   if (in.route.size() > 1) items.push_back({LegendItem::Mark::Line, {140, 140, 140}, "route"});
-  for (const char* s : {"reached", "short", "skipped", "unreachable"}) {
+  for (const auto& [s, name] : EnumNames<TargetStatus>::table) {
     bool any = false;
     for (const auto& t : in.targets) any = any || t.status == s;
-    if (any) items.push_back({LegendItem::Mark::Dot, statusColour(s), std::string("target ") + s});
+    if (any) items.push_back({LegendItem::Mark::Dot, statusColour(s), "target " + std::string(name)});
   }
   if (!in.zones.empty()) items.push_back({LegendItem::Mark::Box, kZoneEdge, "keep-out zone"});
   if (!in.incidents.empty()) items.push_back({LegendItem::Mark::Cross, kIncident, "incident"});

@@ -3,6 +3,7 @@
 #include <cstdio>
 
 #include "core/common/error.hpp"
+#include "core/coverage/coverage_specs.hpp"
 #include "core/grid/direction.hpp"
 #include "core/planning/mission_check.hpp"
 #include "core/coverage/terrain_world.hpp"
@@ -33,7 +34,7 @@ std::vector<RoverStart> cellsToStarts(const GridGeometry& g, const std::vector<S
 PlanResult toPlanResult(const CoverageResult& r, const GridGeometry& g, bool metricsOnly) {
   PlanResult out;
   out.planner = "coverage";
-  out.stopReason = stopReasonName(r.stop);
+  out.stopReason = r.stop;
   out.cancelled = r.stop == StopReason::Cancelled;
   const CoverageMetrics& m = r.metrics;
   out.metrics = {
@@ -75,7 +76,7 @@ PlanResult toPlanResult(const CoverageResult& r, const GridGeometry& g, bool met
                     static_cast<long long>(b.step),
                     b.offField ? "the move would have left the field" : "drove into an obstacle its map held free",
                     cell.x(), cell.y());
-      Incident inc{"bump", b.rover, -1, 0.0, b.truePosition, static_cast<double>(b.cell), note};
+      Incident inc{IncidentKind::Bump, b.rover, -1, 0.0, b.truePosition, static_cast<double>(b.cell), note};
       inc.step = b.step;
       out.incidents.push_back(std::move(inc));
     }
@@ -182,6 +183,23 @@ class CoveragePlanner final : public Planner {
   }
   std::vector<ParamInfo> params() const override { return coverageParamTable().infos(); }
   std::vector<ParamPreset> presets() const override { return coverageParamTable().presets(); }
+  const PlannerSpecs& specs() const override { return coverageSpecs(); }
+  void checkParams(const ParamSet& params) const override { (void)parseCoverageParams(params); }
+  ParamSet mapDefaults(const GridGeometry& map, terrain::Body body) const override {
+    return coverageMapDefaults(map, body);
+  }
+  MapGround groundOnMap(const GridGeometry& map, const ParamSet& params) const override {
+    return coverageGround(map, params);
+  }
+  MemoryEstimate memoryEstimate(const GridGeometry& map, const MapGround& ground, int rovers, bool pdm,
+                                ParamSet& params) const override {
+    (void)pdm;  // the coverage planner reads no PDM
+    return coverageMemoryEstimate(map, ground, rovers, params);
+  }
+  std::vector<RoverStart> defaultStarts(const PlanningProblem& problem, const ParamSet& params, int rovers,
+                                        std::uint64_t seed) const override {
+    return randomValidStarts(*this, problem, params, rovers, seed);
+  }
   void validate(const PlanningProblem& problem, const ParamSet& params) const override {
     const CoverageParams p = parseCoverageParams(params);
     validateWorld(problem.world);

@@ -11,6 +11,7 @@
 #include "core/coverage/knowledge_map.hpp"
 #include "core/coverage/world.hpp"
 #include "core/planning/events.hpp"
+#include "core/planning/outcomes.hpp"
 
 namespace rover::coverage {
 
@@ -23,14 +24,9 @@ struct StartCell {
 // pocket could never move) with random headings, from `seed`.
 std::vector<StartCell> randomStarts(const World& world, int count, std::uint64_t seed);
 
-enum class StopReason {
-  GoalReached,  // coverage goal met (for Voronoi: by every rover in its region)
-  NothingLeft,  // frontier mode: no reachable unexplored cell remains; under localisation
-                // error also: every rover's own map walls it in
-  StepBudget,   // max_steps ran out first
-  Cancelled,
-};
-const char* stopReasonName(StopReason r);
+// Why a run stopped: the planner-neutral enum (core/planning/outcomes.hpp), of which coverage uses
+// GoalReached, NothingLeft, StepBudget and Cancelled.
+using StopReason = rover::StopReason;
 
 struct RoverTrack {
   std::vector<int> cells;       // start cell, then one entry per move

@@ -14,21 +14,6 @@ KnowledgeMap::KnowledgeMap(const GridGeometry& g, std::vector<std::uint8_t> regi
                                  : static_cast<int>(std::count(region_.begin(), region_.end(), 1));
 }
 
-bool KnowledgeMap::sense(int i, bool obstacle) {
-  if (state_[i] != CellState::Unknown) return false;
-  state_[i] = obstacle ? CellState::Obstacle : CellState::Free;
-  knownObstacles_ += obstacle;
-  return true;
-}
-
-bool KnowledgeMap::visit(int i) {
-  bool before = visits_[i] > 0;
-  if (!before) ++visited_;
-  state_[i] = CellState::Visited;
-  ++visits_[i];
-  return before;
-}
-
 bool KnowledgeMap::markObstacle(int i) {
   if (state_[i] == CellState::Obstacle) return false;
   if (state_[i] == CellState::Visited) --visited_;
@@ -38,10 +23,10 @@ bool KnowledgeMap::markObstacle(int i) {
   return true;
 }
 
-bool KnowledgeMap::goalReached(double goal) const {
+int KnowledgeMap::neededFor(double goal) const {
   // The small epsilon keeps e.g. 0.95 · 3420 = 3249 from needing 3250 through rounding.
   double needed = goal * static_cast<double>(regionCells_ - knownObstacles_);
-  return visited_ >= static_cast<int>(std::ceil(needed - 1e-9));
+  return static_cast<int>(std::ceil(needed - 1e-9));
 }
 
 }  // namespace rover::coverage

@@ -25,18 +25,40 @@ class KnowledgeMap {
   int visitedCount() const { return visited_; }
   int knownObstacles() const { return knownObstacles_; }
 
-  // Writes the sensed truth into an Unknown cell; returns whether the map changed.
-  bool sense(int i, bool obstacle);
+  // Writes the sensed truth into an Unknown cell; returns whether the map changed. Inline with
+  // visit and goalReached: a coverage run calls them for every cell it senses and every move.
+  bool sense(int i, bool obstacle) {
+    if (state_[i] != CellState::Unknown) return false;
+    state_[i] = obstacle ? CellState::Obstacle : CellState::Free;
+    knownObstacles_ += obstacle;
+    return true;
+  }
   // Enters a cell (it must not be an obstacle); returns whether it was visited before.
-  bool visit(int i);
+  bool visit(int i) {
+    const bool before = visits_[i] > 0;
+    if (!before) ++visited_;
+    state_[i] = CellState::Visited;
+    ++visits_[i];
+    return before;
+  }
   // A bump (core/coverage/dead_reckoning.hpp): the cell is an obstacle whatever the map held;
   // a cell believed visited no longer counts as visited. Returns whether the map changed.
   bool markObstacle(int i);
   // Paper 002 Algorithm 1 line 13 (with the printed `≤` read as `≥`, SPEC §1):
   // visited >= goal · (cells − known obstacles).
-  bool goalReached(double goal) const;
+  // The count it needs is worked out again only when the known obstacles or the goal changed.
+  bool goalReached(double goal) const {
+    if (goal != goalOf_ || knownObstacles_ != obstaclesOf_) {
+      goalOf_ = goal;
+      obstaclesOf_ = knownObstacles_;
+      needed_ = neededFor(goal);
+    }
+    return visited_ >= needed_;
+  }
 
  private:
+  int neededFor(double goal) const;
+
   GridGeometry geometry_;
   std::vector<std::uint8_t> region_;
   std::vector<CellState> state_;
@@ -44,6 +66,10 @@ class KnowledgeMap {
   int regionCells_ = 0;
   int visited_ = 0;
   int knownObstacles_ = 0;
+  // goalReached's last answer's inputs and the visited count they need.
+  mutable double goalOf_ = -1;
+  mutable int obstaclesOf_ = -1;
+  mutable int needed_ = 0;
 };
 
 }  // namespace rover::coverage

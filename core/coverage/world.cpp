@@ -6,7 +6,7 @@
 
 #include "core/common/error.hpp"
 #include "core/common/random.hpp"
-#include "core/grid/direction.hpp"
+#include "core/grid/neighbours.hpp"
 
 namespace rover::coverage {
 
@@ -52,12 +52,11 @@ namespace {
 // the cell can go round it, so global connectivity is preserved (conservative test).
 bool ringStaysConnected(const Raster<std::uint8_t>& obs, int row, int col) {
   const GridGeometry& g = obs.geometry;
-  std::array<bool, 8> freeRing{};
+  std::array<bool, 8> freeRing{};  // off the grid: not free
   int freeCount = 0;
-  for (int d = 0; d < kDirections; ++d) {
-    int r = row + kDirRow[d], c = col + kDirCol[d];
-    freeRing[d] = g.contains(r, c) && obs(r, c) == 0;
-    freeCount += freeRing[d];
+  for (const Neighbour& n : neighbours8(g, CellIndex{row, col})) {
+    freeRing[n.dir] = obs.at(n.index) == 0;
+    freeCount += freeRing[n.dir];
   }
   if (freeCount <= 1) return freeCount == 1;  // 0 would delete an isolated cell: never happens
   std::array<int, 8> parent{};
@@ -128,12 +127,10 @@ std::vector<std::uint8_t> reachableCells(const World& world, const std::vector<i
     }
   }
   while (!stack.empty()) {
-    CellIndex c = g.cell(stack.back());
+    const int i = stack.back();
     stack.pop_back();
-    for (int d = 0; d < kDirections; ++d) {
-      int r = c.row + kDirRow[d], col = c.col + kDirCol[d];
-      if (!g.contains(r, col)) continue;
-      int j = g.index(r, col);
+    for (const Neighbour& n : neighbours8(g, i)) {
+      const int j = n.index;
       if (!seen[j] && ok(j)) {
         seen[j] = 1;
         stack.push_back(j);
@@ -155,13 +152,11 @@ std::vector<int> freeComponents(const World& world, std::vector<int>& sizes) {
     label[s] = id;
     stack.push_back(s);
     while (!stack.empty()) {
-      CellIndex c = g.cell(stack.back());
+      const int i = stack.back();
       stack.pop_back();
       ++sizes[id];
-      for (int d = 0; d < kDirections; ++d) {
-        int r = c.row + kDirRow[d], col = c.col + kDirCol[d];
-        if (!g.contains(r, col)) continue;
-        int j = g.index(r, col);
+      for (const Neighbour& n : neighbours8(g, i)) {
+        const int j = n.index;
         if (label[j] < 0 && !world.isObstacle(j)) {
           label[j] = id;
           stack.push_back(j);

@@ -7,6 +7,7 @@
 #include "core/common/error.hpp"
 #include "core/planning/departure.hpp"
 #include "core/terrain/layers.hpp"
+#include "core/planning/rover_limits.hpp"
 
 namespace rover::planning {
 
@@ -43,8 +44,7 @@ void refuseBoxedIn(const MissionGround& ground, const std::vector<RoverStart>& r
 
 void checkMissionStarts(const MissionGround& ground, const std::vector<RoverStart>& rovers,
                         const StartRules& rules) {
-  if (rovers.empty() || rovers.size() > 64)
-    throw Error(ErrorCode::InvalidInput, "rovers", "between 1 and 64 rovers are supported");
+  checkRoverCount(rovers.size());
   const GridGeometry* map = ground.dem    ? &ground.dem->geometry()
                             : ground.grid ? &ground.grid->geometry()
                                           : nullptr;

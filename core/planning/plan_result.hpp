@@ -8,6 +8,8 @@
 #include <utility>
 #include <vector>
 
+#include "core/planning/outcomes.hpp"
+
 namespace rover {
 
 struct Metric {
@@ -41,13 +43,11 @@ struct Track {
   std::vector<TrackSample> samples;
 };
 
-// A team route's target in visiting order and what became of the legs that served it:
-// "reached" (every rover's leg reached its slot), "unreachable" (no rover got a slot on valid
-// ground), "skipped" (no leg got there or near), else "short" (some legs ended away from it).
+// A team route's target in visiting order and what became of the legs that served it.
 struct RouteTarget {
   int index = 0;
   Eigen::Vector2d position{0, 0};  // local frame, the target cell's centre
-  std::string status;
+  TargetStatus status = TargetStatus::Skipped;
   int reached = 0, shortLegs = 0, skipped = 0, noSlot = 0;  // legs, one per rover
 };
 
@@ -64,24 +64,22 @@ struct Polyline {
   std::vector<Eigen::Vector2d> points;  // local frame, metres
 };
 
-// Something the user must be told about, with where and when: kind "collision" (two rovers
-// closer than the safety distance in the returned plan), "skipped" or "short" (a rover's leg given
-// up or ended away from its goal), "bump" (coverage under localisation error: a move into an
-// obstacle the rover's map held free).
+// Something the user must be told about (core/planning/outcomes.hpp lists the kinds), with where
+// and when.
 struct Incident {
-  std::string kind;
+  IncidentKind kind = IncidentKind::Collision;
   int rover = 0;
   int other = -1;  // the other rover of a collision
   double time = 0;  // s from the mission start
   Eigen::Vector2d position{0, 0};
   double value = 0;  // collision: the closest distance, m
   std::string note;
-  std::int64_t step = -1;  // a planner without a clock (coverage's "bump"): the step, else -1
+  std::int64_t step = -1;  // a planner without a clock (coverage's bump): the step, else -1
 };
 
 struct PlanResult {
   std::string planner;
-  std::string stopReason;  // planner-defined, e.g. goal_reached, step_budget, cancelled
+  StopReason stopReason = StopReason::Cancelled;
   bool cancelled = false;
   std::vector<Metric> metrics;
   std::vector<Track> tracks;

@@ -7,6 +7,12 @@
 
 namespace rover {
 
+bool Planner::hasParam(const std::string& key) const {
+  for (const auto& info : params())
+    if (info.key == key) return true;
+  return false;
+}
+
 void PlannerRegistry::add(std::unique_ptr<Planner> planner) {
   for (const auto& p : planners_)
     if (p->name() == planner->name())
@@ -15,9 +21,14 @@ void PlannerRegistry::add(std::unique_ptr<Planner> planner) {
   planners_.push_back(std::move(planner));
 }
 
-const Planner& PlannerRegistry::get(const std::string& name) const {
+const Planner* PlannerRegistry::find(const std::string& name) const {
   for (const auto& p : planners_)
-    if (p->name() == name) return *p;
+    if (p->name() == name) return p.get();
+  return nullptr;
+}
+
+const Planner& PlannerRegistry::get(const std::string& name) const {
+  if (const Planner* p = find(name)) return *p;
   std::string known = join(names(), ", ");
   throw Error(ErrorCode::NotFound, "planner",
               "unknown planner '" + name + "' (known: " + known + ")");

@@ -45,52 +45,10 @@ void CoordinationParams::validate() const {
                                             std::to_string(kMaxStartDelays));
 }
 
-const char* coordinationModeName(CoordinationMode m) {
-  switch (m) {
-    case CoordinationMode::Timed:
-      return "timed";
-    case CoordinationMode::Paper:
-      return "paper";
-  }
-  return "unknown";
-}
-
-const char* legReasonName(LegReason r) {
-  switch (r) {
-    case LegReason::None:
-      return "none";
-    case LegReason::InvalidGoal:
-      return "invalid_goal";
-    case LegReason::NoPath:
-      return "no_path";
-    case LegReason::Steep:
-      return "steep";
-    case LegReason::Conflict:
-      return "conflict";
-    case LegReason::PiecesExhausted:
-      return "pieces_exhausted";
-    case LegReason::KeepOut:
-      return "keep_out";
-  }
-  return "unknown";
-}
-
 TraversalLattice makeLattice(const terrain::Dem& dem, const Raster<std::uint8_t>& classes,
                              const CoordinationParams& params) {
   return TraversalLattice(dem, classes, params.rrt.attitudeLimit, edgeResolutionOn(dem.geometry(), params.rrt),
                           params.weights, params.rrt.range, params.threads);
-}
-
-const char* legStatusName(LegStatus s) {
-  switch (s) {
-    case LegStatus::Reached:
-      return "reached";
-    case LegStatus::Short:
-      return "short";
-    case LegStatus::Skipped:
-      return "skipped";
-  }
-  return "unknown";
 }
 
 CoordinationResult coordinate(const terrain::Dem& dem, const Raster<std::uint8_t>& classes,

@@ -27,12 +27,14 @@
 //   is within the acceptance radius of where the rover stops; a leg whose rover ended elsewhere
 //   (a skip, a short leg) is planned again from the real position.
 #include <Eigen/Core>
+#include <array>
 #include <cstdint>
 #include <span>
 #include <string>
 #include <vector>
 
 #include "core/common/cancel.hpp"
+#include "core/common/enum_names.hpp"
 #include "core/grid/raster.hpp"
 #include "core/team/rover_sim.hpp"
 #include "core/team/separation.hpp"
@@ -79,7 +81,6 @@ enum class CoordinationMode {
   // re-planned with a new seed on each conflict, then waits, then the target is skipped.
   Paper,
 };
-const char* coordinationModeName(CoordinationMode m);
 
 // The most start delays timed mode tries per try (CoordinationParams::validate).
 inline constexpr int kMaxStartDelays = 1200;
@@ -139,8 +140,6 @@ enum class LegReason {
   PiecesExhausted,  // max_pieces RRT* pieces and still short of the goal
   KeepOut,          // every try's simulated rover entered a keep-out zone's cells
 };
-const char* legReasonName(LegReason r);
-const char* legStatusName(LegStatus s);
 
 struct LegRecord {
   int rover = 0;
@@ -207,3 +206,14 @@ TraversalLattice makeLattice(const terrain::Dem& dem, const Raster<std::uint8_t>
                              const CoordinationParams& params);
 
 }  // namespace rover::team
+
+// The names of the values above (enum_names.hpp).
+namespace rover {
+template <>
+struct EnumNames<team::CoordinationMode> {
+  static constexpr std::array<EnumName<team::CoordinationMode>, 2> table{{
+      {team::CoordinationMode::Timed, "timed"},
+      {team::CoordinationMode::Paper, "paper"},
+  }};
+};
+}  // namespace rover

@@ -14,6 +14,7 @@
 #include "core/planning/departure.hpp"
 #include "core/team/plan_ahead.hpp"
 #include "core/team/separation.hpp"
+#include "core/planning/rover_limits.hpp"
 
 namespace rover::team {
 
@@ -451,7 +452,7 @@ class Coordinator {
                                       : "every try tilts past the attitude limit";
         return Outcome::Steep;
       }
-      rec.note = std::string("no path: ") + pathStatusName(*noPath);
+      rec.note = "no path: " + std::string(enumName(*noPath));
       return *noPath == PathStatus::InvalidGoal ? Outcome::InvalidGoal : Outcome::NoPath;
     }
     for (int w = 1; w <= policy_.waitsAfterReplans(); ++w) {
@@ -752,8 +753,7 @@ CoordinationResult coordinateWith(const std::vector<RoverTask>& tasks, const Leg
     throw Error(ErrorCode::InvalidParameter, "coordination",
                 "coordination: a policy that does not check last legs for good must recover (park "
                 "steps aside before later passes)");
-  if (tasks.size() > TrafficTable::kMaxRovers)
-    throw Error(ErrorCode::InvalidInput, "rovers", "between 1 and 64 rovers are supported");
+  planning::checkRoverCount(tasks.size());
   for (std::size_t k = 0; k < tasks.size(); ++k) {
     const std::string field = "rovers[" + std::to_string(k) + "]";
     const Pose& s = tasks[k].start;

@@ -5,6 +5,7 @@
 #include <limits>
 
 #include "core/common/error.hpp"
+#include "core/planning/rover_limits.hpp"
 
 namespace rover::team {
 
@@ -100,7 +101,7 @@ std::optional<Eigen::Vector2d> nearestValid(const TerrainEdgeModel& model, Eigen
 std::vector<Pose> formationStarts(const terrain::Dem& dem, const TeamMissionParams& params,
                                   const Eigen::Vector2d& centre, int n) {
   params.validate();
-  if (n < 1 || n > 64) throw Error(ErrorCode::InvalidInput, "rovers", "between 1 and 64 rovers are supported");
+  planning::checkRoverCount(static_cast<std::size_t>(std::max(n, 0)));
   const terrain::Traversability trav = terrain::traversability(dem, params.traversability);
   return formationStarts(dem, trav.classes, params, centre, n);
 }
@@ -109,7 +110,7 @@ std::vector<Pose> formationStarts(const terrain::Dem& dem, const Raster<std::uin
                                   const TeamMissionParams& params, const Eigen::Vector2d& centre,
                                   int n) {
   params.validate();
-  if (n < 1 || n > 64) throw Error(ErrorCode::InvalidInput, "rovers", "between 1 and 64 rovers are supported");
+  planning::checkRoverCount(static_cast<std::size_t>(std::max(n, 0)));
   const TerrainEdgeModel model = wholeMapModel(dem, classes, params.coordination.rrt);
   std::vector<Pose> out;
   std::vector<Eigen::Vector2d> taken;

@@ -2,18 +2,6 @@
 
 namespace rover::team {
 
-const char* routeMethodName(RouteMethod m) {
-  switch (m) {
-    case RouteMethod::LhcGwConv:
-      return "lhc_gw_conv";
-    case RouteMethod::Lhc:
-      return "lhc";
-    case RouteMethod::Lawnmower:
-      return "lawnmower";
-  }
-  return "unknown";
-}
-
 std::unique_ptr<RouteGenerator> makeRouteGenerator(RouteMethod method, const RouteParams& params) {
   switch (method) {
     case RouteMethod::Lawnmower:

@@ -2,16 +2,17 @@
 // The route generator stage (SPEC §3.1): the team's targets over the search grid, from the search
 // cell the team starts in. One small class per method over route_search's algorithms, chosen by
 // makeRouteGenerator; the mission composes whichever it is given.
+#include <array>
 #include <memory>
 #include <vector>
 
+#include "core/common/enum_names.hpp"
 #include "core/team/rover_sim.hpp"
 #include "core/team/route_search.hpp"
 
 namespace rover::team {
 
 enum class RouteMethod { LhcGwConv, Lhc, Lawnmower };
-const char* routeMethodName(RouteMethod m);
 
 class RouteGenerator {
  public:
@@ -68,3 +69,15 @@ Route computeRoute(const SearchGrid& grid, CellIndex start, RouteMethod method,
                    const RouteParams& params);
 
 }  // namespace rover::team
+
+// The names of the values above (enum_names.hpp).
+namespace rover {
+template <>
+struct EnumNames<team::RouteMethod> {
+  static constexpr std::array<EnumName<team::RouteMethod>, 3> table{{
+      {team::RouteMethod::LhcGwConv, "lhc_gw_conv"},
+      {team::RouteMethod::Lhc, "lhc"},
+      {team::RouteMethod::Lawnmower, "lawnmower"},
+  }};
+};
+}  // namespace rover

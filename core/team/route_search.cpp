@@ -6,7 +6,7 @@
 #include <string>
 
 #include "core/common/error.hpp"
-#include "core/grid/direction.hpp"
+#include "core/grid/neighbours.hpp"
 #include "core/terrain/layers.hpp"
 
 namespace rover::team {
@@ -117,7 +117,7 @@ class Climb {
   std::optional<CellIndex> chooseNext(CellIndex cur) const {
     Best best;
     // The 8 neighbours in the fixed order E, NE, N, NW, W, SW, S, SE (core/grid/direction.hpp).
-    for (int d = 0; d < kDirections; ++d) offer(best, cur.row + kDirRow[d], cur.col + kDirCol[d]);
+    for (const Neighbour& n : neighbours8(g_, cur)) offer(best, n.row, n.col);
     if (best.found) return best.cell;
     // No passable neighbour: the best passable cell at Chebyshev distance 2, offered in row-major
     // order (north-west first). The RRT of §3.2 finds the way round the impassable ring.

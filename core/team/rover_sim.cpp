@@ -110,20 +110,6 @@ void SlipParams::validate() const {
   requirePositive(correlationTime, "slip_correlation_time");
 }
 
-const char* simStatusName(SimStatus s) {
-  switch (s) {
-    case SimStatus::Reached:
-      return "reached";
-    case SimStatus::TimeLimit:
-      return "time_limit";
-    case SimStatus::LeftMap:
-      return "left_map";
-    case SimStatus::Cancelled:
-      return "cancelled";
-  }
-  return "unknown";
-}
-
 Trajectory simulate(const terrain::Dem& dem, const std::vector<Eigen::Vector2d>& waypoints,
                     Pose start, double startTime, const RoverModel& model,
                     const ControllerParams& ctl, const SlipParams& slip,

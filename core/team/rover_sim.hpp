@@ -12,12 +12,14 @@
 // sampling and, through 653.68 m in 2295 s, an average speed of ≈0.285 m/s); validate() throws
 // InvalidParameter naming the field by its snake_case parameter key (given in brackets).
 #include <Eigen/Core>
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <numbers>
 #include <vector>
 
 #include "core/common/cancel.hpp"
+#include "core/common/enum_names.hpp"
 #include "core/terrain/dem.hpp"
 
 namespace rover::team {
@@ -106,7 +108,6 @@ enum class SimStatus {
   LeftMap,    // the rover left the grid or drove next to nodata; samples end before it did
   Cancelled,  // the CancelToken was set
 };
-const char* simStatusName(SimStatus s);
 
 // One 10 Hz sample. Angles in radians.
 struct TrajectorySample {
@@ -162,3 +163,16 @@ AttitudeExceedance attitudeExceedance(const Trajectory& t, double limit = kDefau
 // Separation between rovers: separation.hpp (one routine for the coordinator and the metrics).
 
 }  // namespace rover::team
+
+// The names of the values above (enum_names.hpp).
+namespace rover {
+template <>
+struct EnumNames<team::SimStatus> {
+  static constexpr std::array<EnumName<team::SimStatus>, 4> table{{
+      {team::SimStatus::Reached, "reached"},
+      {team::SimStatus::TimeLimit, "time_limit"},
+      {team::SimStatus::LeftMap, "left_map"},
+      {team::SimStatus::Cancelled, "cancelled"},
+  }};
+};
+}  // namespace rover

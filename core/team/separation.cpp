@@ -4,6 +4,7 @@
 #include <limits>
 
 #include "core/common/error.hpp"
+#include "core/planning/rover_limits.hpp"
 
 namespace rover::team {
 
@@ -14,8 +15,7 @@ Eigen::Vector2d positionAtIndex(const Trajectory& t, std::size_t i) {
 
 void TrafficTable::add(const Trajectory& t) {
   if (t.samples.empty()) throw Error(ErrorCode::InvalidInput, "trajectory", "a trajectory has no samples");
-  if (rovers_.size() == kMaxRovers)
-    throw Error(ErrorCode::InvalidInput, "rovers", "between 1 and 64 rovers are supported");
+  planning::checkRoverCount(rovers_.size() + 1);  // the one being added
   rovers_.emplace_back();
   replace(static_cast<int>(rovers_.size()) - 1, t);
 }

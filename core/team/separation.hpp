@@ -12,6 +12,7 @@
 #include <span>
 #include <vector>
 
+#include "core/planning/rover_limits.hpp"
 #include "core/team/rover_sim.hpp"
 
 namespace rover::team {
@@ -45,7 +46,7 @@ Eigen::Vector2d positionAtIndex(const Trajectory& t, std::size_t i);
 class TrafficTable {
  public:
   static constexpr std::size_t kBlock = 16;
-  static constexpr std::size_t kMaxRovers = 64;  // requireStarts' bound
+  static constexpr std::size_t kMaxRovers = planning::kMaxRovers;
   TrafficTable(double safety, double period) : safety_(safety), period_(period) {}
   // Appends the next rover (its trajectory must have a sample; at most kMaxRovers). A rover not
   // planned yet is added as the one sample of its start: standing there from t = 0 (issue 25).

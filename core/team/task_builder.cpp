@@ -8,12 +8,12 @@
 #include "core/common/error.hpp"
 #include "core/coverage/coverage_planner.hpp"
 #include "core/team/formation.hpp"
+#include "core/planning/rover_limits.hpp"
 
 namespace rover::team {
 
 void requireStarts(const std::vector<Pose>& starts) {
-  if (starts.empty() || starts.size() > 64)
-    throw Error(ErrorCode::InvalidInput, "rovers", "between 1 and 64 rovers are supported");
+  planning::checkRoverCount(starts.size());
 }
 
 

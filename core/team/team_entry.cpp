@@ -7,8 +7,11 @@
 
 #include "core/common/error.hpp"
 #include "core/planning/mission_check.hpp"
+#include "core/team/team_memory.hpp"
 #include "core/team/team_replay.hpp"
+#include "core/team/team_specs.hpp"
 #include "core/terrain/body.hpp"
+#include "core/planning/rover_limits.hpp"
 
 namespace rover::team {
 
@@ -28,6 +31,19 @@ class TeamPlanner final : public Planner {
   }
   std::vector<ParamInfo> params() const override { return teamParamTable().infos(); }
   std::vector<ParamPreset> presets() const override { return teamParamTable().presets(); }
+  const PlannerSpecs& specs() const override { return teamSpecs(hybrid_); }
+  void checkParams(const ParamSet& params) const override { (void)parseTeamParams(params); }
+  MemoryEstimate memoryEstimate(const GridGeometry& map, const MapGround& ground, int rovers, bool pdm,
+                                ParamSet& params) const override {
+    (void)ground;  // the map itself
+    return missionMemory(map.cellCount(), rovers, pdm, params, hybrid_);
+  }
+  std::vector<RoverStart> defaultStarts(const PlanningProblem& problem, const ParamSet& params, int rovers,
+                                        std::uint64_t seed) const override {
+    (void)seed;  // the formation is the same for every seed
+    if (!problem.dem) throw Error(ErrorCode::InvalidInput, "map", "the team planners need a DEM");
+    return formationStarts(*problem.dem, params, rovers);
+  }
 
   void validate(const PlanningProblem& problem, const ParamSet& params) const override {
     const TeamPlannerParams p = parseTeamParams(params);
@@ -37,8 +53,7 @@ class TeamPlanner final : public Planner {
     checkGridGeometry(g, "map");  // before the cell size is compared or used
     if (problem.pdm && (problem.pdm->geometry.rows != g.rows || problem.pdm->geometry.cols != g.cols))
       throw Error(ErrorCode::InvalidInput, "pdm", "the PDM must have the DEM's rows and columns");
-    if (problem.rovers.empty() || problem.rovers.size() > 64)
-      throw Error(ErrorCode::InvalidInput, "rovers", "between 1 and 64 rovers are supported");
+    planning::checkRoverCount(problem.rovers.size());
     if (p.mission.footprint < std::max(g.cellWidth, g.cellHeight))
       throwInvalidParameter("footprint_m", "must be at least the map cell size");
     const auto classes = classesFor(problem, p.mission.traversability);
@@ -91,7 +106,7 @@ class TeamPlanner final : public Planner {
       observer->replay(r, p.poseInterval, p.mission.coordination.controller.samplePeriod, cancel);
       if (cancel && cancel->cancelled()) {
         out.cancelled = true;
-        out.stopReason = "cancelled";
+        out.stopReason = StopReason::Cancelled;
       }
     }
     return out;

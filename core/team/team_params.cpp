@@ -50,15 +50,12 @@ ParamTable<P> buildTable() {
   ParamTable<P> t;
   // Route (SPEC §3.1).
   t.group("route");
-  t.add(common(choiceParam("route", {"lhc_gw_conv", "lhc", "lawnmower"},
+  t.add(common(choiceParam("route", enumNames<RouteMethod>(),
                     "Team route over the PDM: LHC_GW_CONV (paper 001), plain hill climbing without "
                     "global warming, or a boustrophedon lawnmower (baselines).")),
-        [](const P& p) -> ParamValue { return std::string(routeMethodName(p.mission.routeMethod)); },
+        [](const P& p) -> ParamValue { return std::string(enumName(p.mission.routeMethod)); },
         [](P& p, const ParamInfo& i, const ParamValue& v) {
-          const std::string s = paramAsChoice(i, v);
-          p.mission.routeMethod = s == "lhc"         ? RouteMethod::Lhc
-                                  : s == "lawnmower" ? RouteMethod::Lawnmower
-                                                     : RouteMethod::LhcGwConv;
+          p.mission.routeMethod = parseEnum<RouteMethod>(paramAsChoice(i, v)).value_or(RouteMethod::LhcGwConv);
         });
   addInt(t, common(intParam("targets", 1, 10000, "targets", "Route length: search cells visited after the start (paper 001: 64).")),
          [](auto& p) -> auto& { return p.mission.route.targets; });
@@ -108,16 +105,16 @@ ParamTable<P> buildTable() {
           [](auto& p) -> auto& { return p.mission.coordination.weights.nPsi; }, kDeg);
   // Coordination (SPEC §3.4).
   t.group("coordination");
-  t.add(common(choiceParam("coordination", {"timed", "paper"},
+  t.add(common(choiceParam("coordination", enumNames<CoordinationMode>(),
                     "timed (ours): RRT* in a corridor round a guide path on the whole map, conflicts "
                     "resolved by starting later (checked at 10 Hz), re-planning only as a fallback; "
                     "paper: paper 001's boxed RRT* and seed re-planning.")),
         [](const P& p) -> ParamValue {
-          return std::string(coordinationModeName(p.mission.coordination.mode));
+          return std::string(enumName(p.mission.coordination.mode));
         },
         [](P& p, const ParamInfo& i, const ParamValue& v) {
-          p.mission.coordination.mode = paramAsChoice(i, v) == "paper" ? CoordinationMode::Paper
-                                                                       : CoordinationMode::Timed;
+          p.mission.coordination.mode =
+              parseEnum<CoordinationMode>(paramAsChoice(i, v)).value_or(CoordinationMode::Timed);
         });
   addReal(t, realParam("corridor_radius", 0.5, 100, "m", "timed: RRT* samples within this distance of the leg's guide path."),
           [](auto& p) -> auto& { return p.mission.coordination.corridorRadius; });

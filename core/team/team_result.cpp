@@ -56,7 +56,7 @@ Series curveSeries(std::string key, std::string xLabel, const std::vector<std::p
 std::vector<RouteTarget> routeTargets(const TeamMissionResult& r) {
   std::vector<RouteTarget> out;
   for (std::size_t i = 0; i < r.route.centres.size(); ++i)
-    out.push_back({static_cast<int>(i), r.route.centres[i], "", 0, 0, 0, 0});
+    out.push_back({static_cast<int>(i), r.route.centres[i], TargetStatus::Skipped, 0, 0, 0, 0});
   for (const LegRecord& leg : r.plan.legs) {
     if (leg.target < 0 || leg.target >= static_cast<int>(out.size())) continue;
     RouteTarget& t = out[static_cast<std::size_t>(leg.target)];
@@ -68,11 +68,11 @@ std::vector<RouteTarget> routeTargets(const TeamMissionResult& r) {
     if (target >= 0 && target < static_cast<int>(out.size())) ++out[static_cast<std::size_t>(target)].noSlot;
   for (RouteTarget& t : out) {
     const int legs = t.reached + t.shortLegs + t.skipped + t.noSlot;
-    t.status = legs == 0                    ? "skipped"
-               : t.reached == legs          ? "reached"
-               : t.noSlot == legs           ? "unreachable"
-               : t.skipped + t.noSlot == legs ? "skipped"
-                                              : "short";
+    t.status = legs == 0                      ? TargetStatus::Skipped
+               : t.reached == legs            ? TargetStatus::Reached
+               : t.noSlot == legs             ? TargetStatus::Unreachable
+               : t.skipped + t.noSlot == legs ? TargetStatus::Skipped
+                                              : TargetStatus::Short;
   }
   return out;
 }
@@ -84,7 +84,7 @@ PlanResult toPlanResult(const TeamMissionResult& r, const TeamPlannerParams& p, 
   PlanResult out;
   out.planner = hybrid ? "hybrid" : "team-search";
   out.cancelled = r.plan.cancelled;
-  out.stopReason = r.plan.cancelled ? "cancelled" : "mission_complete";
+  out.stopReason = r.plan.cancelled ? StopReason::Cancelled : StopReason::MissionComplete;
   const TeamMetrics& m = r.metrics;
   out.metrics = {
       {"rovers", static_cast<double>(r.plan.trajectories.size()), "rovers"},
@@ -171,7 +171,7 @@ PlanResult toPlanResult(const TeamMissionResult& r, const TeamPlannerParams& p, 
     char note[120];
     std::snprintf(note, sizeof note, "rovers %d and %d within %.2f m for %.1f s", c.other, c.rover,
                   c.distance, c.duration);
-    out.incidents.push_back({"collision", c.rover, c.other, c.time, c.position, c.distance, note});
+    out.incidents.push_back({IncidentKind::Collision, c.rover, c.other, c.time, c.position, c.distance, note});
   }
   // Exceedance episodes: consecutive samples over the limit, reported once with the worst angle.
   const double limit = p.mission.exceedanceLimit;
@@ -191,7 +191,7 @@ PlanResult toPlanResult(const TeamMissionResult& r, const TeamPlannerParams& p, 
       char note[120];
       std::snprintf(note, sizeof note, "|roll| or |pitch| up to %.2f° for %zu samples",
                     worst * 180.0 / std::numbers::pi, j - i);
-      out.incidents.push_back({"exceedance", static_cast<int>(k), -1, samples[i].time,
+      out.incidents.push_back({IncidentKind::Exceedance, static_cast<int>(k), -1, samples[i].time,
                                {samples[i].x, samples[i].y}, worst * 180.0 / std::numbers::pi, note});
       i = j;
     }
@@ -201,13 +201,13 @@ PlanResult toPlanResult(const TeamMissionResult& r, const TeamPlannerParams& p, 
     const Trajectory& t = r.plan.trajectories[leg.rover];
     const std::size_t i = std::min(t.samples.size() - 1,
                                    static_cast<std::size_t>(std::lround(leg.endTime / period)));
-    out.incidents.push_back({legStatusName(leg.status), leg.rover, -1, leg.endTime,
+    out.incidents.push_back({leg.status == LegStatus::Short ? IncidentKind::Short : IncidentKind::Skipped, leg.rover, -1, leg.endTime,
                              {t.samples[i].x, t.samples[i].y}, static_cast<double>(leg.target),
                              "target " + std::to_string(leg.target) + ": " + leg.note});
   }
   for (const auto& [rover, target] : r.noSlot) {
     const Eigen::Vector2d at = r.route.centres[static_cast<std::size_t>(target)];
-    out.incidents.push_back({"no_slot", rover, -1, 0.0, at, static_cast<double>(target),
+    out.incidents.push_back({IncidentKind::NoSlot, rover, -1, 0.0, at, static_cast<double>(target),
                              "target " + std::to_string(target) +
                                  ": no valid ground for the rover's slot within half a footprint"});
   }

@@ -288,24 +288,6 @@ bool TerrainEdgeModel::inZone(const Eigen::Vector2d& p) const {
   return cell && classes_(cell->row, cell->col) == static_cast<std::uint8_t>(terrain::TerrainClass::KeepOut);
 }
 
-const char* pathStatusName(PathStatus s) {
-  switch (s) {
-    case PathStatus::Exact:
-      return "exact";
-    case PathStatus::Approximate:
-      return "approximate";
-    case PathStatus::NoSolution:
-      return "no_solution";
-    case PathStatus::InvalidStart:
-      return "invalid_start";
-    case PathStatus::InvalidGoal:
-      return "invalid_goal";
-    case PathStatus::Cancelled:
-      return "cancelled";
-  }
-  return "unknown";
-}
-
 // ---------------------------------------------------------------------------------------------
 // OMPL glue
 

@@ -10,6 +10,7 @@
 // Positions are in the local frame (x east, y north, metres from the raster's south-west corner),
 // headings in radians counter-clockwise from east (SPEC §0).
 #include <Eigen/Core>
+#include <array>
 #include <cstdint>
 #include <numbers>
 #include <optional>
@@ -17,6 +18,7 @@
 #include <vector>
 
 #include "core/common/cancel.hpp"
+#include "core/common/enum_names.hpp"
 #include "core/grid/raster.hpp"
 #include "core/terrain/dem.hpp"
 
@@ -206,7 +208,6 @@ enum class PathStatus {
   InvalidGoal,   // goal outside the map or not pointValid
   Cancelled,     // the cancel token was set; no path returned
 };
-const char* pathStatusName(PathStatus s);
 
 struct PathResult {
   PathStatus status = PathStatus::NoSolution;
@@ -239,3 +240,18 @@ PathResult planPath(const terrain::Dem& dem, const Raster<std::uint8_t>& classes
                     const Corridor* corridor = nullptr);
 
 }  // namespace rover::team
+
+// The names of the values above (enum_names.hpp).
+namespace rover {
+template <>
+struct EnumNames<team::PathStatus> {
+  static constexpr std::array<EnumName<team::PathStatus>, 6> table{{
+      {team::PathStatus::Exact, "exact"},
+      {team::PathStatus::Approximate, "approximate"},
+      {team::PathStatus::NoSolution, "no_solution"},
+      {team::PathStatus::InvalidStart, "invalid_start"},
+      {team::PathStatus::InvalidGoal, "invalid_goal"},
+      {team::PathStatus::Cancelled, "cancelled"},
+  }};
+};
+}  // namespace rover

@@ -7,6 +7,7 @@
 
 #include "core/common/parallel.hpp"
 #include "core/grid/direction.hpp"
+#include "core/grid/neighbours.hpp"
 #include "core/terrain/layers.hpp"
 
 namespace rover::team {
@@ -98,15 +99,13 @@ bool TraversalLattice::flood(std::vector<int> stack, Step step) const {
   while (!stack.empty()) {
     const int i = stack.back();
     stack.pop_back();
-    const CellIndex c = g.cell(i);
-    for (int d = 0; d < kDirections; ++d) {
-      if (moveCost(i, d) < 0) continue;
-      const int row = c.row + kDirRow[d], col = c.col + kDirCol[d];
-      switch (step(i, row, col)) {
+    for (const Neighbour& n : neighbours8(g, i)) {
+      if (moveCost(i, n.dir) < 0) continue;
+      switch (step(i, n.row, n.col)) {
         case FloodStep::Skip:
           break;
         case FloodStep::Push:
-          stack.push_back(g.index(row, col));
+          stack.push_back(n.index);
           break;
         case FloodStep::Stop:
           return true;
@@ -265,12 +264,11 @@ std::optional<std::vector<Eigen::Vector2d>> TraversalLattice::search(
       found = true;
       break;
     }
-    const CellIndex c = g.cell(i);
-    for (int d = 0; d < kDirections; ++d) {
-      const float m = moveCost(i, d);
+    for (const Neighbour& n : neighbours8(g, i)) {
+      const float m = moveCost(i, n.dir);
       if (m < 0) continue;
-      const int rr = c.row + kDirRow[d], cc = c.col + kDirCol[d];
-      const int j = g.index(rr, cc);
+      const int rr = n.row, cc = n.col;
+      const int j = n.index;
       if (!node_[j] && j != target) continue;
       if (!w.contains(rr, cc)) {
         clipped = true;

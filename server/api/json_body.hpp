@@ -1,5 +1,5 @@
 #pragma once
-// The body of a JSON route (defined in routes.cpp; apart from routes.hpp so that header declares
+// The body of a JSON route (defined in route_kit.cpp; apart from routes.hpp so that header declares
 // nothing in rover::json).
 #include <nlohmann/json.hpp>
 

@@ -41,12 +41,15 @@ void fromResult(const json& r, maps::MissionMapInput& in) {
   }
   for (const auto& o : r.value("overlays", json::array()))
     if (o.value("key", "") == "route") in.route = points(o.value("points", json::array()));
+  // Results are written by plan_json.cpp from the same name tables, so every name parses; a
+  // target that did not would be drawn grey like an unreachable one, an incident's kind is not drawn.
   for (const auto& t : r.value("targets", json::array()))
-    in.targets.push_back({t.value("target", 0), {t.value("x", 0.0), t.value("y", 0.0)}, t.value("status", ""),
+    in.targets.push_back({t.value("target", 0), {t.value("x", 0.0), t.value("y", 0.0)},
+                          parseEnum<TargetStatus>(t.value("status", "")).value_or(TargetStatus::Unreachable),
                           0, 0, 0, 0});
   for (const auto& i : r.value("incidents", json::array())) {
     Incident inc;
-    inc.kind = i.value("kind", "");
+    inc.kind = parseEnum<IncidentKind>(i.value("kind", "")).value_or(IncidentKind::Collision);
     inc.rover = i.value("rover", 0);
     inc.position = {i.value("x", 0.0), i.value("y", 0.0)};
     in.incidents.push_back(std::move(inc));
@@ -54,9 +57,9 @@ void fromResult(const json& r, maps::MissionMapInput& in) {
 }
 
 // The final coverage grid from grid.bin (a full frame: u32 type 2, rows, cols, count, then
-// rows·cols states), with the coverage cell from the result's metrics.
+// rows·cols states), with the coverage cell from the result's metrics. Only a planner that plans
+// on a coverage grid draws it: a team's grid is its route search grid.
 void coverageGrid(const fs::path& dir, const json& r, maps::MissionMapInput& in) {
-  if (r.value("planner", "") != "coverage") return;  // the team's grid is its route search grid
   const double cell = r.value("metrics", json::object()).value("coverage_cell_m", 0.0);
   const std::string bytes = readAll(dir / "grid.bin");
   if (cell <= 0 || bytes.size() < 16) return;
@@ -75,7 +78,7 @@ std::string missionMapFile(ApiContext& ctx, const store::MissionRecord& m, const
   const fs::path file = dir / ("map." + format);
   if (fs::exists(file)) return file.string();
   if (!fs::exists(dir / "result.json"))
-    throw ApiError(409, "not_ready", "mission " + m.id + " is " + m.status + ": no result yet", "id");
+    throw ApiError(409, "not_ready", "mission " + m.id + " is " + std::string(enumName(m.status)) + ": no result yet", "id");
   if (!ctx.db.getMap(m.mapId))
     throw ApiError(409, "map_deleted", "the mission's map " + m.mapId + " was deleted: no map to draw on", "id");
   auto map = ctx.maps.get(m.mapId);
@@ -94,7 +97,8 @@ std::string missionMapFile(ApiContext& ctx, const store::MissionRecord& m, const
   in.dem = dem;
   in.title = "mission " + m.id + " - " + m.planner;
   fromResult(result, in);
-  coverageGrid(dir, result, in);
+  if (const Planner* p = ctx.planners.find(m.planner); p && p->specs().ground == Ground::CoverageGrid)
+    coverageGrid(dir, result, in);
   in.zones = missions::keepOutZones(m.spec);
   const maps::MissionMap picture = maps::renderMissionMap(in);
   const std::vector<std::uint8_t> bytes =

@@ -10,7 +10,9 @@
 #include "server/json/json_edge.hpp"
 #include "server/json/mission_request.hpp"
 #include "server/json/plan_json.hpp"
+#include "server/json/planner_json.hpp"
 #include "server/json/zones_json.hpp"
+#include "server/store/run_status.hpp"
 
 namespace rover::api::openapi {
 
@@ -41,6 +43,12 @@ json object(json properties, std::vector<std::string> required = {}, bool closed
   if (closed) s["additionalProperties"] = false;
   return s;
 }
+// A string field whose values are an enum's names, from the enum's one table (enum_names.hpp).
+template <NamedEnum E>
+json oneOf() {
+  return {{"type", "string"}, {"enum", enumNames<E>()}};
+}
+
 json name(const std::string& description) {
   json s = str(description + " UTF-8, at most " + std::to_string(rover::json::kMaxNameChars) +
                " characters, no control, zero-width or text-direction characters.");
@@ -85,6 +93,62 @@ json paramInfoSchema() {
                 {"key", "type", "default", "unit", "doc", "group", "level"});
 }
 
+// A study as server/studies/study_manager.cpp's toJson writes it.
+json studySchema() {
+  json statuses = json::array();
+  for (RunStatus st : kStudyStatuses) statuses.push_back(enumName(st));
+  return object({{"id", str()},
+                 {"name", str()},
+                 {"status", {{"type", "string"}, {"enum", statuses}}},
+                 {"message", str("Why it failed or was queued again.")},
+                 {"created_at", str()},
+                 {"started_at", str()},
+                 {"finished_at", str()},
+                 {"runs_done", {{"type", "integer"}}},
+                 {"runs_total", {{"type", "integer"}}},
+                 {"eta_s", nullable(num("Seconds left; null until known."))},
+                 {"runs_per_s", num()},
+                 {"links", {{"type", "object"}, {"additionalProperties", str()}}}},
+                {"id", "name", "status", "runs_done", "runs_total"});
+}
+
+// A plan's result.json as server/json/plan_json.cpp writes it (the outcome fields in full).
+json planResultSchema() {
+  json incident = object({{"kind", oneOf<IncidentKind>()},
+                          {"rover", {{"type", "integer"}}},
+                          {"other", {{"type", "integer"}}},
+                          {"time_s", num()},
+                          {"step", {{"type", "integer"}}},
+                          {"x", num("Metres, local frame.")},
+                          {"y", num("Metres, local frame.")},
+                          {"note", str()},
+                          {"distance_m", num("collision: the closest distance.")},
+                          {"max_angle_deg", num("exceedance: the worst |roll| or |pitch|.")},
+                          {"cell", {{"type", "integer"}, {"description", "bump: the cell driven into."}}},
+                          {"target", {{"type", "integer"}, {"description", "short, skipped, no_slot: the route target."}}}},
+                         {"kind", "rover", "x", "y", "note"});
+  json target = object({{"target", {{"type", "integer"}}},
+                        {"x", num()},
+                        {"y", num()},
+                        {"status", oneOf<TargetStatus>()},
+                        {"legs_reached", {{"type", "integer"}}},
+                        {"legs_short", {{"type", "integer"}}},
+                        {"legs_skipped", {{"type", "integer"}}},
+                        {"legs_no_slot", {{"type", "integer"}}}},
+                       {"target", "x", "y", "status"});
+  return object({{"planner", str()},
+                 {"stop_reason", oneOf<StopReason>()},
+                 {"cancelled", {{"type", "boolean"}}},
+                 {"metrics", {{"type", "object"}, {"additionalProperties", num()}}},
+                 {"metric_units", {{"type", "object"}, {"additionalProperties", str()}}},
+                 {"rovers", {{"type", "array"}, {"items", {{"type", "object"}}}}},
+                 {"series", {{"type", "object"}}},
+                 {"warnings", {{"type", "array"}, {"items", str()}}},
+                 {"incidents", {{"type", "array"}, {"items", incident}}},
+                 {"targets", {{"type", "array"}, {"items", target}}}},
+                {"planner", "stop_reason", "cancelled", "metrics"});
+}
+
 json schemas(const PlannerRegistry& planners) {
   json s = json::object();
   s["Error"] = object(
@@ -97,6 +161,9 @@ json schemas(const PlannerRegistry& planners) {
 
   // Parameters of each planner, from its own table (the same one the request is checked with).
   std::vector<std::string> names = planners.names();
+  std::string pdmPlanners;
+  for (const auto& n : names)
+    if (planners.get(n).specs().ground == Ground::DemAndPdm) pdmPlanners += (pdmPlanners.empty() ? "" : ", ") + n;
   json anyParams = json::array();
   for (const auto& n : names) {
     json props = json::object();
@@ -117,7 +184,8 @@ json schemas(const PlannerRegistry& planners) {
                       {"x", "y"});
   json request = object(
       {{"map", str("Map id.")},
-       {"pdm", nullable(str("PDM id on that map (team planners: the probability to search).") )},
+       {"pdm", nullable(str("PDM id on that map: the probability to search, for the planners whose ground is "
+                            "dem_pdm (" + pdmPlanners + ")."))},
        {"planner", {{"type", "string"}, {"enum", names}}},
        {"rovers", {{"type", "array"}, {"minItems", 1}, {"maxItems", rover::json::kMaxRovers}, {"items", rover}}},
        {"params", {{"anyOf", anyParams}}},
@@ -159,7 +227,6 @@ json schemas(const PlannerRegistry& planners) {
                               std::to_string(rover::json::kMaxZoneVertices) + " vertices in all).";
   s["MissionLabel"] = object({{"label", name("The run's new label (\"\" clears it).")}}, {"label"}, true);
 
-  const char* statuses[] = {"queued", "running", "succeeded", "completed_with_warnings", "failed", "cancelled", "interrupted"};
   s["Mission"] = object(
       {{"id", str()},
        {"map", str()},
@@ -168,7 +235,7 @@ json schemas(const PlannerRegistry& planners) {
        {"map_name", nullable(str("Null once the map is deleted."))},
        {"pdm_name", nullable(str())},
        {"planner", str()},
-       {"status", {{"type", "string"}, {"enum", statuses}}},
+       {"status", oneOf<RunStatus>()},
        {"message", str("Why it failed, or its warnings.")},
        {"created_at", str()},
        {"started_at", str()},
@@ -181,6 +248,8 @@ json schemas(const PlannerRegistry& planners) {
                                     {}, false))},
        {"step", nullable(num())}},
       {"id", "map", "planner", "status", "message", "created_at", "links", "spec"});
+  s["Study"] = studySchema();
+  s["PlanResult"] = planResultSchema();
   s["Cancelling"] = object({{"id", str()}, {"status", {{"type", "string"}, {"enum", {"cancelling"}}}}}, {"id", "status"});
   s["Deleted"] = object({{"deleted", str("The id deleted.")}}, {"deleted"});
 
@@ -244,12 +313,31 @@ json schemas(const PlannerRegistry& planners) {
 
   s["ParamInfo"] = paramInfoSchema();
   s["Preset"] = object({{"name", str()}, {"doc", str()}, {"params", {{"type", "object"}}}}, {"name", "doc", "params"});
-  s["Planner"] = object({{"name", {{"type", "string"}, {"enum", names}}},
-                         {"summary", str()},
-                         {"params", {{"type", "array"}, {"items", openapi::ref("ParamInfo")}}},
-                         {"presets", {{"type", "array"}, {"items", openapi::ref("Preset")}}},
-                         {"map_defaults", {{"type", "object"}, {"description", "With ?map=: map, body and the defaults it sets."}}}},
-                        {"name", "summary", "params", "presets"});
+  // What each planner describes of itself (core/planning/planner_specs.hpp), with the enums'
+  // names from the JSON edge (server/json/planner_json.hpp).
+  s["PlannerMetric"] = object({{"key", str()}, {"unit", str("Empty when dimensionless.")}, {"doc", str()}},
+                              {"key", "unit", "doc"});
+  s["PlannerStage"] = object({{"name", str()}, {"doc", str()}}, {"name", "doc"});
+  s["Planner"] = object(
+      {{"name", {{"type", "string"}, {"enum", names}}},
+       {"summary", str()},
+       {"params", {{"type", "array"}, {"items", openapi::ref("ParamInfo")}}},
+       {"presets", {{"type", "array"}, {"items", openapi::ref("Preset")}}},
+       {"map_defaults", {{"type", "object"}, {"description", "With ?map=: map, body and the defaults it sets."}}},
+       {"ground", {{"type", "string"},
+                   {"enum", rover::json::groundNames()},
+                   {"description", "What it plans on: coverage_grid (the map resampled to its coverage cell, or "
+                                   "a random obstacle grid) or dem_pdm (the map at its own resolution and a PDM)."}}},
+       {"starts", {{"type", "string"},
+                   {"enum", rover::json::startPlacementNames()},
+                   {"description", "Where its rovers start when none are placed (a study's runs)."}}},
+       {"progress", object({{"measure", {{"type", "string"}, {"enum", rover::json::progressNames()}}},
+                            {"series", str("The result's series that records it.")}},
+                           {"measure", "series"})},
+       {"seconds_per_run", {{"type", "boolean"}, {"description", "A run takes seconds (a simulated mission)."}}},
+       {"metrics", {{"type", "array"}, {"items", openapi::ref("PlannerMetric")}}},
+       {"stages", {{"type", "array"}, {"items", openapi::ref("PlannerStage")}}}},
+      {"name", "summary", "params", "presets", "ground", "starts", "progress", "seconds_per_run", "metrics", "stages"});
   s["Health"] = object({{"status", {{"type", "string"}, {"enum", {"ok"}}}},
                         {"version", str()},
                         {"maps", {{"type", "integer"}}},

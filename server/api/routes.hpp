@@ -1,5 +1,6 @@
 #pragma once
-// The REST + WebSocket API (issue: server): every route, its handler and its OpenAPI entry.
+// The REST + WebSocket API (issue: server): its shared context and the route files that register
+// every route, its named handler and its OpenAPI entry.
 #include <cstdint>
 #include <mutex>
 #include <string>
@@ -54,13 +55,18 @@ struct ApiContext {
 // Registers every /api route on `router` (the study routes too when ctx.studies is set).
 void addApiRoutes(http::Router& router, ApiContext& ctx);
 // `handler` with the API's error mapping (core Error -> 400 naming its field, JSON type errors ->
-// 400, anything else -> 500 without details), for routes registered outside routes.cpp.
+// 400, anything else -> 500 without details), for the route files.
 http::Handler guardedRoute(http::Handler handler);
-// /api/studies (study_routes.cpp), with the handler wrapper and doc() of routes.cpp.
-void addStudyRoutes(http::Router& router, ApiContext& ctx);
+// A route's summary and OpenAPI operation (server/api/openapi.hpp: its statuses and schemas).
 http::RouteOptions routeDoc(const std::string& summary, const openapi::Operation& op,
                             bool blocking = false);
-// POST /api/missions with a parsed body: validated, queued, answered 202 (throws ApiError).
-http::Response submitMission(ApiContext& ctx, const nlohmann::json& body);
+
+// The route files, one per resource (addZoneRoutes: zone_routes.hpp).
+void addPlannerRoutes(http::Router& router, ApiContext& ctx);  // GET /api/planners
+void addMapRoutes(http::Router& router, ApiContext& ctx);      // /api/maps, /api/maps/{id}
+void addLayerRoutes(http::Router& router, ApiContext& ctx);    // /api/maps/{id}/layers/{file}
+void addPdmRoutes(http::Router& router, ApiContext& ctx);      // /api/maps/{id}/pdms...
+void addMissionRoutes(http::Router& router, ApiContext& ctx);  // /api/missions...
+void addStudyRoutes(http::Router& router, ApiContext& ctx);    // /api/studies...
 
 }  // namespace rover::api

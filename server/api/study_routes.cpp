@@ -4,9 +4,8 @@
 #include <cmath>
 
 #include "core/common/error.hpp"
-#include "server/api/json_body.hpp"
-#include "server/api/openapi.hpp"
-#include "server/api/routes.hpp"
+#include "server/api/mission_service.hpp"
+#include "server/api/route_kit.hpp"
 #include "server/json/json_edge.hpp"
 #include "server/json/pdm_json.hpp"
 #include "server/json/plan_json.hpp"
@@ -48,7 +47,8 @@ json runMission(ApiContext& ctx, const studies::StudySpec& spec, std::size_t run
   const studies::Configuration& c = spec.configOf(runIndex);
   const studies::WorldSpec& world = spec.worlds[c.world];
   const std::uint64_t seed = studies::runSeed(spec.masterSeed, spec.replicateOf(runIndex));
-  const bool team = c.point.planner == "team-search" || c.point.planner == "hybrid";
+  const Planner& planner = ctx.planners.get(c.point.planner);
+  const bool onMap = planner.specs().ground == Ground::DemAndPdm;
   json out{{"run_index", runIndex}, {"config", c.name}, {"planner", c.point.planner}, {"world", world.name},
            {"rovers", c.rovers}, {"seed", seed}, {"replicate", spec.replicateOf(runIndex)}};
   json params = json::object();
@@ -70,24 +70,19 @@ json runMission(ApiContext& ctx, const studies::StudySpec& spec, std::size_t run
     if (m.name.rfind("Default: synthetic Mars", 0) == 0) mapId = m.id;
   if (mapId.empty()) return unavailable("the server's default map (synthetic Mars, seed 1) was deleted");
   ParamSet runParams = c.point.params;
-  const Planner& planner = ctx.planners.get(c.point.planner);
   auto dem = ctx.maps.demAtCell(mapId, 0);
-  std::vector<RoverStart> starts;
-  if (team) {
+  if (onMap && planner.hasParam("seed")) {  // as the study runner gives a run its seed
     runParams["seed"] = static_cast<std::int64_t>(seed);
     params["seed"] = seed;
-    starts = problems::formationStarts(*dem, runParams, c.rovers);
-  } else {
-    const PlanningProblem problem =
-        problems::problemOnMap(problems::groundOnMap(c.point.planner, dem->geometry(), runParams), dem);
-    starts = problems::randomValidStarts(planner, problem, runParams, c.rovers, seed);
   }
+  const PlanningProblem problem = problems::problemOnMap(planner.groundOnMap(dem->geometry(), runParams), dem);
+  const std::vector<RoverStart> starts = planner.defaultStarts(problem, runParams, c.rovers, seed);
   json rovers = json::array();
   for (const auto& r : starts)
     rovers.push_back({{"x", r.position.x()}, {"y", r.position.y()}, {"heading", r.heading * 180.0 / M_PI}});
   out["mission"] = {{"map", mapId}, {"planner", c.point.planner}, {"rovers", rovers}, {"params", params},
                     {"name", spec.name + " · " + c.name + " · run " + std::to_string(runIndex)}};
-  if (team && spec.pdmComponents > 0) out["pdm_random"] = {{"components", spec.pdmComponents}, {"seed", seed}};
+  if (onMap && spec.pdmComponents > 0) out["pdm_random"] = {{"components", spec.pdmComponents}, {"seed", seed}};
   return out;
 }
 
@@ -117,7 +112,6 @@ json configurationsJson(const studies::StudySpec& spec) {
 
 using openapi::Operation;
 const nlohmann::json obj = {{"type", "object"}};
-const nlohmann::json arr = {{"type", "array"}, {"items", {{"type", "object"}}}};
 
 }  // namespace
 
@@ -146,7 +140,7 @@ void addStudyRoutes(http::Router& router, ApiContext& ctx) {
     json out = json::array();
     for (const auto& s : ctx.studies->list()) out.push_back(studies::toJson(s));
     return Response::json(200, out);
-  }), routeDoc("List studies, newest first: status, runs done/total, ETA.", Operation().returns(200, "Studies", arr)));
+  }), routeDoc("List studies, newest first: status, runs done/total, ETA.", Operation().returns(200, "Studies", {{"type", "array"}, {"items", openapi::ref("Study")}})));
 
   router.add("GET", "/api/studies/{id}", guardedRoute([&ctx](const Request& req) {
     const studies::StudyState s = studyOr404(ctx, req.params.at("id"));
@@ -221,7 +215,7 @@ void addStudyRoutes(http::Router& router, ApiContext& ctx) {
       ctx.invalidateMap(mapId);
       body["pdm"] = p.id;
     }
-    return submitMission(ctx, body);
+    return Response::json(202, missionJson(submitMission(ctx, body)));
   }), routeDoc("Open a run as a mission: the same map, planner, parameters, seed, starts (and PDM, created on "
                "the map) queued as a new mission (202, the mission); 409 not_a_mission when the run's world "
                "is no stored map.", Operation().returns(202, "Queued mission", obj).errors({404, 409, 429}), true));

@@ -1,8 +1,7 @@
 #include "server/api/zone_routes.hpp"
 
 #include "maps/georef.hpp"
-#include "server/api/json_body.hpp"
-#include "server/api/openapi.hpp"
+#include "server/api/route_kit.hpp"
 #include "server/json/json_edge.hpp"
 #include "server/json/zones_json.hpp"
 
@@ -22,7 +21,7 @@ void addZoneRoutes(http::Router& router, ApiContext& ctx) {
   get.openapi = openapi::Operation().returns(200, "The zones.", openapi::ref("Zones")).errors({404}).toJson();
   router.add("GET", "/api/maps/{id}/zones", guardedRoute([&ctx](const Request& req) {
     const std::string& id = req.params.at("id");
-    if (!ctx.db.getMap(id)) throw ApiError(404, "not_found", "no map '" + rj::shown(id) + "'", "id");
+    mapOr404(ctx, id, "id");
     auto zones = ctx.db.getZones(id);
     return Response::json(200, zones ? *zones : rj::zonesToJson({}));
   }), get);
@@ -66,7 +65,7 @@ void addZoneRoutes(http::Router& router, ApiContext& ctx) {
     }
     const KeepOut zones = rj::zonesFromJson(body, "zones", &g, toLocal);
     const json stored = rj::zonesToJson(zones, rj::zoneNames(body));
-    if (!ctx.db.setZones(id, stored)) throw ApiError(404, "not_found", "no map '" + rj::shown(id) + "'", "id");
+    if (!ctx.db.setZones(id, stored)) throw mapNotFound(id, "id");
     return Response::json(200, stored);
   }), put);
 }

@@ -72,7 +72,7 @@ int benchMission(std::ostream& out) {
       const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
       if (threads == 1) single = wall;
       out << std::left << std::setw(14) << (hybrid ? "hybrid" : "team-search") << std::setw(8)
-          << team::coordinationModeName(mode) << std::right << std::setw(9) << threads << std::fixed << std::setprecision(2) << std::setw(10) << wall
+          << enumName(mode) << std::right << std::setw(9) << threads << std::fixed << std::setprecision(2) << std::setw(10) << wall
           << std::setw(12) << r.metrics.rrtCalls << std::setprecision(0) << std::setw(12)
           << r.metrics.rrtCalls / wall << std::setw(12) << r.metrics.missionTimeS
           << std::setw(12) << r.metrics.collisions << std::setw(10) << r.metrics.targetsReached

@@ -12,6 +12,7 @@
 #include <fstream>
 
 #include "core/coverage/terrain_world.hpp"
+#include "core/planning/rover_limits.hpp"
 #include "maps/geojson.hpp"
 #include "maps/georef.hpp"
 #include "server/cli/coverage_options.hpp"
@@ -38,7 +39,7 @@ void printSummary(std::ostream& out, const coverage::World& world, const coverag
       << (rovers > 1 ? (p.mode == coverage::TeamMode::Overlap ? ", overlap" : ", voronoi") : "")
       << ", sense radius " << p.senseRadius << ", goal " << std::setprecision(1) << p.coverage * 100
       << " %\n";
-  out << "stopped    " << r.stopReason << " after " << static_cast<long>(m("steps")) << " steps\n";
+  out << "stopped    " << enumName(r.stopReason) << " after " << static_cast<long>(m("steps")) << " steps\n";
   out << std::setprecision(2) << "coverage   " << m("coverage") * 100 << " % of free cells, "
       << m("coverage_reachable") * 100 << " % of reachable\n";
   out << std::setprecision(3) << "moves      " << static_cast<long>(m("moves"))
@@ -85,7 +86,7 @@ int coverageCommand(const std::vector<std::string>& argv, std::ostream& out) {
     return 0;
   }
   coverage::WorldParams wp = readWorldOptions(args);
-  int rovers = static_cast<int>(args.integer("rovers", 1, 1, 64));
+  int rovers = static_cast<int>(args.integer("rovers", 1, 1, planning::kMaxRovers));
   ParamSet params = readCoverageParamOptions(args);
   std::vector<RoverStart> starts = readStartOption(args);
   if (!starts.empty()) rovers = static_cast<int>(starts.size());
@@ -101,13 +102,13 @@ int coverageCommand(const std::vector<std::string>& argv, std::ostream& out) {
     typed = coverage::parseCoverageParams(params);
     if (dem) {
       // Square cells of coverage_cell metres in the map's local frame, whatever its pixels.
-      problem = problems::problemOnMap(problems::groundOnMap("coverage", dem->dem.geometry(), params),
+      problem = problems::problemOnMap(planner.groundOnMap(dem->dem.geometry(), params),
                                        std::make_shared<terrain::Dem>(dem->dem), nullptr, import.body);
     } else {
       problem = problems::problemOnGrid(wp);
     }
     problem.keepOut = readKeepOutOption(args, dem ? dem->dem.geometry() : problem.world.geometry());
-    problem.rovers = !starts.empty() ? starts : problems::randomValidStarts(planner, problem, params, rovers, wp.seed);
+    problem.rovers = !starts.empty() ? starts : planner.defaultStarts(problem, params, rovers, wp.seed);
     planner.validate(problem, params);
   } catch (const Error& e) {
     if (e.field().rfind("rovers", 0) == 0 && !starts.empty())

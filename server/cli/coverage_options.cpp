@@ -13,6 +13,7 @@
 
 #include "core/common/strings.hpp"
 #include "core/coverage/coverage_params.hpp"
+#include "core/planning/rover_limits.hpp"
 
 namespace rover::cli {
 
@@ -34,7 +35,8 @@ std::vector<RoverStart> readStartOption(const ArgParser& args) {
     if (v.size() != 3) throw UsageError("invalid value for --start: '" + one + "' is not X,Y,DEG");
     out.push_back({{v[0], v[1]}, v[2] * std::numbers::pi / 180.0});
   }
-  if (out.empty() || out.size() > 64) throw UsageError("invalid value for --start: 1 to 64 rovers");
+  if (out.empty() || out.size() > static_cast<std::size_t>(planning::kMaxRovers))
+    throw UsageError("invalid value for --start: 1 to " + std::to_string(planning::kMaxRovers) + " rovers");
   return out;
 }
 

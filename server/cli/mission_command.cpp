@@ -49,7 +49,7 @@ void printSummary(std::ostream& out, const MissionSetup& s, const PlanResult& r)
   out << "outcome    " << (r.warnings.empty() ? "completed" : "completed with warnings") << "\n";
   for (const auto& w : r.warnings) out << "  warning: " << w << "\n";
   for (const auto& i : r.incidents)
-    out << "  " << i.kind << " rover " << i.rover << " at t = " << std::setprecision(1) << i.time
+    out << "  " << enumName(i.kind) << " rover " << i.rover << " at t = " << std::setprecision(1) << i.time
         << " s (" << i.position.x() << ", " << i.position.y() << "): " << i.note << "\n";
 }
 

@@ -1,6 +1,8 @@
 #include "server/cli/mission_setup.hpp"
 
+#include "core/common/strings.hpp"
 #include "core/team/team_entry.hpp"
+#include "core/planning/rover_limits.hpp"
 #include "maps/georef.hpp"
 #include "server/cli/coverage_options.hpp"
 #include "server/cli/dem_options.hpp"
@@ -19,13 +21,22 @@ PdmOptionNames missionPdmNames() {
   return n;
 }
 
+// The planners this command runs: those that plan on a DEM and a PDM, whose parameters are the
+// team table's.
+std::string demPlanners(const PlannerRegistry& registry) {
+  std::vector<std::string> names;
+  for (const auto& n : registry.names())
+    if (registry.get(n).specs().ground == Ground::DemAndPdm) names.push_back(n);
+  return join(names, " | ");
+}
+
 }  // namespace
 
 void addMissionOptions(ArgParser& a) {
   a.option("dem", "FILE", "", "The DEM to plan on (any raster GDAL reads). Required.");
   addDemOptions(a, "cell", "native");
   addPdmOptions(a, missionPdmNames());
-  a.option("planner", "NAME", "team-search", "team-search | hybrid.");
+  a.option("planner", "NAME", "team-search", demPlanners(makeBuiltinRegistry()) + ".");
   a.option("rovers", "N", "5", "Number of rovers, placed in formation around the map centre.");
   a.option("start", "X,Y,DEG[;X,Y,DEG...]", "formation",
            "Rover starts in the local frame (metres from the lower-left corner) and headings "
@@ -38,11 +49,12 @@ MissionSetup readMissionOptions(const ArgParser& a) {
   MissionSetup s;
   if (!a.has("dem")) throw UsageError("missing option --dem FILE");
   s.plannerName = a.str("planner", "team-search");
-  if (s.plannerName != "team-search" && s.plannerName != "hybrid")
-    throw UsageError("invalid value for --planner: '" + s.plannerName + "' (team-search | hybrid)");
-  s.params = readParamOptions(a, team::teamParamTable().infos());
+  const Planner* planner = s.registry.find(s.plannerName);
+  if (!planner || planner->specs().ground != Ground::DemAndPdm)
+    throw UsageError("invalid value for --planner: '" + s.plannerName + "' (" + demPlanners(s.registry) + ")");
+  s.params = readParamOptions(a, planner->params());
   try {
-    (void)team::parseTeamParams(s.params);  // a bad parameter is refused before the DEM is read
+    planner->checkParams(s.params);  // a bad parameter is refused before the DEM is read
   } catch (const Error& e) {
     throwAsUsage(e);
   }
@@ -62,19 +74,19 @@ MissionSetup readMissionOptions(const ArgParser& a) {
   } else {
     s.pdmSource = "uniform";
   }
-  s.problem = problems::problemOnMap(problems::groundOnMap(s.plannerName, dem->geometry(), s.params), dem,
+  s.problem = problems::problemOnMap(planner->groundOnMap(dem->geometry(), s.params), dem,
                                      pdm.empty() ? nullptr : std::make_shared<Raster<float>>(std::move(pdm)),
                                      import.body);
 
   s.problem.keepOut = readKeepOutOption(a, dem->geometry());
   std::vector<RoverStart> starts = readStartOption(a);
   if (starts.empty()) {
-    const int n = static_cast<int>(a.integer("rovers", 5, 1, 64));
-    starts = orUsage([&] { return problems::formationStarts(*dem, s.params, n); });
+    const int n = static_cast<int>(a.integer("rovers", 5, 1, planning::kMaxRovers));
+    starts = orUsage([&] { return planner->defaultStarts(s.problem, s.params, n, 0); });
   }
   s.problem.rovers = starts;
   try {
-    s.registry.get(s.plannerName).validate(s.problem, s.params);
+    planner->validate(s.problem, s.params);
   } catch (const Error& e) {
     if (e.field().rfind("rovers", 0) == 0) throw UsageError(std::string("invalid value for --start: ") + e.what());
     if (e.field() == "map" || e.field() == "pdm") throw UsageError(e.what());

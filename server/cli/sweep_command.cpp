@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "core/common/parallel.hpp"
+#include "core/planning/rover_limits.hpp"
 #include "server/cli/arg_parser.hpp"
 #include "server/cli/commands.hpp"
 #include "server/cli/study_output.hpp"
@@ -50,7 +51,7 @@ int sweepCommand(const std::vector<std::string>& argv, std::ostream& out) {
   o.runs = static_cast<int>(args.integer("runs", 0, 1, studies::kMaxRuns));
   o.masterSeed = static_cast<std::uint64_t>(args.integer("seed", 1, 0, INT64_MAX));
   o.missionThreads = static_cast<unsigned>(args.integer("mission-threads", 1, 1, 1024));
-  o.rovers = static_cast<int>(args.integer("rovers", 5, 1, 64));
+  o.rovers = static_cast<int>(args.integer("rovers", 5, 1, planning::kMaxRovers));
   o.targets = static_cast<int>(args.integer("targets", 64, 1, 10000));
   o.hirisePath = args.str("hirise", o.hirisePath);
   if (o.hirisePath == "none") o.hirisePath.clear();
@@ -81,7 +82,8 @@ int sweepCommand(const std::vector<std::string>& argv, std::ostream& out) {
       << " runs = " << spec.runCount() << " runs, " << threads << " threads\n" << std::flush;
   studies::RunOptions ro;
   ro.threads = threads;
-  const bool slow = spec.planner != "coverage";  // team missions take seconds each: show progress
+  // Runs that take seconds each (team missions): show progress.
+  const bool slow = makeBuiltinRegistry().get(spec.planner).specs().secondsPerRun;
   const studies::RunReport r = runner.run(db, ro, [&](std::size_t done, std::size_t total) {
     if (slow) out << "  [" << done << "/" << total << "]\n" << std::flush;
   });

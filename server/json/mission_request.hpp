@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include "core/planning/planner.hpp"
+#include "core/planning/rover_limits.hpp"
 
 namespace rover::json {
 
@@ -31,7 +32,7 @@ struct MissionRequest {
 
 // Limits stated in README (API): at most kMaxRovers rovers; x and y finite with |v| <= 1e9 m (the
 // planner then checks they lie on the map); heading in [-360, 360] degrees; pace in [0, 1e6].
-inline constexpr std::size_t kMaxRovers = 64;
+inline constexpr std::size_t kMaxRovers = planning::kMaxRovers;
 inline constexpr double kMaxCoordinateM = 1e9;
 inline constexpr double kMaxHeadingDeg = 360;
 inline constexpr double kMaxPace = 1e6;

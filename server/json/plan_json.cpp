@@ -55,7 +55,7 @@ json metricsObject(const std::vector<Metric>& metrics) {
 
 json toJson(const PlanResult& r) {
   json j{{"planner", r.planner},
-         {"stop_reason", r.stopReason},
+         {"stop_reason", enumName(r.stopReason)},
          {"cancelled", r.cancelled},
          {"metrics", metricsObject(r.metrics)}};
   json units = json::object();
@@ -96,13 +96,13 @@ json toJson(const PlanResult& r) {
   }
   json incidents = json::array();
   for (const auto& i : r.incidents) {
-    json x{{"kind", i.kind},       {"rover", i.rover}, {"time_s", i.time},
+    json x{{"kind", enumName(i.kind)}, {"rover", i.rover}, {"time_s", i.time},
            {"x", i.position.x()}, {"y", i.position.y()}, {"note", i.note}};
     if (i.other >= 0) x["other"] = i.other;
     if (i.step >= 0) x["step"] = i.step;
-    if (i.kind == "collision") x["distance_m"] = i.value;
-    else if (i.kind == "exceedance") x["max_angle_deg"] = i.value;
-    else if (i.kind == "bump") x["cell"] = static_cast<int>(i.value);
+    if (i.kind == IncidentKind::Collision) x["distance_m"] = i.value;
+    else if (i.kind == IncidentKind::Exceedance) x["max_angle_deg"] = i.value;
+    else if (i.kind == IncidentKind::Bump) x["cell"] = static_cast<int>(i.value);
     else if (i.value >= 0) x["target"] = static_cast<int>(i.value);
     incidents.push_back(std::move(x));
   }
@@ -111,7 +111,7 @@ json toJson(const PlanResult& r) {
     json targets = json::array();
     for (const auto& t : r.targets)
       targets.push_back({{"target", t.index}, {"x", t.position.x()}, {"y", t.position.y()},
-                         {"status", t.status}, {"legs_reached", t.reached}, {"legs_short", t.shortLegs},
+                         {"status", enumName(t.status)}, {"legs_reached", t.reached}, {"legs_short", t.shortLegs},
                          {"legs_skipped", t.skipped}, {"legs_no_slot", t.noSlot}});
     j["targets"] = std::move(targets);
   }

@@ -83,7 +83,7 @@ void MissionManager::submit(MissionJob job) {
   retryUnsaved();
   std::unique_lock lock(mutex_);
   admitLocked(job.memory);
-  job.record.status = "queued";
+  job.record.status = RunStatus::Queued;
   db_.insertMission(job.record);  // StorageFull (507) on a full disk: nothing queued
   const GridGeometry& g = job.eventGrid;
   Active a;
@@ -102,7 +102,7 @@ std::uint64_t MissionManager::memoryReserved() const {
   return reserved_;
 }
 
-void MissionManager::recordStatus(const std::string& id, const std::string& status,
+void MissionManager::recordStatus(const std::string& id, RunStatus status,
                                   const std::string& message, const nlohmann::json& metrics) {
   try {
     db_.updateMission(id, status, message, metrics);
@@ -110,7 +110,7 @@ void MissionManager::recordStatus(const std::string& id, const std::string& stat
   } catch (const std::exception&) {
     // A full (or failing) disk: the stream holds the status for clients; the row is retried.
   }
-  if (status == "running") return;  // superseded by the final status anyway
+  if (status == RunStatus::Running) return;  // superseded by the final status anyway
   std::lock_guard lock(unsavedMutex_);
   unsaved_[id] = {status, message, metrics};
 }
@@ -157,8 +157,8 @@ bool MissionManager::cancel(const std::string& id) {
     reserved_ -= it->second.memoryBytes;
     active_.erase(it);
     lock.unlock();
-    recordStatus(id, "cancelled", "cancelled before it started");
-    stream->finish("cancelled", "cancelled before it started", nullptr);
+    recordStatus(id, RunStatus::Cancelled, "cancelled before it started");
+    stream->finish(RunStatus::Cancelled, "cancelled before it started", nullptr);
     std::lock_guard relock(mutex_);
     rememberFinished(id, stream);
   }
@@ -244,9 +244,10 @@ std::string outcomeSummary(const std::vector<std::string>& warnings) {
 void MissionManager::runJob(MissionJob& job, Active a) {
   const std::string id = job.record.id;
   retryUnsaved();
-  recordStatus(id, "running", "");
-  a.stream->setStatus("running");
-  std::string status = "succeeded", message;
+  recordStatus(id, RunStatus::Running, "");
+  a.stream->setStatus(RunStatus::Running);
+  RunStatus status = RunStatus::Succeeded;
+  std::string message;
   nlohmann::json metrics = nullptr;
   try {
     const Planner& planner = registry_.get(job.record.planner);
@@ -271,21 +272,21 @@ void MissionManager::runJob(MissionJob& job, Active a) {
         std::lock_guard lock(mutex_);
         shuttingDown = stopping_;
       }
-      status = shuttingDown ? "interrupted" : "cancelled";
+      status = shuttingDown ? RunStatus::Interrupted : RunStatus::Cancelled;
       message = shuttingDown ? "the server stopped while the mission was running" : "cancelled by request";
     } else if (!result.warnings.empty()) {
       // It ran to its end, but left something the user must be told (short or skipped legs,
       // unreachable ground, attitude exceedances…): not a plain success (issue 10).
-      status = "completed_with_warnings";
+      status = RunStatus::CompletedWithWarnings;
       message = outcomeSummary(result.warnings);
     }
     saveResult(job, result, std::move(resultJson), *a.stream);
     job.problem.dem.reset();
   } catch (const store::StorageFull& e) {
-    status = "failed";
+    status = RunStatus::Failed;
     message = std::string("insufficient storage: ") + e.what();
   } catch (const std::exception& e) {
-    status = "failed";
+    status = RunStatus::Failed;
     message = e.what();
   }
   recordStatus(id, status, message, metrics);
@@ -384,8 +385,8 @@ void MissionManager::stop() {
     if (t.joinable()) t.join();
   workers_.clear();
   for (auto& [id, s] : queuedStreams) {
-    recordStatus(id, "interrupted", "the server stopped before the mission started");
-    s->finish("interrupted", "the server stopped before the mission started", nullptr);
+    recordStatus(id, RunStatus::Interrupted, "the server stopped before the mission started");
+    s->finish(RunStatus::Interrupted, "the server stopped before the mission started", nullptr);
   }
   retryUnsaved();  // whatever is still refused is marked interrupted at the next start
 }

@@ -95,7 +95,7 @@ class MissionManager {
   void rememberFinished(const std::string& id, std::shared_ptr<MissionStream> stream);  // holds mutex_
   // Writes a mission's status row; on a storage failure keeps it in `unsaved_` (retried by the
   // next write) instead of throwing, so a full disk never takes a worker (or the process) down.
-  void recordStatus(const std::string& id, const std::string& status, const std::string& message,
+  void recordStatus(const std::string& id, RunStatus status, const std::string& message,
                     const nlohmann::json& metrics = nullptr);
   void retryUnsaved();
 
@@ -114,7 +114,8 @@ class MissionManager {
   bool stopping_ = false;
   std::vector<std::thread> workers_;
   struct Unsaved {
-    std::string status, message;
+    RunStatus status;
+    std::string message;
     nlohmann::json metrics;
   };
   std::mutex unsavedMutex_;

@@ -113,6 +113,22 @@ constexpr const char* kMissionSelect =
     "COALESCE(pdms.name, '') FROM missions m LEFT JOIN maps ON maps.id = m.map_id "
     "LEFT JOIN pdms ON pdms.id = m.pdm_id ";
 
+// A status as an SQL string literal (the names hold no quote).
+std::string sqlName(RunStatus s) {
+  std::string out = "'";  // appended, not `"'" + name + "'"`: GCC 12 warns on that (-Wrestrict)
+  out.append(enumName(s));
+  out.push_back('\'');
+  return out;
+}
+
+// The final statuses as an SQL list: 'succeeded', 'completed_with_warnings', ...
+std::string finalStatusList() {
+  std::string out;
+  for (const auto& [s, name] : EnumNames<RunStatus>::table)
+    if (isFinal(s)) out += (out.empty() ? "" : ", ") + sqlName(s);
+  return out;
+}
+
 MissionRecord readMission(const Stmt& s) {
   MissionRecord m;
   m.id = s.text(0);
@@ -120,7 +136,10 @@ MissionRecord readMission(const Stmt& s) {
   m.pdmId = s.text(2);
   m.planner = s.text(3);
   m.spec = parseJson(s, 4, "mission spec");
-  m.status = s.text(5);
+  const std::string status = s.text(5);
+  const auto parsed = parseEnum<RunStatus>(status);
+  if (!parsed) throw std::runtime_error("database: mission " + m.id + " has an unknown status '" + status + "'");
+  m.status = *parsed;
   m.message = s.text(6);
   m.createdAt = s.text(7);
   m.startedAt = s.text(8);
@@ -133,11 +152,6 @@ MissionRecord readMission(const Stmt& s) {
 }
 
 }  // namespace
-
-bool isFinal(const std::string& status) {
-  return status == "succeeded" || status == "completed_with_warnings" || status == "failed" ||
-         status == "cancelled" || status == "interrupted";
-}
 
 Database::Database(const std::string& path) {
   if (!path.empty() && path != ":memory:" && path.rfind("file:", 0) != 0) {
@@ -387,7 +401,7 @@ void Database::insertMission(const MissionRecord& m) {
          "started_at, finished_at, metrics, label) "
          "VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12)");
   s.bind(1, m.id).bind(2, m.mapId).bind(3, m.pdmId).bind(4, m.planner).bind(5, spec);
-  s.bind(6, m.status).bind(7, m.message).bind(8, m.createdAt);
+  s.bind(6, std::string(enumName(m.status))).bind(7, m.message).bind(8, m.createdAt);
   s.bindOrNull(9, m.startedAt).bindOrNull(10, m.finishedAt).bindOrNull(11, metrics);
   s.bind(12, m.label);
   s.run();
@@ -418,7 +432,7 @@ long long Database::countMissions() {
   return s.step() ? s.integer(0) : 0;
 }
 
-void Database::updateMission(const std::string& id, const std::string& status,
+void Database::updateMission(const std::string& id, RunStatus status,
                              const std::string& message, const nlohmann::json& metrics) {
   const std::string metricsText = metrics.is_null() ? std::string() : dumpJson(metrics, "metrics");
   const std::string now = nowIso();
@@ -427,17 +441,17 @@ void Database::updateMission(const std::string& id, const std::string& status,
   auto update = [&] {
     // In SET expressions `status` is the value before the update, so the timestamps are set only on
     // the transition into running / into a final status (a repeated update keeps the first time).
-    Stmt s(db_,
-           "UPDATE missions SET "
-           "  started_at = CASE WHEN ?2 = 'running' AND status <> 'running' THEN ?4 "
-           "                    ELSE started_at END, "
-           "  finished_at = CASE WHEN ?5 = 1 AND status NOT IN "
-           "                       ('succeeded', 'completed_with_warnings', 'failed', 'cancelled', 'interrupted') THEN ?4 "
-           "                     ELSE finished_at END, "
-           "  metrics = COALESCE(?6, metrics), "
-           "  status = ?2, message = ?3 "
-           "WHERE id = ?1");
-    s.bind(1, id).bind(2, status).bind(3, message).bind(4, now);
+    static const std::string sql = "UPDATE missions SET "
+                                   "  started_at = CASE WHEN ?2 = " + sqlName(RunStatus::Running) +
+                                   " AND status <> " + sqlName(RunStatus::Running) + " THEN ?4 "
+                                   "                    ELSE started_at END, "
+                                   "  finished_at = CASE WHEN ?5 = 1 AND status NOT IN (" + finalStatusList() +
+                                   ") THEN ?4 ELSE finished_at END, "
+                                   "  metrics = COALESCE(?6, metrics), "
+                                   "  status = ?2, message = ?3 "
+                                   "WHERE id = ?1";
+    Stmt s(db_, sql.c_str());
+    s.bind(1, id).bind(2, std::string(enumName(status))).bind(3, message).bind(4, now);
     s.bindInt(5, isFinal(status) ? 1 : 0);
     s.bindOrNull(6, metricsText);
     s.run();
@@ -470,10 +484,10 @@ int Database::markUnfinishedInterrupted() {
   const std::string now = nowIso();
   std::lock_guard lock(mutex_);
   return withReserve(statusReserve_, [&] {
-    Stmt s(db_,
-           "UPDATE missions SET status = 'interrupted', "
-           "  message = ?1 || status, finished_at = ?2 "
-           "WHERE status IN ('queued', 'running')");
+    static const std::string sql = "UPDATE missions SET status = " + sqlName(RunStatus::Interrupted) +
+                                   ", message = ?1 || status, finished_at = ?2 WHERE status IN (" +
+                                   sqlName(RunStatus::Queued) + ", " + sqlName(RunStatus::Running) + ")";
+    Stmt s(db_, sql.c_str());
     s.bind(1, std::string("server restarted while the mission was ")).bind(2, now).run();
     return sqlite3_changes(db_);
   });

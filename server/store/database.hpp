@@ -10,6 +10,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "server/store/run_status.hpp"
+
 struct sqlite3;
 
 namespace rover::store {
@@ -29,17 +31,13 @@ struct PdmRecord {
   nlohmann::json meta;  // kind (gaussians | random | raster), components, files
 };
 
-// A status a mission does not leave: succeeded, completed_with_warnings, failed, cancelled,
-// interrupted.
-bool isFinal(const std::string& status);
-
 struct MissionRecord {
   std::string id;
   std::string mapId;
   std::string pdmId;    // "" when none
   std::string planner;
   nlohmann::json spec;  // the request as accepted (rovers, params)
-  std::string status;   // queued | running | succeeded | completed_with_warnings | failed | cancelled | interrupted
+  RunStatus status = RunStatus::Queued;
   std::string message;  // failure / interruption reason
   std::string createdAt, startedAt, finishedAt;
   nlohmann::json metrics;  // final metrics (object), null until finished
@@ -87,7 +85,7 @@ class Database {
   long long countMissions();
   // Updates status and message; sets startedAt when status becomes running and finishedAt for
   // a final status; stores metrics when given.
-  void updateMission(const std::string& id, const std::string& status, const std::string& message,
+  void updateMission(const std::string& id, RunStatus status, const std::string& message,
                      const nlohmann::json& metrics = nullptr);
   bool setMissionLabel(const std::string& id, const std::string& label);  // false if absent
   bool deleteMission(const std::string& id);                                // false if absent

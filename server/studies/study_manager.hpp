@@ -3,35 +3,23 @@
 // missions in priority, and a restart resumes what was unfinished. Built on the engine's public
 // interface (studies.hpp); nothing here plans.
 //
-// Where a study lives: DATA/studies/ID/ holds spec.json (the study document as accepted),
-// state.json (status, times, message: rewritten atomically at each change), study.sqlite (the
-// engine's study database), runs.csv (the last download) and, with a launcher, launcher.log.
-// Never a client-chosen path: the id is the server's (DataDir::newId), and specs naming DEM files
-// are refused.
+// Where a study lives: StudyStore (DATA/studies/ID/). Never a client-chosen path: the id is the
+// server's (DataDir::newId), and specs naming DEM files are refused.
 //
-// Priority: a study runs on one thread of its own, one run at a time, and takes its next run only
-// when no mission is waiting and the missions leave a core free (`missionsBusy`), so a mission
-// never waits behind a study; a run in flight is not preempted (runs of the presets take
-// milliseconds to a few seconds).
-// With a launcher (`serve --study-launcher "mpirun -np 16 --hostfile H"`) the study runs as that
-// command + `roverplan study run --spec spec.json --out study.sqlite --quiet`, a child process
-// started without a shell; its progress is read from the database the child writes.
+// The parts: the store (persistence), the scheduler (one study at a time, first queued first, on
+// a thread of its own), an executor (in-process, below the missions, or a launched command such
+// as `serve --study-launcher "mpirun -np 16 --hostfile H"`: study_executor.hpp) and each study's
+// live stream (StudyStream). This class keeps the studies' states and ties the parts together.
 //
 // Bounds (stated in README "Studies"): kMaxServerRuns runs per study, kMaxActive studies queued or
 // running, kMaxStored studies kept; one study runs at a time.
-#include <sys/types.h>
-
-#include <chrono>
-#include <condition_variable>
 #include <cstdint>
-#include <deque>
 #include <functional>
 #include <map>
 #include <memory>
 #include <mutex>
 #include <optional>
 #include <string>
-#include <thread>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -39,6 +27,12 @@
 #include "core/common/cancel.hpp"
 #include "server/http/http_types.hpp"
 #include "server/store/data_dir.hpp"
+#include "server/studies/command_line.hpp"
+#include "server/studies/study_executor.hpp"
+#include "server/studies/study_scheduler.hpp"
+#include "server/studies/study_state.hpp"
+#include "server/studies/study_store.hpp"
+#include "server/studies/study_stream.hpp"
 
 namespace rover::studies {
 
@@ -46,67 +40,14 @@ constexpr std::size_t kMaxServerRuns = 200'000;  // runs (configurations × runs
 constexpr std::size_t kMaxActive = 4;            // studies queued or running
 constexpr std::size_t kMaxStored = 100;          // studies kept (delete ended ones for room)
 
-// A launcher string split into argv the way a shell splits words, without a shell: blanks
-// separate, '…' and "…" quote, a backslash escapes the next character. Throws on an open quote.
-std::vector<std::string> splitCommandLine(const std::string& line);
-
-struct StudyState {
-  std::string id, name;
-  std::string status = "queued";  // queued | running | succeeded | cancelled | failed
-  std::string message;
-  std::string createdAt, startedAt, finishedAt;
-  std::size_t done = 0, total = 0;
-  double etaSeconds = -1;   // -1 = not known yet
-  double runsPerSecond = 0;
-  bool cancelRequested = false;
-};
-nlohmann::json toJson(const StudyState& s);
-bool isEnded(const std::string& status);
-
-// The live state of one study and its WebSocket subscribers, in the pull model of the mission
-// streams (MissionStream): each subscriber keeps a version cursor, so a slow client costs two
-// integers and intermediate states coalesce. Frames (text):
-//   {"type":"snapshot", study{...state}, summary}           first
-//   {"type":"progress", done, total, eta_s, runs_per_s, status, summary?}  summary: when it changed
-//   {"type":"done", status, message, done, total, summary}  last, then a normal close
-// Each frame is encoded once per version and shared by every subscriber (issue 22): a crowd of
-// readers costs the study thread nothing but the wake-ups.
-class StudyStream : public std::enable_shared_from_this<StudyStream> {
- public:
-  void update(const StudyState& state);                 // progress / status
-  void setSummary(nlohmann::json summary);              // the partial (or final) summary
-  std::shared_ptr<http::WsSource> subscribe(std::shared_ptr<http::WsConnection> connection);
-
- private:
-  class Subscription;
-  void wakeAll();
-  mutable std::mutex mutex_;
-  StudyState state_;
-  nlohmann::json summary_ = nullptr;
-  std::uint64_t version_ = 0, summaryVersion_ = 0;
-  std::vector<std::weak_ptr<http::WsConnection>> subscribers_;
-  // Encoded frames and the versions they are of (caller holds mutex_).
-  struct Encoded {
-    std::uint64_t version = ~0ull, summaryVersion = ~0ull;
-    std::shared_ptr<const std::string> bytes;
-  };
-  Encoded snapshot_, progress_, progressWithSummary_, done_;
-  std::shared_ptr<const std::string> encodedLocked(Encoded& slot, bool withSummary,
-                                                   const std::function<nlohmann::json()>& make) const;
-  mutable std::uint64_t encodes_ = 0;
-
- public:
-  std::uint64_t frameEncodes() const;  // frames encoded so far (shared by every subscriber)
-};
-
-class StudyManager {
+class StudyManager : private StudyReporter {
  public:
   // `missionsBusy`: true while missions should have the machine (a mission waits, or they use
   // every core). `launcher`: empty = in-process; else argv prefix of the study command. `selfExe`:
   // the roverplan binary the launcher runs.
   StudyManager(store::DataDir& dir, std::function<bool()> missionsBusy,
                std::vector<std::string> launcher = {}, std::string selfExe = "/proc/self/exe");
-  ~StudyManager();  // stop()
+  ~StudyManager() override;  // stop()
 
   // Validates (throws rover::Error naming the field, http::ApiError 400/429 for the bounds),
   // stores and queues a study document; returns its state.
@@ -142,33 +83,19 @@ class StudyManager {
     std::uint64_t summaryVersion = 0;                // counts publishSummary calls
     std::shared_ptr<std::mutex> summaryOnce = std::make_shared<std::mutex>();  // one first read at a time
   };
-  void publishSummary(const std::string& id, const nlohmann::json& summary);
-  nlohmann::json storedSummary(const std::string& id) const;  // summary.json, else the database's
-  std::string folder(const std::string& id) const;
-  void saveState(const StudyState& s) const;  // caller holds no lock; best effort on a full disk
-  void loadStored();                          // start-up: every stored study; unfinished ones queued
-  void work();
-  void runInProcess(const std::string& id, const CancelToken& cancel);
-  void runLaunched(const std::string& id, const CancelToken& cancel);
-  // Progress: done/total, rate over this session, ETA; pushes the summary every few seconds.
+  // StudyReporter, called by the executor on the scheduler's thread.
+  void publishSummary(const std::string& id, const nlohmann::json& summary) override;
   void report(const std::string& id, std::size_t done, std::size_t total, std::size_t doneAtStart,
-              std::chrono::steady_clock::time_point start, const std::function<nlohmann::json()>& summary,
-              std::chrono::steady_clock::time_point& lastSummary);
-  void finish(const std::string& id, const std::string& status, const std::string& message);
-  // Charges the study's folder (its database as it grew) to the global disk budget; throws
-  // store::OverBudget past it.
-  void chargeDisk(const std::string& id) const;
+              StudyClock::time_point start, const std::function<nlohmann::json()>& summaryOf,
+              StudyClock::time_point& lastSummary) override;
+  void runOne(const std::string& id);  // the scheduler's: running, executed, ended
+  void finish(const std::string& id, RunStatus status, const std::string& message);
 
-  store::DataDir& dir_;
-  std::function<bool()> missionsBusy_;
-  std::vector<std::string> launcher_;
-  std::string selfExe_;
+  StudyStore store_;
+  std::unique_ptr<StudyExecutor> executor_;
   mutable std::mutex mutex_;
-  std::condition_variable cv_;
   std::map<std::string, Entry> studies_;
-  std::deque<std::string> queue_;
-  bool stopping_ = false;
-  std::thread worker_;  // last: started once the rest is constructed
+  StudyScheduler scheduler_;  // last: its thread starts once the rest is constructed
 };
 
 }  // namespace rover::studies

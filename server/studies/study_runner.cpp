@@ -22,8 +22,6 @@ namespace rover::studies {
 
 namespace {
 
-bool isTeamPlanner(const std::string& p) { return p == "team-search" || p == "hybrid"; }
-
 // CPU seconds of the calling thread: with mission_threads = 1 a run's own cost, whatever else the
 // machine is doing (its wall time is not, on a shared machine).
 double threadCpuSeconds() {
@@ -118,11 +116,12 @@ StudyRunner::StudyRunner(StudySpec spec)
   // Coverage on a map: the grid world laid on it is the same for every run of a configuration.
   for (const auto& c : spec_.configurations) {
     std::shared_ptr<const PlanningProblem> p;
-    if (!isTeamPlanner(c.point.planner) && maps_[c.world]) {
+    const Planner& planner = registry_.get(c.point.planner);
+    if (planner.specs().ground == Ground::CoverageGrid && maps_[c.world]) {
       const auto& dem = maps_[c.world];
       try {
         p = std::make_shared<const PlanningProblem>(
-            problems::problemOnMap(problems::groundOnMap(c.point.planner, dem->geometry(), c.point.params), dem));
+            problems::problemOnMap(planner.groundOnMap(dem->geometry(), c.point.params), dem));
       } catch (const Error& e) {
         const std::string field = "worlds[" + std::to_string(c.world) + "]";
         throw Error(e.code(), field, field + " (" + c.name + "): " + e.what());
@@ -141,29 +140,27 @@ std::optional<RunRow> StudyRunner::runOne(std::size_t runIndex, const CancelToke
   row.seed = runSeed(spec_.masterSeed, spec_.replicateOf(runIndex));
   row.host = host_;
   const Planner& planner = registry_.get(c.point.planner);
-  const bool team = isTeamPlanner(c.point.planner);
+  const PlannerSpecs& specs = planner.specs();
   ParamSet params = c.point.params;
   const auto& dem = maps_[c.world];
 
   // The problem, from the one problem builder; every random choice seeded by the run's seed.
   PlanningProblem problem;
-  if (team) {
-    params["seed"] = static_cast<std::int64_t>(row.seed);
+  if (specs.ground == Ground::DemAndPdm) {
+    // The run's seed for the planner's own (the team planners' RRT* and slip noise).
+    if (planner.hasParam("seed")) params["seed"] = static_cast<std::int64_t>(row.seed);
     std::shared_ptr<const Raster<float>> pdm;
     if (spec_.pdmComponents > 0)
       pdm = std::make_shared<const Raster<float>>(problems::randomPdm(*dem, spec_.pdmComponents, row.seed));
-    problem = problems::problemOnMap(problems::groundOnMap(c.point.planner, dem->geometry(), params), dem, pdm);
-    problem.rovers = problems::formationStarts(*dem, params, c.rovers);
+    problem = problems::problemOnMap(planner.groundOnMap(dem->geometry(), params), dem, pdm);
+  } else if (mapProblems_[static_cast<std::size_t>(c.id)]) {
+    problem = *mapProblems_[static_cast<std::size_t>(c.id)];
   } else {
-    if (mapProblems_[static_cast<std::size_t>(c.id)]) {
-      problem = *mapProblems_[static_cast<std::size_t>(c.id)];
-    } else {
-      coverage::WorldParams wp = spec_.worlds[c.world].grid;
-      wp.seed = row.seed;
-      problem = problems::problemOnGrid(wp);
-    }
-    problem.rovers = problems::randomValidStarts(planner, problem, params, c.rovers, row.seed);
+    coverage::WorldParams wp = spec_.worlds[c.world].grid;
+    wp.seed = row.seed;
+    problem = problems::problemOnGrid(wp);
   }
+  problem.rovers = planner.defaultStarts(problem, params, c.rovers, row.seed);
   problem.threads = spec_.missionThreads;
   problem.metricsOnly = true;  // a study keeps metrics and sampled curves, never tracks
 
@@ -173,12 +170,13 @@ std::optional<RunRow> StudyRunner::runOne(std::size_t runIndex, const CancelToke
   row.cpuSeconds = threadCpuSeconds() - c0;
   row.wallSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - w0).count();
   if (r.cancelled) return std::nullopt;
-  row.status = r.stopReason;
+  row.status = enumName(r.stopReason);
 
   // Metrics: the study's read-outs of the curves, then every metric the planner reports (its
   // wall time is the row's wall_s, not a metric: it differs between runs of the same row).
-  if (!team) {
-    if (const Series* curve = findSeries(r, "coverage_vs_moves")) {
+  const bool detection = specs.progress == ProgressMeasure::Detection;
+  if (!detection) {
+    if (const Series* curve = findSeries(r, specs.progressSeries)) {
       const double free = metricOr(r, "free_cells", 0);
       const double reachable = free - metricOr(r, "unreachable_cells", 0);
       const double cells = metricOr(r, "cells", 1);
@@ -193,13 +191,13 @@ std::optional<RunRow> StudyRunner::runOne(std::size_t runIndex, const CancelToke
         row.metrics.push_back({"path_length_ratio@" + levelLabel(level), ratio});
       }
       // Paper 002's runs end at the goal; one that hit the 20·n step budget is counted.
-      row.metrics.push_back({"stopped_by_budget", r.stopReason == "step_budget" ? 1.0 : 0.0});
+      row.metrics.push_back({"stopped_by_budget", r.stopReason == StopReason::StepBudget ? 1.0 : 0.0});
       row.curves.push_back(sampled(*curve, spec_.curvePoints));
     }
   }
   for (const auto& m : r.metrics)
     if (m.key != "plan_wall_s") row.metrics.push_back({m.key, m.value});
-  if (team) {
+  if (detection) {
     // Of the legs the route asked for (slot-less ones included), the share that got there.
     const double reached = metricOr(r, "targets_reached", 0), shortLegs = metricOr(r, "targets_short", 0);
     const double skipped = metricOr(r, "targets_skipped", 0) + metricOr(r, "targets_no_slot", 0);
@@ -207,7 +205,7 @@ std::optional<RunRow> StudyRunner::runOne(std::size_t runIndex, const CancelToke
     row.metrics.push_back({"legs_reached_pct", legs > 0 ? 100.0 * reached / legs : 0.0});
     row.metrics.push_back({"legs_short_pct", legs > 0 ? 100.0 * shortLegs / legs : 0.0});
     row.metrics.push_back({"legs_skipped_pct", legs > 0 ? 100.0 * skipped / legs : 0.0});
-    if (const Series* curve = findSeries(r, "probability_vs_distance_team")) {
+    if (const Series* curve = findSeries(r, specs.progressSeries)) {
       for (double d : spec_.distances) {
         char key[32];
         std::snprintf(key, sizeof key, "p_at_%gm", d);

@@ -5,11 +5,11 @@
 #include <map>
 
 #include "core/common/random.hpp"
-#include "core/coverage/coverage_params.hpp"
 #include "core/planning/planner.hpp"
-#include "core/team/team_entry.hpp"
+#include "core/planning/rover_limits.hpp"
 #include "server/json/json_edge.hpp"
 #include "server/json/plan_json.hpp"
+#include "server/json/planner_json.hpp"
 
 namespace rover::studies {
 
@@ -75,9 +75,6 @@ const json* find(const json& obj, const char* key) {
   return it == obj.end() || it->is_null() ? nullptr : &*it;
 }
 
-// The planner families: which problem builder and which derived metrics a run uses.
-bool isTeamPlanner(const std::string& p) { return p == "team-search" || p == "hybrid"; }
-
 const PlannerRegistry& registry() {
   static const PlannerRegistry r = makeBuiltinRegistry();
   return r;
@@ -135,8 +132,7 @@ void setParams(PointDraft& d, const json& params, const std::string& field) {
 // offending key came from.
 void checkPoint(const PointDraft& d) {
   try {
-    if (isTeamPlanner(d.point.planner)) team::parseTeamParams(d.point.params);
-    else if (d.point.planner == "coverage") coverage::parseCoverageParams(d.point.params);
+    plannerAt(d.point.planner, "planner").checkParams(d.point.params);
   } catch (const Error& e) {
     auto it = d.origin.find(e.field());
     const std::string field = it != d.origin.end() ? it->second : "params." + e.field();
@@ -146,7 +142,8 @@ void checkPoint(const PointDraft& d) {
 
 std::string valueLabel(const json& v) { return v.is_string() ? v.get<std::string>() : v.dump(); }
 
-WorldSpec parseWorld(const json& w, const std::string& field, bool team) {
+// `onMap`: the planner plans on a map (PlannerSpecs::ground DemAndPdm), so no grid world.
+WorldSpec parseWorld(const json& w, const std::string& field, bool onMap) {
   onlyKeys(w, field, {"name", "grid", "terrain", "dem", "cell_size", "crop_m"});
   WorldSpec out;
   const int kinds = (find(w, "grid") != nullptr) + (find(w, "terrain") != nullptr) + (find(w, "dem") != nullptr);
@@ -161,7 +158,7 @@ WorldSpec parseWorld(const json& w, const std::string& field, bool team) {
     if (const json* v = find(*g, "obstacle_fraction"))
       out.grid.obstacleFraction = number(*v, dot(f, "obstacle_fraction"), 0, 0.9);
     if (const json* v = find(*g, "allow_sealed")) out.grid.allowSealed = boolean(*v, dot(f, "allow_sealed"));
-    if (team) bad(f, "the team planners plan on a map: use terrain or dem");
+    if (onMap) bad(f, "the team planners plan on a map: use terrain or dem");
     out.name = std::to_string(out.grid.rows) + "x" + std::to_string(out.grid.cols);
   } else if (const json* t = find(w, "terrain")) {
     const std::string f = dot(field, "terrain");
@@ -212,8 +209,11 @@ StudySpec parseStudySpec(const json& spec) {
   s.json = spec;
   s.planner = "coverage";
   if (const json* v = find(spec, "planner")) s.planner = text(*v, "planner", 64);
-  plannerAt(s.planner, "planner");
-  const bool team = isTeamPlanner(s.planner);
+  // What the study reads depends on the planner's description: the ground it plans on (a map and
+  // a PDM, or a coverage grid), where its rovers start and how its progress is read out.
+  const PlannerSpecs& specs = plannerAt(s.planner, "planner").specs();
+  const bool onMap = specs.ground == Ground::DemAndPdm;
+  const bool detection = specs.progress == ProgressMeasure::Detection;
   s.name = s.planner + " study";
   if (const json* v = find(spec, "name")) s.name = name(*v, "name");
   if (const json* v = find(spec, "runs")) s.runs = static_cast<int>(integer(*v, "runs", 1, kMaxRuns));
@@ -227,7 +227,7 @@ StudySpec parseStudySpec(const json& spec) {
   if (!worlds || !worlds->is_array() || worlds->empty() || worlds->size() > 64)
     bad("worlds", "must be an array of 1 to 64 worlds");
   for (std::size_t i = 0; i < worlds->size(); ++i) {
-    s.worlds.push_back(parseWorld((*worlds)[i], at("worlds", i), team));
+    s.worlds.push_back(parseWorld((*worlds)[i], at("worlds", i), onMap));
     for (std::size_t k = 0; k < i; ++k)
       if (s.worlds[k].name == s.worlds[i].name) bad(at("worlds", i) + ".name", "'" + s.worlds[i].name + "' is used twice");
   }
@@ -236,29 +236,31 @@ StudySpec parseStudySpec(const json& spec) {
     s.rovers.clear();
     if (v->is_array()) {
       if (v->empty() || v->size() > 32) bad("rovers", "must be a team size or an array of 1 to 32 of them");
-      for (std::size_t i = 0; i < v->size(); ++i) s.rovers.push_back(static_cast<int>(integer((*v)[i], at("rovers", i), 1, 64)));
+      for (std::size_t i = 0; i < v->size(); ++i) s.rovers.push_back(static_cast<int>(integer((*v)[i], at("rovers", i), 1, planning::kMaxRovers)));
     } else {
-      s.rovers.push_back(static_cast<int>(integer(*v, "rovers", 1, 64)));
+      s.rovers.push_back(static_cast<int>(integer(*v, "rovers", 1, planning::kMaxRovers)));
     }
   }
-  s.starts = team ? "formation" : "random";
+  const std::string starts = rover::json::startPlacementName(specs.starts);
+  s.starts = starts;
   if (const json* v = find(spec, "starts")) s.starts = text(*v, "starts");
-  if (s.starts != (team ? "formation" : "random"))
-    bad("starts", team ? "the team planners start in formation: must be formation"
-                       : "the coverage planner starts on random free cells: must be random");
-  if (team) s.pdmComponents = 4;
+  if (s.starts != starts)
+    bad("starts", specs.starts == StartPlacement::Formation
+                      ? "the team planners start in formation: must be formation"
+                      : "the coverage planner starts on random free cells: must be random");
+  if (onMap) s.pdmComponents = 4;  // paper 001: G = 4
   if (const json* v = find(spec, "pdm")) {
     onlyKeys(*v, "pdm", {"random_gaussians"});
-    if (!team) bad("pdm", "only the team planners read a PDM");
+    if (!onMap) bad("pdm", "only the team planners read a PDM");
     if (const json* g = find(*v, "random_gaussians")) s.pdmComponents = static_cast<int>(integer(*g, "pdm.random_gaussians", 1, 64));
   }
   if (const json* v = find(spec, "levels")) {
-    if (team) bad("levels", "only for the coverage planner (the team planners read distances)");
+    if (detection) bad("levels", "only for the coverage planner (the team planners read distances)");
     s.levels = numbers(*v, "levels", 0, 1);
   }
-  if (team) s.distances = {100, 200, 300, 400, 600};
+  if (detection) s.distances = {100, 200, 300, 400, 600};
   if (const json* v = find(spec, "distances")) {
-    if (!team) bad("distances", "only for the team planners");
+    if (!detection) bad("distances", "only for the team planners");
     s.distances = numbers(*v, "distances", 0, 1e7);
   }
 
@@ -277,8 +279,9 @@ StudySpec parseStudySpec(const json& spec) {
       PointDraft d = base;
       if (const json* p = find(c, "planner")) {
         d.point.planner = text(*p, dot(f, "planner"), 64);
-        plannerAt(d.point.planner, dot(f, "planner"));
-        if (isTeamPlanner(d.point.planner) != team)
+        // One family: the same worlds, starts and read-outs for every configuration.
+        const PlannerSpecs& other = plannerAt(d.point.planner, dot(f, "planner")).specs();
+        if (other.ground != specs.ground || other.starts != specs.starts || other.progress != specs.progress)
           bad(dot(f, "planner"), "must be of the study planner's family (" + s.planner + ")");
         if (d.point.planner != s.planner) {  // re-type the common params by this planner's table
           d.point.params.clear();

@@ -51,7 +51,7 @@ TEST_CASE("a planner run returns the documented metrics, tracks and curve") {
                           "energy_j", "max_pitch_deg", "revisits", "unreachable_cells"})
     CHECK_NOTHROW(r.metric(key));
   CHECK(r.metric("coverage") >= 0.9);
-  CHECK(r.stopReason == "goal_reached");
+  CHECK(r.stopReason == StopReason::GoalReached);
   REQUIRE(r.tracks.size() == 2);
   // Tracks start where the rovers were placed, in the local frame.
   CHECK(r.tracks[0].points.front().isApprox(prob.rovers[0].position));

@@ -277,7 +277,7 @@ TEST_CASE("sim: statuses for the time limit, leaving the map and cancellation") 
   CHECK(tl.status == SimStatus::TimeLimit);
   CHECK(tl.samples.size() == 21);
   CHECK(trajectoryDuration(tl) == doctest::Approx(2.0));
-  CHECK(std::string(simStatusName(tl.status)) == "time_limit");
+  CHECK(enumName(tl.status) == "time_limit");
 
   Trajectory off = run(dem, {{25.0, 10.0}}, {15.0, 10.0, 0.0});
   CHECK(off.status == SimStatus::LeftMap);

@@ -174,7 +174,7 @@ TEST_CASE("team planner: two rovers crossing head-on keep the safety distance an
   tasks[1].start = {35, 10, M_PI};
   tasks[1].legs.push_back({{10, 10}, {}, 0});
   for (CoordinationMode mode : {CoordinationMode::Timed, CoordinationMode::Paper}) {
-    CAPTURE(coordinationModeName(mode));
+    CAPTURE(enumName(mode));
     CoordinationParams p;
     p.mode = mode;
     const CoordinationResult r = coordinate(dem, classes, tasks, p, 11);

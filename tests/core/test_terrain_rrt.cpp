@@ -284,7 +284,7 @@ TEST_CASE("rrt: invalid start and goal") {
   PathResult same = planPath(d, cls, {5, 5}, 0, {5, 5});
   CHECK(same.status == PathStatus::Exact);
   CHECK(same.waypoints.size() == 1);
-  CHECK(std::string(pathStatusName(PathStatus::InvalidGoal)) == "invalid_goal");
+  CHECK(enumName(PathStatus::InvalidGoal) == "invalid_goal");
 }
 
 TEST_CASE("rrt: same seed gives the identical path, another seed a different one") {

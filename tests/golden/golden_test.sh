@@ -20,8 +20,12 @@ trap 'rm -rf "$tmp"' EXIT
 cd "$tmp"
 
 "$bin" terrain --out default.tif >/dev/null
-gale=$dems/mars_gale_hirise_1m/missionDEM.tif
-kepler=$dems/moon_kepler_rescaled_025m/kepler_site.tif
+# The result JSON names the DEM as given: the shared DEMs are linked under fixed names here, so
+# the hashes do not depend on where the checkout is.
+gale=gale.tif
+kepler=kepler_site.tif
+[ -f "$dems/mars_gale_hirise_1m/missionDEM.tif" ] && ln -s "$dems/mars_gale_hirise_1m/missionDEM.tif" "$gale"
+[ -f "$dems/moon_kepler_rescaled_025m/kepler_site.tif" ] && ln -s "$dems/moon_kepler_rescaled_025m/kepler_site.tif" "$kepler"
 
 : >actual.sha256
 skipped=0

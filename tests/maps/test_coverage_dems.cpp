@@ -228,14 +228,14 @@ TEST_CASE("coverage with default parameters (frontier on) on every DEM in ../sha
     MESSAGE(std::string(s.file) << ": cell " << cell << " m, " << g.rows << " x " << g.cols
                                 << ", reachable "
                                 << (r.metric("free_cells") - r.metric("unreachable_cells"))
-                                << ", stop " << r.stopReason << ", coverage of reachable "
+                                << ", stop " << enumName(r.stopReason) << ", coverage of reachable "
                                 << r.metric("coverage_reachable") << ", path length ratio "
                                 << r.metric("path_length_ratio") << ", energy "
                                 << r.metric("energy_j") << " J, max pitch "
                                 << r.metric("max_pitch_deg") << "°, g " << r.metric("gravity_m_s2")
                                 << ", " << wall << " s");
     CHECK(static_cast<std::int64_t>(g.rows) * g.cols <= defaults.cellBudget);
-    CHECK((r.stopReason == "goal_reached" || r.stopReason == "nothing_left"));
+    CHECK((r.stopReason == StopReason::GoalReached || r.stopReason == StopReason::NothingLeft));
     CHECK(r.metric("coverage_reachable") >= defaults.coverage - 1e-9);
     CHECK(r.metric("energy_j") > 0);
     CHECK(std::isfinite(r.metric("energy_j")));

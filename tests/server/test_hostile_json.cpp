@@ -330,7 +330,7 @@ TEST_CASE("hostile: listings are paginated in SQL and bounded in size") {
     m.mapId = map;
     m.planner = "coverage";
     m.spec = {{"name", std::string(200, 'n')}, {"params", {{"cost_table", std::vector<double>(400, 1.5)}}}};
-    m.status = "succeeded";
+    m.status = RunStatus::Succeeded;
     m.createdAt = "2026-01-01T00:00:" + std::to_string(10 + i / 10) + "." + std::to_string(100 + i) + "Z";
     s.db.insertMission(m);
   }

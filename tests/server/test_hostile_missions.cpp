@@ -8,6 +8,7 @@
 
 #include "api_server.hpp"
 #include "maps/dem_io.hpp"
+#include "core/coverage/coverage_memory.hpp"
 #include "server/missions/mission_memory.hpp"
 
 using namespace rover;
@@ -34,7 +35,7 @@ test::ApiServerOptions budgetOf(std::uint64_t budget, std::size_t queue = 8) {
 // The estimate of a coverage mission with the server's default step budget (no max_steps given).
 missions::MemoryEstimate defaultStepsEstimate(std::int64_t cells, double cell, int rovers) {
   ParamSet none;
-  return missions::coverageMissionMemory(cells, cell, rovers, false, missions::coverageStepBudget(none, 0, cells, rovers));
+  return coverage::missionMemory(cells, cell, rovers, false, coverage::stepBudget(none, 0, cells, rovers));
 }
 
 json coverageMission(const std::string& map, double cell, double pace = 0, double goal = 0.05) {
@@ -275,8 +276,8 @@ TEST_CASE("hostile missions: without max_steps a mission that never meets its go
   // The default coverage grid of the map keeps 40 000 cells: four moves a cell for the team of
   // four is 40 000 steps (the planner's own default would be 20 × 40 000 steps of 4 moves).
   const double cells = m["metrics"]["cells"];
-  CHECK(m["metrics"]["steps"].get<double>() == std::ceil(missions::kDefaultMovesPerCell * cells / 4));
-  CHECK(m["metrics"]["moves"].get<double>() <= missions::kDefaultMovesPerCell * cells);
+  CHECK(m["metrics"]["steps"].get<double>() == std::ceil(coverage::kDefaultMovesPerCell * cells / 4));
+  CHECK(m["metrics"]["moves"].get<double>() <= coverage::kDefaultMovesPerCell * cells);
   const json result = s.get("/api/missions/" + r.json()["id"].get<std::string>() + "/result.json").json();
   CHECK(result["stop_reason"] == "step_budget");
   CHECK(s.manager.memoryReserved() == 0);

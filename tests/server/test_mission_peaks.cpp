@@ -18,8 +18,10 @@
 #include <thread>
 
 #include "api_server.hpp"
+#include "core/coverage/coverage_memory.hpp"
 #include "core/coverage/coverage_params.hpp"
 #include "core/coverage/terrain_world.hpp"
+#include "core/team/team_memory.hpp"
 #include "server/missions/mission_memory.hpp"
 
 using namespace rover;
@@ -105,10 +107,10 @@ missions::MemoryEstimate coverageEstimate(const json& params, int roverCount) {
   const double cell = params.contains("coverage_cell") ? params["coverage_cell"].get<double>()
                                                        : coverage::defaultCoverageCell(map, coverage::CoverageParams{}.cellBudget);
   const double cells = std::ceil(150.0 / cell - 1e-9) * std::ceil(150.0 / cell - 1e-9);
-  const auto steps = missions::coverageStepBudget(ps, requested, static_cast<std::int64_t>(cells), roverCount);
+  const auto steps = coverage::stepBudget(ps, requested, static_cast<std::int64_t>(cells), roverCount);
   const bool localisation = params.contains("odometry_noise");
-  return missions::coverageMissionMemory(static_cast<std::int64_t>(cells), cell, roverCount,
-                                         params.value("mode", "") == "voronoi", steps, localisation);
+  return coverage::missionMemory(static_cast<std::int64_t>(cells), cell, roverCount,
+                                  params.value("mode", "") == "voronoi", steps, localisation);
 }
 
 struct Run {
@@ -205,7 +207,7 @@ TEST_CASE("mission peaks: team-search stays within its estimate" * doctest::skip
   const json params{{"targets", 6}};
   ParamSet ps;
   ps["targets"] = std::int64_t{6};
-  const auto estimate = missions::teamMissionMemory(kDefaultMapCells, 2, false, ps, false);
+  const auto estimate = team::missionMemory(kDefaultMapCells, 2, false, ps, false);
   const Run run = measure(s, {{"planner", "team-search"}, {"rovers", rovers(2)}, {"params", params}}, estimate.bytes);
   checkTrue(run);
   CHECK(run.mission["metrics"]["targets"] == 6);
@@ -217,7 +219,7 @@ TEST_CASE("mission peaks: hybrid stays within its estimate" * doctest::skip(kSan
   const json params{{"targets", 3}};
   ParamSet ps;
   ps["targets"] = std::int64_t{3};
-  const auto estimate = missions::teamMissionMemory(kDefaultMapCells, 2, false, ps, true);
+  const auto estimate = team::missionMemory(kDefaultMapCells, 2, false, ps, true);
   const Run run = measure(s, {{"planner", "hybrid"}, {"rovers", rovers(2)}, {"params", params}}, estimate.bytes);
   checkTrue(run);
   CHECK(run.mission["metrics"]["targets"] == 3);

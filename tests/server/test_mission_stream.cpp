@@ -53,7 +53,7 @@ TEST_CASE("mission stream: subscribers at the same cut get the same shared bytes
   g.rows = 20;
   g.cols = 20;
   auto stream = std::make_shared<missions::MissionStream>("m1", g, 2);
-  stream->setStatus("running");
+  stream->setStatus(RunStatus::Running);
   plannerSteps(*stream, 1);
   auto a = stream->subscribe(std::make_shared<NoWake>());
   auto b = stream->subscribe(std::make_shared<NoWake>());
@@ -67,7 +67,7 @@ TEST_CASE("mission stream: subscribers at the same cut get the same shared bytes
   CHECK(stream->snapshotBuilds() == 1);
 
   for (std::int64_t step = 2; step <= 4; ++step) plannerSteps(*stream, step);
-  stream->finish("succeeded", "", json{{"coverage", 0.5}});
+  stream->finish(RunStatus::Succeeded, "", json{{"coverage", 0.5}});
   const std::uint64_t encodesBefore = stream->frameEncodes();
   const auto restA = drain(*a);
   const std::uint64_t encodesForA = stream->frameEncodes() - encodesBefore;
@@ -96,11 +96,11 @@ TEST_CASE("mission stream: a subscriber that fell behind catches up in one coale
   g.rows = 20;
   g.cols = 20;
   auto stream = std::make_shared<missions::MissionStream>("m2", g, 2);
-  stream->setStatus("running");
+  stream->setStatus(RunStatus::Running);
   auto slow = stream->subscribe(std::make_shared<NoWake>());
   REQUIRE(drain(*slow).size() == 2);  // snapshot and grid at the first cut
   for (std::int64_t step = 1; step <= 50; ++step) plannerSteps(*stream, step);
-  stream->finish("succeeded", "", nullptr);
+  stream->finish(RunStatus::Succeeded, "", nullptr);
   const auto frames = drain(*slow);
   // One overlay-free batch (grid diff, poses with all 50 points, progress), then done: the 50
   // steps are not replayed one by one.

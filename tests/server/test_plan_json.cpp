@@ -18,6 +18,7 @@ using nlohmann::json;
 using rover::ParamInfo;
 using rover::ParamType;
 using rover::ParamValue;
+using rover::StopReason;
 
 namespace {
 
@@ -164,7 +165,7 @@ TEST_CASE("toJson(infos) describes the whole coverage parameter table") {
 TEST_CASE("toJson(PlanResult): metrics object, units, rovers with [x, y] paths, series") {
   rover::PlanResult r;
   r.planner = "coverage";
-  r.stopReason = "goal_reached";
+  r.stopReason = StopReason::GoalReached;
   r.cancelled = false;
   r.metrics = {{"coverage", 0.96, ""}, {"moves", 120, "moves"}, {"distance_m", 130.5, "m"}};
   rover::Track t0;
@@ -236,7 +237,7 @@ TEST_CASE("toJson(PlanResult): metrics object, units, rovers with [x, y] paths, 
 TEST_CASE("toJson(PlanResult) of an empty result has empty containers, not nulls") {
   rover::PlanResult r;
   r.planner = "x";
-  r.stopReason = "cancelled";
+  r.stopReason = StopReason::Cancelled;
   r.cancelled = true;
   json j = rover::json::toJson(r);
   CHECK(j["cancelled"] == true);

@@ -26,6 +26,8 @@ using rover::store::DataDir;
 using rover::store::MapRecord;
 using rover::store::MissionRecord;
 using rover::store::PdmRecord;
+using rover::RunStatus;
+using rover::enumName;
 using nlohmann::json;
 
 namespace {
@@ -84,7 +86,7 @@ MapRecord makeMap(const std::string& id, const std::string& createdAt) {
 }
 
 MissionRecord makeMission(const std::string& id, const std::string& mapId,
-                          const std::string& createdAt, const std::string& status = "queued") {
+                          const std::string& createdAt, RunStatus status = RunStatus::Queued) {
   MissionRecord m;
   m.id = id;
   m.mapId = mapId;
@@ -188,7 +190,7 @@ TEST_CASE("database: missions round trip, newest first") {
   TempDir t;
   Database db(t.db());
   MissionRecord a = makeMission("ma", "m1", "2026-01-01T00:00:00.000Z");
-  MissionRecord b = makeMission("mb", "m1", "2026-01-03T00:00:00.000Z", "succeeded");
+  MissionRecord b = makeMission("mb", "m1", "2026-01-03T00:00:00.000Z", RunStatus::Succeeded);
   b.pdmId = "p9";
   b.message = "done";
   b.startedAt = "2026-01-03T00:00:01.000Z";
@@ -205,7 +207,7 @@ TEST_CASE("database: missions round trip, newest first") {
   CHECK(gotA->pdmId.empty());
   CHECK(gotA->planner == "coverage");
   CHECK(gotA->spec == a.spec);
-  CHECK(gotA->status == "queued");
+  CHECK(gotA->status == RunStatus::Queued);
   CHECK(gotA->message.empty());
   CHECK(gotA->createdAt == a.createdAt);
   CHECK(gotA->startedAt.empty());
@@ -215,7 +217,7 @@ TEST_CASE("database: missions round trip, newest first") {
   auto gotB = db.getMission("mb");
   REQUIRE(gotB.has_value());
   CHECK(gotB->pdmId == "p9");
-  CHECK(gotB->status == "succeeded");
+  CHECK(gotB->status == RunStatus::Succeeded);
   CHECK(gotB->message == "done");
   CHECK(gotB->startedAt == b.startedAt);
   CHECK(gotB->finishedAt == b.finishedAt);
@@ -239,7 +241,7 @@ TEST_CASE("database: deleting a map cascades its PDMs but keeps its missions") {
   db.insertPdm(PdmRecord{"p1", "m1", "a", "2026-01-01T00:00:00.000Z", json::object()});
   db.insertPdm(PdmRecord{"p2", "m1", "b", "2026-01-01T00:00:00.000Z", json::object()});
   db.insertPdm(PdmRecord{"p3", "m2", "c", "2026-01-01T00:00:00.000Z", json::object()});
-  MissionRecord mission = makeMission("x1", "m1", "2026-01-01T00:00:00.000Z", "succeeded");
+  MissionRecord mission = makeMission("x1", "m1", "2026-01-01T00:00:00.000Z", RunStatus::Succeeded);
   mission.pdmId = "p1";
   db.insertMission(mission);
 
@@ -252,7 +254,7 @@ TEST_CASE("database: deleting a map cascades its PDMs but keeps its missions") {
   REQUIRE(kept.has_value());
   CHECK(kept->mapId == "m1");
   CHECK(kept->pdmId == "p1");
-  CHECK(kept->status == "succeeded");
+  CHECK(kept->status == RunStatus::Succeeded);
 }
 
 TEST_CASE("database: updateMission sets timestamps and metrics") {
@@ -260,38 +262,38 @@ TEST_CASE("database: updateMission sets timestamps and metrics") {
   Database db(t.db());
   db.insertMission(makeMission("m", "map", "2026-01-01T00:00:00.000Z"));
 
-  db.updateMission("m", "running", "");
+  db.updateMission("m", RunStatus::Running, "");
   auto r = db.getMission("m");
   REQUIRE(r.has_value());
-  CHECK(r->status == "running");
+  CHECK(r->status == RunStatus::Running);
   CHECK(std::regex_match(r->startedAt, kIsoRe));
   CHECK(r->finishedAt.empty());
   CHECK(r->metrics.is_null());
   const std::string started = r->startedAt;
 
   std::this_thread::sleep_for(std::chrono::milliseconds(5));
-  db.updateMission("m", "running", "50% done");  // still running: startedAt unchanged
+  db.updateMission("m", RunStatus::Running, "50% done");  // still running: startedAt unchanged
   r = db.getMission("m");
   CHECK(r->message == "50% done");
   CHECK(r->startedAt == started);
 
   const json metrics{{"coverage", 0.5}, {"paths", json::array({1, 2, 3})}};
-  db.updateMission("m", "succeeded", "", metrics);
+  db.updateMission("m", RunStatus::Succeeded, "", metrics);
   r = db.getMission("m");
-  CHECK(r->status == "succeeded");
+  CHECK(r->status == RunStatus::Succeeded);
   CHECK(r->message.empty());
   CHECK(r->startedAt == started);
   CHECK(std::regex_match(r->finishedAt, kIsoRe));
   CHECK(r->finishedAt >= r->startedAt);
   CHECK(r->metrics == metrics);
 
-  db.updateMission("m", "succeeded", "note");  // null metrics keep the stored ones
+  db.updateMission("m", RunStatus::Succeeded, "note");  // null metrics keep the stored ones
   r = db.getMission("m");
   CHECK(r->metrics == metrics);
   CHECK(r->message == "note");
 
-  for (const char* final : {"failed", "cancelled", "interrupted"}) {
-    const std::string id = std::string("f-") + final;
+  for (RunStatus final : {RunStatus::Failed, RunStatus::Cancelled, RunStatus::Interrupted}) {
+    const std::string id = "f-" + std::string(enumName(final));
     db.insertMission(makeMission(id, "map", "2026-01-01T00:00:00.000Z"));
     db.updateMission(id, final, "why");
     r = db.getMission(id);
@@ -301,20 +303,20 @@ TEST_CASE("database: updateMission sets timestamps and metrics") {
     CHECK(std::regex_match(r->finishedAt, kIsoRe));
   }
 
-  CHECK_THROWS_AS(db.updateMission("ghost", "running", ""), std::runtime_error);
+  CHECK_THROWS_AS(db.updateMission("ghost", RunStatus::Running, ""), std::runtime_error);
 }
 
 TEST_CASE("database: markUnfinishedInterrupted after a restart") {
   TempDir t;
   {
     Database db(t.db());
-    db.insertMission(makeMission("q", "map", "2026-01-01T00:00:00.000Z", "queued"));
-    db.insertMission(makeMission("r", "map", "2026-01-01T00:00:01.000Z", "queued"));
-    db.updateMission("r", "running", "");
-    db.insertMission(makeMission("s", "map", "2026-01-01T00:00:02.000Z", "queued"));
-    db.updateMission("s", "succeeded", "", json{{"ok", true}});
-    db.insertMission(makeMission("f", "map", "2026-01-01T00:00:03.000Z", "queued"));
-    db.updateMission("f", "failed", "boom");
+    db.insertMission(makeMission("q", "map", "2026-01-01T00:00:00.000Z", RunStatus::Queued));
+    db.insertMission(makeMission("r", "map", "2026-01-01T00:00:01.000Z", RunStatus::Queued));
+    db.updateMission("r", RunStatus::Running, "");
+    db.insertMission(makeMission("s", "map", "2026-01-01T00:00:02.000Z", RunStatus::Queued));
+    db.updateMission("s", RunStatus::Succeeded, "", json{{"ok", true}});
+    db.insertMission(makeMission("f", "map", "2026-01-01T00:00:03.000Z", RunStatus::Queued));
+    db.updateMission("f", RunStatus::Failed, "boom");
   }  // the server "dies" (clean close here; the kill -9 case is tested below)
 
   Database db(t.db());
@@ -323,16 +325,16 @@ TEST_CASE("database: markUnfinishedInterrupted after a restart") {
   auto r = db.getMission("r");
   REQUIRE(q.has_value());
   REQUIRE(r.has_value());
-  CHECK(q->status == "interrupted");
+  CHECK(q->status == RunStatus::Interrupted);
   CHECK(q->message == "server restarted while the mission was queued");
   CHECK(std::regex_match(q->finishedAt, kIsoRe));
-  CHECK(r->status == "interrupted");
+  CHECK(r->status == RunStatus::Interrupted);
   CHECK(r->message == "server restarted while the mission was running");
   CHECK_FALSE(r->startedAt.empty());
   CHECK(std::regex_match(r->finishedAt, kIsoRe));
-  CHECK(db.getMission("s")->status == "succeeded");
+  CHECK(db.getMission("s")->status == RunStatus::Succeeded);
   CHECK(db.getMission("s")->metrics == json{{"ok", true}});
-  CHECK(db.getMission("f")->status == "failed");
+  CHECK(db.getMission("f")->status == RunStatus::Failed);
   CHECK(db.getMission("f")->message == "boom");
   CHECK(db.markUnfinishedInterrupted() == 0);
 }
@@ -421,7 +423,7 @@ TEST_CASE("database: concurrent inserts from 4 threads") {
         for (int i = 0; i < kPerThread; ++i) {
           const std::string id = numbered(numbered("t", th) + "-", i);
           db.insertMission(makeMission(id, "map", rover::store::nowIso()));
-          if (i % 10 == 0) db.updateMission(id, "running", "");
+          if (i % 10 == 0) db.updateMission(id, RunStatus::Running, "");
           (void)db.listMissions();
         }
       } catch (...) {
@@ -449,7 +451,7 @@ TEST_CASE("database: a committed row survives kill -9 of the writer") {
     try {
       Database db(path);
       db.insertMap(makeMap("survivor", "2026-01-01T00:00:00.000Z"));
-      db.insertMission(makeMission("mission", "survivor", "2026-01-01T00:00:00.000Z", "running"));
+      db.insertMission(makeMission("mission", "survivor", "2026-01-01T00:00:00.000Z", RunStatus::Running));
       raise(SIGKILL);  // with the connection still open
     } catch (...) {
       _exit(3);

@@ -42,7 +42,7 @@ struct StudyServer {
     json s;
     while (std::chrono::steady_clock::now() < until) {
       s = study(id);
-      if (studies::isEnded(s["status"])) return s;
+      if (isFinal(parseEnum<RunStatus>(s["status"].get<std::string>()).value_or(RunStatus::Queued))) return s;
       std::this_thread::sleep_for(std::chrono::milliseconds(20));
     }
     return s;

@@ -5,16 +5,17 @@
 // and rings it, its row is highlighted.
 
 import { clockText } from './mission_clock.js';
+import { IncidentKind } from './outcomes.js';
 import { el, fmt } from './util.js';
 
 // Colour and marker shape per kind; unknown kinds get the last one.
 export const INCIDENT_KINDS = {
-  collision: { colour: '#ff3b3b', shape: 'cross', label: 'collision (rovers too close)' },
-  exceedance: { colour: '#ff9f1a', shape: 'triangle', label: 'roll/pitch over the limit' },
-  short: { colour: '#ffe14d', shape: 'circle', label: 'short leg (ended away from its target)' },
-  skipped: { colour: '#e056fd', shape: 'square', label: 'skipped leg' },
-  no_slot: { colour: '#b0b8c4', shape: 'diamond', label: 'target without ground for its slot' },
-  bump: { colour: '#ff6b6b', shape: 'triangle', label: 'bump (move into an unmapped obstacle)' },
+  [IncidentKind.Collision]: { colour: '#ff3b3b', shape: 'cross', label: 'collision (rovers too close)' },
+  [IncidentKind.Exceedance]: { colour: '#ff9f1a', shape: 'triangle', label: 'roll/pitch over the limit' },
+  [IncidentKind.Short]: { colour: '#ffe14d', shape: 'circle', label: 'short leg (ended away from its target)' },
+  [IncidentKind.Skipped]: { colour: '#e056fd', shape: 'square', label: 'skipped leg' },
+  [IncidentKind.NoSlot]: { colour: '#b0b8c4', shape: 'diamond', label: 'target without ground for its slot' },
+  [IncidentKind.Bump]: { colour: '#ff6b6b', shape: 'triangle', label: 'bump (move into an unmapped obstacle)' },
   other: { colour: '#ffffff', shape: 'circle', label: 'other' },
 };
 const MIN_SCALE = 8;  // px/m the map zooms in to, at least, to show a chosen incident

@@ -97,7 +97,7 @@ export class MissionForm {
     if (!d) return box.replaceChildren();
     const parts = [`body ${d.body === 'unknown' ? 'unknown (the CRS names none)' : d.body}`];
     if (d.gravity !== undefined) parts.push(`gravity ${fmt(d.gravity)} m/s²`);
-    else if (p.name === 'coverage') parts.push('gravity: the parameter default');
+    else if (p.params.some((i) => i.key === 'gravity')) parts.push('gravity: the parameter default');
     if (d.coverage_cell !== undefined) {
       const m = state.map;
       const grid = m ? ` (${Math.floor(m.height_m / d.coverage_cell + 1e-6)} × ${Math.floor(m.width_m / d.coverage_cell + 1e-6)} cells)` : '';

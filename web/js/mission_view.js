@@ -12,9 +12,7 @@ import { TrailLayer, TrailSet } from './trails.js';
 import { $, el, fmt, report, roverColour } from './util.js';
 import { Incidents } from './incidents.js';
 import { MissionClock } from './mission_clock.js';
-
-// A mission that ran to its end: cleanly, or with warnings (short/skipped legs, unreachable ground…).
-const completed = (status) => status === 'succeeded' || status === 'completed_with_warnings';
+import { RunStatus, isActive, isCompleted, isRunStatus, isStopped, statusText } from './outcomes.js';
 
 const pct = (v) => `${(v * 100).toFixed(1)} %`;
 const SHOWN_METRICS = [
@@ -210,7 +208,7 @@ export class MissionView {
     $('live-title').textContent = `${mission.planner} · ${mission.id}`;
     $('live-title').title = JSON.stringify(mission.spec || {});
     this.setStatus(mission.status, mission.message || '');
-    this.setProgress(mission.progress?.fraction ?? (completed(mission.status) ? 1 : 0));
+    this.setProgress(mission.progress?.fraction ?? (isCompleted(mission.status) ? 1 : 0));
     this.renderMetrics(mission.metrics);
     this.setExports(null);
     this.replay.disable();
@@ -303,11 +301,11 @@ export class MissionView {
     counters.missionStatus = m.status;
     counters.finalMetrics = m.metrics;
     this.setStatus(m.status, m.message || '');
-    if (completed(m.status)) this.setProgress(1);
+    if (isCompleted(m.status)) this.setProgress(1);
     this.renderMetrics(m.metrics);
     this.coverage.keepFinal();
     this.updateStatusLine(true);
-    if (completed(m.status) || m.status === 'cancelled') {
+    if (isCompleted(m.status) || m.status === RunStatus.Cancelled) {
       try {
         this.result = await api.result(m.mission);
         if (this.mission?.id !== m.mission) return;
@@ -432,23 +430,23 @@ export class MissionView {
   }
 
   // --- dock widgets ---
-  // The badge holds the status in words; what went wrong (warnings, the failure, a closed stream)
-  // goes on its own line under it, clamped to three lines with the whole text as its tooltip.
+  // The badge holds the status (a RunStatus, the page's own 'cancelling', or '' for none) in
+  // words; what went wrong (warnings, the failure, a closed stream) goes on its own line under it,
+  // clamped to three lines with the whole text as its tooltip.
   setStatus(status, message = '') {
     const badge = $('live-status');
-    const word = String(status || '').split(/[\s:(]/)[0];
-    badge.textContent = String(status || '').replace(/_/g, ' ');
-    badge.className = `badge ${word}`;
+    badge.textContent = statusText(status);
+    badge.className = `badge ${status || ''}`;
     badge.hidden = !status;
     const line = $('live-message');
     line.textContent = message;
     line.title = message;
     line.hidden = !message;
-    line.classList.toggle('error', ['failed', 'cancelled', 'interrupted'].includes(word));
-    const running = word === 'running' || word === 'queued';
+    line.classList.toggle('error', isStopped(status));
+    const running = isActive(status);
     $('live-cancel').disabled = !running;
     $('live-cancel').hidden = !running;  // its room goes to the mission's title
-    if (['queued', 'running', 'succeeded', 'completed_with_warnings', 'failed', 'cancelled', 'interrupted'].includes(word)) counters.missionStatus = word;
+    if (isRunStatus(status)) counters.missionStatus = status;
   }
 
   setProgress(f) {

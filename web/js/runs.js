@@ -4,6 +4,7 @@
 
 import { api, downloadWithToken } from './api.js';
 import { CompareView } from './compare_view.js';
+import { isFinal, statusText } from './outcomes.js';
 import { $, el, fmt, report } from './util.js';
 
 
@@ -24,8 +25,6 @@ function keyMetrics(m) {
   }
   return parts.join(' · ');
 }
-
-const ENDED = ['succeeded', 'completed_with_warnings', 'failed', 'cancelled', 'interrupted'];
 
 function paramsLine(m) {
   const spec = m.spec || {};
@@ -73,10 +72,10 @@ export class RunsPanel {
         }),
         el('button', { class: 'name', title: `open run ${m.id}`, onclick: () => this.open(m) }, m.label || `${m.planner} · ${m.id}`),
         el('button', { class: 'small', title: 'rename this run', 'aria-label': `rename run ${m.id}`, onclick: (e) => this.rename(m, e.currentTarget.closest('li')) }, '✎'),
-        el('span', { class: `badge ${m.status}`, title: m.message || '' }, m.status.replace(/_/g, ' ')),
+        el('span', { class: `badge ${m.status}`, title: m.message || '' }, statusText(m.status)),
         el('button', { class: 'small', title: 'duplicate and edit: this run in the Mission form', 'aria-label': `duplicate run ${m.id}`, onclick: () => this.duplicate(m) }, '⧉'),
         el('button', { class: 'small', title: 'download its mission file (open it in the Mission tab to run it again)', 'aria-label': `mission file of run ${m.id}`, onclick: () => downloadWithToken(`/api/missions/${m.id}/mission.json`, `mission-${m.id}.json`).catch(report) }, '⤓'),
-        ENDED.includes(m.status)
+        isFinal(m.status)
           ? el('button', { class: 'small', title: 'delete this run and its results', 'aria-label': `delete run ${m.id}`, onclick: () => this.remove(m) }, '✕')
           : null,
         el('div', { class: 'run-where' },

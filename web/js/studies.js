@@ -9,6 +9,7 @@
 // Reference values (SPEC.md §1, paper 002) are drawn on the same axes where the paper gives them.
 
 import { ApiError, downloadWithToken, getJson, request, sendJson } from './api.js';
+import { RunStatus, isActive } from './outcomes.js';
 import { $, el, fmt, report } from './util.js';
 
 const PRESET_HINTS = {
@@ -157,9 +158,10 @@ export class StudiesPanel {
   renderGrid() {
     const planner = this.planners.find((p) => p.name === $('st-planner').value);
     if (!planner) return;
-    const team = planner.name !== 'coverage';
+    // Random obstacle grids only for a planner that plans on a coverage grid (GET /api/planners: ground).
+    const grids = planner.ground === 'coverage_grid';
     $('st-world').replaceChildren(
-      ...(team ? [] : [el('option', { value: 'grid60' }, 'random 60×60 grids, 5 % obstacles (a new one per run)')]),
+      ...(grids ? [el('option', { value: 'grid60' }, 'random 60×60 grids, 5 % obstacles (a new one per run)')] : []),
       el('option', { value: 'mars' }, 'the default map\'s synthetic Mars (150 m; runs open as missions)'));
     const rows = planner.params
       .filter((p) => ['choice', 'bool', 'int', 'real'].includes(p.type))
@@ -177,7 +179,7 @@ export class StudiesPanel {
     const seed = Number($('st-seed').value);
     if (src !== 'grid') return { preset: src, runs, master_seed: seed };
     const planner = $('st-planner').value;
-    const team = planner !== 'coverage';
+    const described = this.planners.find((p) => p.name === planner);
     const world = $('st-world').value === 'mars' ? { name: 'mars', terrain: {} }
       : { name: '60x60', grid: { rows: 60, cols: 60, obstacle_fraction: 0.05 } };
     const grid = {}, params = {};
@@ -195,12 +197,12 @@ export class StudiesPanel {
     if (rovers.length) doc.rovers = rovers;
     if (Object.keys(params).length) doc.params = params;
     if (Object.keys(grid).length) doc.grid = grid;
-    if (team) {
-      doc.starts = 'formation';
-      doc.pdm = { random_gaussians: 4 };
-    } else {
-      doc.levels = [0.9, 0.95, 0.97, 0.99, 1.0];
-    }
+    // What the study reads follows the planner's description: where its rovers start, whether it
+    // searches a PDM, and how its progress is read out (coverage levels; a detection curve is read
+    // at the server's default distances).
+    if (described?.starts === 'formation') doc.starts = 'formation';
+    if (described?.ground === 'dem_pdm') doc.pdm = { random_gaussians: 4 };
+    if (described?.progress?.measure === 'coverage') doc.levels = [0.9, 0.95, 0.97, 0.99, 1.0];
     return doc;
   }
 
@@ -233,9 +235,9 @@ export class StudiesPanel {
       el('button', { class: 'name', title: `show study ${s.id}`, onclick: () => this.show(s.id) }, `${s.name} · ${s.id.slice(0, 6)}`),
       el('span', { class: `badge ${s.status}` }, s.status),
       el('span', { class: 'muted small' }, ` ${s.runs_done}/${s.runs_total}`),
-      el('button', { title: s.status === 'running' || s.status === 'queued' ? 'cancel' : 'delete the study and its database',
+      el('button', { title: isActive(s.status) ? 'cancel' : 'delete the study and its database',
         onclick: async () => { try { await sendJson('DELETE', `/api/studies/${s.id}`); } catch (err) { report(err); } this.reload(); } },
-      s.status === 'running' || s.status === 'queued' ? 'cancel' : 'delete'))));
+      isActive(s.status) ? 'cancel' : 'delete'))));
   }
 
   async show(id) {
@@ -271,8 +273,8 @@ export class StudiesPanel {
     $('st-status').className = `badge ${s.status}`;
     $('st-counters').textContent = `${done.toLocaleString('en-US')} / ${total.toLocaleString('en-US')} runs` +
       (s.runs_per_s ? ` · ${fmt(s.runs_per_s)} runs/s` : '') +
-      (s.status === 'running' ? ` · ETA ${duration(s.eta_s)}` : '') + (s.message ? ` · ${s.message}` : '');
-    $('st-cancel').hidden = !(s.status === 'running' || s.status === 'queued');
+      (s.status === RunStatus.Running ? ` · ETA ${duration(s.eta_s)}` : '') + (s.message ? ` · ${s.message}` : '');
+    $('st-cancel').hidden = !isActive(s.status);
   }
 
   async cancel() {

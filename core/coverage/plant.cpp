@@ -1,0 +1,113 @@
+#include "core/coverage/plant.hpp"
+
+#include <algorithm>
+#include <cstdlib>
+#include <numbers>
+
+#include "core/grid/direction.hpp"
+
+namespace rover::coverage {
+
+void senseWindow(const World& world, int radius, KnowledgeMap& map, int believedCell, int trueCell,
+                 Recorder& recorder) {
+  // Beyond the field's edge is an obstacle (only a true window off the grid meets it).
+  const GridGeometry& g = world.geometry();
+  const CellIndex c = g.cell(believedCell), t = g.cell(trueCell);
+  const int r0 = std::max(0, c.row - radius), r1 = std::min(g.rows - 1, c.row + radius);
+  const int c0 = std::max(0, c.col - radius), c1 = std::min(g.cols - 1, c.col + radius);
+  for (int row = r0; row <= r1; ++row) {
+    for (int col = c0; col <= c1; ++col) {
+      const int i = g.index(row, col);
+      if (!map.inRegion(i)) continue;
+      bool obstacle;
+      if (believedCell == trueCell) {
+        obstacle = world.isObstacle(i);
+      } else {
+        const int tr = t.row + row - c.row, tc = t.col + col - c.col;
+        obstacle = !g.contains(tr, tc) || world.isObstacle(g.index(tr, tc));
+      }
+      if (map.sense(i, obstacle)) recorder.cellChanged(i, map.state(i), 0);
+    }
+  }
+}
+
+namespace {
+
+// The believed pose is the true pose.
+class PerfectPlant final : public Plant {
+ public:
+  PerfectPlant(const World& world, const CoverageParams& params, TeamOccupancy& team, Recorder& recorder,
+               std::size_t rovers)
+      : world_(world),
+        g_(world.geometry()),
+        radius_(params.senseRadius),
+        team_(team),
+        recorder_(recorder),
+        lastSensed_(rovers, -1) {}
+
+  void sense(const CoverageRover& r) override;
+  Drive drive(CoverageRover& r, int next, std::int64_t, Motion& motion) override {
+    const CellIndex a = g_.cell(r.cell), b = g_.cell(next);
+    const int dir = dirOf(b.row - a.row, b.col - a.col);
+    motion.horizontal = g_.cellWidth * (isDiagonal(dir) ? std::numbers::sqrt2 : 1.0);
+    motion.dh = world_.height(next) - world_.height(r.cell);
+    return Drive::Moved;
+  }
+  void arrived(CoverageRover&) override {}
+  bool stopsWalledIn() const override { return false; }
+  int trueVisited() const override { return team_.visitedTotal(); }
+  int visitedTrulyReached() const override { return team_.visitedTotal(); }
+  RoverPose pose(const CoverageRover& r) const override {
+    const Eigen::Vector2d xy = cellToLocal(g_, g_.cell(r.cell));
+    return {r.id, xy.x(), xy.y(), dirToRadians(r.heading)};
+  }
+  void summarise(CoverageResult&) const override {}
+
+ private:
+  const World& world_;
+  const GridGeometry& g_;
+  const int radius_;
+  TeamOccupancy& team_;
+  Recorder& recorder_;
+  std::vector<int> lastSensed_;  // per rover, the cell it last sensed from (-1: none yet)
+};
+
+void PerfectPlant::sense(const CoverageRover& r) {
+  // Every cell within R of the cell the rover last sensed from is known already (the map never
+  // forgets under a perfect pose), so after a one-cell move only the row and column the move
+  // brought into range are read, in the same row-major order as the whole window.
+  int& last = lastSensed_[r.id];
+  const CellIndex c = g_.cell(r.cell);
+  const CellIndex p = g_.cell(std::max(last, 0));
+  if (last < 0 || std::abs(p.row - c.row) > 1 || std::abs(p.col - c.col) > 1) {
+    senseWindow(world_, radius_, team_.map(r.mapId), r.cell, r.cell, recorder_);
+    last = r.cell;
+    return;
+  }
+  last = r.cell;
+  KnowledgeMap& m = team_.map(r.mapId);
+  const int R = radius_;
+  const int r0 = std::max(0, c.row - R), r1 = std::min(g_.rows - 1, c.row + R);
+  const int c0 = std::max(0, c.col - R), c1 = std::min(g_.cols - 1, c.col + R);
+  for (int row = r0; row <= r1; ++row) {
+    int lo = c0, hi = c1;
+    if (std::abs(row - p.row) <= R) {  // the columns within R of the last cell were sensed
+      if (lo >= p.col - R && lo <= p.col + R) lo = p.col + R + 1;
+      if (hi >= p.col - R && hi <= p.col + R) hi = p.col - R - 1;
+    }
+    for (int col = lo; col <= hi; ++col) {
+      const int i = g_.index(row, col);
+      if (m.inRegion(i) && m.sense(i, world_.isObstacle(i))) recorder_.cellChanged(i, m.state(i), 0);
+    }
+  }
+}
+
+}  // namespace
+
+std::unique_ptr<Plant> makePlant(const World& world, const CoverageParams& params, TeamOccupancy& team,
+                                 Recorder& recorder, const std::vector<CoverageRover>& rovers) {
+  if (params.localisation.active()) return makeDeadReckoningPlant(world, params, team, recorder, rovers);
+  return std::make_unique<PerfectPlant>(world, params, team, recorder, rovers.size());
+}
+
+}  // namespace rover::coverage

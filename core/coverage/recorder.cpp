@@ -1,0 +1,113 @@
+#include "core/coverage/recorder.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <numbers>
+
+#include "core/coverage/energy.hpp"
+#include "core/coverage/plant.hpp"
+#include "core/coverage/team_occupancy.hpp"
+#include "core/grid/direction.hpp"
+
+namespace rover::coverage {
+
+MoveEnergy::MoveEnergy(const EnergyModel& e, double cell)
+    : e_(e), straight_(cell * 1.0), diagonal_(cell * std::numbers::sqrt2) {
+  for (int steps = 0; steps <= 4; ++steps) turn_[steps] = turnEnergy(e, 0, steps);
+  flatStraight_ = forwardEnergy(e, straight_, 0.0);
+  flatDiagonal_ = forwardEnergy(e, diagonal_, 0.0);
+}
+
+int MoveEnergy::turnIndex(int fromDir, int toDir) { return std::abs(turnSteps(fromDir, toDir)); }
+
+double MoveEnergy::forward(double horizontal, double dh) const {
+  // forwardEnergy(e, h, ±0) is the same number for the same h: look the two grid moves up.
+  if (dh == 0 && horizontal == straight_) return flatStraight_;
+  if (dh == 0 && horizontal == diagonal_) return flatDiagonal_;
+  return forwardEnergy(e_, horizontal, dh);
+}
+
+double MoveEnergy::pitchDeg(double horizontal, double dh) {
+  if (dh == 0) return 0.0;  // atan(0) · 180/π
+  return std::atan(std::fabs(dh) / horizontal) * 180.0 / std::numbers::pi;
+}
+
+Recorder::Recorder(const World& world, const CoverageParams& params, EventSink* sink,
+                   const std::vector<StartCell>& starts)
+    : world_(world),
+      g_(world.geometry()),
+      p_(params),
+      sink_(sink),
+      energy_(params.energy, world.geometry().cellWidth),
+      tracks_(starts.size()) {
+  for (std::size_t k = 0; k < starts.size(); ++k) tracks_[k].cells.push_back(starts[k].cell);
+}
+
+void Recorder::moved(int rover, int to, int fromHeading, int dir, double horizontal, double dh, bool revisit) {
+  RoverTrack& t = track(rover);
+  const double pitchDeg = MoveEnergy::pitchDeg(horizontal, dh);
+  t.energyJ += energy_.turn(fromHeading, dir) + energy_.forward(horizontal, dh);
+  t.distanceM += horizontal;
+  t.maxPitchDeg = std::max(t.maxPitchDeg, pitchDeg);
+  t.pitchDeg.push_back(static_cast<float>(pitchDeg));
+  t.cells.push_back(to);
+  ++t.moves;
+  t.revisits += revisit;
+}
+
+void Recorder::stepEnded(std::int64_t step, std::int64_t moves, const TeamOccupancy& team, const Plant& plant,
+                         const std::vector<CoverageRover>& rovers) {
+  curve_.push_back({step, moves, team.visitedTotal(), plant.trueVisited()});
+  if (sink_) emit(step, team, plant, rovers);
+}
+
+void Recorder::emit(std::int64_t step, const TeamOccupancy& team, const Plant& plant,
+                    const std::vector<CoverageRover>& rovers) {
+  if (!changes_.empty()) sink_->cellsChanged(changes_);
+  changes_.clear();
+  poses_.clear();
+  for (const CoverageRover& r : rovers) poses_.push_back(plant.pose(r));
+  sink_->roverPoses(step, poses_);
+  double needed = 0;
+  for (const auto& m : team.maps())
+    needed += std::max(1.0, std::ceil(p_.coverage * (m.regionCells() - m.knownObstacles()) - 1e-9));
+  Progress pr;
+  pr.step = step;
+  pr.fraction = std::min(1.0, team.visitedTotal() / needed);
+  pr.coverage = static_cast<double>(team.visitedTotal()) / world_.freeCount();
+  pr.moves = moves();
+  sink_->progress(pr);
+}
+
+CoverageResult Recorder::finish(StopReason stop, std::int64_t steps, TeamOccupancy& team, const Plant& plant) {
+  CoverageResult res;
+  res.stop = stop;
+  CoverageMetrics& mt = res.metrics;
+  mt.cells = g_.cellCount();
+  mt.freeCells = world_.freeCount();
+  mt.visitedCells = team.visitedTotal();
+  mt.reachableCells = team.reachableCells(plant.visitedTrulyReached());
+  mt.unreachableCells = mt.freeCells - mt.reachableCells;
+  mt.coverage = static_cast<double>(mt.visitedCells) / mt.freeCells;
+  mt.coverageReachable = static_cast<double>(mt.visitedCells) / std::max(1, mt.reachableCells);
+  mt.steps = steps;
+  for (const auto& t : tracks_) {
+    mt.moves += t.moves;
+    mt.makespan = std::max(mt.makespan, t.moves);
+    mt.distanceM += t.distanceM;
+    mt.energyJ += t.energyJ;
+    mt.maxPitchDeg = std::max(mt.maxPitchDeg, t.maxPitchDeg);
+    mt.revisits += t.revisits;
+  }
+  res.rovers = std::move(tracks_);
+  mt.pathLengthRatio = static_cast<double>(mt.moves) / mt.cells;
+  mt.makespanRatio = static_cast<double>(mt.makespan) / mt.cells;
+  res.curve = std::move(curve_);
+  team.finalView(res.finalStates, res.finalVisits);
+  res.region = team.takeRegion();
+  plant.summarise(res);
+  return res;
+}
+
+}  // namespace rover::coverage

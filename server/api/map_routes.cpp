@@ -1,0 +1,159 @@
+// /api/maps: list, upload (any raster GDAL reads, imported in the jail), one map, delete.
+#include <filesystem>
+
+#include "core/common/error.hpp"
+#include "maps/dem_import_options.hpp"
+#include "server/api/multipart.hpp"
+#include "server/api/route_kit.hpp"
+#include "server/json/json_edge.hpp"
+
+namespace rover::api {
+
+namespace fs = std::filesystem;
+using http::ApiError;
+using http::Request;
+using http::Response;
+using nlohmann::json;
+using openapi::Operation;
+using openapi::ref;
+namespace rj = rover::json;
+
+namespace {
+
+// Removes the paths it holds when it goes out of scope, unless released: every error path of
+// an upload leaves nothing behind in data/tmp.
+struct RemoveOnExit {
+  std::vector<std::string> paths;
+  ~RemoveOnExit() {
+    for (const auto& p : paths) store::DataDir::removeTree(p);
+  }
+  void release() { paths.clear(); }
+};
+
+// Moves the request body (or its multipart file parts) into upload files for import. Plain
+// multipart fields are at most 64 KiB each (413 naming the field). On a throw nothing it made
+// is left; on success the caller owns the returned files.
+std::vector<UploadedFile> uploadedFiles(const Request& req, store::DataDir& dir, std::string& name,
+                                        std::map<std::string, std::string>& options) {
+  if (req.bodyFile.empty() || req.bodySize == 0)
+    throw ApiError(400, "invalid_input", "the request has no body: send the DEM file", "file");
+  std::vector<UploadedFile> files;
+  RemoveOnExit made;  // the staging folder of the parts, and the files moved out of it
+  const std::string boundary = multipartBoundary(req.header("content-type"));
+  if (!boundary.empty()) {
+    const std::string parts = dir.stagingDir();
+    made.paths.push_back(parts);
+    for (const auto& p : splitMultipart(req.bodyFile, boundary, parts)) {
+      if (p.filename.empty()) {
+        if (p.name == "name" && name.empty()) name = p.value;
+        if (auto o = options.find(p.name); o != options.end() && o->second.empty()) o->second = p.value;
+        continue;
+      }
+      const std::string moved = (fs::path(dir.tmpDir()) / store::DataDir::newId()).string();
+      fs::rename(p.path, moved);
+      made.paths.push_back(moved);
+      files.push_back({moved, p.filename});
+    }
+    if (files.empty()) throw ApiError(400, "invalid_input", "the multipart body holds no file part", "file");
+    store::DataDir::removeTree(parts);
+    made.release();
+  } else {
+    const std::string moved = (fs::path(dir.tmpDir()) / store::DataDir::newId()).string();
+    fs::rename(req.bodyFile, moved);
+    std::string filename = queryString(req, "filename");
+    files.push_back({moved, filename.empty() ? "upload.tif" : filename});
+  }
+  return files;
+}
+
+Response listMaps(ApiContext& ctx, const Request& req) {
+  const Page page = pageOf(req);
+  json out = json::array();
+  for (const auto& m : ctx.db.listMaps(page.limit, page.offset)) out.push_back(mapJson(m));
+  return pageResponse(req, page, std::move(out), ctx.db.countMaps());
+}
+
+// The DEM options (maps/dem_import_options: cell, crop, crop_px, vertical_scale, body) as query
+// parameters or plain multipart fields, read by the CLI's own parser.
+Response uploadMap(ApiContext& ctx, const Request& req) {
+  std::string name = queryString(req, "name");
+  std::map<std::string, std::string> options;
+  for (const auto& info : maps::demImportOptionInfos()) options[info.key] = queryString(req, info.key);
+  auto files = uploadedFiles(req, ctx.dir, name, options);
+  try {
+    rj::checkName(name, "name");
+    for (const auto& [key, value] : options)
+      if (value.size() > 200) throw ApiError(400, "invalid_parameter", key + " is longer than 200 bytes", key);
+    const maps::DemImport import = maps::parseDemImportOptions(options);
+    return Response::json(201, mapJson(ctx.maps.importDem(files, name, import)));
+  } catch (...) {
+    for (auto& f : files) store::DataDir::removeTree(f.path);
+    throw;
+  }
+}
+
+Response getMap(ApiContext& ctx, const Request& req) {
+  const std::string& id = req.params.at("id");
+  Response r;
+  {
+    std::lock_guard lock(ctx.mapCacheMutex);
+    if (auto it = ctx.mapBodyCache.find(id); it != ctx.mapBodyCache.end()) {
+      r.body = it->second;
+      return r;
+    }
+  }
+  const std::uint64_t ticket = ctx.mapCacheTicket();  // before the reads
+  const store::MapRecord m = mapOr404(ctx, id, "id");
+  json j = mapJson(m);
+  // The first kMaxPage PDMs; pdms_total says when /api/maps/{id}/pdms holds more.
+  j["pdms"] = json::array();
+  for (const auto& p : ctx.db.listPdms(m.id, kMaxPage, 0)) j["pdms"].push_back(pdmJson(p));
+  j["pdms_total"] = ctx.db.countPdms(m.id);
+  r = Response::json(200, j);
+  ctx.cacheMapBody(id, r.body, ticket);
+  return r;
+}
+
+Response deleteMap(ApiContext& ctx, const Request& req) {
+  InvalidateMapAfter after{ctx, req.params.at("id")};
+  ctx.maps.remove(req.params.at("id"));
+  return Response::json(200, {{"deleted", req.params.at("id")}});
+}
+
+http::RouteOptions uploadOptions() {
+  http::RouteOptions upload;
+  upload.streamBody = true;
+  upload.blocking = onPool;
+  upload.summary = "Upload a DEM (raw body with ?filename=, or multipart/form-data with file parts; "
+                   "PDS3 .IMG+.LBL pairs as two parts or a zip), ?name=&cell=&crop=|crop_px=&vertical_scale=&body= "
+                   "(or plain multipart fields of those names).";
+  Operation op;
+  op.query("name", {{"type", "string"}}, "The map's name (default: from the file).")
+      .query("filename", {{"type", "string"}}, "A raw body's file name (its extension picks the driver).");
+  for (const auto& o : maps::demImportOptionInfos())
+    op.query(o.key, {{"type", "string"}, {"pattern", o.pattern}}, o.doc);
+  op.body(ref("MapUpload"), "multipart/form-data")
+      .body({{"type", "string"}, {"format", "binary"}}, "application/octet-stream")
+      .returns(201, "Imported.", ref("Map"))
+      .errors({400, 413, 503, 507});
+  upload.openapi = op.toJson();
+  return upload;
+}
+
+}  // namespace
+
+void addMapRoutes(http::Router& router, ApiContext& ctx) {
+  router.add("GET", "/api/maps", handler(ctx, listMaps),
+             routeDoc("List maps, oldest first: ?limit= (50, at most 500), ?offset=; X-Total-Count and Link rel=next.",
+                      Operation().listing("Map")));
+  router.add("POST", "/api/maps", handler(ctx, uploadMap), uploadOptions());
+  router.add("GET", "/api/maps/{id}", handler(ctx, getMap),
+             routeDoc("One map: size, cell size, CRS, elevation range, class percentages, its first 500 PDMs "
+                      "(pdms_total counts them all).",
+                      Operation().returns(200, "The map.", ref("Map")).errors({404})));
+  router.add("DELETE", "/api/maps/{id}", handler(ctx, deleteMap),
+             routeDoc("Delete a map and its PDMs (missions keep their records and results).",
+                      Operation().returns(200, "Deleted.", ref("Deleted")).errors({404, 503}), onPool));
+}
+
+}  // namespace rover::api

@@ -1,0 +1,178 @@
+// /api/missions: launch (through the mission service), list, one mission, cancel or delete,
+// rename, its files, and its live stream.
+#include <filesystem>
+#include <map>
+
+#include "server/api/mission_file.hpp"
+#include "server/api/mission_map_file.hpp"
+#include "server/api/mission_service.hpp"
+#include "server/api/route_kit.hpp"
+#include "server/json/json_edge.hpp"
+#include "server/json/mission_request.hpp"
+
+namespace rover::api {
+
+namespace fs = std::filesystem;
+using http::ApiError;
+using http::Request;
+using http::Response;
+using nlohmann::json;
+using openapi::Operation;
+using openapi::ref;
+namespace rj = rover::json;
+
+namespace {
+
+Response launchMission(ApiContext& ctx, const Request& req) {
+  return Response::json(202, missionJson(submitMission(ctx, jsonBody(req, rj::kMissionJsonLimits))));
+}
+
+Response listMissions(ApiContext& ctx, const Request& req) {
+  const Page page = pageOf(req);
+  json out = json::array();
+  for (const auto& m : ctx.db.listMissions(page.limit, page.offset)) out.push_back(missionJson(m));
+  return pageResponse(req, page, std::move(out), ctx.db.countMissions());
+}
+
+Response getMission(ApiContext& ctx, const Request& req) {
+  const store::MissionRecord m = missionOr404(ctx, req.params.at("id"));
+  json j = missionJson(m);
+  if (auto s = ctx.missions.stream(m.id)) {
+    json live = s->summary();
+    j["progress"] = live["progress"];
+    j["step"] = live["step"];
+  }
+  return Response::json(200, j);
+}
+
+Response cancelOrDeleteMission(ApiContext& ctx, const Request& req) {
+  const std::string id = req.params.at("id");
+  const store::MissionRecord m = missionOr404(ctx, id);
+  if (ctx.missions.cancel(id)) return Response::json(202, {{"id", id}, {"status", "cancelling"}});
+  // Not running (any more): the run is deleted, its row first so no listing shows a run whose
+  // files are half gone. A mission that is still finishing cannot be deleted yet.
+  if (!isFinal(m.status))
+    throw ApiError(409, "not_finished", "mission " + rj::shown(id) + " is " + std::string(enumName(m.status)) + ": try again when it has ended", "id");
+  // Only the request whose delete removed the row says so; a concurrent one finds nothing.
+  if (!ctx.db.deleteMission(id)) throw missionNotFound(id);
+  ctx.missions.forget(id);
+  ctx.dir.remove(ctx.dir.missionDir(id));
+  return Response::json(200, {{"deleted", id}});
+}
+
+Response renameMission(ApiContext& ctx, const Request& req) {
+  const std::string id = req.params.at("id");
+  json body = jsonBody(req, rj::kMissionJsonLimits);
+  if (!body.is_object()) throw ApiError(400, "bad_json", "the request body must be a JSON object", "body");
+  for (const auto& item : body.items())
+    if (item.key() != "label")
+      throw ApiError(400, "unknown_field", "only 'label' can be changed, not '" + rj::shown(item.key()) + "'",
+                     rj::shown(item.key()));
+  auto label = body.find("label");
+  if (label == body.end() || !label->is_string()) throw ApiError(400, "invalid_field", "label must be a string", "label");
+  rj::checkName(label->get<std::string>(), "label");
+  // A DELETE may land between the update and the read back: then it is gone (404).
+  if (!ctx.db.setMissionLabel(id, label->get<std::string>())) throw missionNotFound(id);
+  return Response::json(200, missionJson(missionOr404(ctx, id)));
+}
+
+Response withAttachment(Response r, const std::string& filename) {
+  r.headers.emplace_back("Content-Disposition", "attachment; filename=\"" + filename + "\"");
+  return r;
+}
+
+// mission.json: recorded at launch; runs launched before that name their map's current grid.
+Response missionFileOf(ApiContext& ctx, const store::MissionRecord& m) {
+  std::string digest;
+  if (m.spec.is_object() && m.spec.contains("dem_sha256") && m.spec["dem_sha256"].is_string())
+    digest = m.spec["dem_sha256"].get<std::string>();
+  else if (ctx.db.getMap(m.mapId))
+    digest = mapDigest(ctx, m.mapId);
+  return withAttachment(Response::json(200, missionFile(m, digest, ctx.version)), "mission-" + m.id + ".json");
+}
+
+Response getMissionFile(ApiContext& ctx, const Request& req) {
+  const std::string id = req.params.at("id"), file = req.params.at("file");
+  const store::MissionRecord m = missionOr404(ctx, id);
+  if (file == "mission.json") return missionFileOf(ctx, m);
+  const std::string attachment = "mission-" + id + "-" + file;
+  if (file == "map.png" || file == "map.tif")
+    return withAttachment(fileResponse(missionMapFile(ctx, m, file.substr(4)), file == "map.png" ? "image/png" : "image/tiff"),
+                          attachment);
+  static const std::map<std::string, std::string> types{{"result.json", "application/json"},
+                                                        {"result.geojson", "application/geo+json"},
+                                                        {"result.csv", "text/csv"}};
+  auto t = types.find(file);
+  if (t == types.end())
+    throw ApiError(404, "not_found",
+                   "no file '" + rj::shown(file) + "' (mission.json, result.json, result.geojson, result.csv, map.png, map.tif)",
+                   "file");
+  const fs::path path = fs::path(ctx.dir.missionDir(id)) / file;
+  if (!fs::exists(path)) {
+    // An ended run without files (failed, cancelled before it stored anything) will never
+    // have them: say so, with the reason it ended.
+    if (isFinal(m.status))
+      throw ApiError(409, "no_result",
+                     "mission " + rj::shown(id) + " ended " + std::string(enumName(m.status)) + " without a result" +
+                         (m.message.empty() ? std::string() : ": " + m.message),
+                     "id");
+    throw ApiError(409, "not_ready", "mission " + rj::shown(id) + " is " + std::string(enumName(m.status)) + ": no result yet", "id");
+  }
+  return withAttachment(fileResponse(path.string(), t->second), attachment);
+}
+
+}  // namespace
+
+void addMissionRoutes(http::Router& router, ApiContext& ctx) {
+  router.add("POST", "/api/missions", handler(ctx, launchMission),
+             routeDoc("Launch a mission {map, pdm?, planner, rovers:[{x,y,heading}], params:{...}, pace?}; "
+                      "validated fully, then queued (202). A mission file (GET .../mission.json) is accepted as it is.",
+                      Operation()
+                          .body({{"anyOf", {ref("MissionRequest"), ref("MissionFile")}}})
+                          .returns(202, "Queued.", ref("Mission"))
+                          .errors({400, 409, 413, 415, 429, 503, 507}),
+                      onPool));
+  router.add("GET", "/api/missions", handler(ctx, listMissions),
+             routeDoc("List missions, newest first: ?limit= (50, at most 500), ?offset=; X-Total-Count and Link rel=next.",
+                      Operation().listing("Mission")));
+  router.add("GET", "/api/missions/{id}", handler(ctx, getMission),
+             routeDoc("One mission: status, progress, metrics.",
+                      Operation().returns(200, "The mission.", ref("Mission")).errors({404})));
+  router.add("DELETE", "/api/missions/{id}", handler(ctx, cancelOrDeleteMission),
+             routeDoc("Cancel a queued or running mission (202; the planner stops within one step), or delete "
+                      "an ended one with its result files (200).",
+                      Operation()
+                          .returns(200, "Deleted (it had ended).", ref("Deleted"))
+                          .returns(202, "Cancelling (it was queued or running).", ref("Cancelling"))
+                          .errors({404, 409})));
+  router.add("PATCH", "/api/missions/{id}", handler(ctx, renameMission),
+             routeDoc("Rename a run: {\"label\": \"...\"} (at most 200 characters, no control characters).",
+                      Operation().body(ref("MissionLabel")).returns(200, "Renamed.", ref("Mission")).errors({400, 404, 415})));
+  router.add("GET", "/api/missions/{id}/{file}", handler(ctx, getMissionFile),
+             routeDoc("A mission's file (mission.json: everything to run it again, POST it to /api/missions), or "
+                      "a finished mission's result: result.json, result.geojson (map CRS: tracks, route, targets, "
+                      "zones, incidents), result.csv (every sample, both frames), map.png (the map with its "
+                      "legend and scale bar, at most 4096 px a side), map.tif (the same map as a GeoTIFF in the "
+                      "map's CRS).",
+                      Operation()
+                          .returns(200, "mission.json (MissionFile), result.json, result.geojson or result.csv.",
+                                   {{"oneOf", {ref("MissionFile"), ref("PlanResult")}}})
+                          .returns(200, "result.geojson.", {{"type", "object"}}, "application/geo+json")
+                          .returns(200, "result.csv.", {{"type", "string"}}, "text/csv")
+                          .returns(200, "map.png.", nullptr, "image/png")
+                          .returns(200, "map.tif.", nullptr, "image/tiff")
+                          .errors({404, 409, 503}),
+                      onPool));
+
+  http::RouteOptions ws;
+  ws.openapi = Operation().errors({404, 503}).toJson();  // 503: subscriber limits (ws_admission.hpp)
+  ws.summary = "WebSocket: a snapshot, then live events (binary grid frames, JSON poses/progress), "
+               "then {\"type\":\"done\"}; see README for the protocol.";
+  router.addWebSocket("/api/missions/{id}/stream", [&ctx](const Request& req, std::shared_ptr<http::WsConnection> c) {
+    auto s = ctx.missions.stream(req.params.at("id"));
+    if (!s) throw missionNotFound(req.params.at("id"));
+    return s->subscribe(std::move(c));
+  }, ws);
+}
+
+}  // namespace rover::api

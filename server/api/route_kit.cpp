@@ -1,0 +1,156 @@
+#include "server/api/route_kit.hpp"
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <cstdlib>
+
+#include "maps/dem_digest.hpp"
+#include "server/json/json_edge.hpp"
+
+namespace rover::api {
+
+using http::ApiError;
+using http::Request;
+using http::Response;
+using nlohmann::json;
+namespace rj = rover::json;
+
+const json kIdSchema = {{"type", "string"}};
+
+std::string mediaType(const Request& req) {
+  std::string type = req.header("content-type");
+  type = type.substr(0, type.find(';'));
+  std::transform(type.begin(), type.end(), type.begin(), [](unsigned char c) { return std::tolower(c); });
+  while (!type.empty() && (type.back() == ' ' || type.back() == '\t')) type.pop_back();
+  while (!type.empty() && (type.front() == ' ' || type.front() == '\t')) type.erase(0, 1);
+  return type;
+}
+
+bool sendsJson(const Request& req) { return mediaType(req) == "application/json"; }
+
+json jsonBody(const Request& req, const rj::JsonLimits& limits) {
+  if (!sendsJson(req)) {
+    const std::string type = mediaType(req);
+    throw ApiError(415, "unsupported_media_type",
+                   "send the body as JSON with Content-Type: application/json" +
+                       (type.empty() ? std::string(" (the request has none)") : " (not " + rj::shown(type) + ")"),
+                   "content-type");
+  }
+  return rj::parseJsonLimited(req.body, limits);
+}
+
+double queryNumber(const Request& req, const std::string& key, double fallback) {
+  auto it = req.query.find(key);
+  if (it == req.query.end() || it->second.empty()) return fallback;
+  char* end = nullptr;
+  double v = std::strtod(it->second.c_str(), &end);
+  if (*end != '\0' || !std::isfinite(v))
+    throw ApiError(400, "invalid_parameter", key + " must be a number", key);
+  return v;
+}
+
+long long queryInteger(const Request& req, const std::string& key, long long fallback, long long lo, long long hi) {
+  const double v = queryNumber(req, key, static_cast<double>(fallback));
+  if (v < static_cast<double>(lo) || v > static_cast<double>(hi) || std::trunc(v) != v)
+    throw ApiError(400, "invalid_parameter",
+                   key + " must be an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]", key);
+  return static_cast<long long>(v);
+}
+
+std::string queryString(const Request& req, const std::string& key) {
+  auto it = req.query.find(key);
+  return it == req.query.end() ? "" : it->second;
+}
+
+Page pageOf(const Request& req) {
+  return {queryInteger(req, "limit", kDefaultPage, 1, kMaxPage), queryInteger(req, "offset", 0, 0, 1'000'000'000)};
+}
+
+Response pageResponse(const Request& req, const Page& page, json items, long long total) {
+  const long long next = page.offset + static_cast<long long>(items.size());
+  Response r = Response::json(200, items);
+  r.headers.emplace_back("X-Total-Count", std::to_string(total));
+  if (!items.empty() && next < total)
+    r.headers.emplace_back("Link", "<" + req.path + "?limit=" + std::to_string(page.limit) +
+                                       "&offset=" + std::to_string(next) + ">; rel=\"next\"");
+  return r;
+}
+
+http::Handler handler(ApiContext& ctx, ApiHandler fn) {
+  return guardedRoute([&ctx, fn](const Request& req) { return fn(ctx, req); });
+}
+
+Response fileResponse(const std::string& path, const std::string& type) {
+  Response r;
+  r.file = path;
+  r.contentType = type;
+  return r;
+}
+
+ApiError mapNotFound(const std::string& id, const std::string& field) {
+  return ApiError(404, "not_found", "no map '" + rj::shown(id) + "'", field);
+}
+
+ApiError missionNotFound(const std::string& id) {
+  return ApiError(404, "not_found", "no mission '" + rj::shown(id) + "'", "id");
+}
+
+store::MapRecord mapOr404(ApiContext& ctx, const std::string& id, const std::string& field) {
+  auto m = ctx.db.getMap(id);
+  if (!m) throw mapNotFound(id, field);
+  return std::move(*m);
+}
+
+store::MissionRecord missionOr404(ApiContext& ctx, const std::string& id) {
+  auto m = ctx.db.getMission(id);
+  if (!m) throw missionNotFound(id);
+  return std::move(*m);
+}
+
+std::string mapDigest(ApiContext& ctx, const std::string& mapId) {
+  if (auto rec = ctx.db.getMap(mapId); rec && rec->meta.contains("dem_sha256"))
+    return rec->meta["dem_sha256"].get<std::string>();
+  return maps::demSha256(ctx.maps.get(mapId)->dem);
+}
+
+json mapJson(const store::MapRecord& m) {
+  json j = m.meta;
+  j["id"] = m.id;
+  j["name"] = m.name;
+  j["created_at"] = m.createdAt;
+  j["layers"] = json::object();
+  for (const char* l : {"elevation", "hillshade", "slope", "traversability", "pdm"})
+    j["layers"][l] = "/api/maps/" + m.id + "/layers/" + l + ".png";
+  return j;
+}
+
+json pdmJson(const store::PdmRecord& p) {
+  json j = p.meta;
+  j["id"] = p.id;
+  j["map"] = p.mapId;
+  j["name"] = p.name;
+  j["created_at"] = p.createdAt;
+  j["layer"] = "/api/maps/" + p.mapId + "/layers/pdm.png?pdm=" + p.id;
+  j["raster"] = "/api/maps/" + p.mapId + "/layers/pdm.tif?pdm=" + p.id;
+  return j;
+}
+
+json missionJson(const store::MissionRecord& m) {
+  return {{"id", m.id},          {"map", m.mapId},          {"pdm", m.pdmId.empty() ? json(nullptr) : json(m.pdmId)},
+          {"label", m.label},
+          {"map_name", m.mapName.empty() ? json(nullptr) : json(m.mapName)},
+          {"pdm_name", m.pdmName.empty() ? json(nullptr) : json(m.pdmName)},
+          {"planner", m.planner}, {"status", enumName(m.status)},      {"message", m.message},
+          {"created_at", m.createdAt}, {"started_at", m.startedAt}, {"finished_at", m.finishedAt},
+          {"metrics", m.metrics}, {"spec", m.spec},
+          {"links",
+           {{"stream", "/api/missions/" + m.id + "/stream"},
+            {"result_json", "/api/missions/" + m.id + "/result.json"},
+            {"result_geojson", "/api/missions/" + m.id + "/result.geojson"},
+            {"result_csv", "/api/missions/" + m.id + "/result.csv"},
+            {"map_png", "/api/missions/" + m.id + "/map.png"},
+            {"map_tif", "/api/missions/" + m.id + "/map.tif"}}}};
+}
+
+}  // namespace rover::api

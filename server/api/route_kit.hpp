@@ -1,0 +1,78 @@
+#pragma once
+// What the route files share (server/api/*_routes.cpp): the JSON media-type check, query
+// parameters, listing pages, file responses, route docs, the "find it or 404" lookups and the
+// JSON views of the stored resources.
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "server/api/json_body.hpp"
+#include "server/api/openapi.hpp"
+#include "server/api/routes.hpp"
+#include "server/http/http_types.hpp"
+#include "server/store/database.hpp"
+
+namespace rover::api {
+
+// The request's media type: Content-Type without its parameters, lower case, trimmed.
+std::string mediaType(const http::Request& req);
+// The one JSON media-type check: application/json (parameters such as charset allowed). A browser
+// sends text/plain, form-urlencoded or multipart cross-site without asking first (no CORS
+// preflight), so accepting those would let any page launch or rename missions on an open server.
+bool sendsJson(const http::Request& req);
+
+// ?key= as a finite number (400 invalid_parameter naming it), `fallback` when absent or empty.
+double queryNumber(const http::Request& req, const std::string& key, double fallback);
+// An integer query parameter in [lo, hi], range-checked as a double before the conversion (a
+// static_cast<int> of 1e300 is undefined behaviour).
+long long queryInteger(const http::Request& req, const std::string& key, long long fallback, long long lo,
+                       long long hi);
+// ?key= as given, "" when absent.
+std::string queryString(const http::Request& req, const std::string& key);
+
+// Listing pages: ?limit= (default 50, at most 500) and ?offset= (rows skipped). The body stays a
+// JSON array; X-Total-Count holds the total and, when more rows follow, a Link header
+// <path?limit=L&offset=O>; rel="next" (RFC 8288) points at the next page.
+constexpr long long kDefaultPage = 50, kMaxPage = 500;
+struct Page {
+  long long limit, offset;
+};
+Page pageOf(const http::Request& req);
+http::Response pageResponse(const http::Request& req, const Page& page, nlohmann::json items, long long total);
+
+// A named handler of a route file, with the API's error mapping (guardedRoute).
+using ApiHandler = http::Response (*)(ApiContext& ctx, const http::Request& req);
+http::Handler handler(ApiContext& ctx, ApiHandler fn);
+
+// A file answered from disk with its media type.
+http::Response fileResponse(const std::string& path, const std::string& type);
+
+// `blocking`: the handler is slow (GDAL, rendering, PDM discretisation, whole-DEM validation)
+// and runs on the server's work pool, so the io threads keep answering (see RouteOptions).
+constexpr bool onPool = true;
+// A string path or query parameter (an id) in OpenAPI.
+extern const nlohmann::json kIdSchema;
+
+// Invalidates a map's cached body when the write that changes it has finished, on success or
+// failure (after, not before: see ApiContext::mapCacheTicket).
+struct InvalidateMapAfter {
+  ApiContext& ctx;
+  std::string id;
+  ~InvalidateMapAfter() { ctx.invalidateMap(id); }
+};
+
+// The 404s of the stored resources, one wording each; `field` names the input that held the id.
+http::ApiError mapNotFound(const std::string& id, const std::string& field);
+http::ApiError missionNotFound(const std::string& id);
+store::MapRecord mapOr404(ApiContext& ctx, const std::string& id, const std::string& field);
+store::MissionRecord missionOr404(ApiContext& ctx, const std::string& id);
+
+// The digest of a map's grid (maps/dem_digest): stored with maps imported since mission files,
+// computed from the loaded grid for older ones.
+std::string mapDigest(ApiContext& ctx, const std::string& mapId);
+
+// The JSON views of the stored resources, with their links.
+nlohmann::json mapJson(const store::MapRecord& m);
+nlohmann::json pdmJson(const store::PdmRecord& p);
+nlohmann::json missionJson(const store::MissionRecord& m);
+
+}  // namespace rover::api
