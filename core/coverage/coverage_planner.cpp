@@ -54,7 +54,7 @@ const CoverageParams& validated(const CoverageParams& params) {
 
 // The coverage engine after Fields2Cover's stages: the move policy picks, the plant drives and
 // senses, the team occupancy says who is where, the recorder keeps what happened; this loop only
-// orders them (SPEC §1: sense, choose, move, until the stop rule). docs/decisions/0001.
+// orders them (SPEC §1: sense, choose, move, until the stop rule). .decisions/0001.
 class Engine {
  public:
   Engine(const World& world, const std::vector<StartCell>& starts, const CoverageParams& params,

@@ -136,7 +136,13 @@ int MovePolicy::afterContourMove(CoverageRover& r) {
 int MovePolicy::frontierStep(CoverageRover& r) {
   // Ours (SPEC §1 frontier): every neighbour is visited, so walk the shortest known path to the
   // nearest cell not yet entered; re-plan when the path is blocked by a team mate.
-  if (r.planPos < r.plan.size() && enterable(r, r.plan[r.planPos])) return r.plan[r.planPos++];
+  // The path's next cell must still neighbour the rover's: under localisation error a bump
+  // leaves the rover where it was and a loop closure moves its believed cell, either of which
+  // puts the rest of the path out of step.
+  if (r.planPos < r.plan.size() && enterable(r, r.plan[r.planPos])) {
+    const CellIndex a = g_.cell(r.cell), b = g_.cell(r.plan[r.planPos]);
+    if (std::max(std::abs(a.row - b.row), std::abs(a.col - b.col)) == 1) return r.plan[r.planPos++];
+  }
   int next = bfsToFrontier(r, false);
   if (next >= 0 && !team_.isFree(next)) next = bfsToFrontier(r, true);
   return next;

@@ -3,7 +3,7 @@
 // (core/coverage/coverage_planner.cpp): each rover's track (cells, distance, paper 000 eq. 5
 // energy, pitch), the coverage curve, the events a sink asked for, and the metrics at the end.
 // Energy and pitch of the flat one-cell moves of a world without heights are worked out once, not
-// per move (the trigonometry per move was a tenth of a study's time, docs/decisions/0001).
+// per move (the trigonometry per move was a tenth of a study's time, .decisions/0001).
 #include <array>
 #include <cstdint>
 #include <vector>

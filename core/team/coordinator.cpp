@@ -24,14 +24,14 @@ PaperPolicy::PaperPolicy(const CoordinationParams& p) : waits_(p.maxWaits), dwel
 // default map, seed 2); 4.5 s skipped fewer legs there (6 of 960 against 9) but left no time to
 // step aside on real ground. The whole dwell_check (10 s by default): a stop checked for less
 // left a rover no time to get out of the way when its next leg found no clear try
-// (docs/decisions/0002).
+// (.decisions/0002).
 TimedPolicy::TimedPolicy(const CoordinationParams& p, StopRules rules) : rules_(rules), dwell_(p.dwellCheck) {
   const double period = p.controller.samplePeriod;
   const int step = std::max(1, static_cast<int>(std::lround(p.delayStep / period)));
   const int maxTicks = static_cast<int>(std::lround(p.maxWaits * p.waitStep / period));
   for (int ticks = 0; ticks <= maxTicks; ticks += step) delays_.push_back(ticks);
   // Higher-priority rovers may roam round a stopped one for long: it moves again before each
-  // next pass, looks farther and reads the traffic table first (docs/decisions/0002).
+  // next pass, looks farther and reads the traffic table first (.decisions/0002).
   aside_.parkingMoves = 8;
   aside_.recoveriesPerLeg = 2;
   aside_.backAlong = 200.0;
@@ -357,7 +357,7 @@ class Coordinator {
       const bool sameZones = attempt > 0 && keepOut.size() == zonesBefore;
       zonesBefore = keepOut.size();
       // Then the next try is likely this problem again with the next seed, and a worker plans it
-      // meanwhile (such runs of tries are much of a slow mission's RRT* time: docs/decisions/0002);
+      // meanwhile (such runs of tries are much of a slow mission's RRT* time: .decisions/0002);
       // not when this try is likely the last (repeatedShortEndsReplans,
       // unzonedConflictsEndReplans). A try that does not count for the latter breaks its run.
       const int unzonedBefore = std::exchange(unzonedRun, 0);
@@ -481,7 +481,7 @@ class Coordinator {
   // end).
   void park(int k) {
     // Timed: where no spot stays clear for good the rover moves again before each next pass
-    // (ours: higher-priority rovers may roam round a stopped one for long: docs/decisions/0002).
+    // (ours: higher-priority rovers may roam round a stopped one for long: .decisions/0002).
     // Paper: one move to a spot clear for good, as before.
     const int moves = policy_.aside().parkingMoves;
     for (int move = 0; move < moves; ++move) {

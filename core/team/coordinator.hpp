@@ -40,7 +40,7 @@ struct AsideSearch {
 // How a piece of a leg answers a try that comes closer than the safety distance to a
 // higher-priority rover (or tilts past the attitude check): the rules the coordinator's loop asks.
 // Each try is simulated once; then the rules below decide. PaperPolicy and TimedPolicy own their
-// constants; docs/decisions/0002 gives each timed rule's evidence.
+// constants; .decisions/0002 gives each timed rule's evidence.
 class ConflictPolicy {
  public:
   virtual ~ConflictPolicy() = default;
@@ -121,7 +121,7 @@ class PaperPolicy : public ConflictPolicy {
 // Ours: start the same try later (0, δ, 2δ, … up to max_waits × wait_step, δ = delay_step) — a
 // reservation check in time against every committed trajectory — and re-plan only when no delay
 // clears it; the stop rules and the recoveries above. The dwell is dwell_check, the time a stopped
-// rover has to step aside when its next leg finds no clear try (docs/decisions/0002).
+// rover has to step aside when its next leg finds no clear try (.decisions/0002).
 class TimedPolicy : public ConflictPolicy {
  public:
   // The two stop rules, on by default; off only to measure what each one does (tests, 0002).

@@ -75,7 +75,7 @@ void LayerCache::chargeLocked(const std::string& path, std::uint64_t size) {
     } catch (const store::OverBudget& e) {
       // A cache makes room by forgetting (the map's own files when its budget is full, any when
       // the server's is); what cannot fit even then is refused.
-      if (e.status() == 507 && evictOldestLocked(path, e.serverWide() ? std::string() : mapOf(path))) continue;
+      if (e.refusal() == Refusal::DiskBudgetFull && evictOldestLocked(path, e.serverWide() ? std::string() : mapOf(path))) continue;
       std::error_code ec;
       fs::remove(path, ec);
       throw;

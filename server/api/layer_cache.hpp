@@ -5,8 +5,8 @@
 // is produced once however many requests ask for it at the same time (a once-lock per file), and
 // producing one blocks neither other layers nor other maps.
 // With a DiskBudget the files are charged to their map (DiskUse::Layer): a new file that does not
-// fit first evicts older ones (of any map), then is refused (OverBudget 507/413, field "layer")
-// and deleted.
+// fit first evicts older ones (of any map), then is refused (OverBudget disk_budget_full or
+// too_large, field "layer") and deleted.
 #include <cstdint>
 #include <functional>
 #include <memory>

@@ -3,9 +3,6 @@
 
 namespace rover::api {
 
-using http::ApiError;
-using http::Request;
-using http::Response;
 
 namespace {
 

@@ -10,13 +10,6 @@
 namespace rover::api {
 
 namespace fs = std::filesystem;
-using http::ApiError;
-using http::Request;
-using http::Response;
-using nlohmann::json;
-using openapi::Operation;
-using openapi::ref;
-namespace rj = rover::json;
 
 namespace {
 

@@ -11,9 +11,6 @@
 
 namespace rover::api {
 
-using http::ApiError;
-using nlohmann::json;
-namespace rj = rover::json;
 
 namespace {
 

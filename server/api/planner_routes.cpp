@@ -4,10 +4,6 @@
 
 namespace rover::api {
 
-using http::Request;
-using http::Response;
-using nlohmann::json;
-namespace rj = rover::json;
 
 namespace {
 

@@ -10,11 +10,6 @@
 
 namespace rover::api {
 
-using http::ApiError;
-using http::Request;
-using http::Response;
-using nlohmann::json;
-namespace rj = rover::json;
 
 const json kIdSchema = {{"type", "string"}};
 
@@ -78,7 +73,7 @@ Response pageResponse(const Request& req, const Page& page, json items, long lon
 }
 
 http::Handler handler(ApiContext& ctx, ApiHandler fn) {
-  return guardedRoute([&ctx, fn](const Request& req) { return fn(ctx, req); });
+  return [&ctx, fn](const Request& req) { return fn(ctx, req); };
 }
 
 Response fileResponse(const std::string& path, const std::string& type) {

@@ -11,7 +11,18 @@
 #include "server/http/http_types.hpp"
 #include "server/store/database.hpp"
 
+namespace rover::json {}
+
 namespace rover::api {
+
+// The names every route file uses, declared once here.
+using http::ApiError;
+using http::Request;
+using http::Response;
+using nlohmann::json;
+using openapi::Operation;
+using openapi::ref;
+namespace rj = rover::json;
 
 // The request's media type: Content-Type without its parameters, lower case, trimmed.
 std::string mediaType(const http::Request& req);
@@ -39,7 +50,7 @@ struct Page {
 Page pageOf(const http::Request& req);
 http::Response pageResponse(const http::Request& req, const Page& page, nlohmann::json items, long long total);
 
-// A named handler of a route file, with the API's error mapping (guardedRoute).
+// A named handler of a route file; what it throws is answered by the error table (error_table.hpp).
 using ApiHandler = http::Response (*)(ApiContext& ctx, const http::Request& req);
 http::Handler handler(ApiContext& ctx, ApiHandler fn);
 

@@ -54,9 +54,6 @@ struct ApiContext {
 
 // Registers every /api route on `router` (the study routes too when ctx.studies is set).
 void addApiRoutes(http::Router& router, ApiContext& ctx);
-// `handler` with the API's error mapping (core Error -> 400 naming its field, JSON type errors ->
-// 400, anything else -> 500 without details), for the route files.
-http::Handler guardedRoute(http::Handler handler);
 // A route's summary and OpenAPI operation (server/api/openapi.hpp: its statuses and schemas).
 http::RouteOptions routeDoc(const std::string& summary, const openapi::Operation& op,
                             bool blocking = false);

@@ -14,11 +14,6 @@
 
 namespace rover::api {
 
-using http::ApiError;
-using http::Request;
-using http::Response;
-using nlohmann::json;
-namespace rj = rover::json;
 
 namespace {
 
@@ -110,13 +105,12 @@ json configurationsJson(const studies::StudySpec& spec) {
   return out;
 }
 
-using openapi::Operation;
 const nlohmann::json obj = {{"type", "object"}};
 
 }  // namespace
 
 void addStudyRoutes(http::Router& router, ApiContext& ctx) {
-  router.add("GET", "/api/studies/presets", guardedRoute([](const Request&) {
+  router.add("GET", "/api/studies/presets", [](const Request&) {
     json out = json::array();
     for (const auto& name : studies::presetNames()) {
       studies::PresetOptions o;
@@ -125,24 +119,24 @@ void addStudyRoutes(http::Router& router, ApiContext& ctx) {
       out.push_back({{"name", name}, {"spec", spec}});
     }
     return Response::json(200, out);
-  }), routeDoc("Study presets (laine-fig6, laine-fig8, frontier, swinton) as study documents.", Operation().returns(200, "The presets", obj)));
+  }, routeDoc("Study presets (laine-fig6, laine-fig8, frontier, swinton) as study documents.", Operation().returns(200, "The presets", obj)));
 
-  router.add("POST", "/api/studies", guardedRoute([&ctx](const Request& req) {
+  router.add("POST", "/api/studies", [&ctx](const Request& req) {
     const json body = jsonBody(req, kStudyJsonLimits);
     const studies::StudyState s = ctx.studies->submit(body);
     return Response::json(202, studies::toJson(s));
-  }), routeDoc("Launch a study: a study document (see README \"Studies\") or {\"preset\": NAME, \"runs\": N, "
+  }, routeDoc("Launch a study: a study document (see README \"Studies\") or {\"preset\": NAME, \"runs\": N, "
                "\"master_seed\"?, \"name\"?}; validated (400 naming the field), stored and queued (202). At most " +
                std::to_string(studies::kMaxServerRuns) + " runs per study, " + std::to_string(studies::kMaxActive) +
                " studies queued or running, " + std::to_string(studies::kMaxStored) + " kept (429).", Operation().body(obj).returns(202, "Queued", obj).errors({400, 413, 415, 429, 507}), true));
 
-  router.add("GET", "/api/studies", guardedRoute([&ctx](const Request&) {
+  router.add("GET", "/api/studies", [&ctx](const Request&) {
     json out = json::array();
     for (const auto& s : ctx.studies->list()) out.push_back(studies::toJson(s));
     return Response::json(200, out);
-  }), routeDoc("List studies, newest first: status, runs done/total, ETA.", Operation().returns(200, "Studies", {{"type", "array"}, {"items", openapi::ref("Study")}})));
+  }, routeDoc("List studies, newest first: status, runs done/total, ETA.", Operation().returns(200, "Studies", {{"type", "array"}, {"items", openapi::ref("Study")}})));
 
-  router.add("GET", "/api/studies/{id}", guardedRoute([&ctx](const Request& req) {
+  router.add("GET", "/api/studies/{id}", [&ctx](const Request& req) {
     const studies::StudyState s = studyOr404(ctx, req.params.at("id"));
     json j = studies::toJson(s);
     const json spec = ctx.studies->specJson(s.id);
@@ -150,10 +144,10 @@ void addStudyRoutes(http::Router& router, ApiContext& ctx) {
     j["configurations"] = configurationsJson(studies::parseStudySpec(spec));
     j["summary"] = ctx.studies->summary(s.id);
     return Response::json(200, j);
-  }), routeDoc("One study: its document, configurations, status and summary table (mean, std, quartiles "
+  }, routeDoc("One study: its document, configurations, status and summary table (mean, std, quartiles "
                "per configuration and metric; partial while it runs).", Operation().returns(200, "The study", obj).errors({404}), true));
 
-  router.add("DELETE", "/api/studies/{id}", guardedRoute([&ctx](const Request& req) {
+  router.add("DELETE", "/api/studies/{id}", [&ctx](const Request& req) {
     const std::string id = req.params.at("id");
     switch (ctx.studies->remove(id)) {
       case studies::StudyManager::Removal::NotFound: throw ApiError(404, "not_found", "no study '" + id + "'", "id");
@@ -162,20 +156,20 @@ void addStudyRoutes(http::Router& router, ApiContext& ctx) {
       case studies::StudyManager::Removal::Deleted: break;
     }
     return Response::json(200, {{"deleted", id}});
-  }), routeDoc("Cancel a queued or running study (202; the runs done are kept), or delete an ended one with "
+  }, routeDoc("Cancel a queued or running study (202; the runs done are kept), or delete an ended one with "
                "its database (200).", Operation().returns(202, "Cancelled", obj).returns(200, "Deleted", obj).errors({404}), true));
 
-  router.add("GET", "/api/studies/{id}/runs.csv", guardedRoute([&ctx](const Request& req) {
+  router.add("GET", "/api/studies/{id}/runs.csv", [&ctx](const Request& req) {
     const studies::StudyState s = studyOr404(ctx, req.params.at("id"));
     Response r;
     r.contentType = "text/csv";
     r.file = ctx.studies->runsCsvFile(s.id);
     r.headers.emplace_back("Content-Disposition", "attachment; filename=\"study-" + s.id + "-runs.csv\"");
     return r;
-  }), routeDoc("The study's runs as CSV: run_index, config, replicate, seed, status, wall_s, cpu_s, host, "
+  }, routeDoc("The study's runs as CSV: run_index, config, replicate, seed, status, wall_s, cpu_s, host, "
                "rank, then one column per metric.", Operation().returns(200, "Runs", nullptr, "text/csv").errors({404}), true));
 
-  router.add("GET", "/api/studies/{id}/study.sqlite", guardedRoute([&ctx](const Request& req) {
+  router.add("GET", "/api/studies/{id}/study.sqlite", [&ctx](const Request& req) {
     const studies::StudyState s = studyOr404(ctx, req.params.at("id"));
     const std::string path = ctx.studies->databasePath(s.id);
     if (path.empty()) throw ApiError(409, "not_ready", "study " + s.id + " has no database yet", "id");
@@ -184,17 +178,17 @@ void addStudyRoutes(http::Router& router, ApiContext& ctx) {
     r.contentType = "application/vnd.sqlite3";
     r.headers.emplace_back("Content-Disposition", "attachment; filename=\"study-" + s.id + ".sqlite\"");
     return r;
-  }), routeDoc("The study database (SQLite, WAL: complete once the study has ended): spec, configs, runs, "
+  }, routeDoc("The study database (SQLite, WAL: complete once the study has ended): spec, configs, runs, "
                "curves; `roverplan study summary` reads it.", Operation().returns(200, "SQLite database", nullptr, "application/vnd.sqlite3").errors({404})));
 
-  router.add("GET", "/api/studies/{id}/runs/{run}", guardedRoute([&ctx](const Request& req) {
+  router.add("GET", "/api/studies/{id}/runs/{run}", [&ctx](const Request& req) {
     const studies::StudyState s = studyOr404(ctx, req.params.at("id"));
     const studies::StudySpec spec = studies::parseStudySpec(ctx.studies->specJson(s.id));
     return Response::json(200, runMission(ctx, spec, runIndexOf(req, spec)));
-  }), routeDoc("One run: its configuration, parameters, seed and the mission it was (or why it has none: "
+  }, routeDoc("One run: its configuration, parameters, seed and the mission it was (or why it has none: "
                "mission_unavailable).", Operation().returns(200, "The run", obj).errors({404}), true));
 
-  router.add("POST", "/api/studies/{id}/runs/{run}/mission", guardedRoute([&ctx](const Request& req) {
+  router.add("POST", "/api/studies/{id}/runs/{run}/mission", [&ctx](const Request& req) {
     const studies::StudyState s = studyOr404(ctx, req.params.at("id"));
     const studies::StudySpec spec = studies::parseStudySpec(ctx.studies->specJson(s.id));
     json run = runMission(ctx, spec, runIndexOf(req, spec));
@@ -216,7 +210,7 @@ void addStudyRoutes(http::Router& router, ApiContext& ctx) {
       body["pdm"] = p.id;
     }
     return Response::json(202, missionJson(submitMission(ctx, body)));
-  }), routeDoc("Open a run as a mission: the same map, planner, parameters, seed, starts (and PDM, created on "
+  }, routeDoc("Open a run as a mission: the same map, planner, parameters, seed, starts (and PDM, created on "
                "the map) queued as a new mission (202, the mission); 409 not_a_mission when the run's world "
                "is no stored map.", Operation().returns(202, "Queued mission", obj).errors({404, 409, 429}), true));
 

@@ -7,11 +7,6 @@
 
 namespace rover::api {
 
-using http::ApiError;
-using http::Request;
-using http::Response;
-using nlohmann::json;
-namespace rj = rover::json;
 
 void addZoneRoutes(http::Router& router, ApiContext& ctx) {
   http::RouteOptions get;
@@ -19,12 +14,12 @@ void addZoneRoutes(http::Router& router, ApiContext& ctx) {
       "A map's keep-out zones: a GeoJSON FeatureCollection of Polygons in the local frame (metres "
       "from the map's lower-left corner), empty when none were saved.";
   get.openapi = openapi::Operation().returns(200, "The zones.", openapi::ref("Zones")).errors({404}).toJson();
-  router.add("GET", "/api/maps/{id}/zones", guardedRoute([&ctx](const Request& req) {
+  router.add("GET", "/api/maps/{id}/zones", [&ctx](const Request& req) {
     const std::string& id = req.params.at("id");
     mapOr404(ctx, id, "id");
     auto zones = ctx.db.getZones(id);
     return Response::json(200, zones ? *zones : rj::zonesToJson({}));
-  }), get);
+  }, get);
 
   http::RouteOptions put;
   put.blocking = true;  // may load the map from disk
@@ -40,7 +35,7 @@ void addZoneRoutes(http::Router& router, ApiContext& ctx) {
                     .returns(200, "The zones as stored, in the local frame.", openapi::ref("Zones"))
                     .errors({400, 404, 413, 415, 503, 507})
                     .toJson();
-  router.add("PUT", "/api/maps/{id}/zones", guardedRoute([&ctx](const Request& req) {
+  router.add("PUT", "/api/maps/{id}/zones", [&ctx](const Request& req) {
     const std::string& id = req.params.at("id");
     auto map = ctx.maps.get(id);  // 404 for an unknown map
     const rj::JsonLimits limits{rj::kMaxZonesFileBytes, 64};
@@ -67,7 +62,7 @@ void addZoneRoutes(http::Router& router, ApiContext& ctx) {
     const json stored = rj::zonesToJson(zones, rj::zoneNames(body));
     if (!ctx.db.setZones(id, stored)) throw mapNotFound(id, "id");
     return Response::json(200, stored);
-  }), put);
+  }, put);
 }
 
 }  // namespace rover::api

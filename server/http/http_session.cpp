@@ -1,102 +1,21 @@
 #include "server/http/http_session.hpp"
 
-#include <unistd.h>
 #include <algorithm>
 #include <cctype>
 #include <cerrno>
-#include <cstdio>
 #include <filesystem>
-#include <limits>
-#include <random>
-#include <sstream>
 #include <string_view>
 
 #include <boost/asio/dispatch.hpp>
 #include <boost/asio/post.hpp>
-#include <boost/beast/websocket/rfc6455.hpp>
 
+#include "server/http/dispatch.hpp"
 #include "server/http/request_framing.hpp"
 #include "server/http/websocket_session.hpp"
 
 namespace rover::http {
 
 namespace fs = std::filesystem;
-
-// ---------------------------------------------------------------- ServerState
-
-namespace {
-OriginPolicy originPolicy(const ServerConfig& c) {
-  OriginPolicy p{c.publicNames, c.corsOrigin};
-  // A wildcard bind names no host; a named one (an interface address or name) is one of ours.
-  if (!c.host.empty() && c.host != "0.0.0.0" && c.host != "::" && c.host != "[::]") p.extraHosts.push_back(c.host);
-  return p;
-}
-}  // namespace
-
-ServerState::ServerState(ServerConfig c, const Router& r, WorkPool& p)
-    : config(std::move(c)), origins(originPolicy(config)), router(r), statics(config.webRoot), pool(p) {
-  std::random_device rd;
-  tempSalt_ = (static_cast<std::uint64_t>(rd()) << 32) ^ rd();
-}
-
-std::optional<std::uint64_t> ServerState::add(std::weak_ptr<Closable> session) {
-  std::lock_guard lock(mutex_);
-  if (stopping_) return std::nullopt;
-  const std::uint64_t id = nextId_++;
-  sessions_.emplace(id, std::move(session));
-  return id;
-}
-
-void ServerState::remove(std::uint64_t id) {
-  std::lock_guard lock(mutex_);
-  sessions_.erase(id);
-  if (sessions_.empty()) emptied_.notify_all();
-}
-
-std::vector<std::shared_ptr<Closable>> ServerState::live() const {
-  std::vector<std::shared_ptr<Closable>> out;
-  std::lock_guard lock(mutex_);
-  for (const auto& [id, weak] : sessions_)
-    if (auto s = weak.lock()) out.push_back(std::move(s));
-  return out;
-}
-
-bool ServerState::waitUntilEmpty(std::chrono::milliseconds timeout) {
-  std::unique_lock lock(mutex_);
-  return emptied_.wait_for(lock, timeout, [&] { return sessions_.empty(); });
-}
-
-void ServerState::beginStop() {
-  {
-    std::unique_lock gate(wakeGate_);
-    stopped_ = true;
-  }
-  std::lock_guard lock(mutex_);
-  stopping_ = true;
-}
-
-void ServerState::log(const std::string& line) const {
-  static std::mutex logMutex;
-  std::lock_guard lock(logMutex);
-  std::fprintf(stderr, "%s\n", line.c_str());
-}
-
-std::string ServerState::tempFilePath() {
-  std::uint64_t n;
-  {
-    std::lock_guard lock(mutex_);
-    n = ++tempCounter_;
-  }
-  fs::path dir = config.uploadDir.empty() ? fs::temp_directory_path() : fs::path(config.uploadDir);
-  std::error_code ec;
-  fs::create_directories(dir, ec);
-  std::ostringstream name;
-  name << "upload-" << ::getpid() << '-' << std::hex << tempSalt_ << '-' << std::dec << n
-       << ".part";
-  return (dir / name.str()).string();
-}
-
-// ---------------------------------------------------------------- helpers
 
 namespace {
 
@@ -112,75 +31,9 @@ std::string lower(std::string_view s) {
   return out;
 }
 
-// Time depends on the secret's length only, not on where the strings differ.
-bool constantTimeEquals(const std::string& presented, const std::string& secret) {
-  unsigned char diff = presented.size() == secret.size() ? 0 : 1;
-  for (std::size_t i = 0; i < secret.size(); ++i) {
-    const unsigned char p = i < presented.size() ? static_cast<unsigned char>(presented[i]) : 0;
-    diff |= static_cast<unsigned char>(p ^ static_cast<unsigned char>(secret[i]));
-  }
-  volatile unsigned char result = diff;
-  return result == 0;
-}
-
-bool authorized(const Request& req, const std::string& token, bool allowQueryToken) {
-  std::string presented;
-  bool found = false;
-  const std::string h = req.header("authorization");
-  if (h.size() > 7 && lower(h.substr(0, 7)) == "bearer ") {
-    presented = h.substr(7);
-    while (!presented.empty() && (presented.back() == ' ' || presented.back() == '\t'))
-      presented.pop_back();
-    while (!presented.empty() && presented.front() == ' ') presented.erase(presented.begin());
-    found = true;
-  }
-  if (!found && allowQueryToken) {
-    auto it = req.query.find("token");
-    if (it != req.query.end()) {
-      presented = it->second;
-      found = true;
-    }
-  }
-  return found && constantTimeEquals(presented, token);
-}
-
-bool isApiPath(const std::string& path) {
-  return path == "/api" || path.rfind("/api/", 0) == 0;
-}
-
-// An unexpected exception's text goes to the log only: it may hold server paths (a
-// std::filesystem error does) or library internals.
-Response invokeHandler(const Route& route, const Request& req, const ServerState& state) noexcept {
-  try {
-    try {
-      return route.handler(req);
-    } catch (const ApiError& e) {
-      Response r = Response::error(e.status(), e.code(), e.what(), e.field());
-      r.headers = e.headers();
-      return r;
-    } catch (const std::exception& e) {
-      state.log("http: " + req.method + " " + req.path + ": handler failed: " + e.what());
-      return Response::error(500, "internal", "internal error");
-    } catch (...) {
-      return Response::error(500, "internal", "unknown error");
-    }
-  } catch (...) {  // building the error itself failed (out of memory)
-    Response r;
-    r.status = 500;
-    r.body = R"({"error":{"code":"internal","message":"internal error"}})";
-    return r;
-  }
-}
-
 bool bodyless(int status) {
   return status < 200 || status == 204 || status == 304;
 }
-
-}  // namespace
-
-// ---------------------------------------------------------------- HttpSession
-
-namespace {
 
 // A write of the streamed body failed because the disk (or the file size limit) is full: the
 // client gets 507, not a reset (Beast's file body reports the system error through put()).
@@ -392,107 +245,14 @@ void HttpSession::onParseError(beast::error_code ec) {
 void HttpSession::onHeader() {
   started_ = std::chrono::steady_clock::now();
   const auto& h = headerParser_->get();
-  request_.method = std::string(h.method_string());
   request_.remote = remote_;
   keepAlive_ = h.keep_alive();
   version_ = h.version();
   head_ = h.method() == bhttp::verb::head;
-  if (auto bad = checkFraming(h)) {
-    // The rest of the connection's bytes cannot be trusted to be framed as the client meant:
-    // answer and close, never parse them as another request.
-    const std::string_view raw = sv(h.target());
-    request_.path = std::string(raw.substr(0, std::min<std::size_t>(raw.find('?'), 200)));
-    return sendError(bad->status, bad->code, bad->message, bad->field, true);
-  }
-  for (const auto& field : h) {
-    std::string name = lower(sv(field.name_string()));
-    auto [it, inserted] = request_.headers.emplace(name, std::string(field.value()));
-    if (!inserted) it->second += ", " + std::string(field.value());
-  }
-  if (!parseTarget(sv(h.target()), request_.path, request_.query)) {
-    const std::string_view raw = sv(h.target());
-    request_.path = std::string(raw.substr(0, std::min<std::size_t>(raw.find('?'), 200)));
-    return sendError(400, "bad_request", "invalid request target", "path",
-                     !headerParser_->is_done());
-  }
-  routeRequest();
-}
-
-void HttpSession::routeRequest() {
-  const ServerConfig& cfg = state_->config;
-  const auto& h = headerParser_->get();
-  const bool bodyPending = !headerParser_->is_done();
-  const bool isUpgrade = beast::websocket::is_upgrade(h);
-  const std::string& path = request_.path;
-  const bool api = isApiPath(path);
-
-  // Before anything else, even a preflight: a request for another host name (DNS rebinding) or a
-  // state change from a foreign page is not ours to answer (request_origin.hpp).
-  const std::string host = request_.header("host");
-  // HTTP/1.1 requires Host (RFC 9112 §3.2: 400 without one); an HTTP/1.0 tool may omit it, and no
-  // browser does, so its absence opens no rebinding.
-  if (host.empty() && version_ >= 11)
-    return sendError(400, "bad_request", "the request has no Host header", "host", bodyPending);
-  if (!host.empty() && !hostAllowed(state_->origins, host))
-    return sendError(421, "misdirected_request",
-                     "this server does not answer to that Host name (start it with --public-name NAME to add one)",
-                     "host", bodyPending);
-  const bool safeMethod = h.method() == bhttp::verb::get || h.method() == bhttp::verb::head ||
-                          h.method() == bhttp::verb::options;
-  if ((isUpgrade || !safeMethod) &&
-      foreignOrigin(state_->origins, request_.header("origin"), request_.header("sec-fetch-site"),
-                    host))
-    return sendError(403, "foreign_origin",
-                     "state-changing requests and live streams are refused from another site's page "
-                     "(start the server with --cors ORIGIN to allow one)",
-                     "origin", bodyPending);
-
-  if (!cfg.corsOrigin.empty() && h.method() == bhttp::verb::options) {
-    Response r;
-    r.status = 204;
-    r.contentType.clear();
-    r.headers = {{"Access-Control-Allow-Methods", "GET, POST, PUT, PATCH, DELETE, OPTIONS"},
-                 {"Access-Control-Allow-Headers", "Authorization, Content-Type"},
-                 {"Access-Control-Max-Age", "600"}};
-    return send(std::move(r), bodyPending);
-  }
-
-  Router::Match m = state_->router.match(request_.method, path, isUpgrade);
-  const bool wsRoute = m.route && m.route->method == "WS";
-  const bool needAuth = !cfg.token.empty() && (m.route ? m.route->options.requireAuth : api);
-  if (needAuth && !authorized(request_, cfg.token, wsRoute)) {
-    Response r =
-        Response::error(401, "unauthorized", "missing or invalid bearer token", "authorization");
-    r.headers.emplace_back("WWW-Authenticate", "Bearer");
-    return send(std::move(r), bodyPending);
-  }
-
-  if (!m.route) {
-    if (h.method() == bhttp::verb::get && !isUpgrade) {
-      Router::Match ws = state_->router.match("GET", path, true);
-      if (ws.route && ws.route->method == "WS")
-        return sendError(426, "upgrade_required", "this path is a WebSocket endpoint", "upgrade",
-                         bodyPending);
-    }
-    if (!api && state_->statics.enabled() &&
-        (h.method() == bhttp::verb::get || h.method() == bhttp::verb::head))
-      return send(state_->statics.serve(path), bodyPending);
-    if (m.pathKnown) {
-      std::string allow;
-      for (const auto& method : state_->router.allowedMethods(path))
-        allow += (allow.empty() ? "" : ", ") + method;
-      Response r = Response::error(405, "method_not_allowed",
-                                   request_.method + " is not allowed on " + path, "method");
-      r.headers.emplace_back("Allow", allow);
-      return send(std::move(r), bodyPending);
-    }
-    return sendError(404, "not_found", "no route for " + request_.method + " " + path, "path",
-                     bodyPending);
-  }
-
-  route_ = m.route;
-  request_.params = std::move(m.params);
-  if (wsRoute) return upgrade();
+  Routing routing = routeHead(*state_, h, request_);
+  if (routing.answer) return send(std::move(*routing.answer), routing.close || !headerParser_->is_done());
+  route_ = routing.route;
+  if (route_->method == "WS") return upgrade();
   readBody();
 }
 
@@ -507,15 +267,15 @@ void HttpSession::readBody() {
       !headerParser_->is_done() && lower(sv(h[bhttp::field::expect])) == "100-continue";
 
   if (stream) {
-    tempFile_ = state_->tempFilePath();
+    tempFile_.adopt(state_->uploads.newPath());
     fileParser_.emplace(std::move(*headerParser_));
     headerParser_.reset();
     fileParser_->body_limit(limit);
     fileParser_->eager(true);
     beast::error_code ec;
-    fileParser_->get().body().open(tempFile_.c_str(), beast::file_mode::write_new, ec);
+    fileParser_->get().body().open(tempFile_.path().c_str(), beast::file_mode::write_new, ec);
     if (ec) {
-      tempFile_.clear();
+      tempFile_.release();
       if (isDiskFull(ec))
         return sendError(507, "insufficient_storage",
                          "the server's disk is full: cannot store the request body; free space or try again later",
@@ -582,9 +342,9 @@ void HttpSession::onBody() {
     beast::error_code ignored;
     fileParser_->get().body().file().close(ignored);
     keepAlive_ = fileParser_->get().keep_alive();
-    request_.bodyFile = tempFile_;
+    request_.bodyFile = tempFile_.path();
     std::error_code fec;
-    const auto size = fs::file_size(tempFile_, fec);
+    const auto size = fs::file_size(tempFile_.path(), fec);
     request_.bodySize = fec ? 0 : static_cast<std::uint64_t>(size);
   } else {
     keepAlive_ = stringParser_->get().keep_alive();
@@ -592,7 +352,7 @@ void HttpSession::onBody() {
     request_.bodySize = request_.body.size();
   }
   if (route_->options.blocking) return runOnPool();
-  respond(invokeHandler(*route_, request_, *state_));
+  respond(invoke(*route_, request_, *state_));
 }
 
 void HttpSession::runOnPool() {
@@ -603,7 +363,7 @@ void HttpSession::runOnPool() {
   // opening more connections buys no more turns).
   const std::string client = remote_.substr(0, remote_.rfind(':'));
   const bool queued = state_->pool.trySubmit([self] {
-    Response res = invokeHandler(*self->route_, self->request_, *self->state_);
+    Response res = invoke(*self->route_, self->request_, *self->state_);
     auto done = [self, res = std::move(res)]() mutable {
       try {
         self->respond(std::move(res));
@@ -635,21 +395,9 @@ void HttpSession::upgrade() {
   std::shared_ptr<void> place;  // under the subscriber limits, before anything subscribes
   if (auto refused = admitSubscriber(*state_, request_.path, place)) return send(std::move(*refused));
   auto connection = std::make_shared<WsConnectionImpl>(state_);
-  std::shared_ptr<WsSource> source;
-  try {
-    try {
-      source = route_->wsHandler(request_, connection);
-    } catch (const ApiError& e) {
-      Response r = Response::error(e.status(), e.code(), e.what(), e.field());
-      r.headers = e.headers();
-      return send(std::move(r));
-    } catch (const std::exception& e) {
-      return sendError(500, "internal", e.what(), "");
-    }
-  } catch (...) {
-    return sendError(500, "internal", "unknown error", "");
-  }
-  if (!source) return sendError(500, "internal", "the WebSocket handler returned no source", "");
+  auto opened = openStream(*route_, request_, connection, *state_);
+  if (auto* refused = std::get_if<Response>(&opened)) return send(std::move(*refused));
+  std::shared_ptr<WsSource> source = std::get<std::shared_ptr<WsSource>>(std::move(opened));
 
   auto ws = std::make_shared<WebsocketSession>(std::move(stream_), state_, std::move(connection),
                                                std::move(source), request_.path, std::move(place));
@@ -775,13 +523,11 @@ void HttpSession::onDrain(beast::error_code ec, std::size_t) {
 
 void HttpSession::removeTempFile() {
   if (tempFile_.empty()) return;
-  if (fileParser_) {
+  if (fileParser_) {  // closed before it is removed
     beast::error_code ignored;
     fileParser_->get().body().file().close(ignored);
   }
-  std::error_code ec;
-  fs::remove(tempFile_, ec);
-  tempFile_.clear();
+  tempFile_.remove();
 }
 
 }  // namespace rover::http

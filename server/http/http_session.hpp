@@ -6,17 +6,12 @@
 // routes (the response is posted back to the strand), writes the response, and hands WebSocket
 // upgrades over to a WebsocketSession. The session feeds Beast's parser itself, so every parser
 // exception is caught here: no exception leaves a session's handler (it is logged and the
-// connection closed). Also holds ServerState, what every session of one server shares.
+// connection closed). What to answer is decided in dispatch.hpp; this file only moves bytes.
 #include <chrono>
-#include <condition_variable>
 #include <cstdint>
 #include <memory>
-#include <mutex>
 #include <optional>
-#include <shared_mutex>
 #include <string>
-#include <unordered_map>
-#include <vector>
 
 #include <boost/asio/ip/tcp.hpp>
 #include <boost/beast/core.hpp>
@@ -24,13 +19,8 @@
 
 #include <boost/asio/steady_timer.hpp>
 
-#include "server/http/http_server.hpp"
 #include "server/http/rate_floor.hpp"
-#include "server/http/request_origin.hpp"
-#include "server/http/router.hpp"
-#include "server/http/static_files.hpp"
-#include "server/http/work_pool.hpp"
-#include "server/http/ws_admission.hpp"
+#include "server/http/server_state.hpp"
 
 namespace rover::http {
 
@@ -38,56 +28,6 @@ namespace beast = boost::beast;
 namespace bhttp = boost::beast::http;
 namespace net = boost::asio;
 using tcp = boost::asio::ip::tcp;
-
-// A live connection that stop() can close. close() is thread-safe (it posts to the strand).
-class Closable {
- public:
-  virtual ~Closable() = default;
-  virtual void close() = 0;
-};
-
-// Shared by the listener and all sessions of one server. Sessions hold it by shared_ptr; it holds
-// sessions only by weak_ptr, so a slow or dead client never pins memory.
-class ServerState {
- public:
-  ServerState(ServerConfig config, const Router& router, WorkPool& pool);
-
-  const ServerConfig config;
-  const OriginPolicy origins;  // from config: the Host allow-list and the CORS origin
-  const Router& router;
-  const StaticFiles statics;
-  WorkPool& pool;  // owned by HttpServer, stopped after the io threads
-  const std::shared_ptr<WsAdmission> websockets = std::make_shared<WsAdmission>();
-
-  // Registry of live sessions. add() refuses (nullopt) once stopping.
-  std::optional<std::uint64_t> add(std::weak_ptr<Closable> session);
-  void remove(std::uint64_t id);
-  std::vector<std::shared_ptr<Closable>> live() const;
-  // Waits until every session has unregistered or `timeout` passed; true when none is left.
-  bool waitUntilEmpty(std::chrono::milliseconds timeout);
-
-  // Marks the server as stopping: no new sessions, and WsConnection::wake() becomes a no-op.
-  void beginStop();
-  // Held shared by wake() while it posts to a strand, so the io_context outlives the post.
-  std::shared_mutex& wakeGate() { return wakeGate_; }
-  bool stoppedLocked() const { return stopped_; }  // caller holds wakeGate()
-
-  // One line on stderr (whole lines, never interleaved).
-  void log(const std::string& line) const;
-  // A fresh, unique path in config.uploadDir (or the system temp dir) for a streamed body.
-  std::string tempFilePath();
-
- private:
-  mutable std::mutex mutex_;
-  std::condition_variable emptied_;
-  std::unordered_map<std::uint64_t, std::weak_ptr<Closable>> sessions_;
-  std::uint64_t nextId_ = 1;
-  bool stopping_ = false;
-  std::shared_mutex wakeGate_;
-  bool stopped_ = false;  // guarded by wakeGate_
-  std::uint64_t tempCounter_ = 0;
-  std::uint64_t tempSalt_ = 0;
-};
 
 class HttpSession : public Closable, public std::enable_shared_from_this<HttpSession> {
  public:
@@ -105,7 +45,6 @@ class HttpSession : public Closable, public std::enable_shared_from_this<HttpSes
   void onRead(beast::error_code ec, std::size_t bytes);
   void onParseError(beast::error_code ec);
   void onHeader();
-  void routeRequest();
   void readBody();
   void onContinueWritten(beast::error_code ec, std::size_t bytes);
   void startBodyRead();
@@ -152,7 +91,7 @@ class HttpSession : public Closable, public std::enable_shared_from_this<HttpSes
   std::optional<bhttp::request_parser<bhttp::file_body>> fileParser_;
   Request request_;
   const Route* route_ = nullptr;
-  std::string tempFile_;
+  TempFile tempFile_;  // the streamed body
   bool keepAlive_ = false;
   bool head_ = false;
   unsigned version_ = 11;

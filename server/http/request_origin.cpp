@@ -28,7 +28,27 @@ bool loopbackV4(std::string_view host) {
   return dots == 3;
 }
 
+// Time depends on the secret's length only, not on where the strings differ.
+bool constantTimeEquals(const std::string& presented, const std::string& secret) {
+  unsigned char diff = presented.size() == secret.size() ? 0 : 1;
+  for (std::size_t i = 0; i < secret.size(); ++i) {
+    const unsigned char p = i < presented.size() ? static_cast<unsigned char>(presented[i]) : 0;
+    diff |= static_cast<unsigned char>(p ^ static_cast<unsigned char>(secret[i]));
+  }
+  volatile unsigned char result = diff;
+  return result == 0;
+}
+
 }  // namespace
+
+OriginPolicy originPolicy(const std::string& bindHost, const std::vector<std::string>& publicNames,
+                          const std::string& corsOrigin) {
+  OriginPolicy p{publicNames, corsOrigin};
+  // A wildcard bind names no host; a named one (an interface address or name) is one of ours.
+  if (!bindHost.empty() && bindHost != "0.0.0.0" && bindHost != "::" && bindHost != "[::]")
+    p.extraHosts.push_back(bindHost);
+  return p;
+}
 
 std::optional<std::string> hostName(std::string_view value) {
   while (!value.empty() && (value.back() == ' ' || value.back() == '\t')) value.remove_suffix(1);
@@ -71,6 +91,49 @@ bool foreignOrigin(const OriginPolicy& policy, std::string_view origin, std::str
   const std::string own = lower(hostHeader);
   const std::string o = lower(origin);
   return o != "http://" + own && o != "https://" + own;
+}
+
+std::optional<Response> refuseByOrigin(const OriginPolicy& policy, const Request& req, unsigned httpVersion,
+                                       bool stateChanging) {
+  const std::string host = req.header("host");
+  if (host.empty() && httpVersion >= 11)
+    return Response::error(400, "bad_request", "the request has no Host header", "host");
+  if (!host.empty() && !hostAllowed(policy, host))
+    return Response::error(421, "misdirected_request",
+                           "this server does not answer to that Host name (start it with --public-name NAME to add one)",
+                           "host");
+  if (stateChanging && foreignOrigin(policy, req.header("origin"), req.header("sec-fetch-site"), host))
+    return Response::error(403, "foreign_origin",
+                           "state-changing requests and live streams are refused from another site's page "
+                           "(start the server with --cors ORIGIN to allow one)",
+                           "origin");
+  return std::nullopt;
+}
+
+bool bearerAuthorized(const Request& req, const std::string& token, bool allowQueryToken) {
+  std::string presented;
+  bool found = false;
+  const std::string h = req.header("authorization");
+  if (h.size() > 7 && lower(h.substr(0, 7)) == "bearer ") {
+    presented = h.substr(7);
+    while (!presented.empty() && (presented.back() == ' ' || presented.back() == '\t')) presented.pop_back();
+    while (!presented.empty() && presented.front() == ' ') presented.erase(presented.begin());
+    found = true;
+  }
+  if (!found && allowQueryToken) {
+    auto it = req.query.find("token");
+    if (it != req.query.end()) {
+      presented = it->second;
+      found = true;
+    }
+  }
+  return found && constantTimeEquals(presented, token);
+}
+
+Response unauthorized() {
+  Response r = Response::error(401, "unauthorized", "missing or invalid bearer token", "authorization");
+  r.headers.emplace_back("WWW-Authenticate", "Bearer");
+  return r;
 }
 
 }  // namespace rover::http

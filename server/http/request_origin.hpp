@@ -8,10 +8,13 @@
 //     this server as same-origin, with `Host: evil.example:8080`.
 // The first is refused by the Origin check, the second by the Host allow-list. Non-browser clients
 // (curl, the CLI, scripts) send no Origin and a loopback or configured Host, and are unaffected.
+// Also who may use the API at all: the bearer token of `serve --token`.
 #include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
+
+#include "server/http/http_types.hpp"
 
 namespace rover::http {
 
@@ -22,6 +25,11 @@ struct OriginPolicy {
   // The one foreign origin allowed to change state (--cors), "" for none.
   std::string corsOrigin;
 };
+
+// The policy of a server bound to `bindHost` ("0.0.0.0" or "::" for every interface) that also
+// answers `publicNames` and lets `corsOrigin` ("" for none) change state.
+OriginPolicy originPolicy(const std::string& bindHost, const std::vector<std::string>& publicNames,
+                          const std::string& corsOrigin);
 
 // The host part of a Host header value ("Example.org:8080" -> "example.org", "[::1]:80" -> "::1"),
 // lower-cased; nullopt when the value is malformed (empty, a bad port, spaces, a userinfo '@').
@@ -36,5 +44,21 @@ bool hostAllowed(const OriginPolicy& policy, std::string_view hostHeader);
 // browser's `Sec-Fetch-Site: cross-site`/`same-site`.
 bool foreignOrigin(const OriginPolicy& policy, std::string_view origin, std::string_view secFetchSite,
                    std::string_view hostHeader);
+
+// The answer for a request that is not ours to serve, checked before anything else (even a CORS
+// preflight); nullopt when it may go on:
+//   400 bad_request without a Host on HTTP/1.1 (RFC 9112 §3.2; an HTTP/1.0 tool may omit it, and
+//       no browser does, so its absence opens no rebinding);
+//   421 misdirected_request for a Host this server does not answer to (DNS rebinding);
+//   403 foreign_origin for a `stateChanging` request (not GET/HEAD/OPTIONS, or a WebSocket
+//       upgrade) from a foreign page.
+std::optional<Response> refuseByOrigin(const OriginPolicy& policy, const Request& req, unsigned httpVersion,
+                                       bool stateChanging);
+
+// Whether `req` presents `token`: "Authorization: Bearer TOKEN", or with `allowQueryToken` (a
+// WebSocket upgrade: browsers cannot set its headers) ?token=TOKEN. Compared in constant time.
+bool bearerAuthorized(const Request& req, const std::string& token, bool allowQueryToken);
+// 401 unauthorized with WWW-Authenticate: Bearer.
+Response unauthorized();
 
 }  // namespace rover::http

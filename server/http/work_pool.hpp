@@ -2,7 +2,7 @@
 // A fixed set of threads for slow request handlers (imports, renders, PDM discretisation, mission
 // validation), so the io threads keep answering cheap requests (/api/health) while those run.
 // Bounded: at most `maxQueued` jobs wait; beyond that trySubmit() refuses and the caller answers
-// 503. A job must not throw (HttpSession wraps handlers in invokeHandler, which does not).
+// 503. A job must not throw (HttpSession runs handlers through invoke(), dispatch.hpp, which does not).
 //
 // Fair between clients (issue 22: 20 clients looping on one GET made another's upload wait 36 s):
 // each client (the server passes the remote address) has its own FIFO queue and the threads serve

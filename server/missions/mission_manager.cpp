@@ -11,7 +11,7 @@
 #include "core/coverage/coverage_entry.hpp"
 #include "maps/geojson.hpp"
 #include "maps/result_csv.hpp"
-#include "server/http/http_types.hpp"
+#include "server/errors/domain_error.hpp"
 #include "server/json/plan_json.hpp"
 
 namespace rover::missions {
@@ -29,7 +29,7 @@ std::string readFile(const fs::path& p) {
 
 // Seconds a client refused for a full queue or budget is told to wait (Retry-After): missions
 // take from seconds to minutes, so a short retry is cheap and a long one would idle the workers.
-constexpr int kRetryAfterSeconds = 10;
+constexpr std::chrono::seconds kRetryAfter{10};
 
 MissionManager::MissionManager(store::Database& db, store::DataDir& dir,
                                const PlannerRegistry& registry, unsigned workers,
@@ -60,23 +60,23 @@ std::string remedy(const MemoryEstimate& e, std::uint64_t budget) {
 }  // namespace
 
 void MissionManager::admitLocked(const MemoryEstimate& e) const {
-  if (stopping_) throw http::ApiError(503, "unavailable", "the server is shutting down");
+  if (stopping_) throw DomainError(Refusal::Unavailable, "the server is shutting down");
   if (e.bytes > budget_)
-    throw http::ApiError(413, "mission_too_large",
-                         "the mission needs about " + formatBytes(e.bytes) + " (" + e.what +
-                             "), more than the server's mission memory budget of " + formatBytes(budget_) +
-                             ": " + remedy(e, budget_),
-                         e.field);
+    throw DomainError(Refusal::MissionTooLarge,
+                      "the mission needs about " + formatBytes(e.bytes) + " (" + e.what +
+                          "), more than the server's mission memory budget of " + formatBytes(budget_) + ": " +
+                          remedy(e, budget_),
+                      e.field);
   if (queue_.size() >= capacity_)
-    throw http::ApiError(429, "queue_full",
-                         "the mission queue is full (" + std::to_string(capacity_) + " waiting); try again later")
-        .withHeader("Retry-After", std::to_string(kRetryAfterSeconds));
+    throw DomainError(Refusal::QueueFull,
+                      "the mission queue is full (" + std::to_string(capacity_) + " waiting); try again later")
+        .retryAfter(kRetryAfter);
   if (reserved_ + e.bytes > budget_)
-    throw http::ApiError(429, "memory_busy",
-                         "the running and queued missions hold " + formatBytes(reserved_) + " of the " +
-                             formatBytes(budget_) + " mission memory budget and this one needs about " +
-                             formatBytes(e.bytes) + " (" + e.what + "); try again when one finishes")
-        .withHeader("Retry-After", std::to_string(kRetryAfterSeconds));
+    throw DomainError(Refusal::MemoryBusy,
+                      "the running and queued missions hold " + formatBytes(reserved_) + " of the " +
+                          formatBytes(budget_) + " mission memory budget and this one needs about " +
+                          formatBytes(e.bytes) + " (" + e.what + "); try again when one finishes")
+        .retryAfter(kRetryAfter);
 }
 
 void MissionManager::submit(MissionJob job) {
@@ -84,7 +84,7 @@ void MissionManager::submit(MissionJob job) {
   std::unique_lock lock(mutex_);
   admitLocked(job.memory);
   job.record.status = RunStatus::Queued;
-  db_.insertMission(job.record);  // StorageFull (507) on a full disk: nothing queued
+  db_.insertMission(job.record);  // StorageFull on a full disk: nothing queued
   const GridGeometry& g = job.eventGrid;
   Active a;
   a.stream = std::make_shared<MissionStream>(job.record.id, g, static_cast<int>(job.problem.rovers.size()), job.pace);

@@ -6,8 +6,8 @@
 // Memory is bounded and stated (issue 14): a queued mission holds its request, not its world — the
 // world / DEM / PDM are built by `MissionJob::build` when a worker starts it — and every mission's
 // estimated memory (mission_memory.hpp) is counted against a budget while it is queued or running:
-// one mission over the budget is refused with 413, a full budget with 429 + Retry-After.
-// A full disk never stops the server: writes answer 507, a worker that cannot store its result
+// one mission over the budget is refused mission_too_large, a full budget memory_busy with a
+// retry-after (DomainError). A full disk never stops the server: writes throw StorageFull, a worker that cannot store its result
 // marks the mission failed (or keeps the status in memory and retries the row later).
 #include <condition_variable>
 #include <cstdint>
@@ -58,12 +58,12 @@ class MissionManager {
                  std::uint64_t memoryBudget = defaultMissionMemoryBudget());
   ~MissionManager();  // stop()
 
-  // Throws http::ApiError 413 mission_too_large when one mission's estimate exceeds the budget,
-  // 429 (Retry-After) when the queue is full or the running + queued missions leave too little of
-  // the budget. Cheap: callers check before they build anything big; submit() checks again.
+  // Throws DomainError mission_too_large when one mission's estimate exceeds the budget,
+  // queue_full or memory_busy (with a retry-after) when the queue is full or the running + queued
+  // missions leave too little of the budget, unavailable once stopping. Cheap: callers check before they build anything big; submit() checks again.
   void admit(const MemoryEstimate& estimate) const;
-  // Queues a validated mission (row inserted as "queued"); throws like admit(), and 507 when the
-  // row cannot be written (full disk).
+  // Queues a validated mission (row inserted as "queued"); throws like admit(), and StorageFull when
+  // the row cannot be written (full disk).
   void submit(MissionJob job);
   // Cancels a queued or running mission; false if it is not (or no longer) active.
   bool cancel(const std::string& id);

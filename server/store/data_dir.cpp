@@ -91,7 +91,7 @@ DataDir::DataDir(std::string root) : root_(std::move(root)), budget_(std::make_u
     const fs::path probe = dir / (".write-probe-" + newId());
     const int fd = ::open(probe.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0600);
     if (fd < 0 && isStorageFullErrno(errno)) {
-      startedFull_ = true;  // writable, only full: start, and let each write answer 507
+      startedFull_ = true;  // writable, only full: start, and let each write be refused
       continue;
     }
     if (fd < 0) {

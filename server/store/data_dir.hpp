@@ -10,31 +10,30 @@
 #include <optional>
 #include <string>
 
-#include "server/http/http_types.hpp"
+#include "server/errors/domain_error.hpp"
 
 namespace rover::store {
 
-// A write failed because the disk (or the file size limit) is full: answered 507
-// insufficient_storage, with a message that names what could not be stored but no server path.
-class StorageFull : public http::ApiError {
+// A write failed because the disk (or the file size limit) is full: refused insufficient_storage,
+// with a message that names what could not be stored but no server path.
+class StorageFull : public DomainError {
  public:
   explicit StorageFull(const std::string& what)
-      : http::ApiError(507, "insufficient_storage",
-                       "the server's disk is full: " + what + "; free space or try again later") {}
+      : DomainError(Refusal::InsufficientStorage,
+                    "the server's disk is full: " + what + "; free space or try again later") {}
 
  protected:
-  StorageFull(int status, const std::string& code, const std::string& message, const std::string& field)
-      : http::ApiError(status, code, message, field) {}
+  StorageFull(Refusal code, const std::string& message, const std::string& field)
+      : DomainError(code, message, field) {}
 };
 
 // Beyond a disk budget (DiskBudget, server/store/disk_budget.hpp): a StorageFull, so a mission or
-// study that meets it fails as on a full disk; answered 507 disk_budget_full, or 413 too_large for
-// one object no per-map budget could hold.
+// study that meets it fails as on a full disk; refused disk_budget_full, or too_large for one
+// object no per-map budget could hold.
 class OverBudget : public StorageFull {
  public:
-  OverBudget(int status, const std::string& code, const std::string& message, const std::string& field,
-             bool serverWide)
-      : StorageFull(status, code, message, field), serverWide_(serverWide) {}
+  OverBudget(Refusal code, const std::string& message, const std::string& field, bool serverWide)
+      : StorageFull(code, message, field), serverWide_(serverWide) {}
   // The global budget is full (not only the map's): freeing any map's files makes room.
   bool serverWide() const { return serverWide_; }
 
@@ -57,7 +56,7 @@ bool isStorageFullErrno(int err);
 class DataDir {
  public:
   // Creates the layout if missing; throws std::runtime_error if the folder is not writable. A
-  // folder on a full disk is accepted (startedFull() says so): reads work and writes answer 507 until
+  // folder on a full disk is accepted (startedFull() says so): reads work and writes are refused until
   // space frees, so a restart with a full disk still starts.
   explicit DataDir(std::string root);
   ~DataDir();

@@ -46,7 +46,7 @@ struct MissionRecord {
   std::string mapName, pdmName;
 };
 
-// A full disk: every write throws StorageFull (data_dir.hpp, answered 507) and leaves the old row.
+// A full disk: every write throws StorageFull (data_dir.hpp) and leaves the old row.
 // So that final mission statuses and deletes (which free space) still commit when the disk is
 // full, the database keeps two reserves of disk in files beside it (PATH.reserve-status,
 // PATH.reserve-delete): such a write that finds the disk full gives its reserve back and retries

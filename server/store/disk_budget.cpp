@@ -69,21 +69,21 @@ void DiskBudget::charge(const std::string& key, DiskUse use, const std::string& 
   const std::string what = diskUseName(use);
   if (perMap(use)) {
     if (bytes > limits_.perMapBytes)
-      throw OverBudget(413, "too_large",
+      throw OverBudget(Refusal::TooLarge,
                        "the " + what + " would take " + megabytes(bytes) +
                            " on disk, more than a map's whole disk budget of " + megabytes(limits_.perMapBytes),
                        field, false);
     const auto m = byMap_.find(mapId);
     const std::uint64_t ofMap = m == byMap_.end() ? 0 : m->second;
     if (ofMap - oldOfMap + bytes > limits_.perMapBytes)
-      throw OverBudget(507, "disk_budget_full",
+      throw OverBudget(Refusal::DiskBudgetFull,
                        "the map's disk budget is full: its PDMs, layer files and mission results take " +
                            megabytes(ofMap) + " of " + megabytes(limits_.perMapBytes) + " and the " + what +
                            " needs " + megabytes(bytes) + "; delete some of its PDMs or missions",
                        field, false);
   }
   if (total_ - old + bytes > limits_.globalBytes)
-    throw OverBudget(507, "disk_budget_full",
+    throw OverBudget(Refusal::DiskBudgetFull,
                      "the server's disk budget is full: " + megabytes(total_) + " of " +
                          megabytes(limits_.globalBytes) + " used and the " + what + " needs " + megabytes(bytes) +
                          "; delete maps, missions or studies",
@@ -101,14 +101,14 @@ void DiskBudget::requireRoom(DiskUse use, const std::string& mapId, const std::s
   if (perMap(use)) {
     const auto m = byMap_.find(mapId);
     if (m != byMap_.end() && m->second >= limits_.perMapBytes)
-      throw OverBudget(507, "disk_budget_full",
+      throw OverBudget(Refusal::DiskBudgetFull,
                        "the map's disk budget is full: its PDMs, layer files and mission results take " +
                            megabytes(m->second) + " of " + megabytes(limits_.perMapBytes) +
                            "; delete some of its PDMs or missions",
                        field, false);
   }
   if (total_ >= limits_.globalBytes)
-    throw OverBudget(507, "disk_budget_full",
+    throw OverBudget(Refusal::DiskBudgetFull,
                      "the server's disk budget is full: " + megabytes(total_) + " of " +
                          megabytes(limits_.globalBytes) + " used; delete maps, missions or studies",
                      field, true);

@@ -3,9 +3,8 @@
 // server stores is charged here when it is committed and released when it is deleted:
 //   per map:  its PDMs, its cached layer files and the results of missions on it
 //   globally: all of that, plus the maps' own DEMs and the studies' databases.
-// Past a budget the write is refused before the object becomes visible: 413 too_large when one
-// object is larger than a whole per-map budget (it could never fit), else 507 disk_budget_full
-// naming the budget and what fills it. Totals are kept incrementally (a charge is O(1)); they are
+// Past a budget the write is refused before the object becomes visible: too_large when one object
+// is larger than a whole per-map budget (it could never fit), else disk_budget_full naming the budget and what fills it. Totals are kept incrementally (a charge is O(1)); they are
 // counted from the files once at start-up (recountDiskUse).
 #include <cstdint>
 #include <limits>
@@ -33,13 +32,13 @@ class DiskBudget {
   DiskBudgetLimits limits() const;
 
   // Charges `bytes` of `use` under `key` (a stored folder or file; a key charged again replaces
-  // its old size) to map `mapId` ("" for none) and to the global total. Throws OverBudget (413 or
-  // 507, `field` in the error) and charges nothing when that would pass a budget.
+  // its old size) to map `mapId` ("" for none) and to the global total. Throws OverBudget (too_large or
+  // disk_budget_full, `field` in the error) and charges nothing when that would pass a budget.
   void charge(const std::string& key, DiskUse use, const std::string& mapId, std::uint64_t bytes,
               const std::string& field = "");
   // Records without a check: what is on disk already (start-up).
   void record(const std::string& key, DiskUse use, const std::string& mapId, std::uint64_t bytes);
-  // Throws OverBudget 507 when the budget `use` would be charged to is already full, so a request
+  // Throws OverBudget disk_budget_full when the budget `use` would be charged to is already full, so a request
   // whose output cannot be stored is refused before it costs anything.
   void requireRoom(DiskUse use, const std::string& mapId, const std::string& field = "") const;
   void release(const std::string& key);

@@ -1,7 +1,7 @@
 #pragma once
 // Small SQLite helpers shared by the server's database and the study database: a prepared
 // statement finalized on scope exit (values only ever bound as parameters) and exec(); a full
-// disk or failed write throws StorageFull (answered 507), anything else std::runtime_error.
+// disk or failed write throws StorageFull, anything else std::runtime_error.
 #include <sqlite3.h>
 
 #include <stdexcept>
@@ -12,7 +12,7 @@
 namespace rover::store {
 
 // A full disk (SQLITE_FULL), a failed write (SQLITE_IOERR_*) or a file over RLIMIT_FSIZE are
-// the disk's fault, not a bug: StorageFull, answered 507.
+// the disk's fault, not a bug: StorageFull.
 inline bool storageFailure(int rc) {
   const int primary = rc & 0xff;
   return primary == SQLITE_FULL || primary == SQLITE_IOERR;

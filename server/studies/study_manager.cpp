@@ -4,6 +4,7 @@
 #include <iostream>
 
 #include "core/common/error.hpp"
+#include "server/errors/domain_error.hpp"
 #include "server/store/database.hpp"
 #include "server/studies/studies.hpp"
 
@@ -17,24 +18,24 @@ namespace {
 // The server reads no file a request names: DEM worlds are refused, and the swinton preset runs on
 // its synthetic Mars world only.
 json documentOf(const json& body) {
-  if (!body.is_object()) throw http::ApiError(400, "bad_json", "the request body must be a JSON object", "body");
+  if (!body.is_object()) throw DomainError(Refusal::BadJson, "the request body must be a JSON object", "body");
   if (body.contains("preset")) {
     for (const auto& item : body.items())
       if (item.key() != "preset" && item.key() != "runs" && item.key() != "master_seed" && item.key() != "name")
-        throw http::ApiError(400, "unknown_field", "with a preset only runs, master_seed and name may be given",
-                             item.key().substr(0, 64));
-    if (!body["preset"].is_string()) throw http::ApiError(400, "invalid_field", "preset must be a string", "preset");
+        throw DomainError(Refusal::UnknownField, "with a preset only runs, master_seed and name may be given",
+                          item.key().substr(0, 64));
+    if (!body["preset"].is_string()) throw DomainError(Refusal::InvalidField, "preset must be a string", "preset");
     PresetOptions o;
     o.hirisePath = "";
     if (body.contains("runs")) {
       const json& r = body["runs"];
       if (!r.is_number_integer() || r.get<std::int64_t>() < 1 || r.get<std::int64_t>() > kMaxRuns)
-        throw http::ApiError(400, "invalid_field", "runs must be an integer in [1, " + std::to_string(kMaxRuns) + "]", "runs");
+        throw DomainError(Refusal::InvalidField, "runs must be an integer in [1, " + std::to_string(kMaxRuns) + "]", "runs");
       o.runs = r.get<int>();
     }
     if (body.contains("master_seed")) {
       if (!body["master_seed"].is_number_unsigned())
-        throw http::ApiError(400, "invalid_field", "master_seed must be a non-negative integer", "master_seed");
+        throw DomainError(Refusal::InvalidField, "master_seed must be a non-negative integer", "master_seed");
       o.masterSeed = body["master_seed"].get<std::uint64_t>();
     }
     json spec = presetSpecJson(body["preset"].get<std::string>(), o);
@@ -44,9 +45,8 @@ json documentOf(const json& body) {
   if (const auto w = body.find("worlds"); w != body.end() && w->is_array())
     for (std::size_t i = 0; i < w->size(); ++i)
       if ((*w)[i].is_object() && (*w)[i].contains("dem"))
-        throw http::ApiError(400, "invalid_field",
-                             "the server reads no file a request names: use grid or terrain worlds",
-                             "worlds[" + std::to_string(i) + "].dem");
+        throw DomainError(Refusal::InvalidField, "the server reads no file a request names: use grid or terrain worlds",
+                          "worlds[" + std::to_string(i) + "].dem");
   return body;
 }
 
@@ -78,16 +78,16 @@ StudyManager::StudyManager(store::DataDir& dir, std::function<bool()> missionsBu
 StudyManager::~StudyManager() { stop(); }
 
 StudyState StudyManager::submit(const json& body) {
-  store_.requireRoom();  // 507 when the disk budget is full
+  store_.requireRoom();  // OverBudget when the disk budget is full
   const json doc = documentOf(body);
   const StudySpec spec = parseStudySpec(doc);  // rover::Error naming the field
   if (spec.runCount() > kMaxServerRuns)
-    throw http::ApiError(400, "too_many_runs",
-                         "the study has " + std::to_string(spec.runCount()) + " runs; the server runs at most " +
-                             std::to_string(kMaxServerRuns) + " per study (use roverplan study run on a cluster)",
-                         "runs");
+    throw DomainError(Refusal::TooManyRuns,
+                      "the study has " + std::to_string(spec.runCount()) + " runs; the server runs at most " +
+                          std::to_string(kMaxServerRuns) + " per study (use roverplan study run on a cluster)",
+                      "runs");
   if (!executor_->multithreadedRuns() && spec.missionThreads > 1)
-    throw http::ApiError(400, "invalid_field", "a study on the server plans each run on one thread", "mission_threads");
+    throw DomainError(Refusal::InvalidField, "a study on the server plans each run on one thread", "mission_threads");
   StudyState s;
   s.id = store::DataDir::newId();
   s.name = spec.name;
@@ -98,12 +98,12 @@ StudyState StudyManager::submit(const json& body) {
     std::size_t active = 0;
     for (const auto& [id, e] : studies_) active += !isFinal(e.state.status);
     if (active >= kMaxActive)
-      throw http::ApiError(429, "too_many_studies",
-                           std::to_string(kMaxActive) + " studies are queued or running: wait for one to end or cancel one", "")
-          .withHeader("Retry-After", "60");
+      throw DomainError(Refusal::TooManyStudies,
+                        std::to_string(kMaxActive) + " studies are queued or running: wait for one to end or cancel one")
+          .retryAfter(std::chrono::seconds(60));
     if (studies_.size() >= kMaxStored)
-      throw http::ApiError(429, "too_many_studies",
-                           "the server keeps at most " + std::to_string(kMaxStored) + " studies: delete ended ones", "");
+      throw DomainError(Refusal::TooManyStudies,
+                        "the server keeps at most " + std::to_string(kMaxStored) + " studies: delete ended ones");
   }
   store_.create(s, spec.json);
   {

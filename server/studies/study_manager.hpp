@@ -49,7 +49,7 @@ class StudyManager : private StudyReporter {
                std::vector<std::string> launcher = {}, std::string selfExe = "/proc/self/exe");
   ~StudyManager() override;  // stop()
 
-  // Validates (throws rover::Error naming the field, http::ApiError 400/429 for the bounds),
+  // Validates (throws rover::Error naming the field, DomainError for the document and the bounds),
   // stores and queues a study document; returns its state.
   StudyState submit(const nlohmann::json& spec);
   std::vector<StudyState> list() const;  // newest first

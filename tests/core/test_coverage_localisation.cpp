@@ -282,3 +282,32 @@ TEST_CASE("a rover its own map walls in stops instead of waiting out the step bu
   CHECK(r.rovers[0].waits < 100);
   CHECK(r.metrics.trueCoverage < r.metrics.coverage);
 }
+
+// The frontier path under bumps and loop closures: a bump leaves the rover where it was and a
+// loop closure moves its believed cell, so the rest of a path planned before may no longer start
+// beside it. Following it anyway took a "move" to a cell two away, whose direction is undefined
+// (a crash on the default map: 1 rover, 5 % odometry noise, 1° heading noise, seed 3).
+TEST_CASE("localisation error with the frontier and loop closures: every move is to a neighbour") {
+  for (std::uint64_t seed : {1u, 2u, 3u, 4u, 5u, 6u}) {
+    CAPTURE(seed);
+    const World w = hillyWorld(60, seed, 0.08);
+    CoverageParams p = noisy(5.0, 1.0, true);
+    p.frontier = true;
+    p.coverage = 0.6;
+    p.localisation.seed = seed;
+    p.localisation.loopClosureGap = 5;
+    const auto starts = randomStarts(w, 1, seed);
+    const CoverageResult r = runCoverage(w, starts, p);
+    CHECK(r.metrics.moves > 0);
+    const GridGeometry& g = w.geometry();
+    const auto& cells = r.rovers[0].cells;
+    int jumps = 0;
+    for (std::size_t i = 1; i < cells.size(); ++i) {
+      const CellIndex a = g.cell(cells[i - 1]), b = g.cell(cells[i]);
+      jumps += std::max(std::abs(a.row - b.row), std::abs(a.col - b.col)) != 1;
+    }
+    // Only a loop closure moves the believed cell other than by a move.
+    CHECK(jumps <= r.rovers[0].loopClosures);
+    checkSameRun(r, runCoverage(w, starts, p));
+  }
+}

@@ -1,4 +1,4 @@
-// The coverage engine's stages (docs/decisions/0001): the neighbour range, the rover limit, the
+// The coverage engine's stages (.decisions/0001): the neighbour range, the rover limit, the
 // energy of flat moves looked up, and the perfect plant's sensing of only the cells a move brings
 // into range.
 #include <doctest/doctest.h>

@@ -3,10 +3,10 @@
 // paper 001's defaults and must come out collision-free, every leg accounted for; orbital-scale
 // rasters (pixels larger than the team footprint) are refused naming footprint_m, and planned
 // once the footprint is a few of their pixels (where that stays within the parameter's 1 km).
+// How long each takes is printed by tests/bench/dem_planners.sh, not checked here.
 #include <doctest/doctest.h>
 
 #include <algorithm>
-#include <chrono>
 #include <cstdlib>
 #include <filesystem>
 #include <string>
@@ -86,14 +86,12 @@ TEST_CASE("team planners on every DEM in ../shared/dems") {
     for (const std::string name : {"team-search", "hybrid"}) {
       CAPTURE(name);
       const Planner& planner = reg.get(name);
-      const auto t0 = std::chrono::steady_clock::now();
       planner.validate(problem, params);
       const PlanResult r = planner.run(problem, params, nullptr, nullptr);
-      const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
       MESSAGE(file << " " << name << ": " << metric(r, "targets_reached") << " reached, "
                    << metric(r, "targets_short") << " short, " << metric(r, "targets_skipped")
                    << " skipped, " << metric(r, "targets_no_slot") << " without a slot, "
-                   << metric(r, "unreachable_area_m2") << " m² unreachable, " << wall << " s");
+                   << metric(r, "unreachable_area_m2") << " m² unreachable");
       CHECK(metric(r, "collisions") == 0);
       // Every leg the route asked for is accounted for: reached, short, skipped or slot-less.
       if (name == "team-search")
@@ -101,7 +99,6 @@ TEST_CASE("team planners on every DEM in ../shared/dems") {
                   metric(r, "targets_no_slot") ==
               doctest::Approx(3 * metric(r, "targets")));
       CHECK(metric(r, "targets_reached") > 0);
-      CHECK(wall < 120);
     }
   }
 }

@@ -5,6 +5,7 @@
 #include <doctest/doctest.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <filesystem>
@@ -21,6 +22,7 @@
 #include "server/missions/mission_manager.hpp"
 #include "server/missions/mission_memory.hpp"
 #include "test_client.hpp"
+#include "tests/wait_until.hpp"
 
 namespace rover::test {
 
@@ -112,17 +114,23 @@ struct ApiServer {
   }
   std::string defaultMap() { return get("/api/maps").json()[0]["id"]; }
   std::string status(const std::string& id) { return get("/api/missions/" + id).json()["status"]; }
-  // Polls until the mission has a final status, for at most `seconds`; returns its last state.
-  nlohmann::json waitFinished(const std::string& id, double seconds = 30) {
-    const auto until = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
+  // Waits until the mission has a final status and returns its state; FAILs on a hang (`seconds`
+  // raises the hang deadline for a long mission, never lowers it).
+  nlohmann::json waitFinished(const std::string& id, double seconds = 0) {
     nlohmann::json m;
-    while (std::chrono::steady_clock::now() < until) {
-      m = get("/api/missions/" + id).json();
-      const std::string s = m["status"];
-      if (s != "queued" && s != "running") return m;
-      std::this_thread::sleep_for(std::chrono::milliseconds(20));
-    }
+    waitUntil(
+        [&] {
+          m = get("/api/missions/" + id).json();
+          const std::string s = m["status"];
+          return s != "queued" && s != "running";
+        },
+        std::max(kHangDeadline, std::chrono::milliseconds(static_cast<long>(seconds * 1000))),
+        "mission " + id + " to finish");
     return m;
+  }
+  // Waits until the mission has left the queue (running or already over).
+  void waitStarted(const std::string& id) {
+    waitUntil([&] { return status(id) != "queued"; }, "mission " + id + " to start");
   }
 };
 

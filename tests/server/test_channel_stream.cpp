@@ -126,7 +126,7 @@ TEST_CASE("study stream: snapshot, progress with the summary only when it change
   auto stream = std::make_shared<studies::StudyStream>();
   studies::StudyState s;
   s.id = "s1";
-  s.status = "running";
+  s.status = RunStatus::Running;
   s.total = 10;
   stream->update(s);
   auto sub = stream->subscribe(std::make_shared<NoWake>());
@@ -157,7 +157,7 @@ TEST_CASE("study stream: snapshot, progress with the summary only when it change
   CHECK(j["summary"]["runs"] == 3);
 
   s.done = 10;
-  s.status = "succeeded";
+  s.status = RunStatus::Succeeded;
   stream->update(s);
   frames = drain(*sub);
   REQUIRE(frames.size() == 1);  // the done frame carries the last state

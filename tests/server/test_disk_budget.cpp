@@ -9,6 +9,7 @@
 
 #include "core/pdm/pdm.hpp"
 #include "maps/dem_io.hpp"
+#include "server/api/error_table.hpp"
 #include "server/json/pdm_json.hpp"
 #include "server/store/disk_budget.hpp"
 #include "api_server.hpp"
@@ -49,7 +50,7 @@ TEST_CASE("disk budget: one object larger than a map's budget is 413, a full map
     b.charge("pdms/big", store::DiskUse::Pdm, "m1", 1001, "body");
     FAIL("a PDM larger than the whole map budget was charged");
   } catch (const store::OverBudget& e) {
-    CHECK(e.status() == 413);
+    CHECK(rover::api::httpStatus(e.refusal()) == 413);
     CHECK(e.code() == "too_large");
     CHECK(e.field() == "body");
     CHECK(std::string(e.what()).find("more than a map's whole disk budget") != std::string::npos);
@@ -60,7 +61,7 @@ TEST_CASE("disk budget: one object larger than a map's budget is 413, a full map
     b.charge("pdms/b", store::DiskUse::Pdm, "m1", 200, "body");
     FAIL("the map's budget was passed");
   } catch (const store::OverBudget& e) {
-    CHECK(e.status() == 507);
+    CHECK(rover::api::httpStatus(e.refusal()) == 507);
     CHECK(e.code() == "disk_budget_full");
     CHECK(std::string(e.what()).find("the map's disk budget is full") != std::string::npos);
   }
@@ -73,7 +74,7 @@ TEST_CASE("disk budget: one object larger than a map's budget is 413, a full map
     b.charge("studies/s", store::DiskUse::Study, "", 500);
     FAIL("the global budget was passed");
   } catch (const store::OverBudget& e) {
-    CHECK(e.status() == 507);
+    CHECK(rover::api::httpStatus(e.refusal()) == 507);
     CHECK(std::string(e.what()).find("the server's disk budget is full") != std::string::npos);
   }
   b.release("maps/m3");

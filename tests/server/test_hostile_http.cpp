@@ -93,6 +93,12 @@ class Raw {
     const ssize_t n = ::recv(fd_, &c, 1, 0);
     return n == 0 || (n < 0 && errno != EAGAIN && errno != EWOULDBLOCK);
   }
+  // The same, without waiting: true once the server has closed, or sent something (its 408).
+  bool closedNow() {
+    char c;
+    const ssize_t n = ::recv(fd_, &c, 1, MSG_DONTWAIT | MSG_PEEK);
+    return n >= 0 || (errno != EAGAIN && errno != EWOULDBLOCK);
+  }
 
  private:
   int fd_ = -1;
@@ -255,20 +261,18 @@ TEST_CASE("rate floor: a steady slow body never reaches its deadline, a stall do
 }
 
 TEST_CASE("work pool: bounded queue refuses, jobs run on the pool, stop drops the queued ones") {
-  http::WorkPool pool(1, 1);
-  std::atomic<bool> release{false};
+  test::Gate release;  // before the pool: the held job may wait on it until the pool is gone
   std::atomic<int> ran{0};
+  http::WorkPool pool(1, 1);
   REQUIRE(pool.trySubmit([&] {
-    while (!release) std::this_thread::sleep_for(1ms);
+    release.wait();
     ++ran;
   }));
-  for (int i = 0; i < 2000 && pool.busy() == 0; ++i) std::this_thread::sleep_for(1ms);
-  CHECK(pool.busy() == 1);
+  test::waitUntil([&] { return pool.busy() == 1; }, "the first job to take the thread");
   CHECK(pool.trySubmit([&] { ++ran; }));   // waits in the queue
   CHECK_FALSE(pool.trySubmit([&] { ++ran; }));  // the queue is full
-  release = true;
-  for (int i = 0; i < 2000 && ran < 2; ++i) std::this_thread::sleep_for(1ms);
-  CHECK(ran == 2);
+  release.open();
+  test::waitUntil([&] { return ran == 2; }, "both jobs to run");
   pool.stop();
   CHECK_FALSE(pool.trySubmit([&] { ++ran; }));
 }
@@ -408,6 +412,7 @@ TEST_CASE("hostile: a slow but steady upload is accepted, a stalled one gets 408
            std::to_string(total) + "\r\n\r\n");
     const auto t0 = Clock::now();
     bool sent = true;
+    // The pauses are the behaviour under test (a slow client), bounded: 40 pieces, 5 s in all.
     for (std::size_t off = 0; off < total && sent; off += piece) {
       sent = c.send(std::string(piece, 'u'));
       std::this_thread::sleep_until(t0 + std::chrono::milliseconds(125 * (off / piece + 1)));
@@ -429,15 +434,16 @@ TEST_CASE("hostile: a slow but steady upload is accepted, a stalled one gets 408
     CHECK(firstBody(raw)["error"]["field"] == "body");
   }
   {
-    // A trickle (2 KiB/s) below the floor: also cut.
+    // A trickle (2 KiB/s) below the floor: also cut. The pauses are the trickle under test,
+    // bounded: it goes on until the server cuts it, at most 200 pieces (20 s, the bound of a hang).
     Raw c(s.port(), 10000ms);
     c.send("POST /api/things HTTP/1.1\r\nHost: localhost\r\nContent-Length: 100000\r\n\r\n");
     bool cut = false;
-    for (int i = 0; i < 40 && !cut; ++i) {
-      cut = !c.send(std::string(200, 't'));
-      std::this_thread::sleep_for(100ms);
-      if (i > 25) break;
+    for (int i = 0; i < 200 && !cut; ++i) {
+      cut = !c.send(std::string(200, 't')) || c.closedNow();
+      if (!cut) std::this_thread::sleep_for(100ms);
     }
+    CHECK(cut);
     const std::string raw = c.readAll();
     CHECK(statuses(raw) == std::vector<int>{408});
   }
@@ -458,37 +464,44 @@ TEST_CASE("hostile: slowloris with 500 connections is cut at the header deadline
     held.push_back(std::move(c));
   }
   REQUIRE(held.size() == 500);
+  // Every connection trickles one more header line every 100 ms (the pause is the attack under
+  // test) until the server has cut them all: trickling must not keep one open past the header
+  // deadline. Bounded: a server that never cuts fails at 300 rounds (30 s, the bound of a hang).
   double worst = 0;
-  int answered = 0;
-  const auto t0 = Clock::now();
-  for (int i = 0; i < 10; ++i) {
-    for (auto& c : held) c->send("X-a: b\r\n");  // one more header line each: still trickling
+  int answered = 0, rounds = 0;
+  std::size_t closed = 0;
+  for (; rounds < 300 && closed < held.size(); ++rounds) {
+    closed = 0;
+    for (auto& c : held) {
+      if (c->closedNow()) {
+        ++closed;
+        continue;
+      }
+      c->send("X-a: b\r\n");  // one more header line: still trickling
+    }
     const auto h0 = Clock::now();
     if (test::request(s.port(), "GET", "/api/health").status == 200) ++answered;
     worst = std::max(worst, msSince(h0));
     std::this_thread::sleep_for(100ms);
   }
-  MESSAGE("health under 500 slowloris connections: worst " << worst << " ms over 10 requests");
-  CHECK(answered == 10);
-  // All 500 are cut at the header deadline (3 s after they started), not kept by trickling.
-  std::this_thread::sleep_until(t0 + 4s);
-  int closed = 0;
-  for (auto& c : held) closed += c->closedByServer() ? 1 : 0;
+  MESSAGE("health under 500 slowloris connections: worst " << worst << " ms over " << rounds << " requests");
+  CHECK(answered == rounds);
   CHECK(closed == 500);
 }
 
 TEST_CASE("hostile: with the work pool saturated by slow handlers, /api/health still answers") {
+  // Slow handlers that hold their pool thread until the test opens the gate (declared before the
+  // server, which waits for its handlers when it stops).
+  test::Gate gate;
+  std::atomic<int> entered{0};
   TempDir tmp;
   ApiServer s(tmp.str("data"), unstarted());
-  // Slow handlers that hold their pool thread until the test opens the gate (at most 20 s).
-  std::atomic<bool> gate{false};
-  std::atomic<int> entered{0};
   http::RouteOptions slow;
   slow.blocking = true;
   slow.requireAuth = false;
   s.router.add("GET", "/api/test/sleep", [&](const http::Request&) {
     ++entered;
-    for (int i = 0; i < 2000 && !gate; ++i) std::this_thread::sleep_for(10ms);
+    gate.wait();
     return http::Response::json(200, {{"slept", true}});
   }, slow);
   http::ServerConfig c;
@@ -509,9 +522,9 @@ TEST_CASE("hostile: with the work pool saturated by slow handlers, /api/health s
   // Two first, until both run; only then four more, so which ones wait is not a race between the
   // pool's threads picking up work and new requests arriving.
   for (int i = 0; i < 2; ++i) sleepers.emplace_back(sleeper);
-  for (int i = 0; i < 1000 && entered < 2; ++i) std::this_thread::sleep_for(10ms);
+  test::waitUntil([&] { return entered == 2; }, "two slow requests to run");
   for (int i = 0; i < 4; ++i) sleepers.emplace_back(sleeper);
-  for (int i = 0; i < 1000 && busy < 2; ++i) std::this_thread::sleep_for(10ms);
+  test::waitUntil([&] { return busy == 2; }, "two slow requests to be refused");
   CHECK(entered == 2);
   CHECK(busy == 2);
   CHECK(retryAfter == 2);
@@ -521,12 +534,11 @@ TEST_CASE("hostile: with the work pool saturated by slow handlers, /api/health s
     const auto h0 = Clock::now();
     if (test::request(s.port(), "GET", "/api/health").status == 200) ++answered;
     worst = std::max(worst, msSince(h0));
-    std::this_thread::sleep_for(20ms);
   }
   MESSAGE("health while the work pool is saturated: worst " << worst << " ms over 10 requests");
   CHECK(answered == 10);
   CHECK(ok == 0);  // all of that happened while every slow request was still held
-  gate = true;
+  gate.open();
   for (auto& t : sleepers) t.join();
   CHECK(ok == 4);
   CHECK(entered == 4);

@@ -3,6 +3,7 @@
 // against a racing delete, and every error naming its field. Over loopback, bounded loops only.
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <atomic>
 #include <fstream>
 #include <set>
@@ -408,9 +409,11 @@ TEST_CASE("hostile: the map-body cache never keeps a map a write has changed or 
         ++reads;
       }
     });
-  while (reads < 20) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  test::waitUntil([&] { return reads >= 20; }, "20 GETs before the delete");
   CHECK(request(s.port(), "DELETE", "/api/maps/" + map).status == 200);
-  std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  // Twenty more GETs race past the delete (or the readers are done).
+  const int atDelete = reads;
+  test::waitUntil([&] { return reads >= std::min(atDelete + 20, 600); }, "20 GETs after the delete");
   stop = true;
   for (auto& r : readers) r.join();
   CHECK(s.get("/api/maps/" + map).status == 404);

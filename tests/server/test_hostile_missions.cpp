@@ -103,7 +103,7 @@ TEST_CASE("hostile missions: the queue stays bounded in count too, with Retry-Af
   const std::string map = s.defaultMap();
   const auto slow = coverageMission(map, 0, 5, 1.0);
   const std::string running = s.postJson("/api/missions", slow).json()["id"];
-  for (int i = 0; i < 200 && s.status(running) == "queued"; ++i) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  s.waitStarted(running);
   const std::string waiting = s.postJson("/api/missions", slow).json()["id"];
   auto full = s.postJson("/api/missions", slow);
   checkError(full, 429, "queue_full", "");
@@ -212,16 +212,11 @@ TEST_CASE("hostile missions: a subscriber that never reads is dropped while a re
   REQUIRE(frames.size() >= 3);
   CHECK(json::parse(frames.front().data)["type"] == "snapshot");
   CHECK(json::parse(frames.back().data)["type"] == "done");
-  // The reader is gone; the stuck one is dropped at its write deadline (polled, bounded: the
-  // stream holds its subscribers weakly, so the count falls when the session ends).
+  // The reader is gone; the stuck one is dropped at its write deadline (the stream holds its
+  // subscribers weakly, so the count falls when the session ends).
   auto stream = s.manager.stream(id);
   REQUIRE(stream);
-  bool dropped = false;
-  for (int i = 0; i < 600 && !dropped; ++i) {
-    dropped = stream->subscriberCount() == 0;
-    if (!dropped) std::this_thread::sleep_for(100ms);
-  }
-  CHECK(dropped);
+  test::waitUntil([&] { return stream->subscriberCount() == 0; }, "the stream to lose its stuck subscriber");
 }
 
 namespace {

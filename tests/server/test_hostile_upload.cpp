@@ -257,16 +257,22 @@ TEST_CASE("layer cache: least recently used files go past the cap, each file is 
   const fs::path maps = tmp.path / "maps";
   fs::create_directories(maps / "m1" / "layers");
   api::LayerCache cache(maps.string(), 2500);
-  std::atomic<int> made{0};
+  std::atomic<int> made{0}, asking{0};
+  // The first making holds on until all eight threads are asking (an event, not a pause), so the
+  // others ask while the file is being made.
   auto make = [&](const std::string& path) {
     ++made;
-    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    test::pollUntil([&] { return asking.load() == 8; });
     std::ofstream(path, std::ios::binary) << std::string(1000, 'x');
   };
   auto file = [&](const std::string& n) { return (maps / "m1" / "layers" / n).string(); };
   // Eight threads ask for the same file at once: it is made once.
   std::vector<std::thread> ts;
-  for (int i = 0; i < 8; ++i) ts.emplace_back([&] { cache.get(file("a.png"), make); });
+  for (int i = 0; i < 8; ++i)
+    ts.emplace_back([&] {
+      ++asking;
+      cache.get(file("a.png"), make);
+    });
   for (auto& t : ts) t.join();
   CHECK(made == 1);
   cache.get(file("b.png"), make);

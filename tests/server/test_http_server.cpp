@@ -32,6 +32,7 @@
 
 #include "server/http/http_server.hpp"
 #include "server/http/router.hpp"
+#include "tests/wait_until.hpp"
 
 namespace {
 
@@ -174,7 +175,7 @@ struct Client {
     socket.connect(tcp::endpoint(net::ip::make_address("127.0.0.1"), port));
   }
 
-  Reply send(bhttp::request<bhttp::string_body> req, std::chrono::milliseconds limit = 5000ms) {
+  Reply send(bhttp::request<bhttp::string_body> req, std::chrono::milliseconds limit = rover::test::kHangDeadline) {
     Watchdog dog(socket.native_handle(), limit);
     req.version(11);
     req.set(bhttp::field::host, "127.0.0.1");
@@ -195,7 +196,7 @@ struct Client {
   }
 
   // Raw bytes, then whatever comes back until the server closes (for malformed requests).
-  std::string raw(const std::string& bytes, std::chrono::milliseconds limit = 5000ms) {
+  std::string raw(const std::string& bytes, std::chrono::milliseconds limit = rover::test::kHangDeadline) {
     Watchdog dog(socket.native_handle(), limit);
     beast::error_code ec;
     net::write(socket, net::buffer(bytes), ec);
@@ -253,13 +254,13 @@ class QueueSource : public WsSource {
     if (frames_.empty()) return std::nullopt;
     WsFrame f = std::move(frames_.front());
     frames_.pop_front();
-    handedAt_.push_back(std::chrono::steady_clock::now());
+    handed_.push_back(f.data);
     return f;
   }
-  // When each frame was handed to the session (the session waits before it asks again).
-  std::vector<std::chrono::steady_clock::time_point> handedAt() {
+  // The frames handed to the session, in the order it took them.
+  std::vector<std::string> handed() {
     std::lock_guard lock(mutex_);
-    return handedAt_;
+    return handed_;
   }
   std::chrono::milliseconds minInterval() const override { return interval_; }
   int calls() {
@@ -272,7 +273,7 @@ class QueueSource : public WsSource {
   std::deque<WsFrame> frames_;
   std::chrono::milliseconds interval_;
   int calls_ = 0;
-  std::vector<std::chrono::steady_clock::time_point> handedAt_;
+  std::vector<std::string> handed_;
 };
 
 // prefix + i (spelled out: GCC 12 -O3 warns falsely on `"literal" + std::to_string(i)`).
@@ -313,7 +314,7 @@ struct WsClient {
       ws.set_option(websocket::stream_base::decorator([bearer](websocket::request_type& req) {
         req.set(bhttp::field::authorization, "Bearer " + bearer);
       }));
-    Watchdog dog(ws.next_layer().native_handle(), 5000ms);
+    Watchdog dog(ws.next_layer().native_handle(), rover::test::kHangDeadline);
     beast::error_code ec;
     ws.handshake(response, "127.0.0.1", target, ec);
     return !ec;
@@ -323,6 +324,7 @@ struct WsClient {
     bool binary = false;
     std::string data;
   };
+  bool hitDeadline = false;  // the last readAll ended at its deadline, not at the server's close
   // Reads messages until the server closes (or the deadline); `closeCode` is set on a close.
   std::vector<Message> readAll(std::chrono::milliseconds limit, int* closeCode = nullptr,
                                std::size_t maxMessages = 1000) {
@@ -338,6 +340,7 @@ struct WsClient {
       }
       out.push_back({ws.got_binary(), beast::buffers_to_string(buf.data())});
     }
+    hitDeadline = dog.fired();
     return out;
   }
 };
@@ -598,25 +601,45 @@ TEST_CASE("http: an oversized header gets 431 and malformed requests get 400") {
   CHECK(call(s.port(), bhttp::verb::get, "/api/ok").status == 200);
 }
 
-TEST_CASE("http: the read timeout closes an idle half-sent request") {
-  TestServer s;
-  s.config.readTimeout = std::chrono::seconds(1);
-  s.router.add("GET", "/api/ok", [](const Request&) { return Response::json(200, {}); });
-  s.start();
-  Client c(s.port());
-  const auto t0 = std::chrono::steady_clock::now();
-  Watchdog dog(c.socket.native_handle(), 4000ms);
-  net::write(c.socket, net::buffer(std::string("GET /api/ok HTTP/1.1\r\nHost: localhost\r\n")));
-  char buf[256];
+TEST_CASE("http: the read timeout closes an idle half-sent request, a longer one keeps it open") {
+  // The same half-sent header on two servers that differ only in their read timeout. The event
+  // waited for is the short one's close; at that moment the long one's connection must still be
+  // open and answer once the header is finished: the close came from the timeout, not from the
+  // half-sent request itself. (The watchdog's bound only catches a hang.)
+  const std::string head = "GET /api/ok HTTP/1.1\r\nHost: localhost\r\n";
+  auto ok = [](const Request&) { return Response::json(200, {}); };
+  TestServer patient;
+  patient.config.readTimeout = std::chrono::seconds(3600);
+  patient.router.add("GET", "/api/ok", ok);
+  patient.start();
+  TestServer strict;
+  strict.config.readTimeout = std::chrono::seconds(1);
+  strict.router.add("GET", "/api/ok", ok);
+  strict.start();
+  Client kept(patient.port());
+  net::write(kept.socket, net::buffer(head));  // first: it has waited longer than the other
+  Client cut(strict.port());
+  {
+    Watchdog dog(cut.socket.native_handle(), rover::test::kHangDeadline);
+    net::write(cut.socket, net::buffer(head));
+    char buf[256];
+    beast::error_code ec;
+    std::size_t total = 0;
+    while (!ec) total += cut.socket.read_some(net::buffer(buf), ec);
+    CHECK_FALSE(dog.fired());  // the server closed, not the watchdog
+    CHECK(ec == net::error::eof);
+    CHECK(total == 0);  // quietly: no response to a request that never finished
+  }
+  // Nothing from the patient server yet: no bytes, no end of stream.
+  kept.socket.non_blocking(true);
+  char probe;
   beast::error_code ec;
-  std::size_t total = 0;
-  while (!ec) total += c.socket.read_some(net::buffer(buf), ec);
-  const auto elapsed = std::chrono::steady_clock::now() - t0;
-  CHECK_FALSE(dog.fired());  // the server closed, not the watchdog
-  CHECK(ec == net::error::eof);
-  CHECK(elapsed >= 800ms);
-  CHECK(elapsed < 3500ms);
-  (void)total;
+  kept.socket.read_some(net::buffer(&probe, 1), ec);
+  CHECK(ec == net::error::would_block);
+  kept.socket.non_blocking(false);
+  Watchdog dog(kept.socket.native_handle(), rover::test::kHangDeadline);
+  net::write(kept.socket, net::buffer(std::string("\r\n")));
+  CHECK(kept.read().status == 200);
 }
 
 // ------------------------------------------------------------------------------ static files
@@ -814,7 +837,12 @@ TEST_CASE("http: stop closes idle keep-alive connections and open websockets pro
   WsClient ws;
   REQUIRE(ws.connect(s.port(), "/api/ws"));
   s.stop();  // returns (a hang fails the test run): sessions are closed, not waited for
-  CHECK(ws.readAll(2000ms).empty());
+  // Both clients see the server's close (the watchdog's bound only catches a hang).
+  CHECK(ws.readAll(rover::test::kHangDeadline).empty());
+  CHECK_FALSE(ws.hitDeadline);
+  Watchdog dog(idle.socket.native_handle(), rover::test::kHangDeadline);
+  CHECK_FALSE(idle.read().ok);
+  CHECK_FALSE(dog.fired());
 }
 
 // ------------------------------------------------------------------------------- websockets
@@ -839,7 +867,7 @@ TEST_CASE("websocket: text and binary frames arrive in order, then a normal clos
   WsClient c;
   REQUIRE(c.connect(s.port(), "/api/missions/m42/events"));
   int code = 0;
-  auto msgs = c.readAll(5000ms, &code);
+  auto msgs = c.readAll(rover::test::kHangDeadline, &code);
   CHECK(seenId == "m42");
   REQUIRE(msgs.size() == 5);
   CHECK(msgs[0].data == "one");
@@ -850,11 +878,43 @@ TEST_CASE("websocket: text and binary frames arrive in order, then a normal clos
   CHECK(msgs[3].data == std::string("\x00\x01\x02\xff", 4));
   CHECK(msgs[4].data == "{\"type\":\"done\"}");
   CHECK(code == static_cast<int>(websocket::close_code::normal));
-  // Non-last frames are spaced by the source's interval: measured where the session waits (a
-  // timer never fires early), not on the client, whose reads may start late under load.
-  const auto handed = source->handedAt();
-  REQUIRE(handed.size() == 5);
-  for (std::size_t i = 1; i < handed.size(); ++i) CHECK(handed[i] - handed[i - 1] >= 5ms);
+  // One frame per ask, taken in the order they were pushed.
+  CHECK(source->calls() == 5);
+  CHECK(source->handed() == std::vector<std::string>{"one", "two", "three", std::string("\x00\x01\x02\xff", 4),
+                                                     "{\"type\":\"done\"}"});
+}
+
+TEST_CASE("websocket: the next frame waits for the source's interval, which wake() does not cut short") {
+  // An interval of an hour: the second frame is ready, but the session, pausing after the first,
+  // must not ask for it before the server stops (an event, not a measured gap).
+  TestServer s;
+  std::mutex m;
+  std::shared_ptr<QueueSource> source;
+  std::shared_ptr<WsConnection> connection;
+  s.router.addWebSocket("/api/ws", [&](const Request&, std::shared_ptr<WsConnection> conn) {
+    std::lock_guard lock(m);
+    source = std::make_shared<QueueSource>(std::chrono::hours(1));
+    source->push(text("one"));
+    source->push(text("two", true));
+    connection = conn;
+    return source;
+  });
+  s.start();
+  WsClient c;
+  REQUIRE(c.connect(s.port(), "/api/ws"));
+  const auto first = c.readAll(rover::test::kHangDeadline, nullptr, 1);
+  REQUIRE(first.size() == 1);
+  CHECK(first[0].data == "one");
+  {
+    std::lock_guard lock(m);
+    connection->wake();  // the session is pausing, not parked: nothing to pull early
+  }
+  s.stop();
+  CHECK(c.readAll(rover::test::kHangDeadline).empty());
+  CHECK_FALSE(c.hitDeadline);
+  std::lock_guard lock(m);
+  CHECK(source->calls() == 1);
+  CHECK(source->handed() == std::vector<std::string>{"one"});
 }
 
 TEST_CASE("websocket: a source with nothing to say waits for wake() from another thread") {
@@ -879,15 +939,16 @@ TEST_CASE("websocket: a source with nothing to say waits for wake() from another
       src = source;
       conn = connection;
     }
-    // The session has asked and parked by now (or will find the frame on its first ask).
+    // Each frame is pushed once the session has asked and found nothing (parked): its first ask,
+    // then one ask for each frame and one more after it. The bound only catches a hang.
     for (int i = 0; i < 3; ++i) {
-      std::this_thread::sleep_for(50ms);
+      rover::test::pollUntil([&] { return src->calls() >= 2 * i + 1; });
       src->push(text(numbered("tick", i), i == 2));
       for (int k = 0; k < 5; ++k) conn->wake();  // coalesced
     }
   });
   int code = 0;
-  auto msgs = c.readAll(5000ms, &code);
+  auto msgs = c.readAll(rover::test::kHangDeadline, &code);
   producer.join();
   REQUIRE(msgs.size() == 3);
   CHECK(msgs[0].data == "tick0");
@@ -915,8 +976,8 @@ TEST_CASE("websocket: two clients on one route get their own streams") {
   WsClient a, b;
   REQUIRE(a.connect(s.port(), "/api/ws/a"));
   REQUIRE(b.connect(s.port(), "/api/ws/b"));
-  auto ma = a.readAll(5000ms);
-  auto mb = b.readAll(5000ms);
+  auto ma = a.readAll(rover::test::kHangDeadline);
+  auto mb = b.readAll(rover::test::kHangDeadline);
   CHECK(n == 2);
   REQUIRE(ma.size() == 11);
   REQUIRE(mb.size() == 11);
@@ -974,10 +1035,10 @@ TEST_CASE("websocket: auth applies to upgrades, ?token= is accepted there") {
   CHECK(r.header("www-authenticate") == "Bearer");
   WsClient query;
   REQUIRE(query.connect(s.port(), "/api/ws?token=tok"));
-  CHECK(query.readAll(3000ms).size() == 1);
+  CHECK(query.readAll(rover::test::kHangDeadline).size() == 1);
   WsClient header;
   REQUIRE(header.connect(s.port(), "/api/ws", "tok"));
-  CHECK(header.readAll(3000ms).size() == 1);
+  CHECK(header.readAll(rover::test::kHangDeadline).size() == 1);
 }
 
 // Says nothing; tells when the session lets go of it.
@@ -1064,19 +1125,18 @@ TEST_CASE("websocket: a client that never reads does not stop another from getti
 
   WsClient slow;  // small receive buffer and never reads
   REQUIRE(slow.connect(s.port(), "/api/slow", "", 4096));
-  // Wait until the slow session is stuck on its write (next() stops being called).
-  int last = -1;
-  for (int i = 0; i < 40 && flood->calls != last; ++i) {
-    last = flood->calls;
-    std::this_thread::sleep_for(100ms);
-  }
-  CHECK(flood->calls == last);  // back-pressure: one write in flight, no queue
-  CHECK(flood->calls < 50);
+  // The slow session is writing (the event waited for); it stalls once the socket buffers fill.
+  rover::test::waitUntil([&] { return flood->calls >= 1; }, "the slow session asks its source for a frame");
 
   WsClient fast;
   REQUIRE(fast.connect(s.port(), "/api/fast"));
-  auto msgs = fast.readAll(10000ms);  // the bound only catches a hang
+  auto msgs = fast.readAll(rover::test::kHangDeadline);  // the bound only catches a hang
+  CHECK_FALSE(fast.hitDeadline);
   CHECK(msgs.size() == 21);
   CHECK(call(s.port(), bhttp::verb::get, "/api/ok").status == 200);
+  // Back-pressure: one write in flight and no queue, so while the fast client was served the
+  // stuck session took no more 2 MiB frames than the socket buffers hold (a queue would take
+  // hundreds).
+  CHECK(flood->calls < 50);
   s.stop();  // must not hang on the stuck write
 }

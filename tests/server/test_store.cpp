@@ -1,5 +1,6 @@
 #include "server/store/database.hpp"
 #include "server/store/data_dir.hpp"
+#include "tests/wait_until.hpp"
 #include <doctest/doctest.h>
 
 #include <signal.h>
@@ -271,7 +272,8 @@ TEST_CASE("database: updateMission sets timestamps and metrics") {
   CHECK(r->metrics.is_null());
   const std::string started = r->startedAt;
 
-  std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  // Once the clock reads later than startedAt, a reset of it would show.
+  rover::test::waitUntil([&] { return rover::store::nowIso() > started; }, "the clock to pass startedAt");
   db.updateMission("m", RunStatus::Running, "50% done");  // still running: startedAt unchanged
   r = db.getMission("m");
   CHECK(r->message == "50% done");
@@ -520,8 +522,8 @@ TEST_CASE("database: every acknowledged write survives kill -9 mid-stream") {
 TEST_CASE("database: nowIso is UTC with milliseconds") {
   const std::string a = rover::store::nowIso();
   CHECK(std::regex_match(a, kIsoRe));
-  std::this_thread::sleep_for(std::chrono::milliseconds(3));
-  CHECK(rover::store::nowIso() > a);
+  // It moves on by the millisecond the format shows (ISO strings order as the times they name).
+  rover::test::waitUntil([&] { return rover::store::nowIso() > a; }, "nowIso to move past " + a);
 }
 
 // ---- DataDir ----------------------------------------------------------------------------------

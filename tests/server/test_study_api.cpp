@@ -19,9 +19,11 @@ namespace {
 
 using nlohmann::json;
 
-// The API with studies, as `roverplan serve` builds it; `busy` stands for the missions' claim.
+// The API with studies, as `roverplan serve` builds it; `busy` stands for the missions' claim and
+// `busyAsked` counts how often the studies have asked for it.
 struct StudyServer {
   std::shared_ptr<std::atomic<bool>> busy = std::make_shared<std::atomic<bool>>(false);
+  std::shared_ptr<std::atomic<int>> busyAsked = std::make_shared<std::atomic<int>>(0);
   ApiServer api;
   studies::StudyManager studies;
   explicit StudyServer(const std::string& data)
@@ -30,22 +32,30 @@ struct StudyServer {
           o.start = false;
           return o;
         }()),
-        studies(api.dir, [b = busy] { return b->load(); }) {
+        studies(api.dir, [b = busy, n = busyAsked] {
+          ++*n;
+          return b->load();
+        }) {
     api.ctx.studies = &studies;
     api::addStudyRoutes(api.router, api.ctx);
     api.start();
   }
   ~StudyServer() { studies.stop(); }
   json study(const std::string& id) { return api.get("/api/studies/" + id).json(); }
-  json waitEnded(const std::string& id, double seconds = 120) {
-    const auto until = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
+  // Waits until the study has ended and returns its state; FAILs on a hang.
+  json waitEnded(const std::string& id) {
     json s;
-    while (std::chrono::steady_clock::now() < until) {
-      s = study(id);
-      if (isFinal(parseEnum<RunStatus>(s["status"].get<std::string>()).value_or(RunStatus::Queued))) return s;
-      std::this_thread::sleep_for(std::chrono::milliseconds(20));
-    }
+    waitUntil(
+        [&] {
+          s = study(id);
+          return isFinal(parseEnum<RunStatus>(s["status"].get<std::string>()).value_or(RunStatus::Queued));
+        },
+        rover::test::kHangDeadline, "study " + id + " to end");
     return s;
+  }
+  // Waits until the study has committed its first runs.
+  void waitFirstRuns(const std::string& id) {
+    waitUntil([&] { return study(id)["runs_done"].get<int>() > 0; }, "study " + id + " to commit runs");
   }
 };
 
@@ -200,7 +210,9 @@ TEST_CASE("studies API: bad specs answer 400 naming the field, bounds") {
   const HttpResult full = s.api.postJson("/api/studies", tinySpec(5));
   CHECK(full.status == 429);
   CHECK(full.headers.count("Retry-After") == 1);
-  std::this_thread::sleep_for(std::chrono::milliseconds(200));
+  // The running study has asked twice since and was told to wait both times: no run taken.
+  const int asked = s.busyAsked->load();
+  waitUntil([&] { return s.busyAsked->load() >= asked + 2; }, "the study to ask whether the missions are busy");
   CHECK(s.study(ids[0])["runs_done"] == 0);
 
   // Cancel a queued one: it ends at once; then it can be deleted.
@@ -221,9 +233,7 @@ TEST_CASE("studies API: cancelling a running study keeps the runs done") {
   TempDir tmp;
   StudyServer s(tmp.str("data"));
   const std::string id = s.api.postJson("/api/studies", tinySpec(20000)).json()["id"];
-  // Wait for the first committed runs.
-  for (int i = 0; i < 1000 && s.study(id)["runs_done"].get<int>() == 0; ++i)
-    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  s.waitFirstRuns(id);
   CHECK(request(s.api.port(), "DELETE", "/api/studies/" + id).status == 202);
   const json e = s.waitEnded(id);
   CHECK(e["status"] == "cancelled");
@@ -241,8 +251,7 @@ TEST_CASE("studies API: a restart resumes an unfinished study with only its miss
   {
     StudyServer s(tmp.str("data"));
     id = s.api.postJson("/api/studies", spec).json()["id"];
-    for (int i = 0; i < 1000 && s.study(id)["runs_done"].get<int>() == 0; ++i)
-      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    s.waitFirstRuns(id);
   }  // the server stops mid-study
   {
     studies::StudyDb db = studies::StudyDb::open(tmp.str("data/studies/" + id + "/study.sqlite"));

@@ -10,13 +10,14 @@
 #include <vector>
 
 #include "server/http/work_pool.hpp"
+#include "tests/wait_until.hpp"
 
 using namespace rover;
 using namespace std::chrono_literals;
 
 TEST_CASE("work pool: a client with one job is served before another client's 50 queued jobs finish") {
+  test::Gate release;  // before the pool: the held job may wait on it until the pool is gone
   http::WorkPool pool(1, 68);  // one client may hold 51 of the 68 places
-  std::atomic<bool> release{false};
   std::mutex m;
   std::vector<std::string> order;
   auto record = [&](std::string what) {
@@ -25,11 +26,10 @@ TEST_CASE("work pool: a client with one job is served before another client's 50
   };
   // A's first job holds the only thread until every job is queued, so the order is the pool's.
   REQUIRE(pool.trySubmit([&] {
-    for (int i = 0; i < 20000 && !release; ++i) std::this_thread::sleep_for(1ms);
+    release.wait();
     record("A");
   }, "10.0.0.1"));
-  for (int i = 0; i < 2000 && pool.busy() == 0; ++i) std::this_thread::sleep_for(1ms);
-  REQUIRE(pool.busy() == 1);
+  test::waitUntil([&] { return pool.busy() == 1; }, "A's first job to take the thread");
   for (int i = 0; i < 50; ++i) REQUIRE(pool.trySubmit([&] { record("A"); }, "10.0.0.1"));
   REQUIRE(pool.trySubmit([&] { record("B"); }, "10.0.0.2"));
   CHECK(pool.queued() == 51);
@@ -38,16 +38,14 @@ TEST_CASE("work pool: a client with one job is served before another client's 50
   CHECK(pool.trySubmit([&] { record("A"); }, "10.0.0.1"));
   CHECK_FALSE(pool.trySubmit([&] { record("A"); }, "10.0.0.1"));
   CHECK(pool.queued() == 52);
-  release = true;
-  for (int i = 0; i < 20000; ++i) {
-    {
-      std::lock_guard lock(m);
-      if (order.size() == 53) break;
-    }
-    std::this_thread::sleep_for(1ms);
-  }
+  release.open();
+  test::waitUntil(
+      [&] {
+        std::lock_guard lock(m);
+        return order.size() == 53;
+      },
+      "all 53 jobs to run");
   std::lock_guard lock(m);
-  REQUIRE(order.size() == 53);
   // FIFO would put B after A's 50; in turns it comes right after A's running job and one more.
   const auto b = std::find(order.begin(), order.end(), "B") - order.begin();
   CHECK(b <= 2);
@@ -55,14 +53,12 @@ TEST_CASE("work pool: a client with one job is served before another client's 50
 }
 
 TEST_CASE("work pool: clients take turns one job each, in the order they arrived") {
+  test::Gate release;
   http::WorkPool pool(1, 16);
-  std::atomic<bool> release{false};
   std::mutex m;
   std::string order;
-  REQUIRE(pool.trySubmit([&] {
-    for (int i = 0; i < 20000 && !release; ++i) std::this_thread::sleep_for(1ms);
-  }, "gate"));
-  for (int i = 0; i < 2000 && pool.busy() == 0; ++i) std::this_thread::sleep_for(1ms);
+  REQUIRE(pool.trySubmit([&] { release.wait(); }, "gate"));
+  test::waitUntil([&] { return pool.busy() == 1; }, "the gate job to take the thread");
   auto job = [&](char c) {
     return [&, c] {
       std::lock_guard lock(m);
@@ -72,14 +68,13 @@ TEST_CASE("work pool: clients take turns one job each, in the order they arrived
   for (int i = 0; i < 3; ++i) REQUIRE(pool.trySubmit(job('a'), "a"));
   for (int i = 0; i < 2; ++i) REQUIRE(pool.trySubmit(job('b'), "b"));
   REQUIRE(pool.trySubmit(job('c'), "c"));
-  release = true;
-  for (int i = 0; i < 20000; ++i) {
-    {
-      std::lock_guard lock(m);
-      if (order.size() == 6) break;
-    }
-    std::this_thread::sleep_for(1ms);
-  }
+  release.open();
+  test::waitUntil(
+      [&] {
+        std::lock_guard lock(m);
+        return order.size() == 6;
+      },
+      "the six jobs to run");
   std::lock_guard lock(m);
   CHECK(order == "abcaba");
 }
