@@ -154,10 +154,12 @@ TEST_CASE("team: a head-on pair is forced to re-plan and the plan is collision-f
   const terrain::Dem dem = flatDem(80, 160);  // 40 × 20 m
   const auto classes = classesOf(dem);
   std::vector<RoverTask> tasks(2);
+  // Each goal 5 m short of the other's start: a rover standing at its start holds that spot until
+  // it leaves (issue 25), so a goal on it would be a swap no priority order can plan.
   tasks[0].start = {5, 10, 0};
-  tasks[0].legs.push_back({{35, 10}, {}, 0});
+  tasks[0].legs.push_back({{30, 10}, {}, 0});
   tasks[1].start = {35, 10, M_PI};
-  tasks[1].legs.push_back({{5, 10}, {}, 0});
+  tasks[1].legs.push_back({{10, 10}, {}, 0});
   CoordinationParams p;
   p.threads = 2;
   CoordinationResult r = coordinate(dem, classes, tasks, p, 7);
@@ -174,9 +176,9 @@ TEST_CASE("team: a head-on pair is forced to re-plan and the plan is collision-f
   CHECK(r.legs[1].replans > 0);
   // Both really arrive.
   CHECK((Eigen::Vector2d(r.trajectories[0].samples.back().x, r.trajectories[0].samples.back().y) -
-         Eigen::Vector2d(35, 10)).norm() < 0.5);
+         Eigen::Vector2d(30, 10)).norm() < 0.5);
   CHECK((Eigen::Vector2d(r.trajectories[1].samples.back().x, r.trajectories[1].samples.back().y) -
-         Eigen::Vector2d(5, 10)).norm() < 0.5);
+         Eigen::Vector2d(10, 10)).norm() < 0.5);
 }
 
 TEST_CASE("team: with no re-plans allowed a crossing rover waits, then goes") {
