@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
-# Installs the browser libraries of the web page (and of the browser tests) from npm, as pinned by
-# their package-lock.json files; does nothing when they are already installed. Node.js and npm come
-# from Debian when the machine has none.
+# Installs the browser libraries of the web page (and of the browser tests, and the OpenAPI linters
+# of tests/contract) from npm, as pinned by their package-lock.json files; does nothing when they
+# are already installed. Node.js and npm come from Debian when the machine has none.
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 if ! command -v npm >/dev/null 2>&1; then

@@ -12,7 +12,7 @@ cd "$root"
 export CCACHE_BASEDIR="$root" CCACHE_NOHASHDIR=1
 
 bash docker/install-deps.sh
-bash docker/setup-web.sh web tests/browser
+bash docker/setup-web.sh web tests/browser tests/contract
 jobs=$(nproc)
 
 echo "== Release build (build/)"

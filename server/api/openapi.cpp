@@ -69,6 +69,7 @@ std::string errorText(int status) {
     case 415: return "The body is not sent as application/json.";
     case 421: return "The Host header names a host this server does not answer to (a DNS-rebinding "
                      "guard); start it with --public-name NAME to add one.";
+    case 426: return "A WebSocket path asked for without the upgrade.";
     case 429: return "Mission queue or memory budget full; see Retry-After.";
     case 503: return "Work queue full, or a stream's or the server's subscriber limit reached; see Retry-After.";
     case 507: return "The server's disk is full, or a disk budget (per map or in all) is: the message says which.";
@@ -91,25 +92,6 @@ json paramInfoSchema() {
                  {"group", str("The form's section (route, RRT*, coordination, rover, simulation, ...).")},
                  {"level", {{"type", "string"}, {"enum", {"common", "advanced"}}}}},
                 {"key", "type", "default", "unit", "doc", "group", "level"});
-}
-
-// A study as server/studies/study_manager.cpp's toJson writes it.
-json studySchema() {
-  json statuses = json::array();
-  for (RunStatus st : kStudyStatuses) statuses.push_back(enumName(st));
-  return object({{"id", str()},
-                 {"name", str()},
-                 {"status", {{"type", "string"}, {"enum", statuses}}},
-                 {"message", str("Why it failed or was queued again.")},
-                 {"created_at", str()},
-                 {"started_at", str()},
-                 {"finished_at", str()},
-                 {"runs_done", {{"type", "integer"}}},
-                 {"runs_total", {{"type", "integer"}}},
-                 {"eta_s", nullable(num("Seconds left; null until known."))},
-                 {"runs_per_s", num()},
-                 {"links", {{"type", "object"}, {"additionalProperties", str()}}}},
-                {"id", "name", "status", "runs_done", "runs_total"});
 }
 
 // A plan's result.json as server/json/plan_json.cpp writes it (the outcome fields in full).
@@ -198,7 +180,7 @@ json schemas(const PlannerRegistry& planners) {
        {"dem_sha256", nullable({{"type", "string"}, {"pattern", "^[0-9a-f]{64}$"},
                                 {"description", "The map's grid digest; a map with another answers 409 map_changed."}})},
        {"map_name", nullable(str("Informative."))},
-       {"keep_out", {{"allOf", {openapi::ref("Zones")}}, {"nullable", true},
+       {"keep_out", {{"type", "object"}, {"allOf", {openapi::ref("Zones")}}, {"nullable", true},
                      {"description", "Keep-out zones of this mission, in the local frame."}}}},
       {"map", "planner", "rovers"}, true);
   // Every field the parser accepts has its schema, and no other.
@@ -248,7 +230,7 @@ json schemas(const PlannerRegistry& planners) {
                                     {}, false))},
        {"step", nullable(num())}},
       {"id", "map", "planner", "status", "message", "created_at", "links", "spec"});
-  s["Study"] = studySchema();
+  s.update(studySchemas());
   s["PlanResult"] = planResultSchema();
   s["Cancelling"] = object({{"id", str()}, {"status", {{"type", "string"}, {"enum", {"cancelling"}}}}}, {"id", "status"});
   s["Deleted"] = object({{"deleted", str("The id deleted.")}}, {"deleted"});
@@ -348,6 +330,45 @@ json schemas(const PlannerRegistry& planners) {
   return s;
 }
 
+// The operation's one-line summary: its description up to the first clause break ("List
+// missions, newest first: ?limit= ..." -> "List missions, newest first").
+std::string shortSummary(const std::string& text) {
+  std::size_t cut = text.size();
+  for (const char* mark : {": ", "; ", ". ", " (", " {"}) cut = std::min(cut, text.find(mark));
+  std::string out = text.substr(0, cut);
+  if (out.size() > 60 && out.find(", ") != std::string::npos) out = out.substr(0, out.find(", "));
+  while (!out.empty() && out.back() == '.') out.pop_back();
+  return out;
+}
+
+// Each route's resource, by its path: the most specific one named in it.
+std::string tagOf(const std::string& pattern) {
+  for (const char* sub : {"/pdms", "/layers", "/zones"})
+    if (pattern.find(sub) != std::string::npos) return std::string(sub + 1);
+  for (const char* top : {"maps", "missions", "studies", "planners"})
+    if (pattern.rfind(std::string("/api/") + top, 0) == 0) return top;
+  return "server";
+}
+
+json tags() {
+  return json::array({{{"name", "server"}, {"description", "Liveness and this document."}},
+                      {{"name", "planners"}, {"description", "The registered planners and their parameters."}},
+                      {{"name", "maps"}, {"description", "DEMs: upload, metadata, delete."}},
+                      {{"name", "layers"}, {"description", "A map's rasters (elevation, slope, classes, PDM)."}},
+                      {{"name", "zones"}, {"description", "A map's keep-out zones."}},
+                      {{"name", "pdms"}, {"description", "Probability distribution maps of a map."}},
+                      {{"name", "missions"}, {"description", "Launch, watch, rename, cancel missions; their files."}},
+                      {{"name", "studies"}, {"description", "Seeded batches of runs: launch, summary, downloads."}}});
+}
+
+std::string pathParamText(const std::string& name) {
+  if (name == "id") return "The resource's id (as its listing gives it).";
+  if (name == "pdm") return "The PDM's id.";
+  if (name == "run") return "The run's index in the study, in plain decimal digits.";
+  if (name == "file") return "The file's name (the route's description lists them).";
+  return "A path segment.";
+}
+
 std::string operationId(const std::string& method, const std::string& pattern) {
   std::string id = method;
   std::transform(id.begin(), id.end(), id.begin(), [](unsigned char c) { return std::tolower(c); });
@@ -433,41 +454,75 @@ Operation& Operation::listing(const std::string& item) {
 
 json document(const http::Router& router, const PlannerRegistry& planners, const std::string& version) {
   json paths = json::object();
+  json websockets = json::object();
   for (const auto& r : router.routes()) {
-    std::string method = r.method == "WS" ? "get" : r.method;
-    std::transform(method.begin(), method.end(), method.begin(), [](unsigned char c) { return std::tolower(c); });
-    json op{{"summary", r.options.summary}, {"operationId", operationId(r.method, r.pattern)}};
     json params = json::array();
     for (std::size_t p = r.pattern.find('{'); p != std::string::npos; p = r.pattern.find('{', p + 1)) {
       auto end = r.pattern.find('}', p);
-      params.push_back({{"name", r.pattern.substr(p + 1, end - p - 1)}, {"in", "path"}, {"required", true},
+      const std::string name = r.pattern.substr(p + 1, end - p - 1);
+      params.push_back({{"name", name}, {"in", "path"}, {"required", true}, {"description", pathParamText(name)},
                         {"schema", {{"type", "string"}}}});
     }
     json extra = r.options.openapi.is_object() ? r.options.openapi : json::object();
-    for (const auto& q : extra.value("parameters", json::array())) params.push_back(q);
-    if (!params.empty()) op["parameters"] = params;
-    if (extra.contains("requestBody")) op["requestBody"] = extra["requestBody"];
-    json responses = extra.value("responses", json::object());
-    if (r.method == "WS") responses["101"] = {{"description", "Switching to WebSocket."}};
-    if (responses.empty()) responses["200"] = {{"description", "OK"}};
     std::vector<int> errors = extra.value("x-errors", std::vector<int>{});
     if (r.options.requireAuth) errors.push_back(401);
     if (r.method != "GET") errors.push_back(403);  // request_origin.hpp: state changes and streams
     errors.push_back(421);
     errors.push_back(500);
+    json errorResponses = json::object();
     for (int e : errors)
-      responses[std::to_string(e)] = {{"description", errorText(e)},
-                                      {"content", {{"application/json", {{"schema", openapi::ref("Error")}}}}}};
+      errorResponses[std::to_string(e)] = {{"description", errorText(e)},
+                                           {"content", {{"application/json", {{"schema", openapi::ref("Error")}}}}}};
+    // OpenAPI 3.0 has no way to say "WebSocket": a 101 is no success a linter or a generated client
+    // knows. The streams are listed apart, with the errors their upgrade may answer.
+    if (r.method == "WS") {
+      errorResponses["426"] = {{"description", errorText(426)},
+                               {"content", {{"application/json", {{"schema", openapi::ref("Error")}}}}}};
+      websockets[r.pattern] = {{"summary", shortSummary(r.options.summary)},
+                               {"description", r.options.summary},
+                               {"tags", {tagOf(r.pattern)}},
+                               {"parameters", params},
+                               {"errors", errorResponses}};
+      continue;
+    }
+    std::string method = r.method;
+    std::transform(method.begin(), method.end(), method.begin(), [](unsigned char c) { return std::tolower(c); });
+    json op{{"summary", shortSummary(r.options.summary)},
+            {"description", r.options.summary},
+            {"operationId", operationId(r.method, r.pattern)},
+            {"tags", {tagOf(r.pattern)}}};
+    for (const auto& q : extra.value("parameters", json::array())) params.push_back(q);
+    if (!params.empty()) op["parameters"] = params;
+    if (extra.contains("requestBody")) op["requestBody"] = extra["requestBody"];
+    json responses = extra.value("responses", json::object());
+    if (responses.empty()) responses["200"] = {{"description", "OK"}};
+    responses.update(errorResponses);
     op["responses"] = responses;
-    if (r.options.requireAuth) op["security"] = json::array({{{"bearer", json::array()}}});
+    // Routes that take the token take it only when the server was started with --token: the
+    // empty requirement says a server without one answers as well.
+    op["security"] = r.options.requireAuth ? json::array({{{"bearer", json::array()}}, json::object()}) : json::array();
     paths[r.pattern][method] = op;
   }
   return {{"openapi", "3.0.3"},
           {"info", {{"title", "roverplan API"}, {"version", version},
-                    {"description", "Mission planning for teams of planetary micro-rovers."}}},
+                    {"description", "Mission planning for teams of planetary micro-rovers. WebSocket streams "
+                                    "(which OpenAPI 3.0 cannot describe) are listed under x-websockets."},
+                    {"contact", {{"name", "The operator of this roverplan server"}}},
+                    // The project declares no licence yet: say what that means, not a licence it has not chosen.
+                    {"license", {{"name", "No licence declared (all rights reserved)"},
+                                 {"url", "https://choosealicense.com/no-permission/"}}}}},
+          {"servers", json::array({{{"url", "http://{host}:{port}"},
+                                    {"description", "A roverplan server (`roverplan serve`, loopback by default)."},
+                                    {"variables", {{"host", {{"default", "127.0.0.1"}}},
+                                                   {"port", {{"default", "8080"}}}}}}})},
+          {"tags", tags()},
           {"paths", paths},
+          {"x-websockets", websockets},
           {"components",
-           {{"securitySchemes", {{"bearer", {{"type", "http"}, {"scheme", "bearer"}}}}},
+           {{"securitySchemes",
+             {{"bearer", {{"type", "http"}, {"scheme", "bearer"},
+                          {"description", "Authorization: Bearer TOKEN, when the server was started with --token "
+                                          "TOKEN (a WebSocket upgrade may give ?token=TOKEN instead)."}}}}},
             {"schemas", schemas(planners)}}}};
 }
 

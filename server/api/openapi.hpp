@@ -42,6 +42,10 @@ class Operation {
   int last_ = 0;
 };
 
+// The schemas of /api/studies (server/api/openapi_studies.cpp): Study, StudyDetail, StudySummary,
+// StudyConfiguration, StudyPreset, StudyRun.
+nlohmann::json studySchemas();
+
 // The document of every route of `router`; the planners' parameter tables and presets give the
 // mission request's and planner listing's schemas.
 nlohmann::json document(const http::Router& router, const PlannerRegistry& planners,

@@ -144,8 +144,6 @@ json configurationsJson(const studies::StudySpec& spec) {
   return out;
 }
 
-const nlohmann::json obj = {{"type", "object"}};
-
 }  // namespace
 
 void addStudyRoutes(http::Router& router, ApiContext& ctx) {
@@ -158,7 +156,8 @@ void addStudyRoutes(http::Router& router, ApiContext& ctx) {
       out.push_back({{"name", name}, {"spec", spec}});
     }
     return Response::json(200, out);
-  }, routeDoc("Study presets (laine-fig6, laine-fig8, frontier, swinton) as study documents.", Operation().returns(200, "The presets", obj)));
+  }, routeDoc("Study presets (laine-fig6, laine-fig8, frontier, swinton) as study documents.",
+              Operation().returns(200, "The presets.", {{"type", "array"}, {"items", ref("StudyPreset")}})));
 
   router.add("POST", "/api/studies", [&ctx](const Request& req) {
     const json body = jsonBody(req, kStudyJsonLimits);
@@ -167,7 +166,7 @@ void addStudyRoutes(http::Router& router, ApiContext& ctx) {
   }, routeDoc("Launch a study: a study document (see README \"Studies\") or {\"preset\": NAME, \"runs\": N, "
                "\"master_seed\"?, \"name\"?}; validated (400 naming the field), stored and queued (202). At most " +
                std::to_string(studies::kMaxServerRuns) + " runs per study, " + std::to_string(studies::kMaxActive) +
-               " studies queued or running, " + std::to_string(studies::kMaxStored) + " kept (429).", Operation().body(obj).returns(202, "Queued", obj).errors({400, 413, 415, 429, 507}), true));
+               " studies queued or running, " + std::to_string(studies::kMaxStored) + " kept (429).", Operation().body(ref("StudyRequest")).returns(202, "Queued.", ref("Study")).errors({400, 413, 415, 429, 507}), true));
 
   router.add("GET", "/api/studies", [&ctx](const Request&) {
     json out = json::array();
@@ -184,7 +183,7 @@ void addStudyRoutes(http::Router& router, ApiContext& ctx) {
     j["summary"] = ctx.studies->summary(s.id);
     return Response::json(200, j);
   }, routeDoc("One study: its document, configurations, status and summary table (mean, std, quartiles "
-               "per configuration and metric; partial while it runs).", Operation().returns(200, "The study", obj).errors({404}), true));
+               "per configuration and metric; partial while it runs).", Operation().returns(200, "The study.", ref("StudyDetail")).errors({404}), true));
 
   router.add("DELETE", "/api/studies/{id}", [&ctx](const Request& req) {
     const std::string id = req.params.at("id");
@@ -196,7 +195,7 @@ void addStudyRoutes(http::Router& router, ApiContext& ctx) {
     }
     return Response::json(200, {{"deleted", id}});
   }, routeDoc("Cancel a queued or running study (202; the runs done are kept), or delete an ended one with "
-               "its database (200).", Operation().returns(202, "Cancelled", obj).returns(200, "Deleted", obj).errors({404}), true));
+               "its database (200).", Operation().returns(202, "Cancelling.", ref("Cancelling")).returns(200, "Deleted.", ref("Deleted")).errors({404}), true));
 
   router.add("GET", "/api/studies/{id}/runs.csv", [&ctx](const Request& req) {
     const studies::StudyState s = studyOr404(ctx, req.params.at("id"));
@@ -218,14 +217,29 @@ void addStudyRoutes(http::Router& router, ApiContext& ctx) {
     r.headers.emplace_back("Content-Disposition", "attachment; filename=\"study-" + s.id + ".sqlite\"");
     return r;
   }, routeDoc("The study database (SQLite, WAL: complete once the study has ended): spec, configs, runs, "
-               "curves; `roverplan study summary` reads it.", Operation().returns(200, "SQLite database", nullptr, "application/vnd.sqlite3").errors({404})));
+               "curves; `roverplan study summary` reads it.", Operation().returns(200, "SQLite database", nullptr, "application/vnd.sqlite3").errors({404, 409})));
+
+  router.add("GET", "/api/studies/{id}/benchmark.db", [&ctx](const Request& req) {
+    const studies::StudyState s = studyOr404(ctx, req.params.at("id"));
+    const std::string path = ctx.studies->benchmarkDbFile(s.id);
+    if (path.empty()) throw ApiError(409, "not_ready", "study " + s.id + " has no database yet", "id");
+    Response r;
+    r.file = path;
+    r.contentType = "application/vnd.sqlite3";
+    r.headers.emplace_back("Content-Disposition", "attachment; filename=\"study-" + s.id + "-benchmark.db\"");
+    return r;
+  }, routeDoc("The study as an OMPL benchmark database (SQLite: experiments, plannerConfigs, enums, runs, "
+               "progress, as ompl_benchmark_statistics.py writes them; our metrics are run columns): open it "
+               "in Planner Arena. The runs stored so far while the study runs.",
+               Operation().returns(200, "OMPL benchmark database.", nullptr, "application/vnd.sqlite3").errors({404, 409}),
+               onPool));
 
   router.add("GET", "/api/studies/{id}/runs/{run}", [&ctx](const Request& req) {
     const studies::StudyState s = studyOr404(ctx, req.params.at("id"));
     const studies::StudySpec spec = studies::parseStudySpec(ctx.studies->specJson(s.id));
     return Response::json(200, runMission(ctx, spec, runIndexOf(req, spec)));
   }, routeDoc("One run: its configuration, parameters, seed and the mission it was (or why it has none: "
-               "mission_unavailable).", Operation().returns(200, "The run", obj).errors({404}), true));
+               "mission_unavailable).", Operation().returns(200, "The run.", ref("StudyRun")).errors({404}), true));
 
   router.add("POST", "/api/studies/{id}/runs/{run}/mission", [&ctx](const Request& req) {
     const studies::StudyState s = studyOr404(ctx, req.params.at("id"));
@@ -251,7 +265,7 @@ void addStudyRoutes(http::Router& router, ApiContext& ctx) {
     return Response::json(202, missionJson(submitMission(ctx, body)));
   }, routeDoc("Open a run as a mission: the same map, planner, parameters, seed, starts (and PDM, created on "
                "the map) queued as a new mission (202, the mission); 409 not_a_mission when the run's world "
-               "is no stored map.", Operation().returns(202, "Queued mission", obj).errors({404, 409, 429}), true));
+               "is no stored map.", Operation().returns(202, "Queued mission.", ref("Mission")).errors({404, 409, 429}), true));
 
   http::RouteOptions ws = routeDoc("WebSocket: {\"type\":\"snapshot\"}, then progress frames (runs done/total, "
                                    "ETA, a partial summary every few seconds), then {\"type\":\"done\"}.", Operation().returns(101, "Switching protocols").errors({404, 503}));

@@ -1,4 +1,4 @@
-// `roverplan study run | merge | summary | dump` (issue 12): the CLI of the study engine
+// `roverplan study run | merge | summary | dump | export` (issue 12): the CLI of the study engine
 // (server/studies/studies.hpp).
 #include <chrono>
 #include <fstream>
@@ -17,12 +17,13 @@ namespace rover::cli {
 namespace {
 
 const char* kStudyUsage =
-    "usage: roverplan study <run|merge|summary|dump> ...\n"
+    "usage: roverplan study <run|merge|summary|dump|export> ...\n"
     "  run      (--preset NAME | --spec FILE.json) [--runs N] [--threads N] [--shard K/N] --out FILE.sqlite\n"
     "           (under mpirun -np N: rank 0 writes FILE, every rank runs chunks it hands out)\n"
     "  merge    OUT.sqlite IN.sqlite...   the shards of one study into one database\n"
     "  summary  FILE.sqlite [--json]      mean, std, p5, p50, p95 per configuration and metric\n"
-    "  dump     FILE.sqlite               the per-run rows without timing/host/rank (identity checks)\n";
+    "  dump     FILE.sqlite               the per-run rows without timing/host/rank (identity checks)\n"
+    "  export   FILE.sqlite --ompl OUT.db as an OMPL benchmark database (Planner Arena, ompl_benchmark_statistics.py)\n";
 
 // `K/N`, 0 <= K < N.
 std::pair<int, int> parseShard(const std::string& s) {
@@ -213,12 +214,31 @@ int dumpCommand(const std::vector<std::string>& argv, std::ostream& out) {
   return 0;
 }
 
+int exportCommand(const std::vector<std::string>& argv, std::ostream& out) {
+  ArgParser args("study export", "Writes a study database as an OMPL benchmark database: the tables and columns "
+                                 "OMPL's ompl_benchmark_statistics.py writes (experiments, plannerConfigs, enums, "
+                                 "runs, progress), the metrics as run columns, for Planner Arena.");
+  args.positional("FILE", "A study database.");
+  args.option("ompl", "OUT.db", "", "The OMPL benchmark database to write (replaced) (required).");
+  if (!args.parse(argv)) {
+    out << args.help();
+    return 0;
+  }
+  if (args.positionals().size() != 1 || !args.has("ompl"))
+    throw UsageError("usage: roverplan study export FILE.sqlite --ompl OUT.db");
+  const std::string target = args.str("ompl", "");
+  const studies::OmplCounts n = openExisting(args.positionals()[0]).writeOmplBenchmark(target);
+  out << "wrote " << target << ": " << n.experiments << " experiments, " << n.plannerConfigs << " planner configs, "
+      << n.runs << " runs, " << n.progress << " progress rows\n";
+  return 0;
+}
+
 }  // namespace
 
 int studyCommand(const std::vector<std::string>& argv, std::ostream& out) {
   if (argv.empty() || argv[0] == "--help" || argv[0] == "-h") {
     out << kStudyUsage;
-    if (argv.empty()) throw UsageError("missing subcommand (run, merge, summary, dump)");
+    if (argv.empty()) throw UsageError("missing subcommand (run, merge, summary, dump, export)");
     return 0;
   }
   const std::vector<std::string> rest(argv.begin() + 1, argv.end());
@@ -226,7 +246,8 @@ int studyCommand(const std::vector<std::string>& argv, std::ostream& out) {
   if (argv[0] == "merge") return mergeCommand(rest, out);
   if (argv[0] == "summary") return summaryCommand(rest, out);
   if (argv[0] == "dump") return dumpCommand(rest, out);
-  throw UsageError("unknown subcommand '" + argv[0] + "' (run, merge, summary, dump)");
+  if (argv[0] == "export") return exportCommand(rest, out);
+  throw UsageError("unknown subcommand '" + argv[0] + "' (run, merge, summary, dump, export)");
 }
 
 }  // namespace rover::cli

@@ -270,6 +270,8 @@ std::vector<std::string> StudyDb::metricKeys() const {
   return out;
 }
 
+std::string StudyDb::metricColumnSql(const std::string& key) { return quoted(columnOf(key)); }
+
 void StudyDb::mergeFrom(const std::string& path) {
   {
     Stmt a(db_, "ATTACH DATABASE ? AS src");

@@ -51,6 +51,11 @@ struct RunRow {
 
 class SummaryAccumulator;
 
+// Rows written by StudyDb::writeOmplBenchmark, per OMPL table.
+struct OmplCounts {
+  std::size_t experiments = 0, plannerConfigs = 0, runs = 0, progress = 0, enums = 0;
+};
+
 struct SummaryRow {
   std::string config;
   std::string metric;
@@ -100,11 +105,15 @@ class StudyDb {
   // The rows that must be identical in every execution mode (no timing, host or rank), in run
   // order, metrics sorted by key, numbers printed exactly: for identity checks.
   void dump(std::ostream& out) const;
+  // The study as an OMPL benchmark database at `path` (replaced), in the schema OMPL's
+  // ompl_benchmark_statistics.py writes, so Planner Arena plots it (server/studies/study_ompl.cpp).
+  OmplCounts writeOmplBenchmark(const std::string& path) const;
 
  private:
   explicit StudyDb(sqlite3* db);
   void ensureMetricColumns(const std::vector<RunRow>& rows);
   std::vector<std::string> metricKeys() const;  // in `ord` order
+  static std::string metricColumnSql(const std::string& key);  // its runs column, quoted for SQL
   sqlite3* db_;
   std::set<std::string> columns_;
 };

@@ -99,6 +99,7 @@ json StudyManager::specJson(const std::string& id) const { return store_.specJso
 std::string StudyManager::databasePath(const std::string& id) const { return store_.databasePath(id); }
 
 std::string StudyManager::runsCsvFile(const std::string& id) const { return store_.runsCsvFile(id); }
+std::string StudyManager::benchmarkDbFile(const std::string& id) const { return store_.benchmarkDbFile(id); }
 
 json StudyManager::summary(const std::string& id) {
   std::shared_ptr<std::mutex> once;

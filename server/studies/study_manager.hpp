@@ -66,6 +66,7 @@ class StudyManager : private StudyReporter {
   nlohmann::json summary(const std::string& id);
   // runs.csv written (streamed) into the study's folder; returns its path.
   std::string runsCsvFile(const std::string& id) const;
+  std::string benchmarkDbFile(const std::string& id) const;  // empty when there is no database yet
   std::string databasePath(const std::string& id) const;  // empty when there is none yet
   std::shared_ptr<StudyStream> stream(const std::string& id) const;
 

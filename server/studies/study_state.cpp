@@ -22,7 +22,8 @@ json toJson(const StudyState& s) {
            {{"self", "/api/studies/" + s.id},
             {"stream", "/api/studies/" + s.id + "/stream"},
             {"runs_csv", "/api/studies/" + s.id + "/runs.csv"},
-            {"sqlite", "/api/studies/" + s.id + "/study.sqlite"}}}};
+            {"sqlite", "/api/studies/" + s.id + "/study.sqlite"},
+            {"benchmark_db", "/api/studies/" + s.id + "/benchmark.db"}}}};
 }
 
 }  // namespace rover::studies

@@ -150,6 +150,25 @@ std::string StudyStore::runsCsvFile(const std::string& id) const {
   return out.string();
 }
 
+std::string StudyStore::benchmarkDbFile(const std::string& id) const {
+  const std::string path = databasePath(id);
+  if (path.empty()) return {};
+  StudyDb db = StudyDb::open(path);
+  if (!db.hasSpec()) return {};
+  // Temp + rename, as runs.csv: a download in progress keeps its own copy.
+  const fs::path out = fs::path(folder(id)) / "benchmark.db";
+  const fs::path temp = fs::path(folder(id)) / ("benchmark.db." + store::DataDir::newId());
+  try {
+    db.writeOmplBenchmark(temp.string());
+  } catch (...) {
+    std::error_code ec;
+    fs::remove(temp, ec);
+    throw;
+  }
+  fs::rename(temp, out);
+  return out.string();
+}
+
 void StudyStore::remove(const std::string& id) const { dir_.remove(folder(id)); }
 
 void StudyStore::requireRoom() const {

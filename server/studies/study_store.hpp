@@ -2,7 +2,7 @@
 // Where the server's studies live (StudyManager): DATA/studies/ID/ holds spec.json (the study
 // document as accepted), state.json (status, times, message: rewritten atomically at each
 // change), study.sqlite (the engine's study database), summary.json (an ended study's summary),
-// runs.csv (the last download) and, with a launcher, launcher.log. Never a client-chosen path:
+// runs.csv and benchmark.db (the last downloads) and, with a launcher, launcher.log. Never a client-chosen path:
 // the id is the server's (DataDir::newId). Each study's folder is charged to the disk budget.
 #include <string>
 #include <vector>
@@ -34,6 +34,9 @@ class StudyStore {
   void saveSummary(const std::string& id, const nlohmann::json& summary) const;  // throws on a full disk
   // runs.csv written (streamed) into the study's folder; returns its path.
   std::string runsCsvFile(const std::string& id) const;
+  // benchmark.db (the study as an OMPL benchmark database) written into the study's folder; its
+  // path. Empty when the study has no database yet.
+  std::string benchmarkDbFile(const std::string& id) const;
   void remove(const std::string& id) const;  // the folder and its budget entry
 
   // The disk budget: 507 when it is full; charge throws store::OverBudget past it (a stat of the

@@ -148,6 +148,22 @@ python3 -c 'import json,sys; d=json.load(open(sys.argv[1])); assert d["runs_done
   || fail "study summary --json: bad JSON"
 pass "study summary prints the table and JSON"
 
+# --- export --ompl: an OMPL benchmark database (Planner Arena) -----------------------------------
+run study export "$TMP/t1.sqlite" --ompl "$TMP/t1.ompl.db"
+expect_status 0 "study export --ompl"
+grep -q "$RUNS runs" "$OUT" || fail "study export: does not report $RUNS runs"
+python3 - "$TMP/t1.ompl.db" "$RUNS" <<'PY' || fail "study export: not OMPL's tables or not every run"
+import sqlite3, sys
+db = sqlite3.connect(sys.argv[1])
+tables = {r[0] for r in db.execute("SELECT name FROM sqlite_master WHERE type = 'table'")}
+assert {"experiments", "plannerConfigs", "enums", "runs", "progress"} <= tables, tables
+runs = db.execute("SELECT count(*) FROM plannerConfigs INNER JOIN runs ON plannerConfigs.id = runs.plannerid").fetchone()[0]
+assert runs == int(sys.argv[2]), runs
+PY
+run study export "$TMP/t1.sqlite"
+expect_status 2 "study export without --ompl"
+pass "study export --ompl writes OMPL's tables with every run"
+
 echo '{"worlds": [{"grid": {"rows": 1}}]}' >"$TMP/bad.json"
 run study run --spec "$TMP/bad.json" --out "$TMP/bad.sqlite"
 expect_status 2 "study run with a bad spec"

@@ -3,14 +3,20 @@
 // and the answers of the main routes match the schemas the document gives for them (a small
 // JSON-schema subset validator below: type, nullable, enum, properties, required,
 // additionalProperties, items, minItems/maxItems, minimum/maximum, maxLength, pattern,
-// anyOf/oneOf, $ref).
+// anyOf/oneOf, $ref). Every route is then called, its successes and errors alike, and each
+// answer checked against the document: JSON against its schema, files by their media type.
 #include <doctest/doctest.h>
 
+#include <algorithm>
+#include <fstream>
 #include <regex>
 #include <set>
 
 #include "api_server.hpp"
 #include "server/json/mission_request.hpp"
+#include "server/studies/studies.hpp"
+#include "server/studies/study_manager.hpp"
+#include "maps/dem_io.hpp"
 
 using rover::ParamType;
 using rover::test::ApiServer;
@@ -120,13 +126,35 @@ struct Contract {
   ApiServer& s;
   json doc;
   SchemaCheck checker{doc};
+  std::set<std::string> answered{};  // "get /api/maps/{id}" of every route whose answer was checked
   // Checks an answer's status is documented for the route and its body matches the schema.
   json expect(const rover::test::HttpResult& r, const std::string& pattern, const std::string& method, int status) {
     CHECK_MESSAGE(r.status == status, method << " " << pattern << ": " << r.status << " " << r.body.substr(0, 300));
     const json body = r.json();
     const auto problems = checker.check(body, responseSchema(doc, pattern, method, r.status));
     CHECK_MESSAGE(problems.empty(), method << " " << pattern << " " << r.status << ": " << (problems.empty() ? "" : problems[0]));
+    answered.insert(method + " " + pattern);
     return body;
+  }
+  // A file answer: its status documented with its media type, and sent with that type.
+  void expectFile(const rover::test::HttpResult& r, const std::string& pattern, const std::string& method, int status,
+                  const std::string& type) {
+    CHECK_MESSAGE(r.status == status, method << " " << pattern << ": " << r.status << " " << r.body.substr(0, 300));
+    responseSchema(doc, pattern, method, status, type);
+    CHECK(r.headers.at("Content-Type").rfind(type, 0) == 0);
+    CHECK(!r.body.empty());
+    answered.insert(method + " " + pattern);
+  }
+  // A WebSocket upgrade refused: a status x-websockets lists for the stream, as an Error.
+  void expectRefusedUpgrade(const std::string& target, const std::string& pattern, int status) {
+    const auto r = request(s.port(), "GET", target, "", "",
+                           {{"Upgrade", "websocket"}, {"Connection", "Upgrade"},
+                            {"Sec-WebSocket-Key", "dGhlIHNhbXBsZSBub25jZQ=="}, {"Sec-WebSocket-Version", "13"}});
+    CHECK_MESSAGE(r.status == status, pattern << ": " << r.status);
+    const json& doc404 = doc["x-websockets"][pattern]["errors"][std::to_string(r.status)];
+    REQUIRE_MESSAGE(doc404.is_object(), pattern << " does not list " << r.status);
+    CHECK(checker.check(r.json(), doc404["content"]["application/json"]["schema"]).empty());
+    answered.insert("ws " + pattern);
   }
 };
 
@@ -193,7 +221,8 @@ TEST_CASE("openapi: the document is structurally valid 3.0.3 and every $ref reso
   CHECK(doc["paths"]["/api/maps"]["post"]["responses"].contains("201"));
   CHECK(doc["paths"]["/api/maps/{id}/pdms"]["post"]["responses"].contains("201"));
   CHECK(doc["paths"]["/api/missions/{id}"]["delete"]["responses"].contains("202"));
-  CHECK(doc["paths"]["/api/missions/{id}/stream"]["get"]["responses"].contains("101"));
+  CHECK(!doc["paths"].contains("/api/missions/{id}/stream"));
+  CHECK(doc["x-websockets"]["/api/missions/{id}/stream"]["errors"].contains("404"));
   // The request schemas come from the validation's tables: every planner parameter with its range.
   const json& schemas = doc["components"]["schemas"];
   for (const auto& name : s.planners.names())
@@ -259,4 +288,153 @@ TEST_CASE("openapi: the main routes answer what their schemas say") {
   c.expect(request(s.port(), "DELETE", "/api/maps/" + map + "/pdms/" + pdm["id"].get<std::string>()),
            "/api/maps/{id}/pdms/{pdm}", "delete", 200);
   CHECK(health["planners"].size() == planners.size());
+}
+
+namespace {
+
+// The API with studies, as `roverplan serve` builds it.
+struct StudyApi {
+  ApiServer api;
+  rover::studies::StudyManager studies;
+  explicit StudyApi(const std::string& data)
+      : api(data, [] {
+          rover::test::ApiServerOptions o;
+          o.start = false;
+          return o;
+        }()),
+        studies(api.dir, [] { return false; }) {
+    api.ctx.studies = &studies;
+    rover::api::addStudyRoutes(api.router, api.ctx);
+    api.start();
+  }
+  ~StudyApi() { studies.stop(); }
+};
+
+// A 40 × 50 GeoTIFF of 1 m cells, as bytes.
+std::string smallDem(const TempDir& tmp) {
+  rover::Raster<float> z(rover::GridGeometry{40, 50, 1.0, 1.0}, 0.0f);
+  for (int r = 0; r < 40; ++r)
+    for (int c = 0; c < 50; ++c) z(r, c) = 0.05f * static_cast<float>(c);
+  z.geo.valid = true;
+  z.geo.geotransform = {500000, 1, 0, 4100040, 0, -1};
+  const std::string path = tmp.str("small.tif");
+  rover::maps::writeGeoTiff(path, z);
+  std::ifstream in(path, std::ios::binary);
+  return std::string((std::istreambuf_iterator<char>(in)), {});
+}
+
+}  // namespace
+
+TEST_CASE("openapi: every route answers what the document says, errors included") {
+  TempDir tmp;
+  StudyApi sa(tmp.str("data"));
+  ApiServer& s = sa.api;
+  Contract c{s, s.get("/api/openapi.json").json()};
+  const auto send = [&](const std::string& method, const std::string& target, const json& body) {
+    return request(s.port(), method, target, body.dump(), "application/json");
+  };
+  c.expect(s.get("/api/openapi.json"), "/api/openapi.json", "get", 200);
+  c.expect(s.get("/api/health"), "/api/health", "get", 200);
+  c.expect(s.get("/api/planners"), "/api/planners", "get", 200);
+  c.expect(s.get("/api/planners?map=nope"), "/api/planners", "get", 404);
+
+  // Maps: an upload (201), a bad one, the listing, one map, its layers, its deletion.
+  const std::string map = s.defaultMap();
+  const json up = c.expect(request(s.port(), "POST", "/api/maps?name=small&filename=small.tif", smallDem(tmp), "image/tiff"),
+                           "/api/maps", "post", 201);
+  c.expect(request(s.port(), "POST", "/api/maps?filename=x.tif", "not a raster", "image/tiff"), "/api/maps", "post", 400);
+  c.expect(s.get("/api/maps"), "/api/maps", "get", 200);
+  c.expect(s.get("/api/maps?limit=0"), "/api/maps", "get", 400);
+  c.expect(s.get("/api/maps/" + map), "/api/maps/{id}", "get", 200);
+  c.expect(s.get("/api/maps/nope"), "/api/maps/{id}", "get", 404);
+  c.expectFile(s.get("/api/maps/" + map + "/layers/slope.png?max=256"), "/api/maps/{id}/layers/{file}", "get", 200, "image/png");
+  c.expectFile(s.get("/api/maps/" + map + "/layers/elevation.tif"), "/api/maps/{id}/layers/{file}", "get", 200, "image/tiff");
+  c.expect(s.get("/api/maps/" + map + "/layers/nope.png"), "/api/maps/{id}/layers/{file}", "get", 404);
+  c.expect(s.get("/api/maps/" + map + "/layers/slope.png?max=x"), "/api/maps/{id}/layers/{file}", "get", 400);
+  const std::string upId = up["id"];
+  c.expect(request(s.port(), "DELETE", "/api/maps/" + upId), "/api/maps/{id}", "delete", 200);
+  c.expect(request(s.port(), "DELETE", "/api/maps/" + upId), "/api/maps/{id}", "delete", 404);
+
+  // Keep-out zones: read, replace, refused.
+  const json zones = {{"type", "FeatureCollection"},
+                      {"features", {{{"type", "Feature"}, {"properties", {{"name", "rim"}}},
+                                     {"geometry", {{"type", "Polygon"},
+                                                   {"coordinates", {{{130, 10}, {140, 10}, {140, 20}, {130, 20}, {130, 10}}}}}}}}}};
+  c.expect(send("PUT", "/api/maps/" + map + "/zones", zones), "/api/maps/{id}/zones", "put", 200);
+  c.expect(send("PUT", "/api/maps/" + map + "/zones", {{"type", "Point"}}), "/api/maps/{id}/zones", "put", 400);
+  c.expect(request(s.port(), "PUT", "/api/maps/" + map + "/zones", zones.dump(), "text/plain"), "/api/maps/{id}/zones", "put", 415);
+  c.expect(s.get("/api/maps/" + map + "/zones"), "/api/maps/{id}/zones", "get", 200);
+  c.expect(s.get("/api/maps/nope/zones"), "/api/maps/{id}/zones", "get", 404);
+  c.expect(send("PUT", "/api/maps/" + map + "/zones", {{"type", "FeatureCollection"}, {"features", json::array()}}),
+           "/api/maps/{id}/zones", "put", 200);
+
+  // PDMs.
+  const json pdm = c.expect(s.postJson("/api/maps/" + map + "/pdms", {{"random", 2}, {"seed", 3}}), "/api/maps/{id}/pdms", "post", 201);
+  c.expect(s.postJson("/api/maps/" + map + "/pdms", {{"random", 0}}), "/api/maps/{id}/pdms", "post", 400);
+  c.expect(s.get("/api/maps/" + map + "/pdms"), "/api/maps/{id}/pdms", "get", 200);
+  c.expect(s.get("/api/maps/nope/pdms"), "/api/maps/{id}/pdms", "get", 404);
+  const std::string pdmPath = "/api/maps/" + map + "/pdms/" + pdm["id"].get<std::string>();
+  c.expect(s.get(pdmPath), "/api/maps/{id}/pdms/{pdm}", "get", 200);
+  c.expect(s.get("/api/maps/" + map + "/pdms/nope"), "/api/maps/{id}/pdms/{pdm}", "get", 404);
+  c.expect(request(s.port(), "DELETE", pdmPath), "/api/maps/{id}/pdms/{pdm}", "delete", 200);
+  c.expect(request(s.port(), "DELETE", pdmPath), "/api/maps/{id}/pdms/{pdm}", "delete", 404);
+
+  // Missions: launch, refusals, the run, its files, its stream refused, its deletion.
+  const json mission = {{"map", map}, {"planner", "coverage"}, {"pace", 0},
+                        {"rovers", {{{"x", 20}, {"y", 20}, {"heading", 0}}}}, {"params", {{"coverage", 0.05}}}};
+  const std::string id = c.expect(s.postJson("/api/missions", mission), "/api/missions", "post", 202)["id"];
+  c.expect(s.postJson("/api/missions", {{"map", map}}), "/api/missions", "post", 400);
+  c.expect(request(s.port(), "POST", "/api/missions", mission.dump(), "text/plain"), "/api/missions", "post", 415);
+  s.waitFinished(id);
+  c.expect(s.get("/api/missions"), "/api/missions", "get", 200);
+  c.expect(s.get("/api/missions?offset=-1"), "/api/missions", "get", 400);
+  c.expect(s.get("/api/missions/" + id), "/api/missions/{id}", "get", 200);
+  c.expect(s.get("/api/missions/nope"), "/api/missions/{id}", "get", 404);
+  c.expect(send("PATCH", "/api/missions/" + id, {{"label", "strip B"}}), "/api/missions/{id}", "patch", 200);
+  c.expect(send("PATCH", "/api/missions/" + id, {{"colour", "red"}}), "/api/missions/{id}", "patch", 400);
+  const std::string files = "/api/missions/{id}/{file}";
+  c.expect(s.get("/api/missions/" + id + "/mission.json"), files, "get", 200);
+  c.expect(s.get("/api/missions/" + id + "/result.json"), files, "get", 200);
+  c.expectFile(s.get("/api/missions/" + id + "/result.csv"), files, "get", 200, "text/csv");
+  c.expectFile(s.get("/api/missions/" + id + "/result.geojson"), files, "get", 200, "application/geo+json");
+  c.expectFile(s.get("/api/missions/" + id + "/map.png"), files, "get", 200, "image/png");
+  c.expect(s.get("/api/missions/" + id + "/nope.txt"), files, "get", 404);
+  c.expectRefusedUpgrade("/api/missions/nope/stream", "/api/missions/{id}/stream", 404);
+  c.expect(request(s.port(), "DELETE", "/api/missions/" + id), "/api/missions/{id}", "delete", 200);
+  c.expect(request(s.port(), "DELETE", "/api/missions/" + id), "/api/missions/{id}", "delete", 404);
+
+  // Studies: presets, a tiny study to its end, its downloads and runs, refusals, its deletion.
+  c.expect(s.get("/api/studies/presets"), "/api/studies/presets", "get", 200);
+  const json tiny = {{"name", "tiny"}, {"planner", "coverage"}, {"runs", 2},
+                     {"worlds", {{{"name", "20x20"}, {"grid", {{"rows", 20}, {"cols", 20}}}}}}, {"levels", {0.9}}};
+  const std::string study = c.expect(s.postJson("/api/studies", tiny), "/api/studies", "post", 202)["id"];
+  c.expect(s.postJson("/api/studies", {{"planner", "nope"}}), "/api/studies", "post", 400);
+  rover::test::waitUntil(
+      [&] { return s.get("/api/studies/" + study).json()["status"] == "succeeded"; }, rover::test::kHangDeadline,
+      "the study to succeed");
+  c.expect(s.get("/api/studies"), "/api/studies", "get", 200);
+  c.expect(s.get("/api/studies/" + study), "/api/studies/{id}", "get", 200);
+  c.expect(s.get("/api/studies/nope"), "/api/studies/{id}", "get", 404);
+  c.expectFile(s.get("/api/studies/" + study + "/runs.csv"), "/api/studies/{id}/runs.csv", "get", 200, "text/csv");
+  c.expect(s.get("/api/studies/nope/runs.csv"), "/api/studies/{id}/runs.csv", "get", 404);
+  c.expectFile(s.get("/api/studies/" + study + "/study.sqlite"), "/api/studies/{id}/study.sqlite", "get", 200,
+               "application/vnd.sqlite3");
+  c.expect(s.get("/api/studies/nope/study.sqlite"), "/api/studies/{id}/study.sqlite", "get", 404);
+  c.expectFile(s.get("/api/studies/" + study + "/benchmark.db"), "/api/studies/{id}/benchmark.db", "get", 200,
+               "application/vnd.sqlite3");
+  c.expect(s.get("/api/studies/nope/benchmark.db"), "/api/studies/{id}/benchmark.db", "get", 404);
+  c.expect(s.get("/api/studies/" + study + "/runs/1"), "/api/studies/{id}/runs/{run}", "get", 200);
+  c.expect(s.get("/api/studies/" + study + "/runs/2"), "/api/studies/{id}/runs/{run}", "get", 404);
+  c.expect(s.post("/api/studies/" + study + "/runs/0/mission", ""), "/api/studies/{id}/runs/{run}/mission", "post", 409);
+  c.expect(s.post("/api/studies/nope/runs/0/mission", ""), "/api/studies/{id}/runs/{run}/mission", "post", 404);
+  c.expectRefusedUpgrade("/api/studies/nope/stream", "/api/studies/{id}/stream", 404);
+  c.expect(request(s.port(), "DELETE", "/api/studies/" + study), "/api/studies/{id}", "delete", 200);
+  c.expect(request(s.port(), "DELETE", "/api/studies/" + study), "/api/studies/{id}", "delete", 404);
+
+  // Every route was answered and checked.
+  for (const auto& r : s.router.routes()) {
+    std::string method = r.method == "WS" ? "ws" : r.method;
+    std::transform(method.begin(), method.end(), method.begin(), [](unsigned char ch) { return std::tolower(ch); });
+    CHECK_MESSAGE(c.answered.count(method + " " + r.pattern), r.method << " " << r.pattern << " was not checked");
+  }
 }
