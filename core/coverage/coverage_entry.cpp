@@ -230,6 +230,7 @@ class CoveragePlanner final : public Planner {
     const bool bodyGravity = !params.count("gravity") && problem.body != terrain::Body::Unknown;
     if (bodyGravity) p.energy.gravity = terrain::bodyGravity(problem.body);
     p.frontier = frontierByDefault(problem, params);
+    p.recordTracks = !problem.metricsOnly;
     auto cells = startsToCells(problem.world.geometry(), problem.rovers);
     // Keep-out zones are obstacles of the ground truth (core/planning/keep_out.hpp): the rovers
     // sense them as they sense rocks, and the coverage counts them out of the free cells.

@@ -64,6 +64,9 @@ struct CoverageParams {
   double impassableDeg = 15.0;
   EnergyModel energy;
   LocalisationModel localisation;
+  // Not a user parameter: false for a study's metrics-only runs (PlanningProblem::metricsOnly),
+  // whose results keep no per-move cells or pitch, so the recorder stores none.
+  bool recordTracks = true;
 
   MotionCostTable table() const;
   // The traversability thresholds of impassableDeg (only the impassable class matters here).

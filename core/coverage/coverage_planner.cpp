@@ -15,6 +15,7 @@
 #include "core/coverage/recorder.hpp"
 #include "core/coverage/team_occupancy.hpp"
 #include "core/grid/direction.hpp"
+#include "core/grid/neighbours.hpp"
 
 namespace rover::coverage {
 
@@ -129,8 +130,7 @@ Engine::Turn Engine::play(CoverageRover& r, std::int64_t step) {
     checkRegionGoal(r);
     return team_.teamGoalReached(p_.coverage) ? Turn::TeamGoal : Turn::Next;
   }
-  const CellIndex a = world_.geometry().cell(r.cell), b = world_.geometry().cell(next);
-  const int dir = dirOf(b.row - a.row, b.col - a.col);
+  const int dir = neighbourDir(world_.geometry(), r.cell, next);
   KnowledgeMap& m = team_.map(r.mapId);
   const bool revisit = m.visit(next);
   recorder_.moved(r.id, next, r.heading, dir, motion.horizontal, motion.dh, revisit);

@@ -21,6 +21,11 @@ class KnowledgeMap {
   CellState state(int i) const { return state_[i]; }
   std::uint32_t visits(int i) const { return visits_[i]; }
   bool inRegion(int i) const { return region_.empty() || region_[i] != 0; }
+  // The same cells as raw arrays, for the engine's innermost loop (MovePolicy::costStep reads
+  // eight neighbours a move; through the accessors the compiler reloads each vector per read).
+  const CellState* stateData() const { return state_.data(); }
+  const std::uint32_t* visitsData() const { return visits_.data(); }
+  const std::uint8_t* regionData() const { return region_.empty() ? nullptr : region_.data(); }
   int regionCells() const { return regionCells_; }
   int visitedCount() const { return visited_; }
   int knownObstacles() const { return knownObstacles_; }

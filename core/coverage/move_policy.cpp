@@ -14,6 +14,11 @@ MovePolicy::MovePolicy(const World& world, const CoverageParams& params, const T
   for (int heading = 0; heading < kDirections; ++heading)
     for (int rel = 0; rel < kDirections; ++rel) staticCost_[heading][rel] = table.cost(rel, rotateDir(heading, rel));
   heightTerm_ = params.beta != 0 && world.hasHeights();
+  for (int dir = 0; dir < kDirections; ++dir) offset_[dir] = kDirRow[dir] * g_.cols + kDirCol[dir];
+  onBorder_.assign(static_cast<std::size_t>(g_.cellCount()), 0);
+  for (int row = 0; row < g_.rows; ++row)
+    for (int col = 0; col < g_.cols; ++col)
+      if (row == 0 || col == 0 || row == g_.rows - 1 || col == g_.cols - 1) onBorder_[g_.index(row, col)] = 1;
   bfsParent_.assign(g_.cellCount(), -1);
   bfsSeen_.assign(g_.cellCount(), 0);
 }
@@ -47,24 +52,34 @@ int MovePolicy::costStep(CoverageRover& r) {
   // Paper 000 eq. 3: mc = α(mc_static + mc_visited·V) + β·|Δh|; the cheapest neighbour wins, ties
   // go to the first in the order straight, L45, L90, ... (rarely needed: left ≠ right). Without
   // the height term β·|Δh| is +0, which changes no sum.
+  // The move every step of every run makes (a third of a study's time): the map's arrays are read
+  // raw, and a cell away from the border takes its neighbours by fixed offsets.
   const KnowledgeMap& m = mapOf(r);
+  const CellState* state = m.stateData();
+  const std::uint32_t* visits = m.visitsData();
+  const std::uint8_t* region = m.regionData();
+  const int* occupant = team_.occupantData();
+  const double alpha = p_.alpha, mcVisited = p_.mcVisited, beta = p_.beta;
   const double hCur = heightTerm_ ? world_.height(r.cell) : 0.0;
   const std::array<double, 8>& staticCost = staticCost_[r.heading];
   int best = -1;
   double bestCost = std::numeric_limits<double>::infinity();
   double blockedStraightCost = std::numeric_limits<double>::infinity();
-  for (const Neighbour& n : neighbours8(g_, r.cell, r.heading)) {
-    const int i = n.index;
-    if (!m.inRegion(i)) continue;
-    const int rel = (n.dir - r.heading) & 7;
-    double cost = p_.alpha * (staticCost[rel] + p_.mcVisited * m.visits(i));
-    if (heightTerm_) cost += p_.beta * std::fabs(world_.height(i) - hCur);
-    if (m.state(i) == CellState::Obstacle) {
+  auto consider = [&](int i, int rel) {
+    if (region && !region[i]) return;
+    double cost = alpha * (staticCost[rel] + mcVisited * visits[i]);
+    if (heightTerm_) cost += beta * std::fabs(world_.height(i) - hCur);
+    if (state[i] == CellState::Obstacle) {
       if (rel == 0) blockedStraightCost = cost;
-      continue;
+      return;
     }
-    if (!team_.isFree(i)) continue;
+    if (occupant[i] != TeamOccupancy::kNoRover) return;
     if (cost < bestCost) bestCost = cost, best = i;
+  };
+  if (!onBorder_[static_cast<std::size_t>(r.cell)]) {
+    for (int rel = 0; rel < kDirections; ++rel) consider(r.cell + offset_[(r.heading + rel) & 7], rel);
+  } else {
+    for (const Neighbour& n : neighbours8(g_, r.cell, r.heading)) consider(n.index, (n.dir - r.heading) & 7);
   }
   // "When an obstacle is sensed ahead" and it is what stops the rover going straight on, follow
   // its contour instead of turning away (paper 002 §2.2, obstacle circumnavigation).

@@ -5,6 +5,7 @@
 #include <numbers>
 
 #include "core/grid/direction.hpp"
+#include "core/grid/neighbours.hpp"
 
 namespace rover::coverage {
 
@@ -43,12 +44,11 @@ class PerfectPlant final : public Plant {
         radius_(params.senseRadius),
         team_(team),
         recorder_(recorder),
-        lastSensed_(rovers, -1) {}
+        lastSensed_(rovers, kNotYet) {}
 
   void sense(const CoverageRover& r) override;
   Drive drive(CoverageRover& r, int next, std::int64_t, Motion& motion) override {
-    const CellIndex a = g_.cell(r.cell), b = g_.cell(next);
-    const int dir = dirOf(b.row - a.row, b.col - a.col);
+    const int dir = neighbourDir(g_, r.cell, next);
     motion.horizontal = g_.cellWidth * (isDiagonal(dir) ? std::numbers::sqrt2 : 1.0);
     motion.dh = world_.height(next) - world_.height(r.cell);
     return Drive::Moved;
@@ -69,35 +69,41 @@ class PerfectPlant final : public Plant {
   const int radius_;
   TeamOccupancy& team_;
   Recorder& recorder_;
-  std::vector<int> lastSensed_;  // per rover, the cell it last sensed from (-1: none yet)
+  // Per rover, the cell it last sensed from (row and column: no division to find them again).
+  static constexpr CellIndex kNotYet{-1, -1};
+  std::vector<CellIndex> lastSensed_;
 };
 
 void PerfectPlant::sense(const CoverageRover& r) {
   // Every cell within R of the cell the rover last sensed from is known already (the map never
   // forgets under a perfect pose), so after a one-cell move only the row and column the move
   // brought into range are read, in the same row-major order as the whole window.
-  int& last = lastSensed_[r.id];
+  CellIndex& last = lastSensed_[r.id];
   const CellIndex c = g_.cell(r.cell);
-  const CellIndex p = g_.cell(std::max(last, 0));
-  if (last < 0 || std::abs(p.row - c.row) > 1 || std::abs(p.col - c.col) > 1) {
+  const CellIndex p = last;
+  last = c;
+  if (p.row < 0 || std::abs(p.row - c.row) > 1 || std::abs(p.col - c.col) > 1) {
     senseWindow(world_, radius_, team_.map(r.mapId), r.cell, r.cell, recorder_);
-    last = r.cell;
     return;
   }
-  last = r.cell;
+  // Moved by (dr, dc), each -1..1: the row c.row + dr·R and the column c.col + dc·R came into
+  // range (the parts inside the grid), read row by row.
   KnowledgeMap& m = team_.map(r.mapId);
   const int R = radius_;
+  const int dr = c.row - p.row, dc = c.col - p.col;
+  const int newRow = dr != 0 ? c.row + dr * R : -1;
+  const int newCol = c.col + dc * R;
+  const bool colInGrid = dc != 0 && newCol >= 0 && newCol < g_.cols;
   const int r0 = std::max(0, c.row - R), r1 = std::min(g_.rows - 1, c.row + R);
   const int c0 = std::max(0, c.col - R), c1 = std::min(g_.cols - 1, c.col + R);
+  auto read = [&](int i) {
+    if (m.inRegion(i) && m.sense(i, world_.isObstacle(i))) recorder_.cellChanged(i, m.state(i), 0);
+  };
   for (int row = r0; row <= r1; ++row) {
-    int lo = c0, hi = c1;
-    if (std::abs(row - p.row) <= R) {  // the columns within R of the last cell were sensed
-      if (lo >= p.col - R && lo <= p.col + R) lo = p.col + R + 1;
-      if (hi >= p.col - R && hi <= p.col + R) hi = p.col - R - 1;
-    }
-    for (int col = lo; col <= hi; ++col) {
-      const int i = g_.index(row, col);
-      if (m.inRegion(i) && m.sense(i, world_.isObstacle(i))) recorder_.cellChanged(i, m.state(i), 0);
+    if (row == newRow) {
+      for (int col = c0; col <= c1; ++col) read(g_.index(row, col));
+    } else if (colInGrid) {
+      read(g_.index(row, newCol));
     }
   }
 }

@@ -41,7 +41,8 @@ Recorder::Recorder(const World& world, const CoverageParams& params, EventSink* 
       sink_(sink),
       energy_(params.energy, world.geometry().cellWidth),
       tracks_(starts.size()) {
-  for (std::size_t k = 0; k < starts.size(); ++k) tracks_[k].cells.push_back(starts[k].cell);
+  if (p_.recordTracks)
+    for (std::size_t k = 0; k < starts.size(); ++k) tracks_[k].cells.push_back(starts[k].cell);
 }
 
 void Recorder::moved(int rover, int to, int fromHeading, int dir, double horizontal, double dh, bool revisit) {
@@ -50,8 +51,10 @@ void Recorder::moved(int rover, int to, int fromHeading, int dir, double horizon
   t.energyJ += energy_.turn(fromHeading, dir) + energy_.forward(horizontal, dh);
   t.distanceM += horizontal;
   t.maxPitchDeg = std::max(t.maxPitchDeg, pitchDeg);
-  t.pitchDeg.push_back(static_cast<float>(pitchDeg));
-  t.cells.push_back(to);
+  if (p_.recordTracks) {
+    t.pitchDeg.push_back(static_cast<float>(pitchDeg));
+    t.cells.push_back(to);
+  }
   ++t.moves;
   t.revisits += revisit;
 }

@@ -28,6 +28,7 @@ class TeamOccupancy {
     occupant_[static_cast<std::size_t>(to)] = rover;
   }
   const std::vector<int>& occupants() const { return occupant_; }
+  const int* occupantData() const { return occupant_.data(); }
 
   int mapIdOf(int rover) const { return maps_.size() > 1 ? rover : 0; }
   KnowledgeMap& map(int mapId) { return maps_[static_cast<std::size_t>(mapId)]; }

@@ -5,6 +5,7 @@
 #include <string>
 
 #include "core/common/error.hpp"
+#include "core/planning/departure.hpp"
 #include "core/terrain/layers.hpp"
 #include "core/planning/rover_limits.hpp"
 
@@ -16,6 +17,27 @@ std::string metres(double v) {
   char buf[32];
   std::snprintf(buf, sizeof buf, "%g", v);
   return buf;
+}
+
+// The first rover with no way out (departureOrder), over ground on the map, on data and not
+// impassable.
+void refuseBoxedIn(const MissionGround& ground, const std::vector<RoverStart>& rovers, double safety) {
+  std::vector<Eigen::Vector2d> starts;
+  for (const auto& r : rovers) starts.push_back(r.position);
+  PassableGround passable;
+  if (ground.dem)
+    passable = [&](const Eigen::Vector2d& p) {
+      const auto cell = localToCell(ground.dem->geometry(), p);
+      if (!cell || !ground.dem->valid(cell->row, cell->col)) return false;
+      return !ground.classes || ground.classes->at(ground.dem->geometry().index(*cell)) !=
+                                    static_cast<std::uint8_t>(terrain::TerrainClass::Impassable);
+    };
+  const Departure d = departureOrder(starts, safety, passable);
+  if (d.boxedIn.empty()) return;
+  const std::string field = "rovers[" + std::to_string(d.boxedIn.front()) + "]";
+  throw Error(ErrorCode::InvalidInput, field,
+              field + ": start is boxed in: no way out keeping " + metres(safety) +
+                  " m from the other rovers' starts over passable ground, even after the others have left");
 }
 
 }  // namespace
@@ -91,6 +113,7 @@ void checkMissionStarts(const MissionGround& ground, const std::vector<RoverStar
     }
     gridCells.push_back(gridCell);
   }
+  if (rules.wayOut) refuseBoxedIn(ground, rovers, rules.safetyDistance);
 }
 
 }  // namespace rover::planning

@@ -32,12 +32,16 @@ struct StartRules {
   double safetyDistance = 0.0;
   // Two starts in one cell of the coverage grid are refused: coverage rovers never share a cell.
   bool distinctCells = false;
+  // A rover that cannot leave its start keeping the safety distance, past the rovers standing at
+  // theirs and over ground that is not impassable, even after every rover that can leave has
+  // (departure.hpp), is refused: the team planners keep every standing rover clear (issue 25).
+  bool wayOut = false;
 };
 
 // Throws for the first start that breaks a rule, naming it rovers[K]; "rovers" for a count
 // outside 1..64. Checks, in order: finite numbers; inside the map; on data, with data all round
 // (the bilinear surface a rover stands on); out of the keep-out zones; not impassable; the coverage cell not an obstacle;
-// apart from every earlier start.
+// apart from every earlier start; with `wayOut`, a way out (the first rover without one named).
 void checkMissionStarts(const MissionGround& ground, const std::vector<RoverStart>& rovers,
                         const StartRules& rules);
 

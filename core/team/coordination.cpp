@@ -60,14 +60,14 @@ CoordinationResult coordinate(const terrain::Dem& dem, const Raster<std::uint8_t
   const RoverSimulator simulator(dem, params.model, params.controller, params.slip);
   if (params.mode == CoordinationMode::Paper) {
     const BoxedRrtPlanner planner(dem, classes, params.rrt, params.weights);
-    return coordinateWith(tasks, planner, simulator, paperPolicy(params), params, seed, observer,
+    return coordinateWith(tasks, planner, simulator, PaperPolicy(params), params, seed, observer,
                           cancel);
   }
   std::optional<TraversalLattice> own;
   if (!lattice) lattice = &own.emplace(makeLattice(dem, classes, params));
   const GuidedRrtPlanner planner(dem, classes, *lattice, params.rrt, params.weights,
                                  params.corridorRadius);
-  return coordinateWith(tasks, planner, simulator, timedPolicy(params), params, seed, observer,
+  return coordinateWith(tasks, planner, simulator, TimedPolicy(params), params, seed, observer,
                         cancel);
 }
 

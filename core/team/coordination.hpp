@@ -110,7 +110,7 @@ struct CoordinationParams {
   // seconds to get going again, so a leg ending where a higher-priority rover passes a moment
   // later is refused then, while waiting can still help, not on the next leg. Both modes use
   // it; in timed mode it is also the time a stopped rover has to step aside when its next leg
-  // finds no clear try (coordinator.cpp, ConflictPolicy::recover).             [dwell_check]
+  // finds no clear try (coordinator.cpp, ConflictPolicy::recovers).           [dwell_check]
   double dwellCheck = 10.0;
   // rad; a simulated try whose |roll| or |pitch| goes above this is refused and planned again like
   // a conflict, keeping out of half a metre around the spot (ours; 0 = off); when no try is within

@@ -11,45 +11,33 @@
 #include "core/common/error.hpp"
 #include "core/common/parallel.hpp"
 #include "core/common/random.hpp"
+#include "core/planning/departure.hpp"
 #include "core/team/plan_ahead.hpp"
 #include "core/team/separation.hpp"
 #include "core/planning/rover_limits.hpp"
 
 namespace rover::team {
 
-ConflictPolicy paperPolicy(const CoordinationParams& p) {
-  ConflictPolicy c;
-  c.startDelays = {0};
-  c.checkTiltedTries = true;
-  c.earlyConflictEndsReplans = true;
-  c.waitsAfterReplans = p.maxWaits;
-  c.invalidGoalEndsPiece = false;
-  c.dwell = p.dwellCheck;
-  return c;
-}
+PaperPolicy::PaperPolicy(const CoordinationParams& p) : waits_(p.maxWaits), dwell_(p.dwellCheck) {}
 
 // The dwell: with 0.5 s a rover could arrive where it had no time to get away (7 skipped on the
 // default map, seed 2); 4.5 s skipped fewer legs there (6 of 960 against 9) but left no time to
-// step aside on real ground (below).
-ConflictPolicy timedPolicy(const CoordinationParams& p) {
-  ConflictPolicy c;
+// step aside on real ground. The whole dwell_check (10 s by default): a stop checked for less
+// left a rover no time to get out of the way when its next leg found no clear try
+// (.decisions/0002).
+TimedPolicy::TimedPolicy(const CoordinationParams& p, StopRules rules) : rules_(rules), dwell_(p.dwellCheck) {
   const double period = p.controller.samplePeriod;
   const int step = std::max(1, static_cast<int>(std::lround(p.delayStep / period)));
   const int maxTicks = static_cast<int>(std::lround(p.maxWaits * p.waitStep / period));
-  c.startDelays.clear();
-  for (int ticks = 0; ticks <= maxTicks; ticks += step) c.startDelays.push_back(ticks);
-  c.checkTiltedTries = false;
-  c.earlyConflictEndsReplans = false;
-  c.repeatedShortEndsReplans = true;
-  c.unzonedConflictsEndReplans = 3;
-  c.waitsAfterReplans = 0;
-  c.invalidGoalEndsPiece = true;
-  // The whole dwell_check (10 s by default): a stop checked for less left a rover no time to get
-  // out of the way when its next leg found no clear try (.decisions/0002).
-  c.dwell = p.dwellCheck;
-  c.lastLegParks = false;
-  c.recover = true;
-  return c;
+  for (int ticks = 0; ticks <= maxTicks; ticks += step) delays_.push_back(ticks);
+  // Higher-priority rovers may roam round a stopped one for long: it moves again before each
+  // next pass, looks farther and reads the traffic table first (.decisions/0002).
+  aside_.parkingMoves = 8;
+  aside_.recoveriesPerLeg = 2;
+  aside_.backAlong = 200.0;
+  aside_.maxRing = 28.0;
+  aside_.directions = 16;
+  aside_.readsTraffic = true;
 }
 
 namespace {
@@ -68,11 +56,12 @@ Eigen::Vector2d legGoal(const Leg& leg) { return leg.via.empty() ? leg.goal : le
 // Choices made here where the paper is silent are listed in coordination.hpp.
 class Coordinator {
  public:
-  Coordinator(const std::vector<RoverTask>& tasks, const LegPlanner& planner,
+  Coordinator(const std::vector<RoverTask>& tasks, std::vector<int> order, const LegPlanner& planner,
               const LegSimulator& simulator, const ConflictPolicy& policy,
               const CoordinationParams& params, std::uint64_t seed,
               CoordinationObserver* observer, const CancelToken* cancel)
       : tasks_(tasks),
+        order_(std::move(order)),
         planner_(planner),
         simulator_(simulator),
         policy_(policy),
@@ -87,17 +76,28 @@ class Coordinator {
     const int n = static_cast<int>(tasks_.size());
     out_.trajectories.resize(n);
     out_.paths.resize(n);
-    for (int k = 0; k < n; ++k) startRover(k);
+    rank_.assign(static_cast<std::size_t>(n), 0);
+    for (int r = 0; r < n; ++r) rank_[static_cast<std::size_t>(order_[static_cast<std::size_t>(r)])] = r;
+    // Every rover stands at its start from t = 0 until it is planned (issue 25): a rover planned
+    // earlier never comes closer than the safety distance to one still standing there.
+    for (int k = 0; k < n; ++k) {
+      startRover(k);
+      traffic_.add(out_.trajectories[k]);
+    }
     for (const auto& t : tasks_) legsTotal_ += static_cast<int>(t.legs.size());
     planAhead();
-    for (int k = 0; k < n && !out_.cancelled; ++k) {
+    for (int k : order_) {
+      if (out_.cancelled) break;
       for (int i = 0; i < static_cast<int>(tasks_[k].legs.size()); ++i) {
         runLeg(k, i);
         if (out_.cancelled) break;
       }
       if (!out_.cancelled) park(k);
-      traffic_.add(out_.trajectories[k]);  // rover k is done: the next ones plan round it
+      traffic_.replace(k, out_.trajectories[k]);  // rover k is done: the next ones plan round it
     }
+    // Rover-major whatever the order the rovers left in.
+    std::stable_sort(out_.legs.begin(), out_.legs.end(),
+                     [](const LegRecord& a, const LegRecord& b) { return a.rover < b.rover; });
     out_.rrtCalls += ahead_->finish();  // every leg's plan, used or not: as many whatever the threads
     // Every pair of rovers over every sample: skipped once cancelled (the plan is unfinished
     // anyway, and for 64 rovers far into a long route it is seconds the cancel would wait for).
@@ -263,7 +263,7 @@ class Coordinator {
 
   // `stand` for firstConflict: standing for as long as any higher-priority rover moves.
   static constexpr long kForGood = -1;
-  long dwellTicks() const { return std::lround(policy_.dwell / period_); }
+  long dwellTicks() const { return std::lround(policy_.dwell() / period_); }
 
   // The first conflict with a higher-priority rover (the traffic table holds exactly those) of
   // rover k standing where it is for `ticks` samples, then driving `samples` (appended to its
@@ -345,8 +345,8 @@ class Coordinator {
     int unturnableEnds = 0;  // tries refused for ending where the rover cannot turn
     std::size_t zonesBefore = 0;  // keep-out zones of the previous try
     bool shortBefore = false;     // the previous try's plan ended short of a cut-off goal
-    int unzonedRun = 0;           // policy_.unzonedConflictsEndReplans: such tries in a row
-    bool lastTry = false;         // policy_.repeatedShortEndsReplans, unzonedConflictsEndReplans
+    int unzonedRun = 0;           // policy_.unzonedConflictsEndReplans(): such tries in a row
+    bool lastTry = false;         // policy_.repeatedShortEndsReplans(), unzonedConflictsEndReplans()
     for (int attempt = 0; attempt <= p_.maxReplans && !lastTry; ++attempt) {
       if (cancelled()) return Outcome::Cancelled;
       if (attempt > 0) {
@@ -361,20 +361,20 @@ class Coordinator {
       // not when this try is likely the last (repeatedShortEndsReplans,
       // unzonedConflictsEndReplans). A try that does not count for the latter breaks its run.
       const int unzonedBefore = std::exchange(unzonedRun, 0);
-      const int unzonedLimit = policy_.unzonedConflictsEndReplans;
-      const bool likelyLast = (policy_.repeatedShortEndsReplans && shortBefore && sameZones) ||
+      const int unzonedLimit = policy_.unzonedConflictsEndReplans();
+      const bool likelyLast = (policy_.repeatedShortEndsReplans() && shortBefore && sameZones) ||
                               (unzonedLimit > 0 && unzonedBefore + 1 >= unzonedLimit);
       if (sameZones && !likelyLast && attempt < p_.maxReplans)
         ahead_->speculate(replan(k, i, piece, attempt + 1, goal, keepOut));
       PathResult path = tryPath(k, i, piece, attempt, goal, keepOut);
       if (path.status == PathStatus::Cancelled) return Outcome::Cancelled;
       const bool isShort = path.status == PathStatus::Approximate && path.goalCutOff;
-      lastTry = policy_.repeatedShortEndsReplans && isShort && shortBefore && sameZones;
+      lastTry = policy_.repeatedShortEndsReplans() && isShort && shortBefore && sameZones;
       shortBefore = isShort;
       if (!path.hasPath() || path.waypoints.size() < 2) {
         noPath = path.status;
         // Without keep-out zones a new seed cannot turn an invalid start or goal valid.
-        if (keepOut.empty() && path.status == PathStatus::InvalidGoal && policy_.invalidGoalEndsPiece) {
+        if (keepOut.empty() && path.status == PathStatus::InvalidGoal && policy_.invalidGoalEndsPiece()) {
           rec.note = "no path: invalid_goal (not on ground a rover may stop on)";
           return Outcome::InvalidGoal;
         }
@@ -387,11 +387,11 @@ class Coordinator {
       if (cancelled()) return Outcome::Cancelled;
       std::optional<Eigen::Vector2d> steep = firstExceedance(c0.samples);
       // Tilted while turning in place at the start: no path can help, only driving out straight.
-      if (steep && policy_.recover && (*steep - here(k)).norm() < 0.1) return Outcome::TiltsAtStart;
+      if (steep && policy_.recovers() && (*steep - here(k)).norm() < 0.1) return Outcome::TiltsAtStart;
       // Where the try ends the rover stops, and turns for its next move: ground it may turn on,
       // or the try is refused like a tilted one (a stop 0.2 m short of a valid vertex on 15°
-      // ground left rovers unable to turn for the rest of the mission; ConflictPolicy::recover).
-      if (!steep && policy_.recover && !c0.samples.empty() && !planner_.canStop(xyOf(c0.samples.back()))) {
+      // ground left rovers unable to turn for the rest of the mission; ConflictPolicy::recovers).
+      if (!steep && policy_.recovers() && !c0.samples.empty() && !planner_.canStop(xyOf(c0.samples.back()))) {
         steep = xyOf(c0.samples.back());
         ++unturnableEnds;
       }
@@ -401,14 +401,14 @@ class Coordinator {
         keepOutOf(k, goal, {*zone, 0.5}, keepOut);
         continue;
       }
-      if (steep && !policy_.checkTiltedTries) {
+      if (steep && !policy_.checksTiltedTries()) {
         keepOutOf(k, goal, {*steep, 0.5}, keepOut);
         continue;
       }
       // The leg's last piece decides whether the rover parks here for good.
-      const bool parks = policy_.lastLegParks && lastLeg && reachesGoal(c0, goal);
+      const bool parks = policy_.lastLegParks() && lastLeg && reachesGoal(c0, goal);
       std::optional<Conflict> first;
-      for (int ticks : policy_.startDelays) {
+      for (int ticks : policy_.startDelays()) {
         conflict = firstConflict(k, c0.samples, ticks, parks ? kForGood : dwellTicks());
         if (!first) first = conflict;
         // Standing still already conflicts: so does every longer delay (it stands longer; the
@@ -429,7 +429,7 @@ class Coordinator {
       // Waiting can only help a try that is within the attitude limit.
       if (!firstTry && !steep) firstTry = c0;
       // A conflict in the first second: no other path can dodge it, only waiting can.
-      if (policy_.earlyConflictEndsReplans && conflict && conflict->time - last(k).time < 1.0) break;
+      if (policy_.earlyConflictEndsReplans() && conflict && conflict->time - last(k).time < 1.0) break;
       // Keep out of where the other rover was, or of where the simulated rover tilted.
       const std::size_t zones = keepOut.size();
       keepOutOf(k, goal, conflict ? KeepOutZone{conflict->otherPosition, p_.keepOutRadius}
@@ -455,11 +455,11 @@ class Coordinator {
       rec.note = "no path: " + std::string(enumName(*noPath));
       return *noPath == PathStatus::InvalidGoal ? Outcome::InvalidGoal : Outcome::NoPath;
     }
-    for (int w = 1; w <= policy_.waitsAfterReplans; ++w) {
+    for (int w = 1; w <= policy_.waitsAfterReplans(); ++w) {
       if (cancelled()) return Outcome::Cancelled;
       const int ticks = static_cast<int>(std::lround(w * p_.waitStep / period_));
       Candidate c = simulateTry(k, firstTry->path, ticks, slipSeed(0x3a17ull, k, i, piece, w));
-      const bool parks = policy_.lastLegParks && lastLeg && reachesGoal(c, goal);
+      const bool parks = policy_.lastLegParks() && lastLeg && reachesGoal(c, goal);
       conflict = firstConflict(k, c.samples, 0, parks ? kForGood : dwellTicks());
       if (!conflict && !firstExceedance(c.samples) && !firstForbidden(c.samples)) {
         rec.waits = w;
@@ -483,7 +483,7 @@ class Coordinator {
     // Timed: where no spot stays clear for good the rover moves again before each next pass
     // (ours: higher-priority rovers may roam round a stopped one for long: .decisions/0002).
     // Paper: one move to a spot clear for good, as before.
-    const int moves = policy_.recover ? kMaxAsideMoves : 1;
+    const int moves = policy_.aside().parkingMoves;
     for (int move = 0; move < moves; ++move) {
       if (!firstConflict(k, {}, 0, kForGood) && !blocksLaterGoal(k, here(k))) return;
       const std::optional<double> start = moveAside(k, move);
@@ -505,32 +505,25 @@ class Coordinator {
   // 2 m, then rings of growing radius round it; within the attitude limit if at all possible (a
   // collision is worse than a tilt, so a second pass accepts a move that exceeds it, reported as
   // an exceedance). `move` numbers the calls for a rover (it salts the seeds).
-  // Paper: up to 40 m back, 7 rings of 8, an RRT* call per spot, a spot clear for good — as
-  // before. Timed (ConflictPolicy::recover): up to 200 m back and 9 rings of 16; how long each
-  // spot stays clear is read off the traffic table before any path is planned; spots clear for
-  // good first, else (nearest first) one clear for at least kMinHold; a straight move before
-  // RRT*, which gets at most kAsideRrtCalls calls, and at most kAsideSimulations simulated moves;
-  // the rover must be able to turn where it stops.
-  static constexpr int kMaxAsideMoves = 8;
-  static constexpr int kMaxRecoveries = 2;  // per leg
-  static constexpr int kAsideRrtCalls = 8;
-  static constexpr int kAsideSimulations = 48;
-  static constexpr double kMinHold = 20.0;  // s
+  // Where it looks and how hard: the policy's AsideSearch (paper: 40 m back, 7 rings of 8, an
+  // RRT* call per spot, a spot clear for good; timed: 200 m back, 9 rings of 16, the traffic
+  // table read first).
   std::optional<double> moveAside(int k, int move) {
-    const bool timed = policy_.recover;
+    const AsideSearch& a = policy_.aside();
+    const bool timed = a.readsTraffic;
     const Eigen::Vector2d from = here(k);
     std::vector<Eigen::Vector2d> spots;
     const auto& samples = out_.trajectories[k].samples;
     const double end = samples.back().distance;
     double next = 2.0;
-    for (auto it = samples.rbegin(); it != samples.rend() && next <= (timed ? 200.0 : 40.0); ++it) {
+    for (auto it = samples.rbegin(); it != samples.rend() && next <= a.backAlong; ++it) {
       if (end - it->distance < next) continue;
       spots.emplace_back(it->x, it->y);
       next += 2.0;
     }
-    const int directions = timed ? 16 : 8;
+    const int directions = a.directions;
     for (double radius : {1.5, 2.5, 3.5, 5.0, 7.0, 10.0, 14.0, 20.0, 28.0}) {
-      if (!timed && radius > 14.0) break;
+      if (radius > a.maxRing) break;
       for (int d = 0; d < directions; ++d) {
         const double a = d * 2 * std::numbers::pi / directions;
         spots.push_back(from + radius * Eigen::Vector2d(std::cos(a), std::sin(a)));
@@ -542,7 +535,7 @@ class Coordinator {
     };
     std::vector<Spot> ranked;
     const std::size_t now = out_.trajectories[k].samples.size();
-    const long holdTicks = std::lround(kMinHold / period_);
+    const long holdTicks = std::lround(a.minHold / period_);
     for (const Eigen::Vector2d& spot : spots) {
       if (!planner_.canStop(spot) || blocksLaterGoal(k, spot)) continue;
       if (!timed) {
@@ -560,7 +553,7 @@ class Coordinator {
     int attempt = 0, rrtCalls = 0, simulations = 0;
     std::optional<Candidate> tilted;  // the first move that only exceeded the limit (second pass)
     for (const Spot& spot : ranked) {
-      if (cancelled() || (timed && simulations == kAsideSimulations)) break;
+      if (cancelled() || (timed && simulations == a.simulations)) break;
       const std::uint64_t planSeed = seedFor(seed_ ^ 0x9a4cull, k, attempt, move, 0);
       ++attempt;
       PathResult path;
@@ -568,7 +561,7 @@ class Coordinator {
         path.status = PathStatus::Exact;
         path.waypoints = {from, spot.at};
       } else {
-        if (timed && rrtCalls == kAsideRrtCalls) continue;
+        if (timed && rrtCalls == a.rrtCalls) continue;
         ++rrtCalls;
         ++out_.rrtCalls;
         path = planner_.plan(from, last(k).heading, spot.at, planSeed, {}, cancel_);
@@ -617,7 +610,7 @@ class Coordinator {
           if (!c.reached || c.samples.empty() || firstExceedance(c.samples) || firstForbidden(c.samples) ||
               !planner_.canStop(xyOf(c.samples.back())))
             continue;
-          for (int ticks : policy_.startDelays)
+          for (int ticks : policy_.startDelays())
             if (!firstConflict(k, c.samples, ticks, dwellTicks())) {
               commit(k, delayed(k, c, ticks));
               return true;
@@ -631,12 +624,14 @@ class Coordinator {
   // of a lower-priority rover's leg (the spacing the task builder keeps between goals).
   bool blocksLaterGoal(int k, const Eigen::Vector2d& p) const {
     const double apart = p_.safetyDistance + 2 * p_.controller.acceptanceRadius;
-    for (std::size_t j = static_cast<std::size_t>(k) + 1; j < tasks_.size(); ++j)
+    for (std::size_t j = 0; j < tasks_.size(); ++j) {
+      if (rank_[j] <= rank_[static_cast<std::size_t>(k)]) continue;  // not planned after k
       for (const Leg& leg : tasks_[j].legs) {
         if ((leg.goal - p).norm() < apart) return true;
         for (const auto& v : leg.via)
           if ((v - p).norm() < apart) return true;
       }
+    }
     return false;
   }
 
@@ -649,7 +644,7 @@ class Coordinator {
     rec.target = leg.target;
     rec.startTime = last(k).time;
     rec.status = LegStatus::Short;
-    // Recoveries (ConflictPolicy::recover) are moves of their own, not pieces: the leg's
+    // Recoveries (ConflictPolicy::recovers) are moves of their own, not pieces: the leg's
     // fixed points and pieces go on from where they left the rover.
     int recoveries = 0;
     for (int piece = 0; piece < p_.maxPieces;) {
@@ -664,8 +659,8 @@ class Coordinator {
         out_.cancelled = true;
         return;
       }
-      if (o == Outcome::Skipped && policy_.recover && recoveries < kMaxRecoveries &&
-          firstConflict(k, {}, 0, kForGood) && moveAside(k, kMaxAsideMoves + recoveries)) {
+      if (o == Outcome::Skipped && policy_.recovers() && recoveries < policy_.aside().recoveriesPerLeg &&
+          firstConflict(k, {}, 0, kForGood) && moveAside(k, policy_.aside().parkingMoves + recoveries)) {
         // Standing here it would be run over later: it stepped aside; the leg goes on from there.
         ++recoveries;
         rec.note.clear();
@@ -677,7 +672,7 @@ class Coordinator {
         break;
       }
       if (o == Outcome::TiltsAtStart) {
-        if (recoveries < kMaxRecoveries && escapeTurn(k, i, recoveries)) {
+        if (recoveries < policy_.aside().recoveriesPerLeg && escapeTurn(k, i, recoveries)) {
           ++recoveries;
           rec.note.clear();
           continue;
@@ -723,6 +718,8 @@ class Coordinator {
   }
 
   const std::vector<RoverTask>& tasks_;
+  const std::vector<int> order_;  // the order the rovers are planned in (departureOrder)
+  std::vector<int> rank_;         // per rover, its place in order_
   const LegPlanner& planner_;
   const LegSimulator& simulator_;
   const ConflictPolicy& policy_;
@@ -734,7 +731,7 @@ class Coordinator {
   std::unique_ptr<PlanAhead> ahead_;
   std::vector<std::size_t> firstJob_;  // per rover, the index of its first leg's job
   CoordinationResult out_;
-  TrafficTable traffic_;  // the trajectories of the rovers done so far
+  TrafficTable traffic_;  // the rovers done so far; the others standing at their starts
   int legsDone_ = 0;
   int legsTotal_ = 0;
 };
@@ -747,13 +744,12 @@ CoordinationResult coordinateWith(const std::vector<RoverTask>& tasks, const Leg
                                   CoordinationObserver* observer, const CancelToken* cancel) {
   params.validate();
   if (tasks.empty()) throw Error(ErrorCode::InvalidInput, "rovers", "rovers: none given");
-  if (policy.startDelays.empty() || policy.startDelays.front() != 0 || policy.waitsAfterReplans < 0 ||
-      !(policy.dwell >= 0) ||
-      std::adjacent_find(policy.startDelays.begin(), policy.startDelays.end(),
-                         [](int a, int b) { return b <= a; }) != policy.startDelays.end())
+  const std::vector<int>& delays = policy.startDelays();
+  if (delays.empty() || delays.front() != 0 || policy.waitsAfterReplans() < 0 || !(policy.dwell() >= 0) ||
+      std::adjacent_find(delays.begin(), delays.end(), [](int a, int b) { return b <= a; }) != delays.end())
     throw Error(ErrorCode::InvalidParameter, "coordination",
                 "coordination: a policy starts each try without delay first, then at ascending delays");
-  if (!policy.lastLegParks && !policy.recover)
+  if (!policy.lastLegParks() && !policy.recovers())
     throw Error(ErrorCode::InvalidParameter, "coordination",
                 "coordination: a policy that does not check last legs for good must recover (park "
                 "steps aside before later passes)");
@@ -769,7 +765,19 @@ CoordinationResult coordinateWith(const std::vector<RoverTask>& tasks, const Leg
       if (!finite) throw Error(ErrorCode::InvalidInput, field, field + ": a leg goal is not finite");
     }
   }
-  return Coordinator(tasks, planner, simulator, policy, params, seed, observer, cancel).run();
+  // Rovers boxed in by others leave after them (the table holds every rover at its start until
+  // it is planned); one that cannot leave while the others stand is refused.
+  std::vector<Eigen::Vector2d> starts;
+  for (const RoverTask& t : tasks) starts.emplace_back(t.start.x, t.start.y);
+  planning::Departure departure = planning::departureOrder(starts, params.safetyDistance);
+  if (!departure.boxedIn.empty()) {
+    const std::string field = "rovers[" + std::to_string(departure.boxedIn.front()) + "]";
+    throw Error(ErrorCode::InvalidInput, field,
+                field + ": start is boxed in: no way out past the other rovers' starts keeping the safety distance");
+  }
+  return Coordinator(tasks, std::move(departure.order), planner, simulator, policy, params, seed, observer,
+                     cancel)
+      .run();
 }
 
 }  // namespace rover::team

@@ -43,6 +43,17 @@ std::vector<Eigen::Vector2d> formationSlots(int rovers, double footprint) {
   return out;
 }
 
+std::vector<Eigen::Vector2d> startSlots(int rovers, double footprint, double safety) {
+  std::vector<Eigen::Vector2d> slots = formationSlots(rovers, footprint);
+  double nearest = std::numeric_limits<double>::infinity();
+  for (std::size_t a = 0; a < slots.size(); ++a)
+    for (std::size_t b = a + 1; b < slots.size(); ++b) nearest = std::min(nearest, (slots[a] - slots[b]).norm());
+  const double want = startSpacing(safety);
+  if (nearest < want)
+    for (auto& s : slots) s *= want / nearest;
+  return slots;
+}
+
 TerrainEdgeModel wholeMapModel(const terrain::Dem& dem, const Raster<std::uint8_t>& classes,
                                const RrtParams& rrt) {
   const GridGeometry& g = dem.geometry();
@@ -103,9 +114,9 @@ std::vector<Pose> formationStarts(const terrain::Dem& dem, const Raster<std::uin
   const TerrainEdgeModel model = wholeMapModel(dem, classes, params.coordination.rrt);
   std::vector<Pose> out;
   std::vector<Eigen::Vector2d> taken;
-  for (const auto& slot : formationSlots(n, params.footprint)) {
-    auto p = nearestValid(model, centre + slot, params.footprint,
-                          params.coordination.safetyDistance, taken);
+  const double spacing = startSpacing(params.coordination.safetyDistance);
+  for (const auto& slot : startSlots(n, params.footprint, params.coordination.safetyDistance)) {
+    auto p = nearestValid(model, centre + slot, std::max(params.footprint, spacing), spacing, taken);
     if (!p)
       throw Error(ErrorCode::InvalidInput, "rovers",
                   "no room for the rovers' formation near the start: give the starts explicitly");

@@ -20,6 +20,16 @@ namespace rover::team {
 // and the four corners 1.67 m out.
 std::vector<Eigen::Vector2d> formationSlots(int rovers, double footprint);
 
+// Where each rover starts, as offsets from the formation's centre (issue 25): the formation
+// slots, spread (the whole lattice scaled up) until every two are at least startSpacing(safety)
+// apart. The discs of the safety distance round the standing rovers are then disjoint with a
+// lane of kStartLane between any two, and the plane minus disjoint discs is connected: every
+// rover can drive out past the others while they all still stand. Five rovers in a 5 m
+// footprint (2.36 m apart) are unchanged; 20 rovers go from a 1 m to a 2.25 m lattice.
+inline constexpr double kStartLane = 0.25;  // m, for the simulated rover's deviation from its path
+inline double startSpacing(double safety) { return 2 * safety + kStartLane; }
+std::vector<Eigen::Vector2d> startSlots(int rovers, double footprint, double safety);
+
 // The rover's validity rules on the whole map (the RRT*'s attitude limit and edge resolution).
 TerrainEdgeModel wholeMapModel(const terrain::Dem& dem, const Raster<std::uint8_t>& classes,
                                const RrtParams& rrt);
@@ -42,8 +52,9 @@ std::optional<Eigen::Vector2d> nearestValid(const TerrainEdgeModel& model, Eigen
                                             const Raster<std::uint8_t>* reachable = nullptr,
                                             double stopRadius = 0);
 
-// Starts for `n` rovers in formation around `centre` (the slots, each moved to the nearest valid
-// point as for a target, up to a footprint away), heading east. Throws InvalidInput "rovers"
+// Starts for `n` rovers in formation around `centre` (startSlots, each moved to the nearest valid
+// point as for a target, up to a footprint or a slot spacing away, keeping startSpacing from the
+// starts placed before), heading east. Throws InvalidInput "rovers"
 // when there is no room. The first form computes the traversability classes itself.
 std::vector<Pose> formationStarts(const terrain::Dem& dem, const TeamMissionParams& params,
                                   const Eigen::Vector2d& centre, int n);

@@ -16,6 +16,12 @@ Eigen::Vector2d positionAtIndex(const Trajectory& t, std::size_t i) {
 void TrafficTable::add(const Trajectory& t) {
   if (t.samples.empty()) throw Error(ErrorCode::InvalidInput, "trajectory", "a trajectory has no samples");
   planning::checkRoverCount(rovers_.size() + 1);  // the one being added
+  rovers_.emplace_back();
+  replace(static_cast<int>(rovers_.size()) - 1, t);
+}
+
+void TrafficTable::replace(int rover, const Trajectory& t) {
+  if (t.samples.empty()) throw Error(ErrorCode::InvalidInput, "trajectory", "a trajectory has no samples");
   Track track;
   track.at.reserve(t.samples.size());
   for (const auto& s : t.samples) track.at.emplace_back(s.x, s.y);
@@ -25,8 +31,9 @@ void TrafficTable::add(const Trajectory& t) {
     for (std::size_t i = b * kBlock + 1; i < last; ++i) box.extend(track.at[i]);
     track.boxes.push_back(box);
   }
-  end_ = std::max(end_, track.at.size());
-  rovers_.push_back(std::move(track));
+  rovers_.at(static_cast<std::size_t>(rover)) = std::move(track);
+  end_ = 0;
+  for (const Track& r : rovers_) end_ = std::max(end_, r.at.size());
 }
 
 // A block past a rover's last sample holds its parked position (and so does the rest of its last
@@ -46,6 +53,7 @@ std::optional<Conflict> TrafficTable::scanBlock(int rover, std::size_t from, std
   int nearList[kMaxRovers];
   int nearCount = 0;
   for (std::size_t j = 0; j < rovers_.size(); ++j) {
+    if (static_cast<int>(j) == rover) continue;
     const Box o = boxAt(rovers_[j], block);
     const double dx = std::max({0.0, box.x0 - o.x1, o.x0 - box.x1});
     const double dy = std::max({0.0, box.y0 - o.y1, o.y0 - box.y1});

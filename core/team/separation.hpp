@@ -37,23 +37,26 @@ Eigen::Vector2d positionAtIndex(const Trajectory& t, std::size_t i);
 // shared clock (ours; cooperative A*'s reservation table, Silver 2005, and SIPP's collision
 // intervals, Phillips & Likhachev 2011, hold the same information per cell):
 // the coordinator asks it, for every delay of every try, whether a rover at these positions from
-// this sample index on comes closer than the safety distance to any of them. Positions are packed
+// this sample index on comes closer than the safety distance to any of them; the rovers not
+// planned yet stand at their starts meanwhile (issue 25). Positions are packed
 // per rover and boxed per block of kBlock samples, so a query skips every block farther than the
 // safety distance from the rover's own block — a hybrid mission's 56 000-sample tails and 61 start
 // delays per try made the sample-by-sample scan a third of its sequential time. The answer is the
-// scan's exactly: the first sample index with a conflict, and at it the first rover in priority
-// order. Memory: 16 bytes per sample plus 32 per block of each rover.
+// scan's exactly: the first sample index with a conflict, and at it the first rover by index. Memory: 16 bytes per sample plus 32 per block of each rover.
 class TrafficTable {
  public:
   static constexpr std::size_t kBlock = 16;
   static constexpr std::size_t kMaxRovers = planning::kMaxRovers;
   TrafficTable(double safety, double period) : safety_(safety), period_(period) {}
-  // Appends the next rover in priority order (its trajectory must have a sample; at most
-  // kMaxRovers).
+  // Appends the next rover (its trajectory must have a sample; at most kMaxRovers). A rover not
+  // planned yet is added as the one sample of its start: standing there from t = 0 (issue 25).
   void add(const Trajectory& t);
+  // Rover `rover`'s trajectory replaces what the table held for it (its start, standing).
+  void replace(int rover, const Trajectory& t);
   int rovers() const { return static_cast<int>(rovers_.size()); }
   // The sample index after the longest trajectory's last: every rover is parked from then on.
   std::size_t end() const { return end_; }
+  // Queries never compare `rover` with its own entry.
   // The first conflict of `rover` standing at `p` over sample indices [from, to).
   std::optional<Conflict> standing(int rover, const Eigen::Vector2d& p, std::size_t from,
                                    std::size_t to) const;

@@ -64,6 +64,7 @@ class TeamPlanner final : public Planner {
     ground.keepOut = &problem.keepOut;
     planning::StartRules rules;
     rules.safetyDistance = p.mission.coordination.safetyDistance;
+    rules.wayOut = true;  // the coordinator keeps every standing rover clear (issue 25)
     planning::checkMissionStarts(ground, problem.rovers, rules);
   }
 

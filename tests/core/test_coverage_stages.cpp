@@ -43,6 +43,15 @@ TEST_CASE("neighbours8 gives the in-grid neighbours counter-clockwise from the f
   CHECK(dirsAround(GridGeometry{1, 1, 1.0, 1.0}, {0, 0}, 0).empty());
 }
 
+TEST_CASE("neighbourDir names the move to every in-grid neighbour, on the border and on narrow grids") {
+  // Every cell of grids 1 to 5 columns wide: the flat-offset answer equals the row/column one.
+  for (int cols = 1; cols <= 5; ++cols) {
+    const GridGeometry g{4, cols, 1.0, 1.0};
+    for (int i = 0; i < g.cellCount(); ++i)
+      for (const Neighbour& n : neighbours8(g, i)) CHECK(neighbourDir(g, i, n.index) == n.dir);
+  }
+}
+
 TEST_CASE("dirOf inverts the direction tables") {
   for (int d = 0; d < kDirections; ++d) CHECK(dirOf(kDirRow[d], kDirCol[d]) == d);
   CHECK(dirOf(0, 0) == -1);

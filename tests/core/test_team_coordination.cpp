@@ -1,6 +1,7 @@
 // Prioritised multi-rover planning (SPEC §3.4) and the team mission (SPEC §3.5, §4).
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <optional>
 
@@ -9,6 +10,7 @@
 #include "core/common/random.hpp"
 #include "core/planning/planner.hpp"
 #include "core/team/coordination.hpp"
+#include "core/team/formation.hpp"
 #include "core/team/team_entry.hpp"
 #include "core/team/team_mission.hpp"
 #include "core/terrain/layers.hpp"
@@ -152,10 +154,12 @@ TEST_CASE("team: a head-on pair is forced to re-plan and the plan is collision-f
   const terrain::Dem dem = flatDem(80, 160);  // 40 × 20 m
   const auto classes = classesOf(dem);
   std::vector<RoverTask> tasks(2);
+  // Each goal 5 m short of the other's start: a rover standing at its start holds that spot until
+  // it leaves (issue 25), so a goal on it would be a swap no priority order can plan.
   tasks[0].start = {5, 10, 0};
-  tasks[0].legs.push_back({{35, 10}, {}, 0});
+  tasks[0].legs.push_back({{30, 10}, {}, 0});
   tasks[1].start = {35, 10, M_PI};
-  tasks[1].legs.push_back({{5, 10}, {}, 0});
+  tasks[1].legs.push_back({{10, 10}, {}, 0});
   CoordinationParams p;
   p.threads = 2;
   CoordinationResult r = coordinate(dem, classes, tasks, p, 7);
@@ -172,9 +176,9 @@ TEST_CASE("team: a head-on pair is forced to re-plan and the plan is collision-f
   CHECK(r.legs[1].replans > 0);
   // Both really arrive.
   CHECK((Eigen::Vector2d(r.trajectories[0].samples.back().x, r.trajectories[0].samples.back().y) -
-         Eigen::Vector2d(35, 10)).norm() < 0.5);
+         Eigen::Vector2d(30, 10)).norm() < 0.5);
   CHECK((Eigen::Vector2d(r.trajectories[1].samples.back().x, r.trajectories[1].samples.back().y) -
-         Eigen::Vector2d(5, 10)).norm() < 0.5);
+         Eigen::Vector2d(10, 10)).norm() < 0.5);
 }
 
 TEST_CASE("team: with no re-plans allowed a crossing rover waits, then goes") {
@@ -262,6 +266,19 @@ TEST_CASE("team: formation slots for five rovers are the centre and the four cor
   CHECK(formationSlots(9, 5.0).size() == 9);
 }
 
+TEST_CASE("team: start slots keep two safety distances and a lane apart, five rovers as before") {
+  // Issue 25: disjoint safety discs round the standing rovers, so every one can drive out.
+  CHECK(startSlots(5, 5.0, 1.0) == formationSlots(5, 5.0));  // 2.36 m apart already
+  for (int n : {10, 20, 40, 64}) {
+    const auto s = startSlots(n, 5.0, 1.0);
+    REQUIRE(static_cast<int>(s.size()) == n);
+    double nearest = 1e9;
+    for (std::size_t a = 0; a < s.size(); ++a)
+      for (std::size_t b = a + 1; b < s.size(); ++b) nearest = std::min(nearest, (s[a] - s[b]).norm());
+    CHECK(nearest == doctest::Approx(startSpacing(1.0)));
+  }
+}
+
 TEST_CASE("team: accumulated probability is the PDM mass under the sensed discs") {
   // Uniform PDM over 20 × 20 m; one rover drives 10 m along y = 10 sensing a 1 m disc.
   const terrain::Dem dem = flatDem(80, 80);
@@ -321,6 +338,33 @@ TEST_CASE("team: a whole mission is collision-free and the same for a seed") {
   for (std::size_t i = 0; !differs && i < c.plan.trajectories[0].samples.size(); ++i)
     differs = c.plan.trajectories[0].samples[i].x != a.plan.trajectories[0].samples[i].x;
   CHECK(differs);
+}
+
+TEST_CASE("team: a 3×3 block at the safety distance leaves without a collision, the same on 1 and 2 threads") {
+  // Issue 25: nine rovers on a 1 m lattice (exactly the safety distance) on rolling ground. Every
+  // rover stands at its start until it is planned, and the centre one, boxed in, is planned after
+  // its neighbours: no collision, and the plan does not depend on the threads.
+  const terrain::Dem dem = rollingDem();  // 30 × 30 m
+  TeamMissionParams p;
+  p.route.targets = 2;
+  const Raster<float> pdm = uniformPdm(dem);
+  std::vector<Pose> starts;
+  for (int k = 0; k < 9; ++k) starts.push_back({14.0 + k % 3, 14.0 + k / 3, 0});
+  p.coordination.threads = 2;
+  const TeamMissionResult two = runTeamMission(dem, pdm, starts, p, false);
+  CHECK(two.metrics.collisions == 0);
+  CHECK(two.plan.conflicts.empty());
+  p.coordination.threads = 1;
+  const TeamMissionResult one = runTeamMission(dem, pdm, starts, p, false);
+  REQUIRE(one.plan.trajectories.size() == two.plan.trajectories.size());
+  for (std::size_t k = 0; k < one.plan.trajectories.size(); ++k) {
+    const auto &a = one.plan.trajectories[k].samples, &b = two.plan.trajectories[k].samples;
+    REQUIRE(a.size() == b.size());
+    for (std::size_t i = 0; i < a.size(); ++i) {
+      CHECK(a[i].x == b[i].x);
+      CHECK(a[i].y == b[i].y);
+    }
+  }
 }
 
 TEST_CASE("team: the hybrid mission covers each footprint and senses more of it") {

@@ -382,20 +382,21 @@ TEST_CASE("stages: timed re-plans end after two short tries with the same keep-o
   const StraightLineRover rover;
   CoordinationParams p;
   p.keepOutRadius = 3;
-  ConflictPolicy policy = timedPolicy(p);
-  REQUIRE(policy.repeatedShortEndsReplans);
+  const TimedPolicy policy(p);
+  REQUIRE(policy.repeatedShortEndsReplans());
   const CoordinationResult timed = coordinateWith(tasks, planner, rover, policy, p, 1);
   REQUIRE(timed.legs.size() == 3);
   CHECK(timed.legs[1].status == LegStatus::Reached);
   CHECK((endOf(timed.trajectories[0]) - Eigen::Vector2d(10, 7)).norm() < 1e-9);
   CHECK(timed.legs[2].status == LegStatus::Skipped);
   CHECK(timed.legs[2].replans == 1);
-  policy.repeatedShortEndsReplans = false;
-  const CoordinationResult all = coordinateWith(tasks, planner, rover, policy, p, 1);
+  TimedPolicy::StopRules without;
+  without.repeatedShortEndsReplans = false;
+  const CoordinationResult all = coordinateWith(tasks, planner, rover, TimedPolicy(p, without), p, 1);
   REQUIRE(all.legs.size() == 3);
   CHECK(all.legs[2].status == LegStatus::Skipped);
   CHECK(all.legs[2].replans == p.maxReplans);
-  CHECK_FALSE(paperPolicy(p).repeatedShortEndsReplans);
+  CHECK_FALSE(PaperPolicy(p).repeatedShortEndsReplans());
 }
 
 TEST_CASE("stages: the coordinator with a fake planner and rover: the policy decides a crossing") {
@@ -404,7 +405,7 @@ TEST_CASE("stages: the coordinator with a fake planner and rover: the policy dec
   const StraightLineRover rover;
   CoordinationParams p;
   // Timed: the same try started later clears the crossing; nothing is planned again.
-  const CoordinationResult timed = coordinateWith(tasks, planner, rover, timedPolicy(p), p, 1);
+  const CoordinationResult timed = coordinateWith(tasks, planner, rover, TimedPolicy(p), p, 1);
   REQUIRE(timed.legs.size() == 2);
   CHECK(timed.legs[0].waits == 0);  // the first rover is never disturbed
   CHECK(timed.legs[1].status == LegStatus::Reached);
@@ -415,7 +416,7 @@ TEST_CASE("stages: the coordinator with a fake planner and rover: the policy dec
   CHECK(timed.conflicts.empty());
   // Paper: every re-plan (the fake ignores keep-out zones) meets rover 0 again, so after
   // max_replans tries the rover waits one wait step and goes.
-  const CoordinationResult paper = coordinateWith(tasks, planner, rover, paperPolicy(p), p, 1);
+  const CoordinationResult paper = coordinateWith(tasks, planner, rover, PaperPolicy(p), p, 1);
   REQUIRE(paper.legs.size() == 2);
   CHECK(paper.legs[1].status == LegStatus::Reached);
   CHECK(paper.legs[1].replans == p.maxReplans);
@@ -430,7 +431,7 @@ TEST_CASE("stages: the coordinator with a fake planner and rover: the policy dec
   CoordinationParams none = p;
   none.maxReplans = 0;
   none.maxWaits = 0;
-  const CoordinationResult skipped = coordinateWith(tasks, planner, rover, timedPolicy(none), none, 1);
+  const CoordinationResult skipped = coordinateWith(tasks, planner, rover, TimedPolicy(none), none, 1);
   CHECK(skipped.legs[1].status == LegStatus::Skipped);
   CHECK(skipped.legs[1].reason == LegReason::Conflict);
   CHECK(skipped.legs[1].note.find("of rover 0") != std::string::npos);
@@ -445,8 +446,11 @@ TEST_CASE("stages: the coordinator reports an invalid and an unreachable goal an
   planner.unreachableGoals = {{3, 3}};
   const StraightLineRover rover;
   const CoordinationParams p;
-  for (const ConflictPolicy& policy : {timedPolicy(p), paperPolicy(p)}) {
-    const CoordinationResult r = coordinateWith(tasks, planner, rover, policy, p, 1);
+  const TimedPolicy timedRules(p);
+  const PaperPolicy paperRules(p);
+  for (const ConflictPolicy* policy : {static_cast<const ConflictPolicy*>(&timedRules),
+                                       static_cast<const ConflictPolicy*>(&paperRules)}) {
+    const CoordinationResult r = coordinateWith(tasks, planner, rover, *policy, p, 1);
     REQUIRE(r.legs.size() == 3);
     CHECK(r.legs[0].status == LegStatus::Skipped);
     CHECK(r.legs[0].reason == LegReason::InvalidGoal);
@@ -456,44 +460,52 @@ TEST_CASE("stages: the coordinator reports an invalid and an unreachable goal an
     CHECK((endOf(r.trajectories[0]) - Eigen::Vector2d(0, 3)).norm() < 1e-9);
   }
   // A policy that never starts a try at once is refused.
-  ConflictPolicy bad = timedPolicy(p);
-  bad.startDelays = {5};
+  struct Delays final : TimedPolicy {
+    Delays(const CoordinationParams& p, std::vector<int> d) : TimedPolicy(p), delays(std::move(d)) {}
+    const std::vector<int>& startDelays() const override { return delays; }
+    std::vector<int> delays;
+  };
   const char* refused = "coordination: a policy starts each try without delay first, then at ascending delays";
-  CHECK_THROWS_WITH_AS(coordinateWith(tasks, planner, rover, bad, p, 1), refused, Error);
-  bad.startDelays = {0, 10, 5};  // the coordinator stops at the first delay standing conflicts
-  CHECK_THROWS_WITH_AS(coordinateWith(tasks, planner, rover, bad, p, 1), refused, Error);
+  CHECK_THROWS_WITH_AS(coordinateWith(tasks, planner, rover, Delays(p, {5}), p, 1), refused, Error);
+  // The coordinator stops at the first delay standing conflicts.
+  CHECK_THROWS_WITH_AS(coordinateWith(tasks, planner, rover, Delays(p, {0, 10, 5}), p, 1), refused, Error);
   // Last legs checked for the dwell only need the moves aside at the end.
-  bad = timedPolicy(p);
-  bad.recover = false;
-  CHECK_THROWS_AS(coordinateWith(tasks, planner, rover, bad, p, 1), Error);
+  struct NoRecovery final : TimedPolicy {
+    using TimedPolicy::TimedPolicy;
+    bool recovers() const override { return false; }
+  };
+  CHECK_THROWS_AS(coordinateWith(tasks, planner, rover, NoRecovery(p), p, 1), Error);
 }
 
 TEST_CASE("stages: a rover whose spot will be run over steps aside, then goes on (timed)") {
-  // Rover 0 drives east along y = 5 from x = 0 to 20 (at x = 10 after 20 s). Rover 1 stands at
-  // (10, 5) and must go west to (0, 5): every try meets rover 0 head-on, and standing still it is
+  // Rover 0 drives east along y = 5 from x = 0 to 20 (at x = 10 after 20 s). Rover 1 comes down
+  // from (10, 8) to (10, 5) (there after 6 s; a rover standing at its start is never run over)
+  // and must then go west to (0, 5): every try meets rover 0 head-on, and standing still it is
   // run over. Timed: it steps aside off the line, waits there and goes once rover 0 has passed.
   // Paper (no recoveries): the leg is skipped, and the rover only parks out of the way at the end.
   std::vector<RoverTask> tasks(2);
   tasks[0].start = {0, 5, 0};
   tasks[0].legs = {{{20, 5}, {}, 0}};
-  tasks[1].start = {10, 5, M_PI};
-  tasks[1].legs = {{{0, 5}, {}, 0}};
+  tasks[1].start = {10, 8, -M_PI / 2};
+  tasks[1].legs = {{{10, 5}, {}, 0}, {{0, 5}, {}, 1}};
   const StraightLinePlanner planner;
   const StraightLineRover rover;
   CoordinationParams p;
-  const CoordinationResult timed = coordinateWith(tasks, planner, rover, timedPolicy(p), p, 1);
-  REQUIRE(timed.legs.size() >= 2);
+  const CoordinationResult timed = coordinateWith(tasks, planner, rover, TimedPolicy(p), p, 1);
+  REQUIRE(timed.legs.size() >= 3);
   CHECK(timed.legs[1].status == LegStatus::Reached);
-  CHECK(timed.legs[1].pieces == 1);  // the step aside is a move of its own, then the leg
+  CHECK(timed.legs[2].status == LegStatus::Reached);
+  CHECK(timed.legs[2].pieces == 1);  // the step aside is a move of its own, then the leg
   // It left the line y = 5 before rover 0 came by.
   double off = 0;
-  for (const auto& s : timed.trajectories[1].samples) off = std::max(off, std::abs(s.y - 5));
+  for (const auto& s : timed.trajectories[1].samples)
+    if (s.time >= timed.legs[1].endTime) off = std::max(off, std::abs(s.y - 5));
   CHECK(off >= p.safetyDistance);
   CHECK(timed.conflicts.empty());
   CHECK(checkSeparation(timed.trajectories, p.safetyDistance).minimumDistance >= p.safetyDistance);
   CHECK((endOf(timed.trajectories[1]) - Eigen::Vector2d(0, 5)).norm() < 1e-9);
-  const CoordinationResult paper = coordinateWith(tasks, planner, rover, paperPolicy(p), p, 1);
-  CHECK(paper.legs[1].status == LegStatus::Skipped);
+  const CoordinationResult paper = coordinateWith(tasks, planner, rover, PaperPolicy(p), p, 1);
+  CHECK(paper.legs[2].status == LegStatus::Skipped);
   CHECK(paper.conflicts.empty());
 }
 
@@ -511,7 +523,7 @@ TEST_CASE("stages: a last leg whose goal is passed long after the dwell is reach
   const StraightLinePlanner planner;
   const StraightLineRover rover;
   CoordinationParams p;
-  const CoordinationResult timed = coordinateWith(tasks, planner, rover, timedPolicy(p), p, 1);
+  const CoordinationResult timed = coordinateWith(tasks, planner, rover, TimedPolicy(p), p, 1);
   REQUIRE(timed.legs.size() == 3);  // rover 0's leg, rover 1's leg, rover 1 parking aside
   CHECK(timed.legs[1].status == LegStatus::Reached);
   CHECK(timed.legs[1].replans == 0);
@@ -521,7 +533,7 @@ TEST_CASE("stages: a last leg whose goal is passed long after the dwell is reach
   CHECK(timed.rrtCalls == 2);
   CHECK(timed.conflicts.empty());
   CHECK(checkSeparation(timed.trajectories, p.safetyDistance).minimumDistance >= p.safetyDistance);
-  const CoordinationResult paper = coordinateWith(tasks, planner, rover, paperPolicy(p), p, 1);
+  const CoordinationResult paper = coordinateWith(tasks, planner, rover, PaperPolicy(p), p, 1);
   CHECK(paper.legs[1].status == LegStatus::Skipped);
   CHECK(paper.legs[1].replans == p.maxReplans);
   CHECK(paper.conflicts.empty());
@@ -545,21 +557,21 @@ TEST_CASE("stages: timed re-plans end after three tries that meet a rover standi
   const auto leg1 = [](const CoordinationResult& r) {
     return *std::find_if(r.legs.begin(), r.legs.end(), [](const LegRecord& l) { return l.rover == 1; });
   };
-  const CoordinationResult timed = coordinateWith(tasks, planner, rover, timedPolicy(p), p, 1);
+  const CoordinationResult timed = coordinateWith(tasks, planner, rover, TimedPolicy(p), p, 1);
   CHECK(leg1(timed).status == LegStatus::Skipped);
   CHECK(leg1(timed).reason == LegReason::Conflict);
-  CHECK(leg1(timed).replans == timedPolicy(p).unzonedConflictsEndReplans - 1);
+  CHECK(leg1(timed).replans == TimedPolicy(p).unzonedConflictsEndReplans() - 1);
   CHECK(timed.conflicts.empty());
-  ConflictPolicy untiring = timedPolicy(p);
+  TimedPolicy::StopRules untiring;
   untiring.unzonedConflictsEndReplans = 0;
-  CHECK(leg1(coordinateWith(tasks, planner, rover, untiring, p, 1)).replans == p.maxReplans);
-  CHECK(leg1(coordinateWith(tasks, planner, rover, paperPolicy(p), p, 1)).replans == p.maxReplans);
+  CHECK(leg1(coordinateWith(tasks, planner, rover, TimedPolicy(p, untiring), p, 1)).replans == p.maxReplans);
+  CHECK(leg1(coordinateWith(tasks, planner, rover, PaperPolicy(p), p, 1)).replans == p.maxReplans);
   // Rover 0 paces across rover 1's way 1.2 m short of its goal instead (a zone there would still
   // wall the goal in): met on the way, which another path may dodge, so every re-plan is tried.
   tasks[0].start = {12, 3.8, M_PI};
   tasks[0].legs.clear();
   for (int j = 0; j < 50; ++j) tasks[0].legs.push_back({{j % 2 == 0 ? 9.5 : 10.5, 3.8}, {}, j});
-  const CoordinationResult onTheWay = coordinateWith(tasks, planner, rover, timedPolicy(p), p, 1);
+  const CoordinationResult onTheWay = coordinateWith(tasks, planner, rover, TimedPolicy(p), p, 1);
   CHECK(leg1(onTheWay).status == LegStatus::Skipped);
   CHECK(leg1(onTheWay).replans == p.maxReplans);
 }
@@ -592,7 +604,7 @@ TEST_CASE("stages: a rover that tilts turning where it stands drives straight ou
   const StraightLinePlanner planner;
   const StripRover rover;
   CoordinationParams p;
-  const CoordinationResult timed = coordinateWith(tasks, planner, rover, timedPolicy(p), p, 1);
+  const CoordinationResult timed = coordinateWith(tasks, planner, rover, TimedPolicy(p), p, 1);
   REQUIRE(timed.legs.size() == 1);
   CHECK(timed.legs[0].status == LegStatus::Reached);
   CHECK(timed.legs[0].pieces == 1);  // the drive out is a move of its own
@@ -600,7 +612,7 @@ TEST_CASE("stages: a rover that tilts turning where it stands drives straight ou
   for (const auto& s : timed.trajectories[0].samples) east = std::max(east, s.x);
   CHECK(east >= 1.0);  // it left the strip before turning
   for (const auto& s : timed.trajectories[0].samples) CHECK(std::abs(s.pitch) < p.attitudeCheck);
-  const CoordinationResult paper = coordinateWith(tasks, planner, rover, paperPolicy(p), p, 1);
+  const CoordinationResult paper = coordinateWith(tasks, planner, rover, PaperPolicy(p), p, 1);
   CHECK(paper.legs[0].status == LegStatus::Short);
   CHECK(paper.legs[0].reason == LegReason::Steep);
 }
@@ -695,4 +707,51 @@ TEST_CASE("stages: a speculated re-plan is the plan made alone, used only for it
   failing.speculate(off);
   CHECK_THROWS_AS(failing.plan(off), Error);
   CHECK(failing.finish() == 0);
+}
+
+TEST_CASE("stages: a 3×3 block of rovers at the safety distance all leave without a collision") {
+  // Rovers on a 1 m lattice (exactly the safety distance), row-major; each outer one drives 10 m
+  // straight out, the centre (rovers[4]) 7 m west, behind rovers[3]. Every rover stands at its
+  // start until it is planned, so the centre, boxed in by its eight neighbours, is planned after
+  // them (planned fifth, with rovers 5 to 8 standing for good, it could never leave) (issue 25).
+  std::vector<RoverTask> tasks(9);
+  for (int k = 0; k < 9; ++k) {
+    const Eigen::Vector2d at(10 + k % 3, 10 + k / 3);
+    const Eigen::Vector2d out = at - Eigen::Vector2d(11, 11);
+    const Eigen::Vector2d goal = k == 4 ? Eigen::Vector2d(4, 11) : Eigen::Vector2d(at + 10 * out.normalized());
+    tasks[k].start = {at.x(), at.y(), 0};
+    tasks[k].legs.push_back({goal, {}, k});
+  }
+  const StraightLinePlanner planner;
+  const StraightLineRover rover;
+  const CoordinationParams p;
+  const TimedPolicy timed(p);
+  const PaperPolicy paper(p);
+  for (const ConflictPolicy* policy : {static_cast<const ConflictPolicy*>(&timed),
+                                       static_cast<const ConflictPolicy*>(&paper)}) {
+    CAPTURE(policy->name());
+    const CoordinationResult r = coordinateWith(tasks, planner, rover, *policy, p, 1);
+    CHECK(r.conflicts.empty());
+    CHECK(checkSeparation(r.trajectories, p.safetyDistance).minimumDistance >= p.safetyDistance - 1e-9);
+    REQUIRE(r.legs.size() == 9);
+    for (const LegRecord& leg : r.legs) {
+      CAPTURE(leg.rover);
+      CHECK(leg.status == LegStatus::Reached);
+    }
+  }
+}
+
+TEST_CASE("stages: rovers closer than the safety distance are refused naming the rover") {
+  std::vector<RoverTask> tasks(3);
+  tasks[0].start = {0, 0, 0};
+  tasks[1].start = {10, 0, 0};
+  tasks[2].start = {10.5, 0, 0};  // 0.5 m from rovers[1]: neither can stand there safely
+  for (auto& t : tasks) t.legs.push_back({{t.start.x, 20}, {}, 0});
+  const StraightLinePlanner planner;
+  const StraightLineRover rover;
+  const CoordinationParams p;
+  CHECK_THROWS_WITH_AS(coordinateWith(tasks, planner, rover, TimedPolicy(p), p, 1),
+                       "rovers[1]: start is boxed in: no way out past the other rovers' starts keeping "
+                       "the safety distance",
+                       Error);
 }

@@ -1,0 +1,77 @@
+// Which rovers can leave their starts while the others stand, and in what order (issue 25).
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <memory>
+#include <string>
+
+#include "core/common/error.hpp"
+#include "core/planning/departure.hpp"
+#include "core/planning/mission_check.hpp"
+#include "core/terrain/layers.hpp"
+
+using namespace rover;
+using namespace rover::planning;
+
+TEST_CASE("departure: a 3×3 block at the safety distance leaves from the outside in") {
+  std::vector<Eigen::Vector2d> starts;
+  for (int k = 0; k < 9; ++k) starts.emplace_back(k % 3, k / 3);
+  const Departure d = departureOrder(starts, 1.0);
+  CHECK(d.boxedIn.empty());
+  CHECK(d.order == std::vector<int>{0, 1, 2, 3, 5, 6, 7, 8, 4});
+  // Spread to 2.25 m (the formation's start spacing) every rover can leave at once.
+  for (auto& s : starts) s *= 2.25;
+  CHECK(departureOrder(starts, 1.0).order == std::vector<int>{0, 1, 2, 3, 4, 5, 6, 7, 8});
+}
+
+TEST_CASE("departure: a rover in a pocket leaves after the rover in its mouth, or not at all") {
+  // Passable ground: a 4 m square pocket, open to the east through a 1.5 m mouth, in open ground.
+  const auto pocket = [](double mouth) {
+    return [mouth](const Eigen::Vector2d& p) {
+      const bool wall = (p.x() > -3 && p.x() < 3 && p.y() > -3 && p.y() < 3) &&
+                        !(p.x() > -2 && p.x() < 2 && p.y() > -2 && p.y() < 2);
+      const bool gap = p.x() >= 2 && std::abs(p.y()) < mouth / 2;
+      return !wall || gap;
+    };
+  };
+  // Rover 1 stands in the mouth: rover 0 leaves after it.
+  const Departure open = departureOrder({{0, 0}, {2.5, 0}}, 1.0, pocket(1.5));
+  CHECK(open.boxedIn.empty());
+  CHECK(open.order == std::vector<int>{1, 0});
+  // No mouth: rover 0 never gets out, rover 1 (outside) does.
+  const Departure closed = departureOrder({{0, 0}, {4.5, 0}}, 1.0, pocket(0.0));
+  CHECK(closed.order == std::vector<int>{1});
+  CHECK(closed.boxedIn == std::vector<int>{0});
+}
+
+TEST_CASE("mission check: a team start with no way out is refused naming the rover") {
+  // 20 × 20 m of flat ground at 1 m; impassable cells ring x and y in [5, 12), so a rover at
+  // (8.5, 8.5) stands in a 5 m pocket with no way out.
+  terrain::Dem dem;
+  dem.z = Raster<float>(GridGeometry{20, 20, 1.0, 1.0}, 0.0f);
+  Raster<std::uint8_t> classes(dem.z.geometry, 0);
+  const auto wall = [&](int x, int y) {  // the cell of (x, y) metres: rows count from the north
+    classes(19 - y, x) = static_cast<std::uint8_t>(terrain::TerrainClass::Impassable);
+  };
+  for (int i = 5; i <= 11; ++i)
+    for (int j : {5, 11}) {
+      wall(i, j);
+      wall(j, i);
+    }
+  MissionGround ground;
+  ground.dem = &dem;
+  ground.classes = &classes;
+  StartRules rules;
+  rules.safetyDistance = 1.0;
+  const std::vector<RoverStart> rovers{{{2.5, 2.5}, 0.0}, {{8.5, 8.5}, 0.0}};
+  CHECK_NOTHROW(checkMissionStarts(ground, rovers, rules));  // without the rule
+  rules.wayOut = true;
+  try {
+    checkMissionStarts(ground, rovers, rules);
+    FAIL("accepted");
+  } catch (const Error& e) {
+    CHECK(e.field() == "rovers[1]");
+    CHECK(e.code() == ErrorCode::InvalidInput);
+    CHECK(std::string(e.what()).find("boxed in") != std::string::npos);
+  }
+}
