@@ -3,6 +3,7 @@
 // they reach users as our own messages, network access off — and the one door every user-supplied
 // raster comes in by (issue 14): an allow-list of raster drivers, reads confined to the upload's
 // own folder, and a check of every file the opened dataset uses.
+#include <cstdint>
 #include <memory>
 #include <string>
 #include <vector>
@@ -100,5 +101,9 @@ std::string withoutPaths(const std::string& text);
 // The first n bytes of a file, read through GDAL (so inside an active UploadSandbox); "" when
 // it cannot be read.
 std::string firstBytes(const std::string& path, std::size_t n);
+
+// The bytes of the in-memory file `path` (/vsimem/…), which is then removed; empty when there is
+// none (the exports' way out of GDAL without touching the disk).
+std::vector<std::uint8_t> takeMemFile(const std::string& path);
 
 }  // namespace rover::maps

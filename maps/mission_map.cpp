@@ -273,11 +273,7 @@ std::vector<std::uint8_t> encodeMissionMapGeoTiff(const MissionMap& m, const Gri
     if (err == CE_None && !geo.crsWkt.empty()) err = GDALSetProjection(ds, geo.crsWkt.c_str());
   }
   GDALClose(ds);
-  vsi_l_offset length = 0;
-  GByte* buffer = VSIGetMemFileBuffer(path.c_str(), &length, FALSE);
-  std::vector<std::uint8_t> bytes;
-  if (buffer != nullptr) bytes.assign(buffer, buffer + length);
-  VSIUnlink(path.c_str());
+  std::vector<std::uint8_t> bytes = takeMemFile(path);
   if (err != CE_None || bytes.empty())
     throw std::runtime_error(std::string("GeoTIFF export: ") + CPLGetLastErrorMsg());
   return bytes;

@@ -1,21 +1,16 @@
 #include "maps/render.hpp"
 
-#include <cpl_conv.h>
-#include <cpl_vsi.h>
-#include <gdal.h>
-
 #include <algorithm>
-#include <atomic>
 #include <cmath>
-#include <cstdio>
 #include <limits>
 #include <stdexcept>
 #include <string>
 
 #include "core/common/error.hpp"
 #include "core/terrain/layers.hpp"
+#include "maps/display_grid.hpp"
+#include "maps/layer_legend.hpp"
 #include "maps/painter.hpp"
-#include "maps/gdal_env.hpp"
 
 namespace rover::maps {
 
@@ -77,199 +72,6 @@ constexpr Rgba kClassColours[4] = {
 constexpr double kNeutralShade = 180.3;
 
 // ---------------------------------------------------------------------------------------------
-// Display grids: the source raster, box-downsampled when an overview is asked for.
-
-// Either a view of the source values (no downsampling) or its own downsampled values.
-struct Grid {
-  int rows = 0, cols = 0;
-  std::vector<float> own;       // downsampled values, or empty
-  const float* view = nullptr;  // the source values when not downsampled
-  const float* data() const { return own.empty() ? view : own.data(); }
-  std::size_t size() const { return std::size_t(rows) * cols; }
-  float at(std::size_t i) const { return data()[i]; }
-  float at(int r, int c) const { return data()[std::size_t(r) * cols + c]; }
-  bool empty() const { return size() == 0; }
-};
-
-// Output size: the source size, or scaled so max(rows, cols) == maxSize with the aspect kept.
-void displaySize(int rows, int cols, int maxSize, int& outRows, int& outCols) {
-  outRows = rows;
-  outCols = cols;
-  if (maxSize <= 0 || std::max(rows, cols) <= maxSize) return;
-  if (cols >= rows) {
-    outCols = maxSize;
-    outRows = std::clamp(static_cast<int>(std::lround(double(rows) * maxSize / cols)), 1, maxSize);
-  } else {
-    outRows = maxSize;
-    outCols = std::clamp(static_cast<int>(std::lround(double(cols) * maxSize / rows)), 1, maxSize);
-  }
-}
-
-// Block boundaries: output index i covers source [edges[i], edges[i + 1]); never empty because
-// out <= n.
-std::vector<int> blockEdges(int n, int out) {
-  std::vector<int> e(out + 1);
-  for (int i = 0; i <= out; ++i) e[i] = static_cast<int>(std::int64_t(i) * n / out);
-  return e;
-}
-
-// Mean of the finite values in each block; NaN when a block has none.
-Grid downsampleMean(const Raster<float>& src, int outRows, int outCols) {
-  const int rows = src.geometry.rows, cols = src.geometry.cols;
-  if (outRows == rows && outCols == cols) return Grid{rows, cols, {}, src.values.data()};
-  Grid g{outRows, outCols, std::vector<float>(std::size_t(outRows) * outCols), nullptr};
-  const auto re = blockEdges(rows, outRows), ce = blockEdges(cols, outCols);
-  std::vector<double> sum(outCols);
-  std::vector<int> count(outCols);
-  for (int i = 0; i < outRows; ++i) {
-    std::fill(sum.begin(), sum.end(), 0.0);
-    std::fill(count.begin(), count.end(), 0);
-    for (int r = re[i]; r < re[i + 1]; ++r) {
-      const float* row = src.values.data() + std::size_t(r) * cols;
-      for (int j = 0; j < outCols; ++j)
-        for (int c = ce[j]; c < ce[j + 1]; ++c)
-          if (std::isfinite(row[c])) {
-            sum[j] += row[c];
-            ++count[j];
-          }
-    }
-    for (int j = 0; j < outCols; ++j)
-      g.own[std::size_t(i) * outCols + j] = count[j] ? static_cast<float>(sum[j] / count[j]) : kNaN;
-  }
-  return g;
-}
-
-// The worst class in each block: the highest code ignoring NoData, NoData only if all are.
-// Codes above NoData are not classes and count as NoData.
-Grid downsampleWorstClass(const Raster<std::uint8_t>& src, int outRows, int outCols) {
-  const int rows = src.geometry.rows, cols = src.geometry.cols;
-  constexpr int kNoData = static_cast<int>(terrain::TerrainClass::NoData);
-  const auto re = blockEdges(rows, outRows), ce = blockEdges(cols, outCols);
-  Grid g{outRows, outCols, std::vector<float>(std::size_t(outRows) * outCols), nullptr};
-  std::vector<int> worst(outCols);
-  for (int i = 0; i < outRows; ++i) {
-    std::fill(worst.begin(), worst.end(), -1);
-    for (int r = re[i]; r < re[i + 1]; ++r) {
-      const std::uint8_t* row = src.values.data() + std::size_t(r) * cols;
-      for (int j = 0; j < outCols; ++j)
-        for (int c = ce[j]; c < ce[j + 1]; ++c)
-          if (row[c] < kNoData) worst[j] = std::max(worst[j], int(row[c]));
-    }
-    for (int j = 0; j < outCols; ++j)
-      g.own[std::size_t(i) * outCols + j] = static_cast<float>(worst[j] < 0 ? kNoData : worst[j]);
-  }
-  return g;
-}
-
-// ---------------------------------------------------------------------------------------------
-// Legends.
-
-struct RampLegend {
-  std::string title;
-  double lo = 0, hi = 1;
-  std::vector<double> ticks;  // interior values labelled besides lo and hi
-  Rgba (*colour)(double, const RampLegend&) = nullptr;
-};
-
-struct ClassItem {
-  Rgba colour;
-  std::string label;
-};
-
-constexpr int kMinLegendWidth = 160;
-constexpr int kRampLegendHeight = 32;
-constexpr int kPad = 3;
-constexpr Rgba kLegendBackground = {255, 255, 255, 255};
-
-// "1234", "12.5", "0.125", "3.1e-5": short labels for the 5×7 font.
-std::string formatValue(double v) {
-  char buf[32];
-  const double a = std::fabs(v);
-  if (v == 0) return "0";
-  if (a >= 1e-3 && a < 1e6) {
-    const int decimals = a >= 100 ? 0 : a >= 10 ? 1 : a >= 1 ? 2 : 3;
-    std::snprintf(buf, sizeof buf, "%.*f", decimals, v);
-    std::string s = buf;
-    if (s.find('.') != std::string::npos) {
-      while (s.back() == '0') s.pop_back();
-      if (s.back() == '.') s.pop_back();
-    }
-    return s == "-0" ? "0" : s;
-  }
-  std::snprintf(buf, sizeof buf, "%.1e", v);  // e.g. 3.1e-05 -> 3.1e-5
-  std::string s = buf;
-  const auto e = s.find('e');
-  std::string mant = s.substr(0, e), exp = s.substr(e + 1);
-  if (mant.size() > 2 && mant.compare(mant.size() - 2, 2, ".0") == 0) mant.resize(mant.size() - 2);
-  const bool neg = exp[0] == '-';
-  exp.erase(0, (exp[0] == '-' || exp[0] == '+') ? 1 : 0);
-  while (exp.size() > 1 && exp[0] == '0') exp.erase(0, 1);
-  return mant + "e" + (neg ? "-" : "") + exp;
-}
-
-void drawRampLegend(Image& img, int y0, const RampLegend& lg) {
-  Painter cv(img);
-  cv.rect(0, y0, img.width, kRampLegendHeight, kLegendBackground);
-  cv.text(lg.title, kPad, y0 + 3);
-  const int barX = kPad, barW = img.width - 2 * kPad, barY = y0 + 12;
-  for (int i = 0; i < barW; ++i) {
-    const double v = lg.lo + (lg.hi - lg.lo) * (i + 0.5) / barW;
-    cv.rect(barX + i, barY, 1, 8, lg.colour(v, lg));
-  }
-  // Ticks under the bar and their labels; a label that would overlap one already placed is
-  // dropped (the end labels are placed first).
-  std::vector<std::pair<int, int>> taken;
-  auto place = [&](double v, int align) {  // align: -1 left, 0 centre, +1 right
-    const int x = barX + static_cast<int>(std::lround((v - lg.lo) / (lg.hi - lg.lo) * (barW - 1)));
-    const std::string s = formatValue(v);
-    const int w = font::textWidth(s);
-    int lx = align < 0 ? x : align > 0 ? x - w + 1 : x - w / 2;
-    lx = std::clamp(lx, kPad, img.width - kPad - w);
-    for (const auto& [a, b] : taken)
-      if (lx < b + 4 && lx + w > a - 4) return;
-    taken.emplace_back(lx, lx + w);
-    cv.rect(x, barY + 8, 1, 2, kInk);
-    cv.text(s, lx, y0 + 24);
-  };
-  place(lg.lo, -1);
-  place(lg.hi, +1);
-  for (double t : lg.ticks)
-    if (t > lg.lo && t < lg.hi) place(t, 0);
-}
-
-// Swatches flow left to right and wrap; returns the strip height (at least 28 px).
-int layoutClassLegend(int width, const std::vector<ClassItem>& items,
-                      std::vector<std::pair<int, int>>* positions) {
-  int x = kPad, y = 13;
-  for (const auto& it : items) {
-    const int w = 11 + font::textWidth(it.label);
-    if (x > kPad && x + w > width - kPad) {
-      x = kPad;
-      y += 11;
-    }
-    if (positions) positions->emplace_back(x, y);
-    x += w + 8;
-  }
-  return std::max(28, y + 8 + 4);
-}
-
-void drawClassLegend(Image& img, int y0, int height, const std::string& title,
-                     const std::vector<ClassItem>& items) {
-  Painter cv(img);
-  cv.rect(0, y0, img.width, height, kLegendBackground);
-  cv.text(title, kPad, y0 + 3);
-  std::vector<std::pair<int, int>> pos;
-  layoutClassLegend(img.width, items, &pos);
-  for (std::size_t i = 0; i < items.size(); ++i) {
-    const auto [x, y] = pos[i];
-    cv.rect(x, y0 + y, 8, 8, kInk);
-    cv.rect(x + 1, y0 + y + 1, 6, 6, kLegendBackground);  // a translucent colour shows as on paper
-    cv.rect(x + 1, y0 + y + 1, 6, 6, items[i].colour);
-    cv.text(items[i].label, x + 11, y0 + y + 1);
-  }
-}
-
-// ---------------------------------------------------------------------------------------------
 
 // The raster a layer draws; InvalidInput on field "layer" when it is missing or empty.
 template <class T>
@@ -309,7 +111,7 @@ const char* renderLayerName(RenderLayer layer) {
 
 Image renderLayer(RenderLayer layer, const RenderInput& input, const RenderOptions& options) {
   // 1. The display grid (and, for elevation, the shading grid at the same size).
-  Grid grid, shade;
+  DisplayGrid grid, shade;
   const GridGeometry* geom = nullptr;
   int outRows = 0, outCols = 0;
   switch (layer) {
@@ -484,57 +286,6 @@ Image renderLayer(RenderLayer layer, const RenderInput& input, const RenderOptio
       }
   }
   return img;
-}
-
-std::vector<std::uint8_t> encodePng(const Image& image) {
-  if (image.width <= 0 || image.height <= 0 ||
-      image.rgba.size() != std::size_t(image.width) * image.height * 4)
-    throw Error(ErrorCode::InvalidInput, "image",
-                "image buffer does not hold width × height RGBA pixels");
-  ensureGdal();
-
-  GDALDriverH memDriver = GDALGetDriverByName("MEM");
-  GDALDriverH pngDriver = GDALGetDriverByName("PNG");
-  if (memDriver == nullptr || pngDriver == nullptr)
-    throw std::runtime_error("PNG export: GDAL lacks the MEM or PNG driver");
-
-  const char* memOptions[] = {"INTERLEAVE=PIXEL", nullptr};
-  GDALDatasetH src = GDALCreate(memDriver, "", image.width, image.height, 4, GDT_Byte,
-                                const_cast<char**>(memOptions));
-  if (src == nullptr) throw std::runtime_error(std::string("PNG export: ") + CPLGetLastErrorMsg());
-  // GF_Write only reads the buffer.
-  auto* data = const_cast<std::uint8_t*>(image.rgba.data());
-  if (GDALDatasetRasterIO(src, GF_Write, 0, 0, image.width, image.height, data, image.width,
-                          image.height, GDT_Byte, 4, nullptr, 4, 4 * image.width, 1) != CE_None) {
-    GDALClose(src);
-    throw std::runtime_error(std::string("PNG export: ") + CPLGetLastErrorMsg());
-  }
-  const GDALColorInterp interp[4] = {GCI_RedBand, GCI_GreenBand, GCI_BlueBand, GCI_AlphaBand};
-  for (int b = 0; b < 4; ++b) GDALSetRasterColorInterpretation(GDALGetRasterBand(src, b + 1), interp[b]);
-
-  static std::atomic<unsigned long long> counter{0};
-  const std::string path = "/vsimem/rover_render_" + std::to_string(counter.fetch_add(1)) + ".png";
-  // ZLEVEL=1: measured on a full 4096² hillshaded elevation map, level 1 encodes in ~0.8 s
-  // against ~2.7 s for zlib's default 6, for a file ~1.5× larger (8.0 vs 5.4 MB); renderings are
-  // made on request, so encoding time matters more than bytes.
-  const char* pngOptions[] = {"ZLEVEL=1", nullptr};
-  GDALDatasetH dst = GDALCreateCopy(pngDriver, path.c_str(), src, FALSE,
-                                    const_cast<char**>(pngOptions), nullptr, nullptr);
-  GDALClose(src);
-  if (dst == nullptr) {
-    VSIUnlink(path.c_str());
-    throw std::runtime_error(std::string("PNG export: ") + CPLGetLastErrorMsg());
-  }
-  GDALClose(dst);
-
-  vsi_l_offset length = 0;
-  GByte* buffer = VSIGetMemFileBuffer(path.c_str(), &length, FALSE);
-  std::vector<std::uint8_t> bytes;
-  if (buffer != nullptr) bytes.assign(buffer, buffer + length);
-  VSIUnlink(path.c_str());
-  VSIUnlink((path + ".aux.xml").c_str());  // in case PAM wrote one
-  if (bytes.empty()) throw std::runtime_error("PNG export: the PNG driver wrote nothing");
-  return bytes;
 }
 
 }  // namespace rover::maps

@@ -3,6 +3,8 @@
 // into the data dir, keeps recently used maps loaded, and produces layers (PNG/GeoTIFF/raw float32)
 // on demand, cached as files next to the map (LayerCache: a size cap, made once per file). Every
 // user-supplied raster is read through maps::openUpload inside its own staging folder.
+// Its parts: map_catalog.cpp (the maps in memory, layer files: map_files.hpp), map_import.cpp
+// (imports), map_pdms.cpp (PDMs).
 #include <functional>
 #include <list>
 #include <memory>
@@ -93,8 +95,6 @@ class MapCatalog {
   // file's faults (its own message, a crash with the signal, a deadline), 500 when it cannot start.
   maps::LoadedDem importJailed(const std::string& inDir, jail::ImportRequest req, std::string& rasterName);
   std::shared_ptr<const MapData> loadFromDisk(const store::MapRecord& r);
-  void renderLayerFile(const MapData& map, const std::string& layer, const std::string& format, int side,
-                       const std::string& pdm, const std::string& path);
   // Writes the PDM's files (`write` fills the staging folder) and its row, charged to the map.
   store::PdmRecord storePdm(const std::string& mapId, const std::string& name, const nlohmann::json& meta,
                             const std::function<void(const std::string& staging)>& write);

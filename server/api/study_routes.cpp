@@ -6,6 +6,7 @@
 #include "core/common/error.hpp"
 #include "server/api/mission_service.hpp"
 #include "server/api/route_kit.hpp"
+#include "server/errors/domain_error.hpp"
 #include "server/json/json_edge.hpp"
 #include "server/json/pdm_json.hpp"
 #include "server/json/plan_json.hpp"
@@ -19,6 +20,44 @@ namespace {
 
 // A study document is small (a grid of parameter values); 64 KiB as a mission request.
 constexpr rj::JsonLimits kStudyJsonLimits{std::size_t{64} << 10, 64};
+
+// The study a POST body asks for: a study document as it is, or {"preset", "runs", "master_seed",
+// "name"} made into the preset's document. The server reads no file a request names: DEM worlds
+// are refused, and the swinton preset runs on its synthetic Mars world only. Throws DomainError
+// for the body's shape, rover::Error naming the field for the document (parseStudySpec).
+studies::StudySpec studyOfRequest(const json& body) {
+  if (!body.is_object()) throw DomainError(Refusal::BadJson, "the request body must be a JSON object", "body");
+  if (body.contains("preset")) {
+    for (const auto& item : body.items())
+      if (item.key() != "preset" && item.key() != "runs" && item.key() != "master_seed" && item.key() != "name")
+        throw DomainError(Refusal::UnknownField, "with a preset only runs, master_seed and name may be given",
+                          item.key().substr(0, 64));
+    if (!body["preset"].is_string()) throw DomainError(Refusal::InvalidField, "preset must be a string", "preset");
+    studies::PresetOptions o;
+    o.hirisePath = "";
+    if (body.contains("runs")) {
+      const json& r = body["runs"];
+      if (!r.is_number_integer() || r.get<std::int64_t>() < 1 || r.get<std::int64_t>() > studies::kMaxRuns)
+        throw DomainError(Refusal::InvalidField,
+                          "runs must be an integer in [1, " + std::to_string(studies::kMaxRuns) + "]", "runs");
+      o.runs = r.get<int>();
+    }
+    if (body.contains("master_seed")) {
+      if (!body["master_seed"].is_number_unsigned())
+        throw DomainError(Refusal::InvalidField, "master_seed must be a non-negative integer", "master_seed");
+      o.masterSeed = body["master_seed"].get<std::uint64_t>();
+    }
+    json spec = studies::presetSpecJson(body["preset"].get<std::string>(), o);
+    if (body.contains("name")) spec["name"] = body["name"];  // checked with the spec, by the name rule
+    return studies::parseStudySpec(spec);
+  }
+  if (const auto w = body.find("worlds"); w != body.end() && w->is_array())
+    for (std::size_t i = 0; i < w->size(); ++i)
+      if ((*w)[i].is_object() && (*w)[i].contains("dem"))
+        throw DomainError(Refusal::InvalidField, "the server reads no file a request names: use grid or terrain worlds",
+                          "worlds[" + std::to_string(i) + "].dem");
+  return studies::parseStudySpec(body);
+}
 
 studies::StudyState studyOr404(ApiContext& ctx, const std::string& id) {
   auto s = ctx.studies->get(id);
@@ -123,7 +162,7 @@ void addStudyRoutes(http::Router& router, ApiContext& ctx) {
 
   router.add("POST", "/api/studies", [&ctx](const Request& req) {
     const json body = jsonBody(req, kStudyJsonLimits);
-    const studies::StudyState s = ctx.studies->submit(body);
+    const studies::StudyState s = ctx.studies->submit(studyOfRequest(body));
     return Response::json(202, studies::toJson(s));
   }, routeDoc("Launch a study: a study document (see README \"Studies\") or {\"preset\": NAME, \"runs\": N, "
                "\"master_seed\"?, \"name\"?}; validated (400 naming the field), stored and queued (202). At most " +

@@ -1,16 +1,16 @@
 #include "server/http/http_session.hpp"
 
 #include <algorithm>
-#include <cctype>
 #include <cerrno>
 #include <filesystem>
-#include <string_view>
+#include <variant>
 
 #include <boost/asio/dispatch.hpp>
 #include <boost/asio/post.hpp>
 
 #include "server/http/dispatch.hpp"
 #include "server/http/request_framing.hpp"
+#include "server/http/response_message.hpp"
 #include "server/http/websocket_session.hpp"
 
 namespace rover::http {
@@ -18,22 +18,6 @@ namespace rover::http {
 namespace fs = std::filesystem;
 
 namespace {
-
-// Beast 1.74 speaks boost::string_view.
-std::string_view sv(beast::string_view s) {
-  return {s.data(), s.size()};
-}
-
-std::string lower(std::string_view s) {
-  std::string out(s);
-  std::transform(out.begin(), out.end(), out.begin(),
-                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  return out;
-}
-
-bool bodyless(int status) {
-  return status < 200 || status == 204 || status == 304;
-}
 
 // A write of the streamed body failed because the disk (or the file size limit) is full: the
 // client gets 507, not a reset (Beast's file body reports the system error through put()).
@@ -264,7 +248,7 @@ void HttpSession::readBody() {
   if (auto refused = checkBodyLength(headerParser_->content_length(), limit))
     return sendError(refused->status, refused->code, refused->message, refused->field, true);
   const bool expectContinue =
-      !headerParser_->is_done() && lower(sv(h[bhttp::field::expect])) == "100-continue";
+      !headerParser_->is_done() && beast::iequals(h[bhttp::field::expect], "100-continue");
 
   if (stream) {
     tempFile_.adopt(state_->uploads.newPath());
@@ -413,59 +397,8 @@ void HttpSession::sendError(int status, const std::string& code, const std::stri
 
 void HttpSession::send(Response res, bool close) {
   stopRateTimer();  // a response ends the body's reading, whether it was complete or not
-  const ServerConfig& cfg = state_->config;
-  if (bodyless(res.status)) {
-    res.body.clear();
-    res.file.clear();
-  }
-  auto decorate = [&](auto& msg) {
-    msg.result(static_cast<unsigned>(res.status));
-    msg.version(version_);
-    msg.set(bhttp::field::server, "roverplan");
-    if (!res.contentType.empty() && !bodyless(res.status))
-      msg.set(bhttp::field::content_type, res.contentType);
-    for (const auto& [name, value] : res.headers) msg.insert(name, value);
-    if (!cfg.corsOrigin.empty()) {
-      msg.set(bhttp::field::access_control_allow_origin, cfg.corsOrigin);
-      msg.set(bhttp::field::vary, "Origin");
-      // Without this a cross-origin client cannot read how listings are paged.
-      msg.set(bhttp::field::access_control_expose_headers,
-              "X-Total-Count, Link, Retry-After, Content-Disposition");
-    }
-    msg.keep_alive(keepAlive_ && !close);
-  };
-
-  if (!res.file.empty()) {
-    bhttp::file_body::value_type body;
-    beast::error_code ec;
-    body.open(res.file.c_str(), beast::file_mode::scan, ec);
-    if (ec) {
-      res = Response::error(404, "not_found", "file not found", "path");
-    } else {
-      const std::uint64_t size = body.size();
-      if (head_) {
-        auto msg = std::make_shared<bhttp::response<bhttp::empty_body>>();
-        decorate(*msg);
-        msg->content_length(size);
-        return write(std::move(msg), res.status, 0, close);
-      }
-      auto msg = std::make_shared<bhttp::response<bhttp::file_body>>();
-      decorate(*msg);
-      msg->body() = std::move(body);
-      msg->prepare_payload();
-      return write(std::move(msg), res.status, size, close);
-    }
-  }
-  auto msg = std::make_shared<bhttp::response<bhttp::string_body>>();
-  decorate(*msg);
-  const std::uint64_t size = res.body.size();
-  if (head_) {
-    if (!bodyless(res.status)) msg->content_length(size);
-    return write(std::move(msg), res.status, 0, close);
-  }
-  msg->body() = std::move(res.body);
-  if (!bodyless(res.status)) msg->prepare_payload();
-  write(std::move(msg), res.status, size, close);
+  ResponseMessage out = responseMessage(std::move(res), {version_, keepAlive_ && !close, head_}, state_->config);
+  std::visit([&](auto& msg) { write(std::move(msg), out.status, out.bytes, close); }, out.message);
 }
 
 template <class Message>

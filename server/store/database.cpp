@@ -1,8 +1,6 @@
 #include "server/store/database.hpp"
 
-#include <fcntl.h>
 #include <sqlite3.h>
-#include <unistd.h>
 
 #include <chrono>
 #include <cstdio>
@@ -13,21 +11,12 @@
 #include "server/store/data_dir.hpp"
 #include "server/store/sqlite_stmt.hpp"
 
-// Durability choice: journal_mode=WAL with synchronous=NORMAL. Every write below is a single
-// statement, i.e. one implicit transaction. In WAL mode a transaction is committed once its frames
-// are appended to the -wal file with write(); with synchronous=NORMAL SQLite does not fsync at
-// every commit, only at checkpoints. The data written by write() lives in the kernel's page cache,
-// which survives the death of the process (crash, abort, kill -9): the next open replays the WAL.
-// So a committed row is never lost to a process crash. Only a power loss / kernel panic can roll
-// back the last few transactions (never corrupt the database) — an acceptable trade for a planning
-// server whose missions are marked "interrupted" at restart anyway. Use synchronous=FULL if
-// power-loss durability of the very last commit ever matters.
+// The rows of the server database: maps, their zones, PDMs and missions (opening it and its
+// durability: database_open.cpp; its schema: database_schema.cpp).
 
 namespace rover::store {
 
 namespace {
-
-constexpr int kSchemaVersion = 3;
 
 std::string dumpJson(const nlohmann::json& j, const char* what) {
   try {
@@ -46,41 +35,6 @@ nlohmann::json parseJson(const Stmt& s, int col, const char* what) {
   }
 }
 
-
-// Version 1 of the schema. Later versions add a migrate step from N-1 in Database::Database.
-constexpr const char* kSchemaV1 = R"sql(
-CREATE TABLE IF NOT EXISTS maps(
-  id         TEXT PRIMARY KEY,
-  name       TEXT NOT NULL,
-  created_at TEXT NOT NULL,
-  meta       TEXT NOT NULL DEFAULT 'null'
-);
-CREATE TABLE IF NOT EXISTS pdms(
-  id         TEXT PRIMARY KEY,
-  map_id     TEXT NOT NULL REFERENCES maps(id) ON DELETE CASCADE,
-  name       TEXT NOT NULL,
-  created_at TEXT NOT NULL,
-  meta       TEXT NOT NULL DEFAULT 'null'
-);
-CREATE INDEX IF NOT EXISTS pdms_by_map ON pdms(map_id);
--- map_id / pdm_id are plain text on purpose (no foreign key): a mission's record outlives its map.
-CREATE TABLE IF NOT EXISTS missions(
-  id          TEXT PRIMARY KEY,
-  map_id      TEXT NOT NULL,
-  pdm_id      TEXT NOT NULL DEFAULT '',
-  planner     TEXT NOT NULL,
-  spec        TEXT NOT NULL DEFAULT 'null',
-  status      TEXT NOT NULL,
-  message     TEXT NOT NULL DEFAULT '',
-  created_at  TEXT NOT NULL,
-  started_at  TEXT,
-  finished_at TEXT,
-  metrics     TEXT
-);
-CREATE INDEX IF NOT EXISTS missions_by_created ON missions(created_at DESC, id);
-CREATE INDEX IF NOT EXISTS missions_by_status ON missions(status);
-)sql";
-
 MapRecord readMap(const Stmt& s) {
   return MapRecord{s.text(0), s.text(1), s.text(2), parseJson(s, 3, "map meta")};
 }
@@ -88,23 +42,6 @@ MapRecord readMap(const Stmt& s) {
 PdmRecord readPdm(const Stmt& s) {
   return PdmRecord{s.text(0), s.text(1), s.text(2), s.text(3), parseJson(s, 4, "PDM meta")};
 }
-
-// Version 2: a mission's label, first the request's name.
-constexpr const char* kMigrateV1toV2 = R"sql(
-ALTER TABLE missions ADD COLUMN label TEXT NOT NULL DEFAULT '';
-UPDATE missions SET label = COALESCE(json_extract(spec, '$.name'), '')
-  WHERE json_valid(spec) AND json_type(spec, '$.name') = 'text';
-)sql";
-
-// Version 3: a map's keep-out zones (issue 13), one GeoJSON FeatureCollection per map, deleted
-// with the map.
-constexpr const char* kMigrateV2toV3 = R"sql(
-CREATE TABLE IF NOT EXISTS zones(
-  map_id     TEXT PRIMARY KEY REFERENCES maps(id) ON DELETE CASCADE,
-  body       TEXT NOT NULL,
-  updated_at TEXT NOT NULL
-);
-)sql";
 
 // A mission row with the names of its map and PDM (empty once they are deleted).
 constexpr const char* kMissionSelect =
@@ -153,49 +90,6 @@ MissionRecord readMission(const Stmt& s) {
 
 }  // namespace
 
-Database::Database(const std::string& path) {
-  if (!path.empty() && path != ":memory:" && path.rfind("file:", 0) != 0) {
-    statusReserve_ = {path + ".reserve-status", kStatusReserveBytes};
-    deleteReserve_ = {path + ".reserve-delete", kDeleteReserveBytes};
-  }
-  try {
-    open(path, false);
-  } catch (const StorageFull&) {
-    // A restart with a full disk: no room for the WAL index (-shm). Exclusive locking keeps it in
-    // the process's memory, so reads work and the reserves stay for deletes; failing that, the
-    // reserves give SQLite the room.
-    try {
-      open(path, true);
-    } catch (const StorageFull&) {
-      if (!release(deleteReserve_) && !release(statusReserve_)) throw;
-      open(path, false);
-    }
-  }
-  ensureReserves();
-}
-
-bool Database::release(Reserve& r) {
-  if (r.path.empty()) return false;
-  r.held = false;
-  return ::unlink(r.path.c_str()) == 0;
-}
-
-void Database::ensureReserves() {
-  for (Reserve* r : {&deleteReserve_, &statusReserve_}) {
-    if (r->held || r->path.empty()) continue;
-    const int fd = ::open(r->path.c_str(), O_WRONLY | O_CREAT | O_CLOEXEC, 0600);
-    if (fd < 0) return;
-    // Allocated blocks, not a sparse file: the point is that the space is really taken.
-    const bool ok = ::posix_fallocate(fd, 0, r->bytes) == 0;
-    ::close(fd);
-    if (!ok) {
-      ::unlink(r->path.c_str());
-      return;
-    }
-    r->held = true;
-  }
-}
-
 template <class F>
 auto Database::withReserve(Reserve& r, F&& write) -> decltype(write()) {
   try {
@@ -204,78 +98,6 @@ auto Database::withReserve(Reserve& r, F&& write) -> decltype(write()) {
     if (!release(r)) throw;
     return write();
   }
-}
-
-void Database::open(const std::string& path, bool exclusive) {
-  const int flags = SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE | SQLITE_OPEN_FULLMUTEX;
-  if (sqlite3_open_v2(path.c_str(), &db_, flags, nullptr) != SQLITE_OK) {
-    std::string msg = db_ != nullptr ? sqlite3_errmsg(db_) : "out of memory";
-    sqlite3_close_v2(db_);
-    db_ = nullptr;
-    throw std::runtime_error("database: cannot open '" + path + "': " + msg);
-  }
-  try {
-    sqlite3_extended_result_codes(db_, 1);
-    exec(db_, "PRAGMA busy_timeout=5000");
-    if (exclusive) exec(db_, "PRAGMA locking_mode=EXCLUSIVE");
-    {
-      Stmt s(db_, "PRAGMA journal_mode=WAL");
-      const std::string mode = s.step() ? s.text(0) : std::string();
-      // An in-memory database (":memory:") reports "memory"; a file must really be in WAL mode.
-      if (mode != "wal" && mode != "memory")
-        throw std::runtime_error("database: cannot enable WAL on '" + path + "' (journal mode " +
-                                 mode + ")");
-    }
-    exec(db_, "PRAGMA synchronous=NORMAL");
-    exec(db_, "PRAGMA foreign_keys=ON");
-
-    // Schema creation / migration in one write transaction, so two processes opening a fresh file
-    // at once cannot both initialise it.
-    exec(db_, "BEGIN IMMEDIATE");
-    try {
-      exec(db_, "CREATE TABLE IF NOT EXISTS schema_version(version INTEGER NOT NULL)");
-      long long version = 0;
-      {
-        Stmt s(db_, "SELECT MAX(version) FROM schema_version");
-        if (s.step() && !s.isNull(0)) version = s.integer(0);
-      }
-      if (version > kSchemaVersion)
-        throw std::runtime_error("database: '" + path + "' has schema version " +
-                                 std::to_string(version) + ", newer than this server supports (" +
-                                 std::to_string(kSchemaVersion) + ")");
-      // A new file gets version 1, then every migration from N-1 to N in turn.
-      exec(db_, kSchemaV1);
-      if (version == 0) {
-        Stmt s(db_, "INSERT INTO schema_version(version) VALUES (1)");
-        s.run();
-        version = 1;
-      }
-      if (version == 1) {
-        exec(db_, kMigrateV1toV2);
-        Stmt s(db_, "INSERT INTO schema_version(version) VALUES (2)");
-        s.run();
-        version = 2;
-      }
-      if (version == 2) {
-        exec(db_, kMigrateV2toV3);
-        Stmt s(db_, "INSERT INTO schema_version(version) VALUES (3)");
-        s.run();
-        version = 3;
-      }
-      exec(db_, "COMMIT");
-    } catch (...) {
-      sqlite3_exec(db_, "ROLLBACK", nullptr, nullptr, nullptr);
-      throw;
-    }
-  } catch (...) {
-    sqlite3_close_v2(db_);
-    db_ = nullptr;
-    throw;
-  }
-}
-
-Database::~Database() {
-  if (db_ != nullptr) sqlite3_close_v2(db_);
 }
 
 // ---- maps -------------------------------------------------------------------------------------

@@ -12,46 +12,6 @@ namespace rover::studies {
 
 using nlohmann::json;
 
-namespace {
-
-// The spec document of a POST body: a study spec as it is, or {"preset", "runs", "master_seed"}.
-// The server reads no file a request names: DEM worlds are refused, and the swinton preset runs on
-// its synthetic Mars world only.
-json documentOf(const json& body) {
-  if (!body.is_object()) throw DomainError(Refusal::BadJson, "the request body must be a JSON object", "body");
-  if (body.contains("preset")) {
-    for (const auto& item : body.items())
-      if (item.key() != "preset" && item.key() != "runs" && item.key() != "master_seed" && item.key() != "name")
-        throw DomainError(Refusal::UnknownField, "with a preset only runs, master_seed and name may be given",
-                          item.key().substr(0, 64));
-    if (!body["preset"].is_string()) throw DomainError(Refusal::InvalidField, "preset must be a string", "preset");
-    PresetOptions o;
-    o.hirisePath = "";
-    if (body.contains("runs")) {
-      const json& r = body["runs"];
-      if (!r.is_number_integer() || r.get<std::int64_t>() < 1 || r.get<std::int64_t>() > kMaxRuns)
-        throw DomainError(Refusal::InvalidField, "runs must be an integer in [1, " + std::to_string(kMaxRuns) + "]", "runs");
-      o.runs = r.get<int>();
-    }
-    if (body.contains("master_seed")) {
-      if (!body["master_seed"].is_number_unsigned())
-        throw DomainError(Refusal::InvalidField, "master_seed must be a non-negative integer", "master_seed");
-      o.masterSeed = body["master_seed"].get<std::uint64_t>();
-    }
-    json spec = presetSpecJson(body["preset"].get<std::string>(), o);
-    if (body.contains("name")) spec["name"] = body["name"];  // checked with the spec, by the name rule
-    return spec;
-  }
-  if (const auto w = body.find("worlds"); w != body.end() && w->is_array())
-    for (std::size_t i = 0; i < w->size(); ++i)
-      if ((*w)[i].is_object() && (*w)[i].contains("dem"))
-        throw DomainError(Refusal::InvalidField, "the server reads no file a request names: use grid or terrain worlds",
-                          "worlds[" + std::to_string(i) + "].dem");
-  return body;
-}
-
-}  // namespace
-
 StudyManager::StudyManager(store::DataDir& dir, std::function<bool()> missionsBusy, std::vector<std::string> launcher,
                            std::string selfExe)
     : store_(dir), scheduler_([this](const std::string& id) { runOne(id); }) {
@@ -77,10 +37,8 @@ StudyManager::StudyManager(store::DataDir& dir, std::function<bool()> missionsBu
 
 StudyManager::~StudyManager() { stop(); }
 
-StudyState StudyManager::submit(const json& body) {
+StudyState StudyManager::submit(const StudySpec& spec) {
   store_.requireRoom();  // OverBudget when the disk budget is full
-  const json doc = documentOf(body);
-  const StudySpec spec = parseStudySpec(doc);  // rover::Error naming the field
   if (spec.runCount() > kMaxServerRuns)
     throw DomainError(Refusal::TooManyRuns,
                       "the study has " + std::to_string(spec.runCount()) + " runs; the server runs at most " +

@@ -30,6 +30,7 @@
 #include "server/studies/command_line.hpp"
 #include "server/studies/study_executor.hpp"
 #include "server/studies/study_scheduler.hpp"
+#include "server/studies/study_spec.hpp"
 #include "server/studies/study_state.hpp"
 #include "server/studies/study_store.hpp"
 #include "server/studies/study_stream.hpp"
@@ -49,9 +50,10 @@ class StudyManager : private StudyReporter {
                std::vector<std::string> launcher = {}, std::string selfExe = "/proc/self/exe");
   ~StudyManager() override;  // stop()
 
-  // Validates (throws rover::Error naming the field, DomainError for the document and the bounds),
-  // stores and queues a study document; returns its state.
-  StudyState submit(const nlohmann::json& spec);
+  // Checks the server's bounds (DomainError: the disk budget, runs per study, studies active or
+  // kept), stores and queues a study read at the API edge (server/api/study_routes.cpp); returns
+  // its state.
+  StudyState submit(const StudySpec& spec);
   std::vector<StudyState> list() const;  // newest first
   std::optional<StudyState> get(const std::string& id) const;
   nlohmann::json specJson(const std::string& id) const;

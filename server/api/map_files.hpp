@@ -1,0 +1,31 @@
+#pragma once
+// The files of a stored map besides its DEM (MapCatalog::layerFile): layer renderings as PNG
+// (with a legend, on a ladder of overview sizes), GeoTIFF or raw float32; and how the catalog
+// writes a GeoTIFF into the data dir.
+#include <functional>
+#include <string>
+
+#include "core/grid/raster.hpp"
+
+namespace rover::api {
+
+struct MapData;
+
+// The longest side of the PNG overview for ?max= on a map whose longest side is `nativeSide`: the
+// next rung of the ladder 256, 512, 1024, 2048, 4096; 0 (full size) for max 0 or a rung at least
+// the map's own size.
+int overviewSide(int max, int nativeSide);
+// A PNG overview file named by a size off the ladder (written before the ladder existed): the
+// layer cache drops such files.
+bool offLadderOverview(const std::string& file);
+
+// Runs `write`, a GeoTIFF write into the data dir: a full disk throws store::StorageFull (507),
+// any other failure to write there is the server's (std::runtime_error, 500).
+void storingGeoTiff(const std::function<void()>& write);
+
+// Renders `layer` (elevation|hillshade|slope|traversability|pdm) of `map` as `format`
+// (png|tif|f32) into `path`; `side` > 0 for a PNG overview, `pdmMass` for the pdm layer.
+void renderLayerFile(const MapData& map, const std::string& layer, const std::string& format, int side,
+                     const Raster<float>* pdmMass, const std::string& path);
+
+}  // namespace rover::api

@@ -1,0 +1,230 @@
+#include "server/api/map_catalog.hpp"
+
+// MapCatalog's imports: the client's DEM files staged and read in the import jail (server/jail/),
+// stored as the map's GeoTIFF with its metadata row; and the generated default map.
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <csignal>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <iterator>
+#include <thread>
+
+#include "core/common/error.hpp"
+#include "maps/dem_digest.hpp"
+#include "maps/dem_io.hpp"
+#include "maps/georef.hpp"
+#include "maps/synthetic_terrain.hpp"
+#include "server/api/map_files.hpp"
+#include "server/http/http_types.hpp"
+#include "server/json/json_edge.hpp"
+
+namespace rover::api {
+
+namespace fs = std::filesystem;
+using http::ApiError;
+
+namespace {
+
+constexpr std::size_t kMaxFileNameBytes = 200;
+
+std::string safeName(const std::string& name, const std::string& fallback) {
+  std::string base = fs::path(name).filename().string(), out;
+  for (char c : base) out += (std::isalnum(static_cast<unsigned char>(c)) || c == '.' || c == '-' || c == '_') ? c : '_';
+  if (out.empty() || out == "." || out == "..") out = fallback;
+  return out;
+}
+
+nlohmann::json metaFor(const maps::LoadedDem& d, const terrain::Traversability& t,
+                       const std::vector<std::string>& sources) {
+  const GridGeometry& g = d.dem.geometry();
+  using TC = terrain::TerrainClass;
+  return {{"rows", g.rows},
+          {"cols", g.cols},
+          {"cell_size_m", g.cellWidth},
+          {"cell_height_m", g.cellHeight},
+          {"width_m", g.widthMetres()},
+          {"height_m", g.heightMetres()},
+          {"crs", d.info.crsName},
+          {"geographic", d.info.geographic},
+          {"driver", d.info.driver},
+          {"source_files", sources},
+          {"dem_sha256", maps::demSha256(d.dem)},
+          {"resampling", d.info.resampling},
+          {"elevation", {{"min", d.info.minHeight}, {"max", d.info.maxHeight}}},
+          {"classes",
+           {{"traversable_pct", t.shares.percent(TC::Traversable)},
+            {"high_risk_pct", t.shares.percent(TC::HighRisk)},
+            {"impassable_pct", t.shares.percent(TC::Impassable)},
+            {"nodata_pct", t.shares.percent(TC::NoData)}}}};
+}
+
+}  // namespace
+
+jail::JailLimits MapCatalog::defaultImportLimits(std::int64_t maxCells) {
+  jail::JailLimits l;
+  const auto cells = static_cast<std::uint64_t>(std::max<std::int64_t>(maxCells, 0));
+  // Address space: 1 GiB for the program, GDAL and its block cache, 24 bytes a cell for the grid
+  // and the warper's buffers, and 96 MiB a core for the warper's threads (stack + malloc arena).
+  l.memoryBytes = (1ull << 30) + 24 * cells + (96ull << 20) * std::max(1u, std::thread::hardware_concurrency());
+  l.fileBytes = 4 * cells + (64ull << 20);  // the float32 grid it writes back, and its JSON
+  l.cpuSeconds = 600;
+  l.deadlineSeconds = 300;
+  return l;
+}
+
+void MapCatalog::setImportJail(jail::JailConfig config) {
+  std::lock_guard lock(mutex_);
+  jail_ = std::move(config);
+}
+
+jail::JailConfig MapCatalog::importJail() const {
+  std::lock_guard lock(mutex_);
+  return jail_;
+}
+
+maps::LoadedDem MapCatalog::importJailed(const std::string& inDir, jail::ImportRequest req, std::string& rasterName) {
+  const jail::JailConfig config = importJail();
+  const bool pdm = req.kind == "pdm";
+  const std::string invalid = pdm ? "invalid_pdm" : "invalid_dem";
+  const std::string what = pdm ? "the PDM raster" : "the file";
+  req.allowHdf5 = jail::isolation() == jail::Isolation::Bubblewrap;
+  const std::string out = dir_.stagingDir();
+  struct RemoveOut {
+    std::string path;
+    ~RemoveOut() { store::DataDir::removeTree(path); }
+  } removeOut{out};
+  jail::writeImportRequest(out, req);
+  const jail::JailRun run = jail::runJailed(config, inDir, out);
+  auto logWorker = [&](const std::string& why) {
+    // What the worker said on stderr stays in the server's log; the client gets our words.
+    std::ifstream log(fs::path(out) / "worker.log");
+    std::string tail((std::istreambuf_iterator<char>(log)), {});
+    if (tail.size() > 2000) tail = tail.substr(tail.size() - 2000);
+    std::cerr << "import worker: " << why << (tail.empty() ? "" : ": " + tail) << std::endl;
+  };
+  switch (run.end) {
+    case jail::JailRun::End::NotStarted:
+      throw std::runtime_error("the import worker did not start: " + run.detail);
+    case jail::JailRun::End::DeadlinePassed:
+      throw ApiError(400, "import_timeout",
+                     "the importer did not finish reading " + what + " within " +
+                         std::to_string(static_cast<long long>(config.limits.deadlineSeconds)) + " s",
+                     "file");
+    case jail::JailRun::End::Signalled:
+      if (run.signal == SIGXCPU)
+        throw ApiError(413, "too_large", what + " needs more than the " + std::to_string(config.limits.cpuSeconds) +
+                                             " s of CPU time an import may use", "file");
+      if (run.signal == SIGXFSZ)
+        throw ApiError(413, "too_large", what + " makes a grid larger than an import may write", "file");
+      logWorker("ended by signal " + std::to_string(run.signal));
+      throw ApiError(400, "import_crashed",
+                     "the importer crashed (signal " + std::to_string(run.signal) + ") reading " + what, "file");
+    case jail::JailRun::End::Exited:
+      break;
+  }
+  if (run.exitStatus == 1) {
+    if (auto e = jail::readWorkerError(out)) throw ApiError(e->status, e->code, e->message, e->field);
+  }
+  if (run.exitStatus != 0) {
+    logWorker("exit status " + std::to_string(run.exitStatus));
+    throw ApiError(400, "import_failed", "the importer failed reading " + what + " (exit status " +
+                                             std::to_string(run.exitStatus) + ")", "file");
+  }
+  try {
+    jail::WorkerResult r = jail::readWorkerResult(out, req.load.maxCells);
+    rasterName = r.rasterName;
+    return std::move(r.dem);
+  } catch (const Error& e) {
+    throw ApiError(400, invalid, e.what(), e.field());
+  } catch (const std::runtime_error& e) {
+    logWorker(e.what());
+    throw ApiError(400, invalid, "the importer's output for " + what + " does not read", "file");
+  }
+}
+
+store::MapRecord MapCatalog::importDem(const std::vector<UploadedFile>& files, const std::string& name,
+                                       const maps::DemImport& options) {
+  const double cellSize = options.load.cellSize;
+  if (files.empty()) throw ApiError(400, "invalid_input", "no DEM file in the request", "file");
+  if (!(cellSize >= 0) || !std::isfinite(cellSize) || cellSize > 1e5)
+    throw ApiError(400, "invalid_parameter", "cell must be a positive number of metres", "cell");
+  rover::json::checkName(name, "name");  // the same rule as every other name (server/json/json_edge.hpp)
+  const std::string staging = dir_.stagingDir();
+  try {
+    std::vector<std::string> sources;
+    for (std::size_t i = 0; i < files.size(); ++i) {
+      std::string fallback = "upload";
+      fallback += std::to_string(i);
+      // A file name must fit the file system once staged (NAME_MAX 255) with room for a prefix;
+      // cutting it instead would break the names a PDS3 label gives its image.
+      if (files[i].filename.size() > kMaxFileNameBytes)
+        throw ApiError(400, "invalid_field",
+                       "a file name of " + std::to_string(files[i].filename.size()) + " bytes is longer than the " +
+                           std::to_string(kMaxFileNameBytes) + " allowed",
+                       "filename");
+      std::string fname = safeName(files[i].filename, fallback);
+      if (std::find(sources.begin(), sources.end(), fname) != sources.end()) {
+        std::string unique = std::to_string(i);
+        unique += '_';
+        fname = unique + fname;
+      }
+      fs::rename(files[i].path, fs::path(staging) / fname);
+      sources.push_back(fname);
+    }
+    // The client's files are parsed in the import jail (server/jail/): a crash, hang or memory
+    // bomb in GDAL ends that worker, never this process.
+    jail::ImportRequest req;
+    req.kind = "dem";
+    req.sources = sources;
+    req.load = options.load;
+    req.load.maxCells = maxCells_;
+    std::string raster;
+    maps::LoadedDem d = importJailed(staging, req, raster);
+    terrain::Traversability t = terrain::traversability(d.dem);
+    storingGeoTiff([&] { maps::writeGeoTiff((fs::path(staging) / "dem.tif").string(), d.dem.z); });
+    store::MapRecord rec;
+    rec.id = store::DataDir::newId();
+    // A default name comes from the file (a zip member's may hold anything): its last path part,
+    // hidden controls and bad bytes dropped, at most 200 characters.
+    if (name.empty()) {
+      rec.name = rover::json::cleanName(fs::path(raster).filename().string());
+      if (rec.name.empty()) rec.name = "upload";
+    } else {
+      rec.name = name;
+    }
+    rec.createdAt = store::nowIso();
+    rec.meta = metaFor(d, t, sources);
+    // The body the planners assume: declared with the upload, else read from the CRS.
+    const terrain::Body body = options.body ? *options.body : maps::bodyOfCrs(d.dem.z.geo.crsWkt);
+    rec.meta["body"] = terrain::bodyName(body);
+    rec.meta["body_source"] = options.body ? "declared" : "crs";
+    rec.meta["vertical_scale"] = options.load.verticalScale;
+    if (options.load.crop) rec.meta["crop"] = *options.load.crop;
+    if (options.load.cropPixels) rec.meta["crop_px"] = *options.load.cropPixels;
+    // Files first, then the row: a crash in between leaves an orphan folder nobody lists.
+    dir_.commitDir(staging, dir_.mapDir(rec.id), store::DiskCharge{store::DiskUse::Map, rec.id, "file"});
+    db_.insertMap(rec);
+    return rec;
+  } catch (...) {
+    store::DataDir::removeTree(staging);
+    throw;
+  }
+}
+
+void MapCatalog::ensureDefaultMap() {
+  if (!db_.listMaps().empty()) return;
+  maps::SyntheticTerrainParams p;  // mars, 600 × 600 × 0.25 m, seed 1
+  terrain::Dem dem = maps::generateTerrain(p);
+  const std::string staging = dir_.stagingDir();
+  const std::string path = (fs::path(staging) / "default-mars.tif").string();
+  maps::writeGeoTiff(path, dem.z);
+  const std::string moved = (fs::path(dir_.tmpDir()) / (store::DataDir::newId() + ".tif")).string();
+  fs::rename(path, moved);
+  store::DataDir::removeTree(staging);
+  importDem({{moved, "default-mars.tif"}}, "Default: synthetic Mars, 150 m (seed 1)");
+}
+
+}  // namespace rover::api

@@ -1,0 +1,154 @@
+#include "server/api/map_catalog.hpp"
+
+// MapCatalog's PDMs: made from Gaussian components or a raster upload (read in the import jail),
+// stored in the data dir charged to their map, and their mass on the map's grid kept in memory.
+#include <filesystem>
+#include <fstream>
+
+#include "core/common/error.hpp"
+#include "maps/dem_io.hpp"
+#include "server/api/map_files.hpp"
+#include "server/http/http_types.hpp"
+#include "server/json/json_edge.hpp"
+#include "server/json/pdm_json.hpp"
+
+namespace rover::api {
+
+namespace fs = std::filesystem;
+using http::ApiError;
+
+std::string MapCatalog::pdmFile(const std::string& pdmId) const {
+  return (fs::path(dir_.pdmDir(pdmId)) / "pdm.tif").string();
+}
+
+store::PdmRecord MapCatalog::createPdm(const std::string& mapId, const std::string& name,
+                                       const std::vector<pdm::Gaussian>& components,
+                                       const nlohmann::json& meta) {
+  auto map = get(mapId);
+  dir_.budget().requireRoom(store::DiskUse::Pdm, mapId, "body");
+  // Discretised now to refuse components that put no mass on the map (400), as every later use
+  // would; what is stored is the components (the mass is kept in memory for a while).
+  Raster<float> mass;
+  try {
+    mass = pdm::discretise(components, map->dem.geometry(), map->valid);
+  } catch (const Error& e) {
+    throw ApiError(400, "invalid_parameter", e.what(), e.field());
+  }
+  mass.geo = map->dem.z.geo;
+  const std::string stored = rover::json::toStoredJson(components).dump();
+  const store::PdmRecord rec =
+      storePdm(mapId, name.empty() ? "PDM " + store::nowIso() : name, meta, [&](const std::string& staging) {
+        store::DataDir::writeFileAtomic((fs::path(staging) / "components.json").string(), stored);
+      });
+  keepMass(rec.id, std::make_shared<const Raster<float>>(std::move(mass)));  // a mission often follows
+  return rec;
+}
+
+store::PdmRecord MapCatalog::storePdm(const std::string& mapId, const std::string& name, const nlohmann::json& meta,
+                                      const std::function<void(const std::string&)>& write) {
+  // Files first, then the row, as for maps.
+  const std::string staging = dir_.stagingDir();
+  try {
+    write(staging);
+    store::PdmRecord rec;
+    rec.id = store::DataDir::newId();
+    rec.mapId = mapId;
+    rec.name = name;
+    rec.createdAt = store::nowIso();
+    rec.meta = meta;
+    dir_.commitDir(staging, dir_.pdmDir(rec.id), store::DiskCharge{store::DiskUse::Pdm, mapId, "body"});
+    db_.insertPdm(rec);
+    return rec;
+  } catch (...) {
+    store::DataDir::removeTree(staging);
+    throw;
+  }
+}
+
+store::PdmRecord MapCatalog::createPdmFromRaster(const std::string& mapId, const std::string& name,
+                                                 const std::string& rasterPath) {
+  auto map = get(mapId);
+  const GridGeometry& g = map->dem.geometry();
+  maps::LoadOptions o;
+  o.maxCells = maxCells_;
+  const auto& gt = map->dem.z.geo.geotransform;
+  if (map->dem.z.geo.valid && !map->record.meta.value("geographic", false))
+    o.crop = std::array<double, 4>{gt[0], gt[3] + g.rows * gt[5], g.cols * gt[1], -g.rows * gt[5]};
+  // The raster is read in a folder of its own, so that it can read nothing else, by the import
+  // jail (server/jail/).
+  const std::string staging = dir_.stagingDir();
+  const std::string stagedName = "pdm-raster" + fs::path(rasterPath).extension().string();
+  maps::LoadedDem w;
+  try {
+    fs::rename(rasterPath, fs::path(staging) / stagedName);
+    jail::ImportRequest req;
+    req.kind = "pdm";
+    req.sources = {stagedName};
+    req.load = o;
+    std::string shown;
+    w = importJailed(staging, req, shown);
+  } catch (...) {
+    store::DataDir::removeTree(staging);
+    throw;
+  }
+  store::DataDir::removeTree(staging);
+  if (w.dem.geometry().rows != g.rows || w.dem.geometry().cols != g.cols)
+    throw ApiError(400, "invalid_pdm",
+                   "the PDM raster does not cover the map on its grid (" + std::to_string(w.dem.geometry().rows) +
+                       " x " + std::to_string(w.dem.geometry().cols) + " cells, the map has " +
+                       std::to_string(g.rows) + " x " + std::to_string(g.cols) + ")",
+                   "file");
+  Raster<float> mass;
+  try {
+    mass = pdm::normaliseWeights(w.dem.z, map->valid);
+  } catch (const Error& e) {
+    throw ApiError(400, "invalid_pdm", e.what(), "file");
+  }
+  mass.geo = map->dem.z.geo;
+  return storePdm(mapId, name.empty() ? "raster PDM" : name, {{"kind", "raster"}}, [&](const std::string& staging) {
+    storingGeoTiff([&] { maps::writeGeoTiff((fs::path(staging) / "pdm.tif").string(), mass); });
+  });
+}
+
+void MapCatalog::keepMass(const std::string& pdmId, std::shared_ptr<const Raster<float>> mass) {
+  std::lock_guard lock(mutex_);
+  massCache_.remove_if([&](const auto& e) { return e.first == pdmId; });
+  massCache_.emplace_front(pdmId, std::move(mass));
+  std::int64_t cells = 0;
+  for (auto it = massCache_.begin(); it != massCache_.end();) {
+    cells += it->second->geometry.cellCount();
+    // The newest is kept whatever its size; older ones while they fit.
+    if (it != massCache_.begin() && cells > kMassCacheCells) it = massCache_.erase(it);
+    else ++it;
+  }
+}
+
+std::shared_ptr<const Raster<float>> MapCatalog::pdmMass(const std::string& pdmId) {
+  {
+    std::lock_guard lock(mutex_);
+    for (auto it = massCache_.begin(); it != massCache_.end(); ++it)
+      if (it->first == pdmId) {
+        massCache_.splice(massCache_.begin(), massCache_, it);
+        return massCache_.front().second;
+      }
+  }
+  std::shared_ptr<const Raster<float>> mass;
+  std::error_code ec;
+  if (fs::exists(pdmFile(pdmId), ec)) {
+    mass = std::make_shared<const Raster<float>>(maps::loadDem(pdmFile(pdmId)).dem.z);  // raster, or older
+  } else {
+    const auto rec = db_.getPdm(pdmId);
+    if (!rec) throw ApiError(404, "not_found", "no PDM '" + rover::json::shown(pdmId) + "'", "pdm");
+    std::ifstream in(fs::path(dir_.pdmDir(pdmId)) / "components.json");
+    if (!in) throw std::runtime_error("PDM " + pdmId + ": neither pdm.tif nor components.json is stored");
+    const auto components = rover::json::gaussiansFromStoredJson(nlohmann::json::parse(in));
+    auto map = get(rec->mapId);
+    Raster<float> m = pdm::discretise(components, map->dem.geometry(), map->valid);
+    m.geo = map->dem.z.geo;
+    mass = std::make_shared<const Raster<float>>(std::move(m));
+  }
+  keepMass(pdmId, mass);
+  return mass;
+}
+
+}  // namespace rover::api
