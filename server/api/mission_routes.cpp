@@ -29,19 +29,33 @@ Response listMissions(ApiContext& ctx, const Request& req) {
 
 Response getMission(ApiContext& ctx, const Request& req) {
   const store::MissionRecord m = missionOr404(ctx, req.params.at("id"));
+  // Whether its result files are there: asked before the folder is looked at, as the worker
+  // commits the files before it lets the mission go (so "none" is never said of a coming result).
+  const bool pending = ctx.missions.resultPending(m.id);
   json j = missionJson(m);
   if (auto s = ctx.missions.stream(m.id)) {
     json live = s->summary();
     j["progress"] = live["progress"];
     j["step"] = live["step"];
   }
+  j["result"] = pending || !isFinal(m.status)                                     ? "pending"
+                : fs::exists(fs::path(ctx.dir.missionDir(m.id)) / "result.json") ? "ready"
+                                                                                  : "none";
   return Response::json(200, j);
 }
 
 Response cancelOrDeleteMission(ApiContext& ctx, const Request& req) {
   const std::string id = req.params.at("id");
   const store::MissionRecord m = missionOr404(ctx, id);
-  if (ctx.missions.cancel(id)) return Response::json(202, {{"id", id}, {"status", "cancelling"}});
+  switch (ctx.missions.cancel(id)) {
+    case missions::MissionManager::CancelOutcome::Cancelled:
+      return Response::json(202, {{"id", id}, {"status", "cancelling"}});
+    case missions::MissionManager::CancelOutcome::Finishing:
+      throw ApiError(409, "not_finished",
+                     "mission " + rj::shown(id) + " has stopped and is storing its result: try again when it has ended", "id");
+    case missions::MissionManager::CancelOutcome::NotActive:
+      break;
+  }
   // Not running (any more): the run is deleted, its row first so no listing shows a run whose
   // files are half gone. A mission that is still finishing cannot be deleted yet.
   if (!isFinal(m.status))
@@ -100,8 +114,14 @@ Response getMissionFile(ApiContext& ctx, const Request& req) {
     throw ApiError(404, "not_found",
                    "no file '" + rj::shown(file) + "' (mission.json, result.json, result.geojson, result.csv, map.png, map.tif)",
                    "file");
+  // Asked before the folder is looked at: the worker commits the files, then lets the mission go.
+  const bool pending = ctx.missions.resultPending(id);
   const fs::path path = fs::path(ctx.dir.missionDir(id)) / file;
   if (!fs::exists(path)) {
+    // A cancelled run stores its partial result after its status turned final.
+    if (pending && isFinal(m.status))
+      throw ApiError(409, "not_ready", "mission " + rj::shown(id) + " is " + std::string(enumName(m.status)) +
+                                           ": its result is being stored, try again in a moment", "id");
     // An ended run without files (failed, cancelled before it stored anything) will never
     // have them: say so, with the reason it ended.
     if (isFinal(m.status))
@@ -129,11 +149,12 @@ void addMissionRoutes(http::Router& router, ApiContext& ctx) {
              routeDoc("List missions, newest first: ?limit= (50, at most 500), ?offset=; X-Total-Count and Link rel=next.",
                       Operation().listing("Mission")));
   router.add("GET", "/api/missions/{id}", handler(ctx, getMission),
-             routeDoc("One mission: status, progress, metrics.",
+             routeDoc("One mission: status, progress, metrics, and whether its result files are there (`result`).",
                       Operation().returns(200, "The mission.", ref("Mission")).errors({404})));
   router.add("DELETE", "/api/missions/{id}", handler(ctx, cancelOrDeleteMission),
-             routeDoc("Cancel a queued or running mission (202; the planner stops within one step), or delete "
-                      "an ended one with its result files (200).",
+             routeDoc("Cancel a queued or running mission (202: its status is cancelled at once, the planner stops "
+                      "within one step and its partial result is stored after: `result` says when), or delete "
+                      "an ended one with its result files (200; 409 not_finished while its result is stored).",
                       Operation()
                           .returns(200, "Deleted (it had ended).", ref("Deleted"))
                           .returns(202, "Cancelling (it was queued or running).", ref("Cancelling"))

@@ -228,7 +228,12 @@ json schemas(const PlannerRegistry& planners) {
                         {"stream", "result_json", "result_geojson", "result_csv"})},
        {"progress", nullable(object({{"fraction", num("0..1")}, {"coverage", num()}, {"moves", num()}, {"step", num()}},
                                     {}, false))},
-       {"step", nullable(num())}},
+       {"step", nullable(num())},
+       {"result", {{"type", "string"},
+                   {"enum", {"pending", "ready", "none"}},
+                   {"description", "GET of one mission: its result files are to come (queued, running, or a cancelled "
+                                   "run storing its partial result: they answer 409 not_ready), there, or never "
+                                   "(409 no_result)."}}}},
       {"id", "map", "planner", "status", "message", "created_at", "links", "spec"});
   s.update(studySchemas());
   s["PlanResult"] = planResultSchema();

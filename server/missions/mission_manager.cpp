@@ -35,6 +35,7 @@ MissionManager::MissionManager(store::Database& db, store::DataDir& dir,
                                const PlannerRegistry& registry, unsigned workers,
                                std::size_t queueCapacity, std::uint64_t memoryBudget)
     : db_(db), dir_(dir), registry_(registry), capacity_(queueCapacity), budget_(memoryBudget) {
+  returnFreedMemoryPromptly();
   for (unsigned i = 0; i < std::max(1u, workers); ++i) workers_.emplace_back([this] { work(); });
 }
 
@@ -140,29 +141,53 @@ void MissionManager::rememberFinished(const std::string& id, std::shared_ptr<Mis
   }
 }
 
-bool MissionManager::cancel(const std::string& id) {
+namespace {
+const std::string kCancelledByRequest = "cancelled by request";
+}  // namespace
+
+MissionManager::CancelOutcome MissionManager::cancel(const std::string& id) {
   std::unique_lock lock(mutex_);
   auto it = active_.find(id);
-  if (it == active_.end()) return false;
-  it->second.cancel->cancel();
-  it->second.stream->setCancelled();
-  if (!it->second.running) {
-    // Still queued: take it out and finish it here.
-    for (auto q = queue_.begin(); q != queue_.end(); ++q)
-      if (q->record.id == id) {
-        queue_.erase(q);
-        break;
-      }
-    auto stream = it->second.stream;
-    reserved_ -= it->second.memoryBytes;
-    active_.erase(it);
-    lock.unlock();
-    recordStatus(id, RunStatus::Cancelled, "cancelled before it started");
-    stream->finish(RunStatus::Cancelled, "cancelled before it started", nullptr);
-    std::lock_guard relock(mutex_);
-    rememberFinished(id, stream);
+  if (it == active_.end()) return CancelOutcome::NotActive;
+  Active& a = it->second;
+  if (a.cancelled || a.storing) return CancelOutcome::Finishing;
+  a.cancel->cancel();
+  a.stream->setCancelled();
+  if (a.running) {
+    // Final now, under the lock so the worker (which reads `cancelled` under it once its planner
+    // returns) writes its partial result's row after this one. The planner stops within a step.
+    a.cancelled = true;
+    recordStatus(id, RunStatus::Cancelled, kCancelledByRequest);
+    a.stream->setStatus(RunStatus::Cancelled);  // its "done" frame comes once the result is stored
+    return CancelOutcome::Cancelled;
   }
-  return true;
+  // Still queued: take it out and finish it here.
+  for (auto q = queue_.begin(); q != queue_.end(); ++q)
+    if (q->record.id == id) {
+      queue_.erase(q);
+      break;
+    }
+  auto stream = a.stream;
+  reserved_ -= a.memoryBytes;
+  active_.erase(it);
+  lock.unlock();
+  recordStatus(id, RunStatus::Cancelled, "cancelled before it started");
+  stream->finish(RunStatus::Cancelled, "cancelled before it started", nullptr);
+  std::lock_guard relock(mutex_);
+  rememberFinished(id, stream);
+  return CancelOutcome::Cancelled;
+}
+
+bool MissionManager::resultPending(const std::string& id) const {
+  std::lock_guard lock(mutex_);
+  return active_.count(id) > 0;
+}
+
+bool MissionManager::stopPlanning(const std::string& id) {
+  std::lock_guard lock(mutex_);
+  Active& a = active_.at(id);
+  a.storing = true;
+  return a.cancelled;
 }
 
 void MissionManager::forget(const std::string& id) {
@@ -216,15 +241,12 @@ void MissionManager::work() {
     queue_.pop_front();
     Active& a = active_[job.record.id];
     a.running = true;
+    // Running in the row and the stream before a cancel (which takes the lock) makes it final.
+    recordStatus(job.record.id, RunStatus::Running, "");
+    a.stream->setStatus(RunStatus::Running);
     Active copy = a;
     lock.unlock();
     runJob(job, copy);
-    job = MissionJob{};  // its request, rovers and params too, before the heap is trimmed
-    // Give what the mission held back to the system: glibc keeps freed memory in the worker's
-    // arena (and the arena's top only is trimmed on free), so a finished mission that peaked at
-    // gigabytes otherwise leaves the idle server there (issue 22: 1.77 GB idle after a cancel).
-    // malloc_trim(0) releases the free pages of every arena, the middle of the heap included.
-    ::malloc_trim(0);
   }
 }
 
@@ -244,11 +266,10 @@ std::string outcomeSummary(const std::vector<std::string>& warnings) {
 void MissionManager::runJob(MissionJob& job, Active a) {
   const std::string id = job.record.id;
   retryUnsaved();
-  recordStatus(id, RunStatus::Running, "");
-  a.stream->setStatus(RunStatus::Running);
   RunStatus status = RunStatus::Succeeded;
-  std::string message;
+  std::string message, failure;
   nlohmann::json metrics = nullptr;
+  bool cancelledEarly = false;  // final (cancelled) since the request: the row and stream say so
   try {
     const Planner& planner = registry_.get(job.record.planner);
     if (job.build) {
@@ -261,19 +282,23 @@ void MissionManager::runJob(MissionJob& job, Active a) {
       job.build = nullptr;
     }
     PlanResult result = planner.run(job.problem, job.params, a.stream.get(), a.cancel.get());
+    cancelledEarly = stopPlanning(id);
     job.problem.world = {};  // the result is saved below; the world is no longer needed
     job.problem.pdm.reset();  // (the DEM gives the CSV's heights and attitudes; dropped below)
     // Built once: on a fine grid the result's JSON is the biggest thing a mission holds.
     nlohmann::json resultJson = json::toJson(result);
     metrics = resultJson["metrics"];
-    if (result.cancelled || a.cancel->cancelled()) {
+    if (cancelledEarly) {
+      status = RunStatus::Cancelled;
+      message = kCancelledByRequest;
+    } else if (result.cancelled || a.cancel->cancelled()) {
       bool shuttingDown;
       {
         std::lock_guard lock(mutex_);
         shuttingDown = stopping_;
       }
       status = shuttingDown ? RunStatus::Interrupted : RunStatus::Cancelled;
-      message = shuttingDown ? "the server stopped while the mission was running" : "cancelled by request";
+      message = shuttingDown ? "the server stopped while the mission was running" : kCancelledByRequest;
     } else if (!result.warnings.empty()) {
       // It ran to its end, but left something the user must be told (short or skipped legs,
       // unreachable ground, attitude exceedances…): not a plain success (issue 10).
@@ -283,14 +308,26 @@ void MissionManager::runJob(MissionJob& job, Active a) {
     saveResult(job, result, std::move(resultJson), *a.stream);
     job.problem.dem.reset();
   } catch (const store::StorageFull& e) {
-    status = RunStatus::Failed;
-    message = std::string("insufficient storage: ") + e.what();
+    failure = std::string("insufficient storage: ") + e.what();
   } catch (const std::exception& e) {
-    status = RunStatus::Failed;
-    message = e.what();
+    failure = e.what();
+  }
+  if (!failure.empty()) {
+    // A cancelled mission stays cancelled (a final status is not left): the message says why it
+    // has no result.
+    cancelledEarly = stopPlanning(id);
+    status = cancelledEarly ? RunStatus::Cancelled : RunStatus::Failed;
+    message = cancelledEarly ? kCancelledByRequest + "; no partial result: " + failure : failure;
   }
   recordStatus(id, status, message, metrics);
   a.stream->finish(status, message, metrics);
+  job = MissionJob{};  // its request, rovers and params too, before the heap is trimmed
+  // Give what the mission held back to the system before it is let go (so a client that sees it
+  // ended sees its memory returned): glibc keeps freed memory in the worker's arena, so a mission
+  // that peaked at gigabytes otherwise leaves the idle server there (issue 22: 1.77 GB idle after
+  // a cancel). malloc_trim(0) releases the free pages inside every arena, the middle of the heap
+  // included; the arenas' tops are kept small by returnFreedMemoryPromptly().
+  ::malloc_trim(0);
   std::lock_guard lock(mutex_);
   reserved_ -= a.memoryBytes;
   active_.erase(id);

@@ -3,6 +3,16 @@
 // 429), cancellation through the planner's token, a failing planner marks only its mission failed.
 // Results are written atomically into the mission's folder before its row says "succeeded".
 //
+// A cancel is final at once (issue 22, "cancel within 1 s"): the row and the stream's status say
+// "cancelled" before cancel() returns, whatever the mission's size, and the worker stores the
+// partial result afterwards (its path, JSON, GeoJSON and CSV: seconds for a long mission). Until
+// the files are committed the mission stays active here — resultPending() is true, its result
+// files answer 409 not_ready, its stream's "done" frame (the page's cue to fetch the result) comes
+// once they are there, and its memory stays reserved — so no client reads a half-written result.
+// Chosen over streaming the result to disk during the run: the result's formats are built from
+// the whole plan (metrics, incidents, the GeoJSON's lines), and writing them as the planner goes
+// would cost every mission I/O on its steps to speed up the cancelled ones.
+//
 // Memory is bounded and stated (issue 14): a queued mission holds its request, not its world — the
 // world / DEM / PDM are built by `MissionJob::build` when a worker starts it — and every mission's
 // estimated memory (mission_memory.hpp) is counted against a budget while it is queued or running:
@@ -65,8 +75,16 @@ class MissionManager {
   // Queues a validated mission (row inserted as "queued"); throws like admit(), and StorageFull when
   // the row cannot be written (full disk).
   void submit(MissionJob job);
-  // Cancels a queued or running mission; false if it is not (or no longer) active.
-  bool cancel(const std::string& id);
+  enum class CancelOutcome {
+    Cancelled,  // it was queued or running: its status is "cancelled" now
+    Finishing,  // it has stopped planning (cancelled before, or ran to its end) and stores its result
+    NotActive,  // not queued or running (ended, or unknown)
+  };
+  // Cancels a queued or running mission: its status is final when this returns (see above).
+  CancelOutcome cancel(const std::string& id);
+  // True while the mission is queued, running or storing its result (a cancelled one after its
+  // final status too): its result files are not there yet but may come.
+  bool resultPending(const std::string& id) const;
   // A deleted mission: its finished stream is dropped, so no subscriber replays it.
   void forget(const std::string& id);
   // The stream of a live or finished mission (finished ones rebuilt from disk); null if unknown.
@@ -83,8 +101,13 @@ class MissionManager {
     std::shared_ptr<MissionStream> stream;
     std::shared_ptr<CancelToken> cancel;
     bool running = false;
+    bool cancelled = false;  // cancelled while it ran: the row already says so
+    bool storing = false;    // the planner has returned: a cancel comes too late
     std::uint64_t memoryBytes = 0;
   };
+  // The planner has returned: no cancel changes the outcome from now on. True if a cancel request
+  // already made the mission final (cancelled) while it ran.
+  bool stopPlanning(const std::string& id);
   void admitLocked(const MemoryEstimate& estimate) const;  // caller holds mutex_
   void work();
   void runJob(MissionJob& job, Active active);

@@ -1,9 +1,11 @@
 #include "server/missions/mission_memory.hpp"
 
+#include <malloc.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <cstdio>
+#include <mutex>
 
 namespace rover::missions {
 
@@ -11,6 +13,25 @@ std::uint64_t defaultMissionMemoryBudget() {
   const long pages = ::sysconf(_SC_PHYS_PAGES), pageSize = ::sysconf(_SC_PAGESIZE);
   if (pages <= 0 || pageSize <= 0) return 4ull << 30;
   return static_cast<std::uint64_t>(pages) * static_cast<std::uint64_t>(pageSize) / 2;
+}
+
+// glibc raises its thresholds as big blocks are freed (the mmap threshold to the largest freed
+// mmapped block, up to 32 MiB, and the trim threshold to twice that), so after a mission whose
+// result was a 20 MB string later blocks of up to 32 MiB come from the arenas and a thread
+// arena's free top of up to 64 MiB stays resident: malloc_trim(0) releases free chunks inside an
+// arena but never a thread arena's top (glibc's mtrim trims only the main arena's). Measured on
+// the default map: +8 MiB resident (+12 %) after a 20 000-step coverage mission, growing with each
+// one. Fixed thresholds stop that drift: blocks of 4 MiB and more are mmapped (returned when
+// freed), and an arena's top beyond 4 MiB is given back on the free that grows it. Below 4 MiB
+// (a 600 × 600 float grid is 1.4 MiB) blocks stay in the arenas, so the many short runs of a
+// study do not fault fresh pages for every grid.
+void returnFreedMemoryPromptly() {
+  static std::once_flag once;
+  std::call_once(once, [] {
+    constexpr int kThreshold = 4 << 20;
+    ::mallopt(M_MMAP_THRESHOLD, kThreshold);
+    ::mallopt(M_TRIM_THRESHOLD, kThreshold);
+  });
 }
 
 std::string formatBytes(std::uint64_t bytes) {

@@ -16,6 +16,10 @@ using MemoryEstimate = rover::MemoryEstimate;
 // The default mission memory budget: half the machine's physical memory (4 GiB if unknown).
 std::uint64_t defaultMissionMemoryBudget();
 
+// Sets the C heap so what a finished mission freed goes back to the system (issue 22: "memory
+// returned after a mission"), once per process; the mission manager calls it. See the source.
+void returnFreedMemoryPromptly();
+
 // "1.5 GiB" / "230 MiB" for messages.
 std::string formatBytes(std::uint64_t bytes);
 

@@ -114,15 +114,17 @@ struct ApiServer {
   }
   std::string defaultMap() { return get("/api/maps").json()[0]["id"]; }
   std::string status(const std::string& id) { return get("/api/missions/" + id).json()["status"]; }
-  // Waits until the mission has a final status and returns its state; FAILs on a hang (`seconds`
-  // raises the hang deadline for a long mission, never lowers it).
+  // Waits until the mission has a final status and its worker has let it go (its result stored,
+  // or never to be: a cancelled mission is final before its partial result is stored) and returns
+  // its state; FAILs on a hang (`seconds` raises the hang deadline for a long mission, never
+  // lowers it).
   nlohmann::json waitFinished(const std::string& id, double seconds = 0) {
     nlohmann::json m;
     waitUntil(
         [&] {
           m = get("/api/missions/" + id).json();
           const std::string s = m["status"];
-          return s != "queued" && s != "running";
+          return s != "queued" && s != "running" && m["result"] != "pending";
         },
         std::max(kHangDeadline, std::chrono::milliseconds(static_cast<long>(seconds * 1000))),
         "mission " + id + " to finish");

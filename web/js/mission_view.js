@@ -12,7 +12,7 @@ import { TrailLayer, TrailSet } from './trails.js';
 import { $, el, fmt, report, roverColour } from './util.js';
 import { Incidents } from './incidents.js';
 import { MissionClock } from './mission_clock.js';
-import { RunStatus, isActive, isCompleted, isRunStatus, isStopped, statusText } from './outcomes.js';
+import { RunStatus, isActive, isCompleted, isFinal, isRunStatus, isStopped, statusText } from './outcomes.js';
 
 const pct = (v) => `${(v * 100).toFixed(1)} %`;
 const SHOWN_METRICS = [
@@ -228,7 +228,7 @@ export class MissionView {
         this.plan.clear();
         if (m.route || m.paths) this.plan.apply(m, true);
         this.layers.renderLegends();
-        this.setStatus(m.status);
+        this.onStatus(m.status);
         if (m.progress) this.onProgress(m.progress);
         if (m.metrics) this.renderMetrics(m.metrics);
         this.view.invalidate();
@@ -253,7 +253,7 @@ export class MissionView {
         this.view.invalidate();
       },
       progress: (m) => this.onProgress(m),
-      status: (m) => this.setStatus(m.status),
+      status: (m) => this.onStatus(m.status),
       done: (m) => this.onDone(m),
       closed: (info) => {
         if (!info.done) {
@@ -263,6 +263,12 @@ export class MissionView {
         this.updateStatusLine(true);
       },
     };
+  }
+
+  // A live status. A final one before the "done" frame: a cancelled run is final at once and its
+  // partial result is stored after (the done frame then brings it).
+  onStatus(status) {
+    this.setStatus(status, isFinal(status) ? 'storing its result…' : '');
   }
 
   onProgress(p) {
@@ -335,8 +341,8 @@ export class MissionView {
     try {
       const id = this.mission.id;
       await api.cancel(id);
-      // The final frame may have come in while the request was out.
-      if (this.stream.live && this.mission?.id === id) this.setStatus('cancelling');
+      // The final status or frame may have come in while the request was out.
+      if (this.stream.live && this.mission?.id === id && isActive(counters.missionStatus)) this.setStatus('cancelling');
     } catch (err) {
       report(err);
     }
