@@ -42,6 +42,10 @@ class Operation {
   int last_ = 0;
 };
 
+// The component schemas (server/api/openapi_schemas.cpp): Error, the resources, the mission
+// request, each planner's parameters (from `planners`' tables), and studySchemas().
+nlohmann::json componentSchemas(const PlannerRegistry& planners);
+
 // The schemas of /api/studies (server/api/openapi_studies.cpp): Study, StudyDetail, StudySummary,
 // StudyConfiguration, StudyPreset, StudyRun.
 nlohmann::json studySchemas();

@@ -1,34 +1,18 @@
 // The schemas of /api/studies in the OpenAPI document: what server/studies/study_state.cpp,
 // study_db.cpp (the summary) and server/api/study_routes.cpp write.
 #include "server/api/openapi.hpp"
+#include "server/api/openapi_kit.hpp"
 #include "server/store/run_status.hpp"
 
 namespace rover::api::openapi {
 
 using nlohmann::json;
+using namespace kit;
 
 namespace {
 
-json str(const std::string& description = "") {
-  json s{{"type", "string"}};
-  if (!description.empty()) s["description"] = description;
-  return s;
-}
-json num(const std::string& description = "") {
-  json s{{"type", "number"}};
-  if (!description.empty()) s["description"] = description;
-  return s;
-}
-json nullableNum(const std::string& description = "") {
-  json s = num(description);
-  s["nullable"] = true;
-  return s;
-}
 const json kInteger = {{"type", "integer"}};
 const json kObject = {{"type", "object"}};
-json object(json properties, std::vector<std::string> required) {
-  return {{"type", "object"}, {"properties", std::move(properties)}, {"required", std::move(required)}};
-}
 
 // A study as server/studies/study_state.cpp's toJson writes it.
 json study() {
@@ -43,7 +27,7 @@ json study() {
                  {"finished_at", str()},
                  {"runs_done", kInteger},
                  {"runs_total", kInteger},
-                 {"eta_s", nullableNum("Seconds left; null until known.")},
+                 {"eta_s", nullable(num("Seconds left; null until known."))},
                  {"runs_per_s", num()},
                  {"links", {{"type", "object"}, {"additionalProperties", str()}}}},
                 {"id", "name", "status", "runs_done", "runs_total"});
@@ -58,13 +42,13 @@ json studySchemas() {
                      {"metric", str()},
                      {"runs", {{"type", "integer"}, {"description", "Runs of the configuration stored."}}},
                      {"n", {{"type", "integer"}, {"description", "Runs with a value."}}},
-                     {"mean", nullableNum()},
-                     {"std", nullableNum()},
-                     {"p5", nullableNum()},
-                     {"p50", nullableNum()},
-                     {"p95", nullableNum()},
-                     {"min", nullableNum()},
-                     {"max", nullableNum()}},
+                     {"mean", nullable(num())},
+                     {"std", nullable(num())},
+                     {"p5", nullable(num())},
+                     {"p50", nullable(num())},
+                     {"p95", nullable(num())},
+                     {"min", nullable(num())},
+                     {"max", nullable(num())}},
                     {"config", "metric", "runs", "n"});
   s["StudySummary"] = object({{"study", str()},
                               {"runs_done", kInteger},

@@ -22,7 +22,7 @@ pass() { passed=$((passed + 1)); echo "ok: $*"; }
 "$BIN" serve --port 0 --data "$TMP/data" --quiet > "$TMP/log" 2>&1 &
 PID=$!
 PORT=""
-for _ in $(seq 1 150); do
+for _ in $(seq 1 6000); do  # a hang-only deadline (10 min): the server starts slowly on a loaded machine
   PORT=$(sed -n 's|.*http://127.0.0.1:\([0-9]*\)/.*|\1|p' "$TMP/log" | head -1)
   [ -n "$PORT" ] && curl -fs "http://127.0.0.1:$PORT/api/health" >/dev/null 2>&1 && break
   sleep 0.1

@@ -1,0 +1,287 @@
+// The OpenAPI document's component schemas (GET /api/openapi.json, server/api/openapi.cpp): the
+// error, the resources the routes answer with, the mission request and each planner's
+// parameters, built from the same tables the validation reads.
+#include "server/api/openapi.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "core/pdm/pdm.hpp"
+#include "maps/dem_import_options.hpp"
+#include "server/api/mission_file.hpp"
+#include "server/api/openapi_kit.hpp"
+#include "server/json/json_edge.hpp"
+#include "server/json/mission_request.hpp"
+#include "server/json/plan_json.hpp"
+#include "server/json/planner_json.hpp"
+#include "server/json/zones_json.hpp"
+#include "server/store/run_status.hpp"
+
+namespace rover::api::openapi {
+
+using nlohmann::json;
+using namespace kit;
+
+namespace {
+
+// Component name of a planner's parameters: "Params_coverage", "Params_team-search".
+std::string paramsComponent(const std::string& planner) { return "Params_" + planner; }
+
+json paramInfoSchema() {
+  return object({{"key", str()},
+                 {"type", {{"type", "string"}, {"enum", {"bool", "int", "real", "choice", "real_list"}}}},
+                 {"default", json::object()},
+                 {"unit", str()},
+                 {"doc", str()},
+                 {"min", num()},
+                 {"max", num()},
+                 {"choices", {{"type", "array"}, {"items", str()}}},
+                 {"group", str("The form's section (route, RRT*, coordination, rover, simulation, ...).")},
+                 {"level", {{"type", "string"}, {"enum", {"common", "advanced"}}}}},
+                {"key", "type", "default", "unit", "doc", "group", "level"});
+}
+
+// A plan's result.json as server/json/plan_json.cpp writes it (the outcome fields in full).
+json planResultSchema() {
+  json incident = object({{"kind", oneOf<IncidentKind>()},
+                          {"rover", {{"type", "integer"}}},
+                          {"other", {{"type", "integer"}}},
+                          {"time_s", num()},
+                          {"step", {{"type", "integer"}}},
+                          {"x", num("Metres, local frame.")},
+                          {"y", num("Metres, local frame.")},
+                          {"note", str()},
+                          {"distance_m", num("collision: the closest distance.")},
+                          {"max_angle_deg", num("exceedance: the worst |roll| or |pitch|.")},
+                          {"cell", {{"type", "integer"}, {"description", "bump: the cell driven into."}}},
+                          {"target", {{"type", "integer"}, {"description", "short, skipped, no_slot: the route target."}}}},
+                         {"kind", "rover", "x", "y", "note"});
+  json target = object({{"target", {{"type", "integer"}}},
+                        {"x", num()},
+                        {"y", num()},
+                        {"status", oneOf<TargetStatus>()},
+                        {"legs_reached", {{"type", "integer"}}},
+                        {"legs_short", {{"type", "integer"}}},
+                        {"legs_skipped", {{"type", "integer"}}},
+                        {"legs_no_slot", {{"type", "integer"}}}},
+                       {"target", "x", "y", "status"});
+  return object({{"planner", str()},
+                 {"stop_reason", oneOf<StopReason>()},
+                 {"cancelled", {{"type", "boolean"}}},
+                 {"metrics", {{"type", "object"}, {"additionalProperties", num()}}},
+                 {"metric_units", {{"type", "object"}, {"additionalProperties", str()}}},
+                 {"rovers", {{"type", "array"}, {"items", {{"type", "object"}}}}},
+                 {"series", {{"type", "object"}}},
+                 {"warnings", {{"type", "array"}, {"items", str()}}},
+                 {"incidents", {{"type", "array"}, {"items", incident}}},
+                 {"targets", {{"type", "array"}, {"items", target}}}},
+                {"planner", "stop_reason", "cancelled", "metrics"});
+}
+
+}  // namespace
+
+json componentSchemas(const PlannerRegistry& planners) {
+  json s = json::object();
+  s["Error"] = object(
+      {{"error", object({{"code", str("Machine-readable, e.g. invalid_field, not_found.")},
+                         {"message", str("In words, without server paths.")},
+                         {"field", str("The input at fault: a body field (params.targets, rovers[1].x), "
+                                       "a query parameter, a header, or the path part.")}},
+                        {"code", "message"})}},
+      {"error"});
+
+  // Parameters of each planner, from its own table (the same one the request is checked with).
+  std::vector<std::string> names = planners.names();
+  std::string pdmPlanners;
+  for (const auto& n : names)
+    if (planners.get(n).specs().ground == Ground::DemAndPdm) pdmPlanners += (pdmPlanners.empty() ? "" : ", ") + n;
+  json anyParams = json::array();
+  for (const auto& n : names) {
+    json props = json::object();
+    for (const auto& info : planners.get(n).params()) props[info.key] = paramSchema(info);
+    json p = object(props, {}, true);
+    p["description"] = "Parameters of " + n + "; any left out take their defaults (GET /api/planners).";
+    s[paramsComponent(n)] = p;
+    anyParams.push_back(openapi::ref(paramsComponent(n)));
+  }
+
+  const double maxXY = rover::json::kMaxCoordinateM, maxHeading = rover::json::kMaxHeadingDeg;
+  json rover = object({{"x", {{"type", "number"}, {"minimum", -maxXY}, {"maximum", maxXY},
+                              {"description", "Metres east of the map's lower-left corner."}}},
+                       {"y", {{"type", "number"}, {"minimum", -maxXY}, {"maximum", maxXY},
+                              {"description", "Metres north of the map's lower-left corner."}}},
+                       {"heading", {{"type", "number"}, {"minimum", -maxHeading}, {"maximum", maxHeading},
+                                    {"description", "Degrees counter-clockwise from east (0)."}}}},
+                      {"x", "y"});
+  json request = object(
+      {{"map", str("Map id.")},
+       {"pdm", nullable(str("PDM id on that map: the probability to search, for the planners whose ground is "
+                            "dem_pdm (" + pdmPlanners + ")."))},
+       {"planner", {{"type", "string"}, {"enum", names}}},
+       {"rovers", {{"type", "array"}, {"minItems", 1}, {"maxItems", rover::json::kMaxRovers}, {"items", rover}}},
+       {"params", {{"anyOf", anyParams}}},
+       {"pace", {{"type", "number"}, {"minimum", 0}, {"maximum", rover::json::kMaxPace},
+                 {"description", "Steps per second while watching (0 = full speed)."}}},
+       {"name", nullable(name("The run's label."))},
+       {"format", {{"type", "string"}, {"enum", {kMissionFileFormat}}}},
+       {"version", integer(1, kMissionFileVersion)},
+       {"roverplan", nullable(str("The server version that wrote the mission file (informative)."))},
+       {"dem_sha256", nullable({{"type", "string"}, {"pattern", "^[0-9a-f]{64}$"},
+                                {"description", "The map's grid digest; a map with another answers 409 map_changed."}})},
+       {"map_name", nullable(str("Informative."))},
+       {"keep_out", {{"type", "object"}, {"allOf", {openapi::ref("Zones")}}, {"nullable", true},
+                     {"description", "Keep-out zones of this mission, in the local frame."}}}},
+      {"map", "planner", "rovers"}, true);
+  // Every field the parser accepts has its schema, and no other.
+  for (const char* f : rover::json::kMissionRequestFields)
+    if (!request["properties"].contains(f)) throw std::logic_error(std::string("openapi: no schema for ") + f);
+  s["MissionRequest"] = request;
+  json file = request;
+  file["required"] = {"format", "version", "map", "planner", "rovers", "params"};
+  file["description"] = "A mission file: everything to run a mission again (POST it to /api/missions).";
+  s["MissionFile"] = file;
+  // Keep-out zones (server/json/zones_json.hpp): Polygons in the local frame unless ?crs=map.
+  json position = {{"type", "array"}, {"items", num()}, {"minItems", 2}, {"maxItems", 3}};
+  json ring = {{"type", "array"}, {"items", position}, {"minItems", 4}, {"maxItems", rover::json::kMaxZoneVertices + 1}};
+  json polygon = object({{"type", {{"type", "string"}, {"enum", {"Polygon"}}}},
+                         {"coordinates", {{"type", "array"}, {"items", ring}, {"minItems", 1}}}},
+                        {"type", "coordinates"});
+  json feature = object({{"type", {{"type", "string"}, {"enum", {"Feature"}}}},
+                         {"geometry", polygon},
+                         {"properties", nullable(object({{"name", str()}}))}},
+                        {"type", "geometry"});
+  s["Zones"] = object({{"type", {{"type", "string"}, {"enum", {"FeatureCollection"}}}},
+                       {"features", {{"type", "array"}, {"items", feature}, {"maxItems", rover::json::kMaxZones}}}},
+                      {"type", "features"});
+  s["Zones"]["description"] = "Keep-out zones: a GeoJSON FeatureCollection of Polygons (at most " +
+                              std::to_string(rover::json::kMaxZones) + " zones and " +
+                              std::to_string(rover::json::kMaxZoneVertices) + " vertices in all).";
+  s["MissionLabel"] = object({{"label", name("The run's new label (\"\" clears it).")}}, {"label"}, true);
+
+  s["Mission"] = object(
+      {{"id", str()},
+       {"map", str()},
+       {"pdm", nullable(str())},
+       {"label", str()},
+       {"map_name", nullable(str("Null once the map is deleted."))},
+       {"pdm_name", nullable(str())},
+       {"planner", str()},
+       {"status", oneOf<RunStatus>()},
+       {"message", str("Why it failed, or its warnings.")},
+       {"created_at", str()},
+       {"started_at", str()},
+       {"finished_at", str()},
+       {"metrics", nullable({{"type", "object"}, {"additionalProperties", num()}})},
+       {"spec", {{"type", "object"}, {"description", "The request as accepted, with the map's dem_sha256 at launch."}}},
+       {"links", object({{"stream", str()}, {"result_json", str()}, {"result_geojson", str()}, {"result_csv", str()}},
+                        {"stream", "result_json", "result_geojson", "result_csv"})},
+       {"progress", nullable(object({{"fraction", num("0..1")}, {"coverage", num()}, {"moves", num()}, {"step", num()}},
+                                    {}, false))},
+       {"step", nullable(num())},
+       {"result", {{"type", "string"},
+                   {"enum", {"pending", "ready", "none"}},
+                   {"description", "GET of one mission: its result files are to come (queued, running, or a cancelled "
+                                   "run storing its partial result: they answer 409 not_ready), there, or never "
+                                   "(409 no_result)."}}}},
+      {"id", "map", "planner", "status", "message", "created_at", "links", "spec"});
+  s.update(studySchemas());
+  s["PlanResult"] = planResultSchema();
+  s["Cancelling"] = object({{"id", str()}, {"status", {{"type", "string"}, {"enum", {"cancelling"}}}}}, {"id", "status"});
+  s["Deleted"] = object({{"deleted", str("The id deleted.")}}, {"deleted"});
+
+  s["Pdm"] = object({{"id", str()},
+                     {"map", str()},
+                     {"name", str()},
+                     {"created_at", str()},
+                     {"kind", {{"type", "string"}, {"enum", {"gaussians", "random", "raster"}}}},
+                     {"seed", {{"type", "integer"}}},
+                     {"components", {{"type", "array"}, {"items", {{"type", "object"}}}}},
+                     {"layer", str("PNG of the PDM.")},
+                     {"raster", str("GeoTIFF of the PDM.")}},
+                    {"id", "map", "name", "created_at", "layer"});
+  json component = object({{"x", num("Metres, local frame.")},
+                           {"y", num("Metres, local frame.")},
+                           {"sigma_x", {{"type", "number"}, {"exclusiveMinimum", true}, {"minimum", 0}}},
+                           {"sigma_y", {{"type", "number"}, {"exclusiveMinimum", true}, {"minimum", 0}}},
+                           {"rotation_deg", {{"type", "number"}, {"minimum", -360}, {"maximum", 360}}},
+                           {"weight", {{"type", "number"}, {"minimum", 0}, {"maximum", 1e9}}}},
+                          {"x", "y", "sigma_x"}, true);
+  s["PdmRequest"] = object({{"name", nullable(name("The PDM's name."))},
+                            {"components", {{"type", "array"}, {"minItems", 1}, {"maxItems", pdm::kMaxComponents},
+                                            {"items", component}}},
+                            {"random", integer(1, 100)},
+                            {"seed", integer(0, 1.8e19)}});
+
+  s["Map"] = object({{"id", str()},
+                     {"name", str()},
+                     {"created_at", str()},
+                     {"rows", {{"type", "integer"}}},
+                     {"cols", {{"type", "integer"}}},
+                     {"cell_size_m", num()},
+                     {"cell_height_m", num()},
+                     {"width_m", num()},
+                     {"height_m", num()},
+                     {"crs", str()},
+                     {"geographic", {{"type", "boolean"}}},
+                     {"driver", str()},
+                     {"source_files", {{"type", "array"}, {"items", str()}}},
+                     {"dem_sha256", {{"type", "string"}, {"pattern", "^[0-9a-f]{64}$"}}},
+                     {"resampling", str()},
+                     {"elevation", object({{"min", num()}, {"max", num()}}, {"min", "max"})},
+                     {"classes", object({{"traversable_pct", num()}, {"high_risk_pct", num()},
+                                         {"impassable_pct", num()}, {"nodata_pct", num()}})},
+                     {"body", {{"type", "string"}, {"enum", {"mars", "moon", "earth", "unknown"}}}},
+                     {"body_source", {{"type", "string"}, {"enum", {"declared", "crs"}}}},
+                     {"vertical_scale", num()},
+                     {"crop", {{"type", "array"}, {"items", num()}, {"minItems", 4}, {"maxItems", 4}}},
+                     {"crop_px", {{"type", "array"}, {"items", num()}, {"minItems", 4}, {"maxItems", 4}}},
+                     {"layers", {{"type", "object"}, {"additionalProperties", str()}}},
+                     {"pdms", {{"type", "array"}, {"items", openapi::ref("Pdm")}}},
+                     {"pdms_total", {{"type", "integer"}}}},
+                    {"id", "name", "created_at", "rows", "cols", "cell_size_m", "layers"});
+  json upload = json::object();
+  upload["file"] = {{"type", "array"}, {"items", {{"type", "string"}, {"format", "binary"}}},
+                    {"description", "The DEM's files (one or more parts named file: .IMG + .LBL, a zip, ...)."}};
+  upload["name"] = name("The map's name (default: from the file).");
+  for (const auto& o : maps::demImportOptionInfos())
+    upload[o.key] = {{"type", "string"}, {"pattern", o.pattern}, {"description", o.doc}};
+  s["MapUpload"] = object(upload, {"file"});
+
+  s["ParamInfo"] = paramInfoSchema();
+  s["Preset"] = object({{"name", str()}, {"doc", str()}, {"params", {{"type", "object"}}}}, {"name", "doc", "params"});
+  // What each planner describes of itself (core/planning/planner_specs.hpp), with the enums'
+  // names from the JSON edge (server/json/planner_json.hpp).
+  s["PlannerMetric"] = object({{"key", str()}, {"unit", str("Empty when dimensionless.")}, {"doc", str()}},
+                              {"key", "unit", "doc"});
+  s["PlannerStage"] = object({{"name", str()}, {"doc", str()}}, {"name", "doc"});
+  s["Planner"] = object(
+      {{"name", {{"type", "string"}, {"enum", names}}},
+       {"summary", str()},
+       {"params", {{"type", "array"}, {"items", openapi::ref("ParamInfo")}}},
+       {"presets", {{"type", "array"}, {"items", openapi::ref("Preset")}}},
+       {"map_defaults", {{"type", "object"}, {"description", "With ?map=: map, body and the defaults it sets."}}},
+       {"ground", {{"type", "string"},
+                   {"enum", rover::json::groundNames()},
+                   {"description", "What it plans on: coverage_grid (the map resampled to its coverage cell, or "
+                                   "a random obstacle grid) or dem_pdm (the map at its own resolution and a PDM)."}}},
+       {"starts", {{"type", "string"},
+                   {"enum", rover::json::startPlacementNames()},
+                   {"description", "Where its rovers start when none are placed (a study's runs)."}}},
+       {"progress", object({{"measure", {{"type", "string"}, {"enum", rover::json::progressNames()}}},
+                            {"series", str("The result's series that records it.")}},
+                           {"measure", "series"})},
+       {"seconds_per_run", {{"type", "boolean"}, {"description", "A run takes seconds (a simulated mission)."}}},
+       {"metrics", {{"type", "array"}, {"items", openapi::ref("PlannerMetric")}}},
+       {"stages", {{"type", "array"}, {"items", openapi::ref("PlannerStage")}}}},
+      {"name", "summary", "params", "presets", "ground", "starts", "progress", "seconds_per_run", "metrics", "stages"});
+  s["Health"] = object({{"status", {{"type", "string"}, {"enum", {"ok"}}}},
+                        {"version", str()},
+                        {"maps", {{"type", "integer"}}},
+                        {"missions_running", {{"type", "integer"}}},
+                        {"missions_queued", {{"type", "integer"}}},
+                        {"planners", {{"type", "array"}, {"items", str()}}}},
+                       {"status", "version", "planners"});
+  return s;
+}
+
+}  // namespace rover::api::openapi
