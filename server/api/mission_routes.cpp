@@ -83,11 +83,6 @@ Response renameMission(ApiContext& ctx, const Request& req) {
   return Response::json(200, missionJson(missionOr404(ctx, id)));
 }
 
-Response withAttachment(Response r, const std::string& filename) {
-  r.headers.emplace_back("Content-Disposition", "attachment; filename=\"" + filename + "\"");
-  return r;
-}
-
 // mission.json: recorded at launch; runs launched before that name their map's current grid.
 Response missionFileOf(ApiContext& ctx, const store::MissionRecord& m) {
   std::string digest;

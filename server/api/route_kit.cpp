@@ -83,6 +83,11 @@ Response fileResponse(const std::string& path, const std::string& type) {
   return r;
 }
 
+Response withAttachment(Response r, const std::string& filename) {
+  r.headers.emplace_back("Content-Disposition", "attachment; filename=\"" + filename + "\"");
+  return r;
+}
+
 ApiError mapNotFound(const std::string& id, const std::string& field) {
   return ApiError(404, "not_found", "no map '" + rj::shown(id) + "'", field);
 }

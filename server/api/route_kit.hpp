@@ -56,6 +56,8 @@ http::Handler handler(ApiContext& ctx, ApiHandler fn);
 
 // A file answered from disk with its media type.
 http::Response fileResponse(const std::string& path, const std::string& type);
+// `r` offered as a download named `filename` (Content-Disposition: attachment).
+http::Response withAttachment(http::Response r, const std::string& filename);
 
 // `blocking`: the handler is slow (GDAL, rendering, PDM discretisation, whole-DEM validation)
 // and runs on the server's work pool, so the io threads keep answering (see RouteOptions).

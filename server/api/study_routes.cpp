@@ -199,11 +199,7 @@ void addStudyRoutes(http::Router& router, ApiContext& ctx) {
 
   router.add("GET", "/api/studies/{id}/runs.csv", [&ctx](const Request& req) {
     const studies::StudyState s = studyOr404(ctx, req.params.at("id"));
-    Response r;
-    r.contentType = "text/csv";
-    r.file = ctx.studies->runsCsvFile(s.id);
-    r.headers.emplace_back("Content-Disposition", "attachment; filename=\"study-" + s.id + "-runs.csv\"");
-    return r;
+    return withAttachment(fileResponse(ctx.studies->runsCsvFile(s.id), "text/csv"), "study-" + s.id + "-runs.csv");
   }, routeDoc("The study's runs as CSV: run_index, config, replicate, seed, status, wall_s, cpu_s, host, "
                "rank, then one column per metric.", Operation().returns(200, "Runs", nullptr, "text/csv").errors({404}), true));
 
@@ -211,11 +207,7 @@ void addStudyRoutes(http::Router& router, ApiContext& ctx) {
     const studies::StudyState s = studyOr404(ctx, req.params.at("id"));
     const std::string path = ctx.studies->databasePath(s.id);
     if (path.empty()) throw ApiError(409, "not_ready", "study " + s.id + " has no database yet", "id");
-    Response r;
-    r.file = path;
-    r.contentType = "application/vnd.sqlite3";
-    r.headers.emplace_back("Content-Disposition", "attachment; filename=\"study-" + s.id + ".sqlite\"");
-    return r;
+    return withAttachment(fileResponse(path, "application/vnd.sqlite3"), "study-" + s.id + ".sqlite");
   }, routeDoc("The study database (SQLite, WAL: complete once the study has ended): spec, configs, runs, "
                "curves; `roverplan study summary` reads it.", Operation().returns(200, "SQLite database", nullptr, "application/vnd.sqlite3").errors({404, 409})));
 
@@ -223,11 +215,7 @@ void addStudyRoutes(http::Router& router, ApiContext& ctx) {
     const studies::StudyState s = studyOr404(ctx, req.params.at("id"));
     const std::string path = ctx.studies->benchmarkDbFile(s.id);
     if (path.empty()) throw ApiError(409, "not_ready", "study " + s.id + " has no database yet", "id");
-    Response r;
-    r.file = path;
-    r.contentType = "application/vnd.sqlite3";
-    r.headers.emplace_back("Content-Disposition", "attachment; filename=\"study-" + s.id + "-benchmark.db\"");
-    return r;
+    return withAttachment(fileResponse(path, "application/vnd.sqlite3"), "study-" + s.id + "-benchmark.db");
   }, routeDoc("The study as an OMPL benchmark database (SQLite: experiments, plannerConfigs, enums, runs, "
                "progress, as ompl_benchmark_statistics.py writes them; our metrics are run columns): open it "
                "in Planner Arena. The runs stored so far while the study runs.",

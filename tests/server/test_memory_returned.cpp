@@ -14,6 +14,7 @@
 #include <string>
 
 #include "api_server.hpp"
+#include "process_memory.hpp"
 
 using namespace rover;
 using rover::test::ApiServer;
@@ -22,19 +23,10 @@ using nlohmann::json;
 
 namespace {
 
-#ifdef ROVER_SANITIZED
-constexpr bool kSanitized = true;
-#else
-constexpr bool kSanitized = false;
-#endif
+using rover::test::kSanitized;
+using rover::test::statusBytes;
 
-std::uint64_t residentBytes() {
-  std::ifstream in("/proc/self/status");
-  std::string line;
-  while (std::getline(in, line))
-    if (line.rfind("VmRSS:", 0) == 0) return std::stoull(line.substr(6)) * 1024;
-  return 0;
-}
+std::uint64_t residentBytes() { return statusBytes("VmRSS"); }
 
 json rovers(int count) {
   json out = json::array();

@@ -18,6 +18,7 @@
 #include <thread>
 
 #include "api_server.hpp"
+#include "process_memory.hpp"
 #include "core/coverage/coverage_memory.hpp"
 #include "core/coverage/coverage_params.hpp"
 #include "core/coverage/terrain_world.hpp"
@@ -33,20 +34,8 @@ using nlohmann::json;
 
 namespace {
 
-#ifdef ROVER_SANITIZED
-constexpr bool kSanitized = true;
-#else
-constexpr bool kSanitized = false;
-#endif
-
-// A field of /proc/self/status in bytes ("VmRSS", "VmHWM"); 0 if absent.
-std::uint64_t statusBytes(const std::string& key) {
-  std::ifstream in("/proc/self/status");
-  std::string line;
-  while (std::getline(in, line))
-    if (line.rfind(key + ":", 0) == 0) return std::stoull(line.substr(key.size() + 1)) * 1024;
-  return 0;
-}
+using rover::test::kSanitized;
+using rover::test::statusBytes;
 
 // The process's resident peak from now on, over a baseline taken with the heap trimmed.
 class PeakMeter {
