@@ -55,19 +55,24 @@ class HeldPlanner : public Planner {
   test::Gate& release_;
 };
 
+// Registers the held planner on `s` and returns a mission of it on the default map: one rover at
+// 5 steps a second, covering until cancelled.
+json heldMission(ApiServer& s, test::Gate& release) {
+  s.planners.add(std::make_unique<HeldPlanner>(s.planners.get("coverage"), release));
+  return {{"map", s.defaultMap()},
+          {"planner", "held-coverage"},
+          {"rovers", {{{"x", 20.5}, {"y", 20.5}, {"heading", 0}}}},
+          {"params", {{"frontier", false}, {"coverage", 1}}},
+          {"pace", 5}};
+}
+
 }  // namespace
 
 TEST_CASE("mission cancel: the status is final when the cancel returns, the partial result is stored after") {
   TempDir d;
   ApiServer s(d.str("data"));
   test::Gate release;
-  s.planners.add(std::make_unique<HeldPlanner>(s.planners.get("coverage"), release));
-  // 5 steps a second: it runs until cancelled.
-  const json body{{"map", s.defaultMap()},
-                  {"planner", "held-coverage"},
-                  {"rovers", {{{"x", 20.5}, {"y", 20.5}, {"heading", 0}}}},
-                  {"params", {{"frontier", false}, {"coverage", 1}}},
-                  {"pace", 5}};
+  const json body = heldMission(s, release);
   auto r = s.postJson("/api/missions", body);
   REQUIRE(r.status == 202);
   const std::string id = r.json()["id"];
@@ -114,12 +119,7 @@ TEST_CASE("mission cancel: a queued mission is final at once, with no result to 
   TempDir d;
   ApiServer s(d.str("data"));
   test::Gate release;
-  s.planners.add(std::make_unique<HeldPlanner>(s.planners.get("coverage"), release));
-  const json body{{"map", s.defaultMap()},
-                  {"planner", "held-coverage"},
-                  {"rovers", {{{"x", 20.5}, {"y", 20.5}, {"heading", 0}}}},
-                  {"params", {{"frontier", false}, {"coverage", 1}}},
-                  {"pace", 5}};
+  const json body = heldMission(s, release);
   const std::string running = s.postJson("/api/missions", body).json()["id"];
   const std::string queued = s.postJson("/api/missions", body).json()["id"];  // one worker: it waits
   REQUIRE(s.status(queued) == "queued");
