@@ -14,33 +14,38 @@ export CCACHE_BASEDIR="$root" CCACHE_NOHASHDIR=1
 bash docker/install-deps.sh
 bash docker/setup-web.sh web tests/browser tests/contract
 jobs=$(nproc)
+# Each stage prints the seconds since the start, so a slow CI run says where its time went.
+start=$SECONDS
+stage() { stage "[$((SECONDS - start)) s] $*"; }
 
-echo "== Release build (build/)"
+stage "Release build (build/)"
 cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
 ninja -C build
-echo "== Tests (Release)"
+stage "Tests (Release)"
 ctest --test-dir build --output-on-failure -j "$jobs"
 
-# The script tests that start the roverplan binary (serve-restart, disk-full, exports, study-launcher)
-# run in the Release pass only: the sanitizer build makes the unit-test binaries, not roverplan.
+# The script tests that start the roverplan binary (label "binary": serve-restart, disk-full, exports,
+# study-launcher, contract-lint) run in the Release pass only: the sanitizer build makes the
+# unit-test binaries, not roverplan.
 # Warnings are checked by the Release build; with sanitizers at -O1 GCC 12 reports false
 # maybe-uninitialized warnings inside std::regex, so this build does not use -Werror.
-echo "== Sanitizer build (build-asan/: ASan + UBSan)"
+stage "Sanitizer build (build-asan/: ASan + UBSan)"
 cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=Debug -DROVER_SANITIZE=ON -DROVER_WERROR=OFF \
   -DCMAKE_CXX_FLAGS_DEBUG="-O1 -g" >/dev/null
 ninja -C build-asan test_core test_maps test_server
-echo "== Unit tests under sanitizers"
+stage "Unit tests under sanitizers"
 export ASAN_OPTIONS=abort_on_error=1:detect_leaks=1:strict_string_checks=1
 export UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
-ctest --test-dir build-asan --output-on-failure -j "$jobs" -R '^(core|maps|server)/' -E 'serve-restart|disk-full|server/exports|study-launcher'
+ctest --test-dir build-asan --output-on-failure -j "$jobs" -R '^(core|maps|server)/' -LE binary
 
-echo "== Fuzzing (libFuzzer, ${ROVERPLAN_FUZZ_SECONDS:-30} s per target)"
+stage "Fuzzing (libFuzzer, ${ROVERPLAN_FUZZ_SECONDS:-30} s per target)"
 bash tests/fuzz/run.sh "${ROVERPLAN_FUZZ_SECONDS:-30}"
 
-echo "== Browser tests (Chromium via playwright-core)"
+stage "Browser tests (Chromium via playwright-core)"
 ROVERPLAN_BIN="$root/build/bin/roverplan" node --test tests/browser/
 
 if [ "${ROVERPLAN_SKIP_CONTAINER:-0}" != 1 ]; then
-  echo "== Container smoke test (podman)"
+  stage "Container smoke test (podman)"
   bash tests/container/smoke_test.sh
 fi
+stage "all tests passed"

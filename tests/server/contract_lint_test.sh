@@ -25,6 +25,7 @@ PORT=""
 for _ in $(seq 1 6000); do  # a hang-only deadline (10 min): the server starts slowly on a loaded machine
   PORT=$(sed -n 's|.*http://127.0.0.1:\([0-9]*\)/.*|\1|p' "$TMP/log" | head -1)
   [ -n "$PORT" ] && curl -fs "http://127.0.0.1:$PORT/api/health" >/dev/null 2>&1 && break
+  kill -0 "$PID" 2>/dev/null || { PORT=""; break; }  # it exited: no use waiting for it
   sleep 0.1
 done
 [ -n "$PORT" ] || fail "server did not start: $(tail -5 "$TMP/log")"
