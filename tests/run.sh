@@ -16,7 +16,7 @@ bash docker/setup-web.sh web tests/browser tests/contract
 jobs=$(nproc)
 # Each stage prints the seconds since the start, so a slow CI run says where its time went.
 start=$SECONDS
-stage() { stage "[$((SECONDS - start)) s] $*"; }
+stage() { echo "== [$((SECONDS - start)) s] $*"; }
 
 stage "Release build (build/)"
 cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
