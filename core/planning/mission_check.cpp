@@ -24,14 +24,7 @@ std::string metres(double v) {
 void refuseBoxedIn(const MissionGround& ground, const std::vector<RoverStart>& rovers, double safety) {
   std::vector<Eigen::Vector2d> starts;
   for (const auto& r : rovers) starts.push_back(r.position);
-  PassableGround passable;
-  if (ground.dem)
-    passable = [&](const Eigen::Vector2d& p) {
-      const auto cell = localToCell(ground.dem->geometry(), p);
-      if (!cell || !ground.dem->valid(cell->row, cell->col)) return false;
-      return !ground.classes || ground.classes->at(ground.dem->geometry().index(*cell)) !=
-                                    static_cast<std::uint8_t>(terrain::TerrainClass::Impassable);
-    };
+  const PassableGround passable = ground.dem ? passableGround(*ground.dem, ground.classes) : PassableGround{};
   const Departure d = departureOrder(starts, safety, passable);
   if (d.boxedIn.empty()) return;
   const std::string field = "rovers[" + std::to_string(d.boxedIn.front()) + "]";
@@ -41,6 +34,15 @@ void refuseBoxedIn(const MissionGround& ground, const std::vector<RoverStart>& r
 }
 
 }  // namespace
+
+PassableGround passableGround(const terrain::Dem& dem, const Raster<std::uint8_t>* classes) {
+  return [&dem, classes](const Eigen::Vector2d& p) {
+    const auto cell = localToCell(dem.geometry(), p);
+    if (!cell || !dem.valid(cell->row, cell->col)) return false;
+    return !classes || classes->at(dem.geometry().index(*cell)) !=
+                           static_cast<std::uint8_t>(terrain::TerrainClass::Impassable);
+  };
+}
 
 void checkMissionStarts(const MissionGround& ground, const std::vector<RoverStart>& rovers,
                         const StartRules& rules) {

@@ -8,6 +8,7 @@
 
 #include "core/coverage/world.hpp"
 #include "core/grid/raster.hpp"
+#include "core/planning/departure.hpp"
 #include "core/planning/keep_out.hpp"
 #include "core/planning/planner.hpp"
 #include "core/terrain/dem.hpp"
@@ -26,6 +27,10 @@ struct MissionGround {
   // coverage cell one overlaps, is refused: a rover never stands on a cell a zone touches.
   const KeepOut* keepOut = nullptr;
 };
+
+// Ground a rover may drive over on the map: on the DEM, on data and (with `classes`) not
+// impassable. The one rule the start check and the generated formation's way-out test share.
+PassableGround passableGround(const terrain::Dem& dem, const Raster<std::uint8_t>* classes);
 
 struct StartRules {
   // Two starts closer than this (metres) are refused: the team planners' safety distance.

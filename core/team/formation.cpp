@@ -5,6 +5,8 @@
 #include <limits>
 
 #include "core/common/error.hpp"
+#include "core/planning/departure.hpp"
+#include "core/planning/mission_check.hpp"
 #include "core/planning/rover_limits.hpp"
 
 namespace rover::team {
@@ -43,15 +45,27 @@ std::vector<Eigen::Vector2d> formationSlots(int rovers, double footprint) {
   return out;
 }
 
-std::vector<Eigen::Vector2d> startSlots(int rovers, double footprint, double safety) {
-  std::vector<Eigen::Vector2d> slots = formationSlots(rovers, footprint);
+namespace {
+
+// `slots` scaled about the centre until the nearest two are `spacing` apart (unchanged when they
+// are already).
+std::vector<Eigen::Vector2d> spread(std::vector<Eigen::Vector2d> slots, double spacing) {
   double nearest = std::numeric_limits<double>::infinity();
   for (std::size_t a = 0; a < slots.size(); ++a)
     for (std::size_t b = a + 1; b < slots.size(); ++b) nearest = std::min(nearest, (slots[a] - slots[b]).norm());
-  const double want = startSpacing(safety);
-  if (nearest < want)
-    for (auto& s : slots) s *= want / nearest;
+  if (nearest < spacing)
+    for (auto& s : slots) s *= spacing / nearest;
   return slots;
+}
+
+}  // namespace
+
+std::vector<Eigen::Vector2d> startSlots(int rovers, double footprint, double safety) {
+  return spread(formationSlots(rovers, footprint), startSpacing(safety));
+}
+
+std::vector<Eigen::Vector2d> goalSlots(int rovers, double footprint, double spacing) {
+  return spread(formationSlots(rovers, footprint), spacing);
 }
 
 TerrainEdgeModel wholeMapModel(const terrain::Dem& dem, const Raster<std::uint8_t>& classes,
@@ -74,7 +88,8 @@ std::optional<Eigen::Vector2d> nearestValid(const TerrainEdgeModel& model, Eigen
                                             double reach, double safety,
                                             const std::vector<Eigen::Vector2d>& taken,
                                             const Raster<std::uint8_t>* reachable,
-                                            double stopRadius) {
+                                            double stopRadius,
+                                            const std::function<bool(const Eigen::Vector2d&)>& accept) {
   auto ok = [&](const Eigen::Vector2d& p) {
     if (!turnableAround(model, p, stopRadius)) return false;
     if (reachable) {
@@ -83,7 +98,7 @@ std::optional<Eigen::Vector2d> nearestValid(const TerrainEdgeModel& model, Eigen
     }
     for (const auto& t : taken)
       if ((t - p).norm() < safety) return false;
-    return true;
+    return !accept || accept(p);
   };
   if (ok(want)) return want;
   const double step = 0.25;
@@ -114,9 +129,17 @@ std::vector<Pose> formationStarts(const terrain::Dem& dem, const Raster<std::uin
   const TerrainEdgeModel model = wholeMapModel(dem, classes, params.coordination.rrt);
   std::vector<Pose> out;
   std::vector<Eigen::Vector2d> taken;
-  const double spacing = startSpacing(params.coordination.safetyDistance);
-  for (const auto& slot : startSlots(n, params.footprint, params.coordination.safetyDistance)) {
-    auto p = nearestValid(model, centre + slot, std::max(params.footprint, spacing), spacing, taken);
+  const double safety = params.coordination.safetyDistance, spacing = startSpacing(safety);
+  // Lattice spacing lets every rover pass between any two others; what can still shut one in is
+  // the ground: a slot in a pocket of passable ground (on the default map 40 rovers put rover 4
+  // in one, and the mission check refused the generated formation).
+  const planning::PassableGround passable = planning::passableGround(dem, &classes);
+  auto outOfPockets = [&](const Eigen::Vector2d& p) {
+    return planning::departureOrder({p}, safety, passable).boxedIn.empty();
+  };
+  for (const auto& slot : startSlots(n, params.footprint, safety)) {
+    auto p = nearestValid(model, centre + slot, std::max(params.footprint, spacing), spacing, taken, nullptr, 0,
+                          outOfPockets);
     if (!p)
       throw Error(ErrorCode::InvalidInput, "rovers",
                   "no room for the rovers' formation near the start: give the starts explicitly");

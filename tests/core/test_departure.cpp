@@ -8,6 +8,7 @@
 #include "core/common/error.hpp"
 #include "core/planning/departure.hpp"
 #include "core/planning/mission_check.hpp"
+#include "core/team/formation.hpp"
 #include "core/terrain/layers.hpp"
 
 using namespace rover;
@@ -74,4 +75,33 @@ TEST_CASE("mission check: a team start with no way out is refused naming the rov
     CHECK(e.code() == ErrorCode::InvalidInput);
     CHECK(std::string(e.what()).find("boxed in") != std::string::npos);
   }
+}
+
+TEST_CASE("formation: generated starts are never in a pocket the mission check refuses") {
+  // 40 × 40 m of flat ground at 1 m; impassable cells ring x and y in [17, 24), so the ground
+  // round the formation's centre (20.5, 20.5) is a 6 m pocket with no way out.
+  terrain::Dem dem;
+  dem.z = Raster<float>(GridGeometry{40, 40, 1.0, 1.0}, 0.0f);
+  Raster<std::uint8_t> classes(dem.z.geometry, 0);
+  const auto wall = [&](int x, int y) { classes(39 - y, x) = static_cast<std::uint8_t>(terrain::TerrainClass::Impassable); };
+  for (int i = 17; i <= 23; ++i)
+    for (int j : {17, 23}) {
+      wall(i, j);
+      wall(j, i);
+    }
+  team::TeamMissionParams params;
+  const std::vector<team::Pose> starts = team::formationStarts(dem, classes, params, {20.5, 20.5}, 5);
+  REQUIRE(starts.size() == 5);
+  MissionGround ground;
+  ground.dem = &dem;
+  ground.classes = &classes;
+  StartRules rules;
+  rules.safetyDistance = params.coordination.safetyDistance;
+  rules.wayOut = true;
+  std::vector<RoverStart> rovers;
+  for (const team::Pose& s : starts) {
+    CHECK_FALSE((s.x > 17 && s.x < 24 && s.y > 17 && s.y < 24));  // outside the pocket
+    rovers.push_back({{s.x, s.y}, s.heading});
+  }
+  CHECK_NOTHROW(checkMissionStarts(ground, rovers, rules));
 }
