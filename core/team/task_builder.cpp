@@ -24,13 +24,8 @@ std::vector<std::vector<std::optional<Eigen::Vector2d>>> slotGoals(
     const terrain::Dem& dem, const Raster<std::uint8_t>& classes, int rovers, const Route& route,
     const TeamMissionParams& params, const Raster<std::uint8_t>* reachable, const CancelToken* cancel) {
   const TerrainEdgeModel model = wholeMapModel(dem, classes, params.coordination.rrt);
-  const auto slots = formationSlots(rovers, params.footprint);
-  // Team mates' goals at least the safety distance apart once each rover has stopped anywhere in
-  // its acceptance circle: two rovers on goals exactly 1 m apart can end 0.99 m apart, and when
-  // the first one parks there for good the second leg can never end (measured on the default
-  // map, 5 rovers: 31 of 60 skipped legs in 13 missions were such pairs).
-  const double spacing =
-      params.coordination.safetyDistance + 2 * params.coordination.controller.acceptanceRadius;
+  const double spacing = goalSpacing(params.coordination);
+  const auto slots = goalSlots(rovers, params.footprint, spacing);
   // Timed (ours): the goal's whole stop circle is ground to turn on; paper: the goal alone.
   const double stopCircle = params.coordination.mode == CoordinationMode::Timed
                                 ? stopCircleRadius(params.coordination.controller)

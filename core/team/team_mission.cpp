@@ -119,7 +119,7 @@ TeamMissionResult runTeamMission(const terrain::Dem& dem, const Raster<std::uint
   const std::unique_ptr<RouteGenerator> routes = makeRouteGenerator(params.routeMethod, params.route);
   out.route = routes->generate(out.grid, teamStartCell(out.grid, starts));
   out.routeCurve = accumulatedAlongRoute(out.grid, out.route);
-  out.slots = formationSlots(static_cast<int>(starts.size()), params.footprint);
+  out.slots = goalSlots(static_cast<int>(starts.size()), params.footprint, goalSpacing(params.coordination));
   if (observer) observer->routeChosen(out.grid, out.route);
 
   const Raster<std::uint8_t>* goalsOn = timed ? &reach : nullptr;
