@@ -35,7 +35,7 @@ std::string tinyFile(McapOptions o = {}) {
 
 }  // namespace
 
-TEST_CASE("mcap writer: CRC-32 is the standard one (check value of \"123456789\")") {
+TEST_CASE("mcap writer: CRC-32 is the standard one (check value of 123456789)") {
   CHECK(exports::mcapCrc32("123456789") == 0xCBF43926u);
   CHECK(bitwiseCrc32("123456789") == 0xCBF43926u);
   CHECK(exports::mcapCrc32("89", exports::mcapCrc32("1234567")) == 0xCBF43926u);  // continued
@@ -86,7 +86,7 @@ TEST_CASE("mcap writer: a literal tiny file, record by record") {
   CHECK(idx.le<std::uint64_t>() == 2 * (9 + 22 + 7));
 }
 
-TEST_CASE("mcap writer: the same calls give the same bytes; small chunks split and stay indexed") {
+TEST_CASE("mcap writer: the same calls give the same bytes, small chunks split and stay indexed") {
   CHECK(tinyFile() == tinyFile());
   McapOptions small;
   small.chunkBytes = 1;  // every message closes its chunk
