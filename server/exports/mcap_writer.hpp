@@ -45,7 +45,9 @@ struct McapOptions {
   std::string profile;               // Header.profile: "" (no ROS profile: JSON messages)
   std::string library = "roverplan";  // Header.library
   std::size_t chunkBytes = 1 << 20;  // a chunk closes when its uncompressed records pass this
-  int zstdLevel = 6;                 // ZSTD_compress level
+  // ZSTD_compress level. The default team mission (330 262 messages): level 3 writes 15.1 MB in
+  // ~1 s of CPU, level 6 14.0 MB in ~2.5 s; the server writes a replay as each mission ends.
+  int zstdLevel = 3;
 };
 
 struct McapTotals {
