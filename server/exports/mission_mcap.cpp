@@ -270,10 +270,9 @@ std::string terrainMessage(const terrain::Dem& dem) {
 
 // ---- Samples and incidents ------------------------------------------------------------------------
 
-// A rover's samples on the mission clock: the simulator's when the planner has a clock, else the
-// path's points, one a second, with what the DEM says about them.
-std::vector<TrackSample> samplesOf(const Track& t, const ReplayInput& in, std::size_t k) {
-  if (!t.samples.empty()) return t.samples;
+// A rover's samples on the mission clock when the planner has no clock: the path's points, one a
+// second, with what the DEM says about them (a clock's samples are used where they are).
+std::vector<TrackSample> pointSamples(const Track& t, const ReplayInput& in, std::size_t k) {
   std::vector<TrackSample> out;
   out.reserve(t.points.size());
   const double heading = k < in.startHeadings.size() ? in.startHeadings[k] : 0.0;
@@ -343,7 +342,8 @@ McapTotals writeReplayMcap(const ReplayInput& in, std::ostream& out) {
   const std::uint16_t logC = w.addChannel(logS, "/incidents", "json");
   struct Rover {
     std::uint16_t pose = 0, fix = 0, telemetry = 0;
-    std::vector<TrackSample> samples;
+    std::vector<TrackSample> own;               // coverage: built from the path
+    const std::vector<TrackSample>* samples = nullptr;  // the track's own, or `own`
     const Series* energy = nullptr;
   };
   std::vector<Rover> rovers(r.tracks.size());
@@ -352,7 +352,8 @@ McapTotals writeReplayMcap(const ReplayInput& in, std::ostream& out) {
     rovers[k].pose = w.addChannel(poseS, name + "/pose", "json");
     if (lonLat) rovers[k].fix = w.addChannel(fixS, name + "/fix", "json");
     rovers[k].telemetry = w.addChannel(telemetryS, name + "/telemetry", "json");
-    rovers[k].samples = samplesOf(r.tracks[k], in, k);
+    if (r.tracks[k].samples.empty()) rovers[k].own = pointSamples(r.tracks[k], in, k);
+    rovers[k].samples = r.tracks[k].samples.empty() ? &rovers[k].own : &r.tracks[k].samples;
     const std::string key = "energy_j_rover_" + std::to_string(r.tracks[k].rover);
     for (const Series& s : r.series)
       if (s.key == key) rovers[k].energy = &s;
@@ -376,8 +377,8 @@ McapTotals writeReplayMcap(const ReplayInput& in, std::ostream& out) {
     events.push_back({toNs(time), kIncident, static_cast<std::uint32_t>(i)});
   }
   for (std::size_t k = 0; k < rovers.size(); ++k)
-    for (std::size_t i = 0; i < rovers[k].samples.size(); ++i)
-      events.push_back({toNs(rovers[k].samples[i].time), static_cast<std::uint32_t>(k), static_cast<std::uint32_t>(i)});
+    for (std::size_t i = 0; i < rovers[k].samples->size(); ++i)
+      events.push_back({toNs((*rovers[k].samples)[i].time), static_cast<std::uint32_t>(k), static_cast<std::uint32_t>(i)});
   std::stable_sort(events.begin(), events.end(), [](const Event& a, const Event& b) {
     if (a.t != b.t) return a.t < b.t;
     return (a.rover == kIncident) > (b.rover == kIncident);
@@ -403,7 +404,7 @@ McapTotals writeReplayMcap(const ReplayInput& in, std::ostream& out) {
       continue;
     }
     const Rover& rv = rovers[e.rover];
-    const TrackSample& s = rv.samples[e.index];
+    const TrackSample& s = (*rv.samples)[e.index];
     const int rover = r.tracks[e.rover].rover;
     const double yaw = std::isfinite(s.heading) ? s.heading : 0.0;
     m += "{\"timestamp\":";
