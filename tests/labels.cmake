@@ -58,7 +58,7 @@ rover_label("${test_maps_exe}" "maps/" "*" unit)
 # The server's cases are integration unless their file is one of these (a new file starts there;
 # ctest adds labels to those a test has, so each case is labelled once).
 set(unit_cases "")
-foreach(file arg_parser plan_json cli_commands router store work_pool studies study_ompl mission_stream)
+foreach(file arg_parser plan_json cli_commands router store work_pool studies study_ompl mission_stream mcap_writer)
   rover_cases(cases "${test_server_exe}" "*test_${file}.cpp")
   list(APPEND unit_cases ${cases})
 endforeach()

@@ -12,7 +12,7 @@ cd "$root"
 export CCACHE_BASEDIR="$root" CCACHE_NOHASHDIR=1
 
 bash docker/install-deps.sh
-bash docker/setup-web.sh web tests/browser tests/contract
+bash docker/setup-web.sh web tests/browser tests/contract tests/mcap
 jobs=$(nproc)
 # Each stage prints the seconds since the start, so a slow CI run says where its time went.
 start=$SECONDS

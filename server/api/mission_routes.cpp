@@ -16,6 +16,9 @@ namespace fs = std::filesystem;
 
 namespace {
 
+// No media type is registered for MCAP; Foxglove's own tools serve it as bytes.
+constexpr const char* kMcapMediaType = "application/octet-stream";
+
 Response launchMission(ApiContext& ctx, const Request& req) {
   return Response::json(202, missionJson(submitMission(ctx, jsonBody(req, rj::kMissionJsonLimits))));
 }
@@ -103,11 +106,12 @@ Response getMissionFile(ApiContext& ctx, const Request& req) {
                           attachment);
   static const std::map<std::string, std::string> types{{"result.json", "application/json"},
                                                         {"result.geojson", "application/geo+json"},
-                                                        {"result.csv", "text/csv"}};
+                                                        {"result.csv", "text/csv"},
+                                                        {"replay.mcap", kMcapMediaType}};
   auto t = types.find(file);
   if (t == types.end())
     throw ApiError(404, "not_found",
-                   "no file '" + rj::shown(file) + "' (mission.json, result.json, result.geojson, result.csv, map.png, map.tif)",
+                   "no file '" + rj::shown(file) + "' (mission.json, result.json, result.geojson, result.csv, replay.mcap, map.png, map.tif)",
                    "file");
   // Asked before the folder is looked at: the worker commits the files, then lets the mission go.
   const bool pending = ctx.missions.resultPending(id);
@@ -119,6 +123,11 @@ Response getMissionFile(ApiContext& ctx, const Request& req) {
                                            ": its result is being stored, try again in a moment", "id");
     // An ended run without files (failed, cancelled before it stored anything) will never
     // have them: say so, with the reason it ended.
+    // A result stored before replays were written (issue 28) has every file but this one.
+    if (file == "replay.mcap" && fs::exists(fs::path(ctx.dir.missionDir(id)) / "result.json"))
+      throw ApiError(409, "no_result",
+                     "mission " + rj::shown(id) + " was stored before MCAP replays were recorded: launch its "
+                     "mission.json again for one", "id");
     if (isFinal(m.status))
       throw ApiError(409, "no_result",
                      "mission " + rj::shown(id) + " ended " + std::string(enumName(m.status)) + " without a result" +
@@ -160,7 +169,11 @@ void addMissionRoutes(http::Router& router, ApiContext& ctx) {
   router.add("GET", "/api/missions/{id}/{file}", handler(ctx, getMissionFile),
              routeDoc("A mission's file (mission.json: everything to run it again, POST it to /api/missions), or "
                       "a finished mission's result: result.json, result.geojson (map CRS: tracks, route, targets, "
-                      "zones, incidents), result.csv (every sample, both frames), map.png (the map with its "
+                      "zones, incidents), result.csv (every sample, both frames), replay.mcap (the replay for "
+                      "Foxglove/Lichtblick: per rover foxglove.PoseInFrame, LocationFix when the map has a CRS, and "
+                      "telemetry on the mission clock; the terrain as a foxglove.Grid; route, paths, targets and "
+                      "zones as a SceneUpdate; incidents as foxglove.Log; JSON encoding, zstd chunks, indexed), "
+                      "map.png (the map with its "
                       "legend and scale bar, at most 4096 px a side), map.tif (the same map as a GeoTIFF in the "
                       "map's CRS).",
                       Operation()
@@ -168,6 +181,8 @@ void addMissionRoutes(http::Router& router, ApiContext& ctx) {
                                    {{"oneOf", {ref("MissionFile"), ref("PlanResult")}}})
                           .returns(200, "result.geojson.", {{"type", "object"}}, "application/geo+json")
                           .returns(200, "result.csv.", {{"type", "string"}}, "text/csv")
+                          .returns(200, "replay.mcap (MCAP, https://mcap.dev/spec).", {{"type", "string"}, {"format", "binary"}},
+                                   kMcapMediaType)
                           .returns(200, "map.png.", nullptr, "image/png")
                           .returns(200, "map.tif.", nullptr, "image/tiff")
                           .errors({404, 409, 503}),

@@ -17,6 +17,7 @@
 #include "maps/georef.hpp"
 #include "server/cli/coverage_options.hpp"
 #include "server/cli/dem_options.hpp"
+#include "server/cli/mcap_output.hpp"
 #include "server/json/plan_json.hpp"
 #include "server/problems/problem_builder.hpp"
 
@@ -80,6 +81,9 @@ int coverageCommand(const std::vector<std::string>& argv, std::ostream& out) {
   addCoverageParamOptions(args);
   addKeepOutOption(args);
   args.option("geojson", "FILE", "", "Also write the rover paths as GeoJSON in the map's CRS.");
+  args.option("mcap", "FILE", "",
+              "Also write the replay as an MCAP file for Foxglove/Lichtblick (one move a second: poses, "
+              "telemetry, terrain, zones, incidents).");
   args.flag("json", "Print one JSON object (metrics, per-rover paths, coverage curve).");
   if (!args.parse(argv)) {
     out << args.help();
@@ -129,6 +133,16 @@ int coverageCommand(const std::vector<std::string>& argv, std::ostream& out) {
     std::ofstream f(path);
     f << text;
     if (!f) throw UsageError(path + ": cannot write");
+  }
+  if (args.has("mcap")) {
+    exports::ReplayInput in;
+    in.result = &result;
+    in.dem = dem ? &dem->dem : nullptr;
+    in.grid = dem ? dem->dem.geometry() : problem.world.geometry();
+    in.geo = dem ? dem->dem.z.geo : GeoReference{};
+    in.zones = exports::zonesOf(problem.keepOut);
+    for (const auto& r : problem.rovers) in.startHeadings.push_back(r.heading);
+    writeMcapOrFail(in, args.str("mcap", ""));
   }
 
   if (args.isSet("json")) {

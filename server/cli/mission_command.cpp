@@ -10,6 +10,7 @@
 #include "server/cli/coverage_options.hpp"
 #include "server/cli/dem_options.hpp"
 #include "server/cli/mission_setup.hpp"
+#include "server/cli/mcap_output.hpp"
 #include "server/json/plan_json.hpp"
 
 namespace rover::cli {
@@ -62,6 +63,9 @@ int missionCommand(const std::vector<std::string>& argv, std::ostream& out) {
                  "coordination; or the hybrid mission (SPEC §4).");
   addMissionOptions(args);
   args.option("geojson", "FILE", "", "Also write the trajectories, route, targets and incidents as GeoJSON in the map's CRS.");
+  args.option("mcap", "FILE", "",
+              "Also write the replay as an MCAP file for Foxglove/Lichtblick (poses, fixes, telemetry, terrain, "
+              "route, zones, incidents on the mission clock).");
   args.flag("json", "Print one JSON object (metrics, per-rover trajectories, curves, incidents).");
   if (!args.parse(argv)) {
     out << args.help();
@@ -79,6 +83,16 @@ int missionCommand(const std::vector<std::string>& argv, std::ostream& out) {
     std::ofstream f(path);
     f << text;
     if (!f) throw UsageError(path + ": cannot write");
+  }
+  if (args.has("mcap")) {
+    exports::ReplayInput in;
+    in.result = &result;
+    in.dem = setup.problem.dem.get();
+    in.grid = setup.problem.dem->geometry();
+    in.geo = setup.problem.dem->z.geo;
+    in.zones = exports::zonesOf(setup.problem.keepOut);
+    for (const auto& r : setup.problem.rovers) in.startHeadings.push_back(r.heading);
+    writeMcapOrFail(in, args.str("mcap", ""));
   }
   if (args.isSet("json")) {
     nlohmann::json j = json::toJson(result);

@@ -12,6 +12,7 @@
 #include "maps/geojson.hpp"
 #include "maps/result_csv.hpp"
 #include "server/errors/domain_error.hpp"
+#include "server/exports/mission_mcap.hpp"
 #include "server/json/plan_json.hpp"
 
 namespace rover::missions {
@@ -364,6 +365,16 @@ void MissionManager::writeResultFiles(const MissionJob& job, const PlanResult& r
   store::DataDir::writeFileAtomic(
       (s / "result.csv").string(),
       maps::resultCsv(result.tracks, job.mapGrid, job.geo, job.problem.dem.get(), headings));
+  // The replay for Foxglove/Lichtblick (issue 28), streamed to the staging folder chunk by chunk
+  // (about 1 MB held) and committed, and charged to the map's disk budget, with the other files.
+  exports::ReplayInput replay;
+  replay.result = &result;
+  replay.dem = job.problem.dem.get();
+  replay.grid = job.mapGrid;
+  replay.geo = job.geo;
+  replay.zones = keepOutZones(job.record.spec);
+  replay.startHeadings = headings;
+  exports::writeReplayMcapFile(replay, (s / "replay.mcap").string());
   bool believed = false;
   for (const auto& t : result.tracks) believed = believed || !t.believed.empty();
   store::DataDir::writeFileAtomic((s / "grid.bin").string(), stream.fullGridFrame());

@@ -5,7 +5,7 @@
 // map (and the mission the dock shows).
 import assert from 'node:assert/strict';
 import { execFileSync } from 'node:child_process';
-import { mkdirSync, mkdtempSync, rmSync } from 'node:fs';
+import { mkdirSync, mkdtempSync, readFileSync, rmSync } from 'node:fs';
 import { tmpdir } from 'node:os';
 import { join } from 'node:path';
 import { test } from 'node:test';
@@ -39,12 +39,16 @@ suiteWithServer('exports and compare', { timeout: 300000 }, (ctx) => {
     await page.waitForSelector('#export-map-tif:not(.disabled)');
     const dir = mkdtempSync(join(tmpdir(), 'roverplan-exports-'));
     const files = {};
-    for (const [button, name] of [['#export-geojson', 'result.geojson'], ['#export-csv', 'result.csv'], ['#export-map-png', 'map.png'], ['#export-map-tif', 'map.tif']]) {
+    for (const [button, name] of [['#export-geojson', 'result.geojson'], ['#export-csv', 'result.csv'], ['#export-map-png', 'map.png'], ['#export-map-tif', 'map.tif'], ['#export-mcap', 'replay.mcap']]) {
       const [download] = await Promise.all([page.waitForEvent('download'), page.click(button)]);
       assert.equal(download.suggestedFilename(), `mission-${team.id}-${name}`);
       files[name] = join(dir, download.suggestedFilename());
       await download.saveAs(files[name]);
     }
+    // The MCAP replay: the file's magic at both ends (tests/mcap reads it back with @mcap/core).
+    const mcap = readFileSync(files['replay.mcap']);
+    const magic = Buffer.from([0x89, 0x4d, 0x43, 0x41, 0x50, 0x30, 0x0d, 0x0a]);
+    assert.ok(mcap.subarray(0, 8).equals(magic) && mcap.subarray(mcap.length - 8).equals(magic));
     // GeoJSON: layer "mission" in the map's CRS; features per kind as result.json counts them.
     const info = run('ogrinfo', ['-ro', '-al', '-so', files['result.geojson']]);
     assert.match(info, /^Layer name: mission$/m);

@@ -398,6 +398,7 @@ TEST_CASE("openapi: every route answers what the document says, errors included"
   c.expectFile(s.get("/api/missions/" + id + "/result.csv"), files, "get", 200, "text/csv");
   c.expectFile(s.get("/api/missions/" + id + "/result.geojson"), files, "get", 200, "application/geo+json");
   c.expectFile(s.get("/api/missions/" + id + "/map.png"), files, "get", 200, "image/png");
+  c.expectFile(s.get("/api/missions/" + id + "/replay.mcap"), files, "get", 200, "application/octet-stream");
   c.expect(s.get("/api/missions/" + id + "/nope.txt"), files, "get", 404);
   c.expectRefusedUpgrade("/api/missions/nope/stream", "/api/missions/{id}/stream", 404);
   c.expect(request(s.port(), "DELETE", "/api/missions/" + id), "/api/missions/{id}", "delete", 200);

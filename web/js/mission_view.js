@@ -122,7 +122,7 @@ export class MissionView {
       });
     }
     $('live-cancel').addEventListener('click', () => this.cancel());
-    for (const id of ['export-geojson', 'export-csv', 'export-map-png', 'export-map-tif']) {
+    for (const id of ['export-geojson', 'export-csv', 'export-map-png', 'export-map-tif', 'export-mcap']) {
       $(id).addEventListener('click', (e) => {
         const a = e.currentTarget;
         if (a.classList.contains('disabled')) return e.preventDefault();
@@ -472,7 +472,7 @@ export class MissionView {
   }
 
   setExports(id) {
-    for (const [node, file] of [[$('export-geojson'), 'result.geojson'], [$('export-csv'), 'result.csv'], [$('export-map-png'), 'map.png'], [$('export-map-tif'), 'map.tif']]) {
+    for (const [node, file] of [[$('export-geojson'), 'result.geojson'], [$('export-csv'), 'result.csv'], [$('export-map-png'), 'map.png'], [$('export-map-tif'), 'map.tif'], [$('export-mcap'), 'replay.mcap']]) {
       if (id) {
         node.href = `/api/missions/${id}/${file}`;
         node.setAttribute('download', `mission-${id}-${file}`);
