@@ -87,7 +87,49 @@ const Raster<T>& required(RenderLayer layer, const Raster<T>* r, const char* wha
 
 std::uint8_t toByte(double v) { return static_cast<std::uint8_t>(std::clamp(std::lround(v), 0L, 255L)); }
 
+// Percentiles from at most ~1M cells: a fixed stride through the grid, so deterministic; a colour
+// scale needs no more precision, and a full-size 4096² DEM stays fast.
+ColourRange elevationRange(const float* v, std::size_t n) {
+  const std::size_t stride = std::max<std::size_t>(1, n >> 20);
+  std::vector<float> h;
+  h.reserve(n / stride + 1);
+  for (std::size_t i = 0; i < n; i += stride)
+    if (std::isfinite(v[i])) h.push_back(v[i]);
+  if (h.empty() && stride > 1)  // a sparse DEM the stride missed: take every cell
+    for (std::size_t i = 0; i < n; ++i)
+      if (std::isfinite(v[i])) h.push_back(v[i]);
+  double lo = 0, hi = 0;
+  if (!h.empty()) {  // 2nd and 98th percentiles (nearest rank) clip outliers and spikes
+    auto pct = [&](double q) {
+      auto it = h.begin() + static_cast<std::ptrdiff_t>(std::lround(q * (h.size() - 1)));
+      std::nth_element(h.begin(), it, h.end());
+      return double(*it);
+    };
+    lo = pct(0.02);
+    hi = pct(0.98);
+  }
+  if (!(hi > lo)) {  // flat: centre the single height in the ramp
+    lo -= 0.5;
+    hi += 0.5;
+  }
+  return {lo, hi};
+}
+
+ColourRange pdmRange(const float* v, std::size_t n) {
+  double mx = 0;
+  for (std::size_t i = 0; i < n; ++i)
+    if (std::isfinite(v[i])) mx = std::max(mx, double(v[i]));
+  return {0, mx > 0 ? mx : 1};
+}
+
 }  // namespace
+
+ColourRange colourRange(RenderLayer layer, const Raster<float>& values) {
+  const std::size_t n = std::size_t(values.geometry.rows) * values.geometry.cols;
+  if (layer == RenderLayer::Elevation) return elevationRange(values.values.data(), n);
+  if (layer == RenderLayer::Pdm) return pdmRange(values.values.data(), n);
+  return {};
+}
 
 RenderLayer renderLayerFromName(const std::string& name) {
   for (auto l : {RenderLayer::Elevation, RenderLayer::Hillshade, RenderLayer::Slope,
@@ -159,30 +201,8 @@ Image renderLayer(RenderLayer layer, const RenderInput& input, const RenderOptio
   std::vector<ClassItem> classes;
   switch (layer) {
     case RenderLayer::Elevation: {
-      // Percentiles from at most ~1M cells: a fixed stride through the grid, so deterministic;
-      // a colour scale needs no more precision, and a full-size 4096² DEM stays fast.
-      const std::size_t n = grid.size(), stride = std::max<std::size_t>(1, n >> 20);
-      std::vector<float> h;
-      h.reserve(n / stride + 1);
-      for (std::size_t i = 0; i < n; i += stride)
-        if (std::isfinite(grid.at(i))) h.push_back(grid.at(i));
-      if (h.empty() && stride > 1)  // a sparse DEM the stride missed: take every cell
-        for (std::size_t i = 0; i < n; ++i)
-          if (std::isfinite(grid.at(i))) h.push_back(grid.at(i));
-      double lo = 0, hi = 0;
-      if (!h.empty()) {  // 2nd and 98th percentiles (nearest rank) clip outliers and spikes
-        auto pct = [&](double q) {
-          auto it = h.begin() + static_cast<std::ptrdiff_t>(std::lround(q * (h.size() - 1)));
-          std::nth_element(h.begin(), it, h.end());
-          return double(*it);
-        };
-        lo = pct(0.02);
-        hi = pct(0.98);
-      }
-      if (!(hi > lo)) {  // flat: centre the single height in the ramp
-        lo -= 0.5;
-        hi += 0.5;
-      }
+      const ColourRange cr = options.range ? *options.range : elevationRange(grid.data(), grid.size());
+      const double lo = cr.lo, hi = cr.hi;
       // The ramp spans the 2nd to 98th percentile: the title says so, since the map's own
       // range (its info) is wider.
       scale = {"elevation (m), 2-98 %", lo, hi, {(lo + hi) / 2}, [](double v, const RampLegend& l) {
@@ -201,10 +221,8 @@ Image renderLayer(RenderLayer layer, const RenderInput& input, const RenderOptio
               [](double v, const RampLegend&) { return rampColour(kSlope, v); }};
       break;
     case RenderLayer::Pdm: {
-      double mx = 0;
-      for (std::size_t i = 0; i < grid.size(); ++i)
-        if (std::isfinite(grid.at(i))) mx = std::max(mx, double(grid.at(i)));
-      scale = {"probability mass", 0, mx > 0 ? mx : 1, {}, [](double v, const RampLegend& l) {
+      const ColourRange cr = options.range ? *options.range : pdmRange(grid.data(), grid.size());
+      scale = {"probability mass", 0, cr.hi, {}, [](double v, const RampLegend& l) {
                 return rampColour(kPerceptual, v / l.hi);
               }};
       break;

@@ -26,10 +26,20 @@ struct RenderInput {
   const Raster<float>* pdm = nullptr;               // Pdm (probability mass per cell)
 };
 
+// The values a colour ramp spans (elevation: 2nd–98th percentile; PDM: 0 to the largest mass).
+struct ColourRange {
+  double lo = 0, hi = 1;
+};
+// The range renderLayer gives `layer` when it draws all of `values` at full size: tiles take it
+// from the whole map (map_tiles.hpp), so every tile of a map uses one ramp and adjacent tiles
+// match. Hillshade, slope and classes have fixed scales and ignore it.
+ColourRange colourRange(RenderLayer layer, const Raster<float>& values);
+
 struct RenderOptions {
   int maxSize = 0;      // > 0: downsample (box average) so neither side exceeds it — an overview
   bool legend = true;   // a legend strip with title, colour bar / class swatches and values
   int legendScale = 1;  // > 1: the legend drawn that many times larger (a big picture's labels)
+  const ColourRange* range = nullptr;  // set: this ramp range instead of the drawn grid's own
 };
 
 // RGBA image, row-major, 4 bytes a pixel; nodata cells are transparent. With a legend, the map

@@ -1,4 +1,8 @@
 // GET /api/maps/{id}/layers/{file}: a map's layers as PNG overviews, GeoTIFFs or raw float32.
+#include <algorithm>
+#include <cctype>
+
+#include "maps/tile_grid.hpp"
 #include "server/api/route_kit.hpp"
 
 namespace rover::api {
@@ -26,6 +30,59 @@ Response getLayer(ApiContext& ctx, const Request& req) {
   return r;
 }
 
+// A tile address number: 1 to 9 decimal digits (anything else names no tile: 404, never a 500 or
+// an overflow).
+long long tileNumber(const std::string& s, const char* field) {
+  if (s.empty() || s.size() > 9 || !std::all_of(s.begin(), s.end(), [](unsigned char c) { return std::isdigit(c); }))
+    throw ApiError(404, "not_found", std::string("a tile's ") + field + " is a number of decimal digits", "tile");
+  return std::stoll(s);
+}
+
+// Tiles of a map never change (a map is immutable; a PDM tile names its PDM), so the ETag is the
+// address itself with the renderer's version: a new renderer gives new ETags and new file names.
+constexpr const char* kTileVersion = "t1";
+
+bool etagMatches(const std::string& ifNoneMatch, const std::string& etag) {
+  if (ifNoneMatch.empty()) return false;
+  if (ifNoneMatch.find('*') != std::string::npos) return true;
+  return ifNoneMatch.find(etag) != std::string::npos;  // one tag or a list, weak or strong
+}
+
+Response getTile(ApiContext& ctx, const Request& req) {
+  const std::string& id = req.params.at("id");
+  const std::string& layer = req.params.at("layer");
+  const std::string& last = req.params.at("y");
+  const auto dot = last.find('.');
+  if (dot == std::string::npos) throw ApiError(404, "not_found", "a tile is Y.png or Y.f32", "tile");
+  const std::string format = last.substr(dot + 1);
+  const long long z = tileNumber(req.params.at("z"), "zoom"), x = tileNumber(req.params.at("x"), "column"),
+                  y = tileNumber(last.substr(0, dot), "row");
+  const std::string pdm = queryString(req, "pdm");
+  const std::string path = ctx.maps.tileFile(id, layer, format, z, x, y, pdm);  // 404s checked first
+  // Appended piece by piece: GCC 12's -Wrestrict misreads a chain of operator+ here.
+  std::string etag = "\"";
+  for (const std::string& part : {std::string(kTileVersion), id, layer, layer == "pdm" ? pdm : std::string(),
+                                  std::to_string(z), std::to_string(x)}) {
+    if (part.empty()) continue;
+    etag += part;
+    etag += '-';
+  }
+  etag += std::to_string(y);
+  etag += '.';
+  etag += format;
+  etag += '"';
+  Response r;
+  if (etagMatches(req.header("if-none-match"), etag)) r.status = 304;
+  else r = fileResponse(path, format == "png" ? "image/png" : "application/octet-stream");
+  r.headers.emplace_back("ETag", etag);
+  r.headers.emplace_back("Cache-Control", "public, max-age=31536000, immutable");
+  if (format == "f32")
+    r.headers.insert(r.headers.end(), {{"X-Rows", std::to_string(maps::kTileSize)},
+                                       {"X-Cols", std::to_string(maps::kTileSize)},
+                                       {"X-Nodata", "NaN"}, {"X-Byte-Order", "little-endian"}});
+  return r;
+}
+
 }  // namespace
 
 void addLayerRoutes(http::Router& router, ApiContext& ctx) {
@@ -39,6 +96,20 @@ void addLayerRoutes(http::Router& router, ApiContext& ctx) {
                           .returns(200, "The layer file.", nullptr, "image/png")
                           .returns(200, "The layer file.", nullptr, "image/tiff")
                           .returns(200, "The layer file.", nullptr, "application/octet-stream")
+                          .errors({400, 404, 503, 507}),
+                      onPool));
+  router.add("GET", "/api/maps/{id}/tiles/{layer}/{z}/{x}/{y}", handler(ctx, getTile),
+             routeDoc("A 256-px tile of a layer on the map's tile grid (the map's tiles: size, zmax, "
+                      "resolutions, extent): .png for every layer, .f32 (256×256 little-endian float32, NaN "
+                      "for no data and beyond the map) for elevation and slope; ?pdm=ID for pdm. Tiles never "
+                      "change: ETag, Cache-Control immutable, If-None-Match → 304. An address outside the grid → 404.",
+                      openapi::Operation()
+                          .query("pdm", kIdSchema, "The PDM of a pdm tile (required for pdm).")
+                          .returns(200, "The tile.", nullptr, "image/png")
+                          .header("ETag", "string", "The tile's version (constant for the tile).")
+                          .header("Cache-Control", "string", "public, max-age=31536000, immutable")
+                          .returns(200, "The tile.", nullptr, "application/octet-stream")
+                          .returns(304, "Not modified: If-None-Match named the tile's ETag.")
                           .errors({400, 404, 503, 507}),
                       onPool));
 }

@@ -52,6 +52,7 @@ std::shared_ptr<const MapData> MapCatalog::loadFromDisk(const store::MapRecord& 
   data->record = r;
   data->dem = maps::loadDem((fs::path(dir_.mapDir(r.id)) / "dem.tif").string()).dem;
   data->traversability = terrain::traversability(data->dem);
+  data->elevationRange = maps::colourRange(maps::RenderLayer::Elevation, data->dem.z);
   // Maps imported before bodies were stored read theirs from the CRS, as they did then.
   const auto declared = r.meta.contains("body") && r.meta["body"].is_string()
                             ? maps::bodyFromName(r.meta["body"].get<std::string>() == "unknown" ? "auto" : r.meta["body"].get<std::string>())

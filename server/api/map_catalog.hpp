@@ -15,6 +15,7 @@
 #include "core/pdm/pdm.hpp"
 #include "core/terrain/layers.hpp"
 #include "maps/dem_import_options.hpp"
+#include "maps/render.hpp"
 #include "server/api/layer_cache.hpp"
 #include "server/jail/import_jail.hpp"
 #include "server/jail/worker_output.hpp"
@@ -29,6 +30,7 @@ struct MapData {
   terrain::Traversability traversability;
   std::vector<std::uint8_t> valid;  // cells with data
   terrain::Body body = terrain::Body::Unknown;  // declared at upload, else from the CRS
+  maps::ColourRange elevationRange;  // the elevation ramp of every tile (the full-size picture's)
 };
 
 struct UploadedFile {
@@ -64,6 +66,14 @@ class MapCatalog {
   // 1024, 2048, 4096 (or the full size when that is smaller). Returns the file path.
   std::string layerFile(const std::string& id, const std::string& layer, const std::string& format,
                         int max, const std::string& pdmId);
+
+  // A tile of a layer (maps/tile_grid.hpp, maps/map_tiles.hpp) as png (any layer) or f32
+  // (elevation, slope: kTileSize² little-endian float32), created on first use in the layer cache
+  // (file layers/t1-LAYER[-PDM]-Z-X-Y.FORMAT). The address is checked against the map's stored
+  // size before anything is loaded: z/x/y outside the grid, an unknown layer or format → ApiError
+  // 404; a pdm tile names its PDM (`pdmId` required: a tile never changes, "the newest" would).
+  std::string tileFile(const std::string& id, const std::string& layer, const std::string& format,
+                       long long z, long long x, long long y, const std::string& pdmId);
 
   // PDMs: from JSON ({"components":[...]} or {"random": G, "seed": S}) or a raster upload.
   // Stored compactly (issue 22: a random 3-component PDM on a 49 M-cell map was a 164 MB GeoTIFF):

@@ -73,6 +73,10 @@ std::string pathParamText(const std::string& name) {
   if (name == "pdm") return "The PDM's id.";
   if (name == "run") return "The run's index in the study, in plain decimal digits.";
   if (name == "file") return "The file's name (the route's description lists them).";
+  if (name == "layer") return "The layer: elevation, hillshade, slope, traversability or pdm.";
+  if (name == "z") return "The tile's zoom, 0 (the whole map in one tile) to the map's tiles.zmax, in decimal digits.";
+  if (name == "x") return "The tile's column from the left, from 0, in decimal digits.";
+  if (name == "y") return "The tile's row from the top, from 0, and its format: Y.png, or Y.f32 (elevation, slope).";
   return "A path segment.";
 }
 

@@ -6,6 +6,7 @@
 #include <cstdlib>
 
 #include "maps/dem_digest.hpp"
+#include "maps/tile_grid.hpp"
 #include "server/json/json_edge.hpp"
 
 namespace rover::api {
@@ -114,6 +115,34 @@ std::string mapDigest(ApiContext& ctx, const std::string& mapId) {
   return maps::demSha256(ctx.maps.get(mapId)->dem);
 }
 
+json tileGridJson(const store::MapRecord& m) {
+  const json& meta = m.meta;
+  if (!meta.contains("rows") || !meta["rows"].is_number_integer() || !meta.contains("cols") ||
+      !meta["cols"].is_number_integer() || !meta.contains("cell_size_m") || !meta["cell_size_m"].is_number())
+    return nullptr;  // a record without its size (none is written so); the tiles still answer
+  const int rows = meta["rows"].get<int>(), cols = meta["cols"].get<int>();
+  const double cw = meta["cell_size_m"].get<double>();
+  const double ch = meta.contains("cell_height_m") && meta["cell_height_m"].is_number() ? meta["cell_height_m"].get<double>() : cw;
+  const maps::TileGrid g = maps::tileGridOf(rows, cols);
+  json res = json::array(), resY = json::array(), counts = json::array();
+  for (int z = 0; z <= g.maxZoom(); ++z) {
+    const double f = std::ldexp(1.0, g.nativeZoom - z);  // cells per tile pixel
+    res.push_back(cw * f);
+    resY.push_back(ch * f);
+    counts.push_back({maps::tilesAcross(g, z), maps::tilesDown(g, z)});
+  }
+  return {{"tile_size", maps::kTileSize},
+          {"zmin", 0},
+          {"zmax", g.maxZoom()},
+          {"native_zoom", g.nativeZoom},
+          {"resolutions", res},
+          {"resolutions_y", resY},
+          {"tile_counts", counts},
+          {"extent", {0.0, 0.0, cols * cw, rows * ch}},
+          {"origin", {0.0, rows * ch}},
+          {"url", "/api/maps/" + m.id + "/tiles/{layer}/{z}/{x}/{y}.png"}};
+}
+
 json mapJson(const store::MapRecord& m) {
   json j = m.meta;
   j["id"] = m.id;
@@ -122,6 +151,7 @@ json mapJson(const store::MapRecord& m) {
   j["layers"] = json::object();
   for (const char* l : {"elevation", "hillshade", "slope", "traversability", "pdm"})
     j["layers"][l] = "/api/maps/" + m.id + "/layers/" + l + ".png";
+  j["tiles"] = tileGridJson(m);
   return j;
 }
 

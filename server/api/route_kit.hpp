@@ -85,6 +85,11 @@ std::string mapDigest(ApiContext& ctx, const std::string& mapId);
 
 // The JSON views of the stored resources, with their links.
 nlohmann::json mapJson(const store::MapRecord& m);
+// A map's tile grid (maps/tile_grid.hpp) for a tiled viewer: tile_size, zmin/zmax, native_zoom,
+// resolutions (metres per tile pixel along x, one per zoom; resolutions_y along y), tile_counts
+// ([across, down] per zoom), extent [0, 0, width_m, height_m] and origin (top-left) in the local
+// frame, url (a template with {layer}, {z}, {x}, {y}).
+nlohmann::json tileGridJson(const store::MapRecord& m);
 nlohmann::json pdmJson(const store::PdmRecord& p);
 nlohmann::json missionJson(const store::MissionRecord& m);
 

@@ -351,6 +351,11 @@ TEST_CASE("openapi: every route answers what the document says, errors included"
   c.expectFile(s.get("/api/maps/" + map + "/layers/elevation.tif"), "/api/maps/{id}/layers/{file}", "get", 200, "image/tiff");
   c.expect(s.get("/api/maps/" + map + "/layers/nope.png"), "/api/maps/{id}/layers/{file}", "get", 404);
   c.expect(s.get("/api/maps/" + map + "/layers/slope.png?max=x"), "/api/maps/{id}/layers/{file}", "get", 400);
+  const std::string tiles = "/api/maps/{id}/tiles/{layer}/{z}/{x}/{y}";
+  c.expectFile(s.get("/api/maps/" + map + "/tiles/hillshade/0/0/0.png"), tiles, "get", 200, "image/png");
+  c.expectFile(s.get("/api/maps/" + map + "/tiles/elevation/2/1/0.f32"), tiles, "get", 200, "application/octet-stream");
+  c.expect(s.get("/api/maps/" + map + "/tiles/slope/9/0/0.png"), tiles, "get", 404);
+  c.expect(s.get("/api/maps/" + map + "/tiles/pdm/0/0/0.png"), tiles, "get", 400);
   const std::string upId = up["id"];
   c.expect(request(s.port(), "DELETE", "/api/maps/" + upId), "/api/maps/{id}", "delete", 200);
   c.expect(request(s.port(), "DELETE", "/api/maps/" + upId), "/api/maps/{id}", "delete", 404);

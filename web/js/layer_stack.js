@@ -1,15 +1,19 @@
-// The map's layers: server PNG rasters (elevation, hillshade, slope, traversability, PDM) drawn
-// into the map view's base, plus overlay layers other modules register (coverage, trails). Each
-// layer has a visibility checkbox and an opacity slider; the legend panel shows the legend of each
-// visible layer (the server PNGs carry theirs as a strip under the map: it is cropped off the
-// drawing and shown here). Also loads the float32 rasters behind the cursor readout.
+// The map's layers: the server's raster layers (elevation, hillshade, slope, traversability, PDM)
+// as OpenLayers tile layers under the map view (tiles of GET /api/maps/{id}/tiles/..., at the
+// resolution the view shows: one DEM cell a tile pixel when zoomed in), plus overlay layers other
+// modules register (coverage, trails). Each layer has a visibility checkbox and an opacity slider;
+// the legend panel shows the legend of each visible layer (cut from the strip under the server's
+// small PNG overview of the layer). Also loads the float32 rasters behind the cursor readout.
 
-import { fetchF32, fetchImage, layerUrl } from './api.js';
+import TileLayer from 'ol/layer/Tile.js';
+import XYZ from 'ol/source/XYZ.js';
+import TileGrid from 'ol/tilegrid/TileGrid.js';
+import TileState from 'ol/TileState.js';
+import { fetchF32, fetchImage, layerUrl, request } from './api.js';
 import { counters, state } from './state.js';
 import { $, el, fmt } from './util.js';
 
-const OVERVIEW = 1024;               // PNG overview size for big maps
-const LEGEND_SIZE = 200;             // legends come from a PNG this wide, shown 1:1 (readable)
+const LEGEND_SIZE = 256;             // legends come from the 256-px overview, shown 1:1 (readable)
 const MAX_F32_CELLS = 25_000_000;    // larger maps: no per-cell readout (100 MB a layer)
 const CLASS_NAMES = ['traversable', 'high risk', 'impassable', 'nodata'];
 
@@ -28,7 +32,8 @@ export class LayerStack {
     this.generation = 0;   // bumps per map so late loads of an old map are dropped
     this.aborter = new AbortController();  // cancels the old map's loads in flight
     const png = (id, label, visible, opacity, order) => ({
-      id, label, kind: 'png', visible, opacity, order, image: null, loading: false, error: '', crop: null, legendCanvas: null,
+      id, label, kind: 'png', visible, opacity, order, source: null, loading: false, error: '', legendCanvas: null,
+      ol: new TileLayer({ visible: false, opacity, zIndex: order }),
     });
     for (const l of [
       png('elevation', 'elevation', true, 1, 10),
@@ -43,9 +48,7 @@ export class LayerStack {
 
   add(layer) {
     this.layers.push(layer);
-    if (layer.kind === 'png') {
-      this.view.addLayer({ id: layer.id, order: layer.order, base: true, draw: (ctx, v) => this.drawPng(ctx, v, layer) });
-    }
+    if (layer.kind === 'png') this.view.olMap.addLayer(layer.ol);
     this.renderControls();
   }
 
@@ -68,7 +71,10 @@ export class LayerStack {
     const l = this.get(id);
     if (!l || l.visible === visible) return;
     l.visible = visible;
-    if (visible && l.kind === 'png') this.loadPng(l);
+    if (l.kind === 'png') {
+      l.ol.setVisible(visible && Boolean(l.source));
+      if (visible) this.loadPng(l);
+    }
     this.renderControls();
     this.view.invalidate(true);
   }
@@ -78,17 +84,11 @@ export class LayerStack {
     this.generation++;
     this.aborter.abort();
     this.aborter = new AbortController();
-    for (const l of this.layers) {
-      if (l.kind !== 'png') continue;
-      if (l.image && l.image.close) l.image.close();
-      l.image = null;
-      l.error = '';
-      l.loading = false;
-      l.legendCanvas = null;
-    }
+    for (const l of this.layers) if (l.kind === 'png') this.dropSource(l);
     this.rasters = {};
     this.renderControls();
     if (!map) return;
+    this.view.setProjection(map.width_m, map.height_m, map.cell_size_m / (map.cell_height_m || map.cell_size_m));
     const loads = this.layers.filter((l) => l.kind === 'png' && l.visible).map((l) => this.loadPng(l));
     this.loadRasters(map);
     await Promise.all(loads);
@@ -96,10 +96,7 @@ export class LayerStack {
 
   setPdm(pdmId) {
     const l = this.get('pdm');
-    if (l.image && l.image.close) l.image.close();
-    l.image = null;
-    l.error = '';
-    l.legendCanvas = null;
+    this.dropSource(l);
     delete this.rasters.pdm;
     if (pdmId && state.map) {
       l.visible = true;
@@ -110,56 +107,79 @@ export class LayerStack {
     this.view.invalidate(true);
   }
 
-  async loadPng(layer) {
+  dropSource(layer) {
+    layer.ol.setVisible(false);
+    layer.ol.setSource(null);
+    layer.source = null;
+    layer.tileShown = false;
+    layer.error = '';
+    layer.loading = false;
+    layer.legendCanvas = null;
+  }
+
+  // The layer's tiles on the map's tile grid (the map's `tiles`), fetched with the token (so they
+  // load behind --token too); the first tile that arrives counts the layer as loaded.
+  loadPng(layer) {
     const map = state.map;
-    if (!map || layer.image || layer.loading) return;
+    if (!map || layer.source || layer.loading) return;
     if (layer.id === 'pdm' && !state.pdmId) {
       layer.error = 'no PDM selected';
       this.renderControls();
       return;
     }
-    const gen = this.generation;
-    const max = Math.max(map.rows, map.cols) > OVERVIEW ? OVERVIEW : 0;
-    const pdm = layer.id === 'pdm' ? state.pdmId : '';
+    if (!map.tiles) {
+      layer.error = 'the server gives no tiles for this map';
+      this.renderControls();
+      return;
+    }
+    const gen = this.generation, pdm = layer.id === 'pdm' ? state.pdmId : '';
+    const t = map.tiles, k = this.view.yStretch, top = t.extent[3] * k;
+    const signal = this.aborter.signal;
+    const q = pdm ? `?pdm=${encodeURIComponent(pdm)}` : '';
+    const source = new XYZ({
+      projection: this.view.projection,
+      tileGrid: new TileGrid({ extent: [0, 0, t.extent[2], top], origin: [0, top], resolutions: t.resolutions, tileSize: t.tile_size }),
+      tileUrlFunction: ([z, x, y]) => `/api/maps/${map.id}/tiles/${layer.id}/${z}/${x}/${y}.png${q}`,
+      tileLoadFunction: (tile, src) => loadTile(tile, src, signal),
+      interpolate: false,  // magnified cells stay crisp squares
+      transition: 0,
+      wrapX: false,
+    });
+    layer.source = source;
     layer.loading = true;
+    const settled = (error) => {
+      if (layer.source !== source || !layer.loading) return;
+      layer.loading = false;
+      layer.error = error;
+      if (!error) {
+        layer.tileShown = true;
+        counters.layersLoaded.push(layer.id);
+      }
+      this.renderControls();
+      this.view.invalidate();
+    };
+    source.on('tileloadend', () => settled(''));
+    source.on('tileloaderror', () => settled(`${layer.label}: tiles unavailable`));
+    layer.ol.setSource(source);
+    layer.ol.setOpacity(layer.opacity);
+    layer.ol.setVisible(layer.visible);
     this.renderControls();
+    this.loadLegend(layer, map, pdm, gen);
+  }
+
+  // The legend strip the server draws under the map in its small PNG overview.
+  async loadLegend(layer, map, pdm, gen) {
+    const source = layer.source;
     try {
+      const max = Math.max(map.rows, map.cols) > LEGEND_SIZE ? LEGEND_SIZE : 0;
       const image = await fetchImage(layerUrl(map.id, layer.id, 'png', { max, pdm }), this.aborter.signal);
-      if (gen !== this.generation || (layer.id === 'pdm' && pdm !== state.pdmId)) {
+      if (gen !== this.generation || layer.source !== source) {
         image.close();
         return;
       }
-      const [outRows, outCols] = displaySize(map.rows, map.cols, max);
-      layer.image = image;
-      layer.crop = { rows: Math.min(outRows, image.height), cols: Math.min(outCols, image.width) };
-      layer.error = '';
-      counters.layersLoaded.push(layer.id);
-      this.loadLegend(layer, map, pdm, image, gen);
-    } catch (err) {
-      if (gen === this.generation && err.code !== 'aborted') layer.error = err.message || String(err);
-    } finally {
-      layer.loading = false;
-      if (gen === this.generation) {
-        this.renderControls();
-        this.view.invalidate(true);
-      }
-    }
-  }
-
-  // The legend strip the server draws under the map in its PNG. A strip as wide as a big map
-  // would be unreadable once shrunk into the legend panel, so for wide images it is taken from
-  // the server's small overview of the same layer, whose legend is laid out for ~200 px.
-  async loadLegend(layer, map, pdm, image, gen) {
-    try {
-      let source = image, max = Math.max(map.rows, map.cols) > OVERVIEW ? OVERVIEW : 0;
-      if (image.width > LEGEND_SIZE * 1.3) {
-        max = LEGEND_SIZE;
-        source = await fetchImage(layerUrl(map.id, layer.id, 'png', { max, pdm }), this.aborter.signal);
-      }
-      if (gen !== this.generation || layer.image !== image) return;
       const [mapRows] = displaySize(map.rows, map.cols, max);
-      layer.legendCanvas = this.legendFromStrip(source, mapRows);
-      if (source !== image) source.close();
+      layer.legendCanvas = this.legendFromStrip(image, mapRows);
+      image.close();
       this.renderLegends();
     } catch (err) {
       if (err.code !== 'aborted') console.warn(`legend of ${layer.id}: ${err.message}`);
@@ -175,16 +195,6 @@ export class LayerStack {
     c.getContext('2d').drawImage(image, 0, mapRows, image.width, h, 0, 0, image.width, h);
     c.style.width = `${Math.min(image.width, 220)}px`;
     return c;
-  }
-
-  drawPng(ctx, view, layer) {
-    if (!layer.visible || !layer.image || !state.map) return;
-    const map = state.map;
-    const [sx, sy, sw, sh] = view.rectToScreen(0, 0, map.width_m, map.height_m);
-    ctx.globalAlpha = layer.opacity;
-    // Crisp cells when zoomed far in, smooth otherwise.
-    ctx.imageSmoothingEnabled = sw / layer.crop.cols < 2;
-    ctx.drawImage(layer.image, 0, 0, layer.crop.cols, layer.crop.rows, sx, sy, sw, sh);
   }
 
   // --- float32 rasters for the cursor readout ---
@@ -250,7 +260,8 @@ export class LayerStack {
           'aria-label': `${l.label} opacity`, id: `${id}-opacity`,
           oninput: (e) => {
             l.opacity = Number(e.target.value);
-            this.view.invalidate(l.kind === 'png');
+            if (l.kind === 'png') l.ol.setOpacity(l.opacity);
+            else this.view.invalidate();
           },
         }));
       return row;
@@ -271,5 +282,21 @@ export class LayerStack {
     }
     this.legendNode.replaceChildren(...items);
     this.legendNode.parentElement.hidden = items.length === 0;
+  }
+}
+
+// Loads a tile's PNG with the token into the tile's image (as a blob URL, released once decoded);
+// a refused or failed fetch marks the tile failed, so OL neither waits on it nor asks again.
+async function loadTile(tile, src, signal) {
+  const image = tile.getImage();
+  try {
+    const blob = await (await request(src, { signal })).blob();
+    const url = URL.createObjectURL(blob);
+    const release = () => URL.revokeObjectURL(url);
+    image.addEventListener('load', release, { once: true });
+    image.addEventListener('error', release, { once: true });
+    image.src = url;
+  } catch {
+    tile.setState(TileState.ERROR);
   }
 }

@@ -140,10 +140,10 @@ async function launched(mission) {
 }
 
 let addressNotice = '';  // why the address could not be opened, once the first map is drawn
-// First map drawn (the tests print it): the first frame with the elevation layer in it.
+// First map drawn (the tests print it): the first frame after the elevation's first tile arrived.
 view.onRender(() => {
   counters.mapDraws++;
-  if (!counters.mapDrawn && layers.get('elevation').image) {
+  if (!counters.mapDrawn && layers.get('elevation').tileShown) {
     counters.mapDrawn = true;
     counters.firstMapDrawMs = Math.round(performance.now());
     statusLine(`map drawn ${counters.firstMapDrawMs} ms after page start`);
@@ -228,7 +228,7 @@ $('zoom-in').addEventListener('click', () => view.zoomAt(1.25));
 $('zoom-out').addEventListener('click', () => view.zoomAt(0.8));
 $('zoom-fit').addEventListener('click', () => view.fit());
 $('export-png').addEventListener('click', () => {
-  const url = $('view3d').hidden ? (view.render(), view.canvas.toDataURL('image/png')) : view3d.toDataURL();
+  const url = $('view3d').hidden ? view.snapshot().toDataURL('image/png') : view3d.toDataURL();
   if (!url) return;
   const a = document.createElement('a');
   a.href = url;

@@ -1,10 +1,21 @@
-// The 2D map view: a <canvas> in the local frame (x east, y north, metres from the map's
-// lower-left corner), pan by dragging, zoom with the wheel or +/- keys. Drawing is split in two:
-// "base" layers (the PNG rasters) are composed into a cached canvas only when the view or a layer
-// changes; "overlay" layers (coverage grid, trails, rovers, PDM editing) are drawn every frame on
-// top. Frames are drawn on requestAnimationFrame only when something asked for it.
+// The 2D map view in the local frame (x east, y north, metres from the map's lower-left corner),
+// pan by dragging, zoom with the wheel or +/- keys. Two stacked surfaces:
+// - an OpenLayers map underneath (issue 24): the raster layers as tiles of the server's tile API
+//   (layer_stack.js adds them) in a custom projection of the map's local metres, and a ScaleLine.
+//   It takes no input: this view owns pan and zoom and sets the OL view's centre and resolution.
+// - a <canvas> on top for the overlay layers (coverage grid, trails, rovers, PDM editing, zones),
+//   drawn every frame; "base" overlay layers are composed into a cached canvas only when the view
+//   changes. Frames are drawn on requestAnimationFrame only when something asked for it.
+// Maps whose cells are not square (geographic grids: metres along y differ from x) get a tile
+// projection whose y is stretched to x-metres, and the OL surface is scaled back by CSS.
 
+import OlMap from 'ol/Map.js';
+import View from 'ol/View.js';
+import ScaleLine from 'ol/control/ScaleLine.js';
+import Projection from 'ol/proj/Projection.js';
 import { clamp } from './util.js';
+
+let projections = 0;  // OL keeps projections by code: one code per map shown
 
 export class MapView {
   constructor(canvas) {
@@ -31,6 +42,16 @@ export class MapView {
     this.drag = null;
     this.hoverListeners = [];
 
+    this.olBox = document.createElement('div');
+    this.olBox.className = 'map-ol';
+    canvas.before(this.olBox);
+    this.scaleBox = document.createElement('div');
+    this.scaleBox.className = 'map-scale';
+    canvas.after(this.scaleBox);
+    this.yStretch = 1;  // tile-projection units per metre along y (1: square cells)
+    this.olMap = new OlMap({ target: this.olBox, controls: [new ScaleLine({ target: this.scaleBox })], interactions: [], layers: [] });
+    this.setProjection(100, 100, 1);
+
     new ResizeObserver(() => this.resize()).observe(canvas);
     this.resize();
     this.bindPointer();
@@ -43,6 +64,36 @@ export class MapView {
     this.heightM = heightM;
     if (fit) this.fit();
     else this.invalidate(true);
+  }
+
+  // A new map: a projection in its local metres (`yStretch` = cell width / cell height, 1 for
+  // square cells), returned for the tile sources of that map.
+  setProjection(widthM, heightM, yStretch = 1) {
+    this.yStretch = yStretch > 0 && Number.isFinite(yStretch) ? yStretch : 1;
+    this.projection = new Projection({
+      code: `roverplan-local-${++projections}`, units: 'm', extent: [0, 0, widthM, heightM * this.yStretch],
+    });
+    this.olView = new View({
+      projection: this.projection, center: [this.cx, this.cy * this.yStretch], resolution: 1 / this.scale,
+      minResolution: 1e-6, maxResolution: 1e7, constrainResolution: false, smoothResolutionConstraint: false,
+      enableRotation: false,
+    });
+    this.olMap.setView(this.olView);
+    this.syncOl();
+    return this.projection;
+  }
+
+  // The OL view follows this one: same centre, metres per CSS pixel along x.
+  syncOl() {
+    if (!this.olView) return;
+    const k = this.yStretch;
+    // The OL surface is k times as tall and squeezed back by CSS, so its y units land on metres.
+    this.olBox.style.height = `${this.cssH * k}px`;
+    this.olBox.style.top = `${(this.cssH - this.cssH * k) / 2}px`;
+    this.olBox.style.transform = k === 1 ? '' : `scaleY(${1 / k})`;
+    this.olMap.updateSize();
+    this.olView.setCenter([this.cx, this.cy * k]);
+    this.olView.setResolution(1 / this.scale);
   }
 
   fit() {
@@ -87,6 +138,7 @@ export class MapView {
 
   viewChanged() {
     this.viewVersion++;
+    this.syncOl();
     this.invalidate(true);
   }
 
@@ -103,6 +155,7 @@ export class MapView {
       c.width = Math.round(w * dpr);
       c.height = Math.round(h * dpr);
     }
+    this.olBox.style.width = `${w}px`;
     if (first) this.fit();
     else this.viewChanged();
   }
@@ -134,23 +187,20 @@ export class MapView {
       this.baseDirty = false;
       const b = this.baseCtx;
       b.setTransform(1, 0, 0, 1, 0, 0);
-      b.fillStyle = '#0b0d10';
-      b.fillRect(0, 0, this.base.width, this.base.height);
+      b.clearRect(0, 0, this.base.width, this.base.height);  // the tiles show through
       b.setTransform(dpr, 0, 0, dpr, 0, 0);
-      // The map's footprint, so an area without data still shows where the map is.
+      // The map's outline, so an area without data still shows where the map is.
       const [fx, fy, fw, fh] = this.rectToScreen(0, 0, this.widthM, this.heightM);
-      b.fillStyle = '#1a1f26';
-      b.fillRect(fx, fy, fw, fh);
       for (const l of this.layers) if (l.base) this.drawLayer(b, l);
       b.strokeStyle = '#56657a';
       b.lineWidth = 1;
       b.strokeRect(Math.round(fx) + 0.5, Math.round(fy) + 0.5, Math.round(fw), Math.round(fh));
     }
     ctx.setTransform(1, 0, 0, 1, 0, 0);
+    ctx.clearRect(0, 0, this.canvas.width, this.canvas.height);
     ctx.drawImage(this.base, 0, 0);
     ctx.setTransform(dpr, 0, 0, dpr, 0, 0);
     for (const l of this.layers) if (!l.base) this.drawLayer(ctx, l);
-    this.drawScaleBar(ctx);
     for (const fn of this.renderListeners) fn(t);
   }
 
@@ -164,29 +214,27 @@ export class MapView {
     ctx.restore();
   }
 
-  drawScaleBar(ctx) {
-    // A scale bar of a round length, bottom-right.
-    const target = 120 / this.scale;
-    const pow = 10 ** Math.floor(Math.log10(target));
-    const len = [1, 2, 5, 10].map((m) => m * pow).filter((v) => v <= target).pop() || pow;
-    const px = len * this.scale;
-    const x = this.cssW - px - 16, y = this.cssH - 14;
-    ctx.save();
-    ctx.fillStyle = 'rgba(11,13,16,0.7)';
-    ctx.fillRect(x - 6, y - 16, px + 12, 22);
-    ctx.strokeStyle = '#e3e8ee';
-    ctx.lineWidth = 2;
-    ctx.beginPath();
-    ctx.moveTo(x, y - 4);
-    ctx.lineTo(x, y);
-    ctx.lineTo(x + px, y);
-    ctx.lineTo(x + px, y - 4);
-    ctx.stroke();
-    ctx.fillStyle = '#e3e8ee';
-    ctx.font = '11px system-ui, sans-serif';
-    ctx.textAlign = 'center';
-    ctx.fillText(len >= 1000 ? `${len / 1000} km` : `${len} m`, x + px / 2, y - 5);
-    ctx.restore();
+  // The view as one picture (PNG export): the OL layers' canvases, then the overlays.
+  snapshot() {
+    this.olMap.renderSync();
+    this.render();
+    const out = document.createElement('canvas');
+    out.width = this.canvas.width;
+    out.height = this.canvas.height;
+    const ctx = out.getContext('2d');
+    ctx.fillStyle = '#0b0d10';
+    ctx.fillRect(0, 0, out.width, out.height);
+    const box = this.canvas.getBoundingClientRect();
+    for (const c of this.olBox.querySelectorAll('.ol-layer canvas')) {
+      if (!c.width || !c.height) continue;
+      const r = c.getBoundingClientRect();  // CSS transforms included (the y stretch too)
+      const opacity = Number(c.parentNode.style.opacity || 1);
+      ctx.globalAlpha = Number.isFinite(opacity) ? opacity : 1;
+      ctx.drawImage(c, (r.left - box.left) * this.dpr, (r.top - box.top) * this.dpr, r.width * this.dpr, r.height * this.dpr);
+    }
+    ctx.globalAlpha = 1;
+    ctx.drawImage(this.canvas, 0, 0);
+    return out;
   }
 
   // --- interaction ---

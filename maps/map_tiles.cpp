@@ -1,0 +1,171 @@
+#include "maps/map_tiles.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "core/common/error.hpp"
+#include "core/terrain/layers.hpp"
+
+namespace rover::maps {
+
+namespace {
+
+constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+
+// A rectangle of blocks (in the blocks of the tile's zoom).
+struct Span {
+  int r0 = 0, c0 = 0, rows = 0, cols = 0;
+};
+
+// The tile's blocks grown by `halo` on each side, clipped to the map.
+Span spanOf(const TileWindow& w, int halo) {
+  const int r0 = std::max(0, w.blockRow0 - halo), c0 = std::max(0, w.blockCol0 - halo);
+  const int r1 = std::min(w.blocksDown, w.blockRow0 + w.blockRows + halo);
+  const int c1 = std::min(w.blocksAcross, w.blockCol0 + w.blockCols + halo);
+  return {r0, c0, r1 - r0, c1 - c0};
+}
+
+// Calls fn(blockRow, blockCol, cellRow, cellCol) for every cell of every block of `s`.
+template <class Fn>
+void forCells(const GridGeometry& g, int step, const Span& s, Fn&& fn) {
+  for (int i = 0; i < s.rows; ++i) {
+    const int rBegin = (s.r0 + i) * step, rEnd = std::min(g.rows, rBegin + step);
+    for (int r = rBegin; r < rEnd; ++r)
+      for (int j = 0; j < s.cols; ++j) {
+        const int cBegin = (s.c0 + j) * step, cEnd = std::min(g.cols, cBegin + step);
+        for (int c = cBegin; c < cEnd; ++c) fn(i, j, r, c);
+      }
+  }
+}
+
+// The mean of the finite values of each block of `s` (NaN where a block has none): the values
+// themselves when step is 1.
+Raster<float> blockMean(const Raster<float>& src, int step, const Span& s) {
+  const GridGeometry& g = src.geometry;
+  Raster<float> out(GridGeometry{s.rows, s.cols, g.cellWidth * step, g.cellHeight * step}, kNaN);
+  if (step == 1) {
+    out.values = src.values.block(s.r0, s.c0, s.rows, s.cols);
+    return out;
+  }
+  std::vector<double> sum(std::size_t(s.rows) * s.cols, 0.0);
+  std::vector<int> count(sum.size(), 0);
+  forCells(g, step, s, [&](int i, int j, int r, int c) {
+    const float v = src(r, c);
+    if (std::isfinite(v)) {
+      sum[std::size_t(i) * s.cols + j] += v;
+      ++count[std::size_t(i) * s.cols + j];
+    }
+  });
+  for (std::size_t k = 0; k < sum.size(); ++k)
+    if (count[k]) out.at(static_cast<int>(k)) = static_cast<float>(sum[k] / count[k]);
+  return out;
+}
+
+// The block-mean DEM of `s`, with the east-west spacing of geographic maps per block row.
+terrain::Dem blockDem(const terrain::Dem& dem, int step, const Span& s) {
+  terrain::Dem out;
+  out.z = blockMean(dem.z, step, s);
+  if (!dem.rowCellWidth.empty()) {
+    out.rowCellWidth.resize(s.rows);
+    for (int i = 0; i < s.rows; ++i) {
+      const int rBegin = (s.r0 + i) * step, rEnd = std::min(dem.geometry().rows, rBegin + step);
+      double sum = 0;
+      for (int r = rBegin; r < rEnd; ++r) sum += dem.rowCellWidth[r];
+      out.rowCellWidth[i] = sum / (rEnd - rBegin) * step;
+    }
+  }
+  return out;
+}
+
+// The worst class of each block (the highest code below NoData; NoData when it has none).
+Raster<std::uint8_t> blockWorstClass(const Raster<std::uint8_t>& src, int step, const Span& s) {
+  constexpr auto kNoData = static_cast<std::uint8_t>(terrain::TerrainClass::NoData);
+  const GridGeometry& g = src.geometry;
+  Raster<std::uint8_t> out(GridGeometry{s.rows, s.cols, g.cellWidth * step, g.cellHeight * step}, kNoData);
+  std::vector<int> worst(std::size_t(s.rows) * s.cols, -1);
+  forCells(g, step, s, [&](int i, int j, int r, int c) {
+    const int v = src(r, c);
+    if (v < kNoData) worst[std::size_t(i) * s.cols + j] = std::max(worst[std::size_t(i) * s.cols + j], v);
+  });
+  for (std::size_t k = 0; k < worst.size(); ++k)
+    if (worst[k] >= 0) out.at(static_cast<int>(k)) = static_cast<std::uint8_t>(worst[k]);
+  return out;
+}
+
+// Copies the tile's blocks out of `span`-sized pixels (`px` per block, `channels` values each) into
+// a kTileSize² tile, each block magnified; the rest of `tile` is left as it was.
+template <class T>
+void placeBlocks(const TileWindow& w, const Span& span, const T* blocks, int channels, T* tile) {
+  const int m = w.magnify;
+  for (int py = 0; py < w.blockRows * m; ++py) {
+    const int br = w.blockRow0 + py / m - span.r0;
+    for (int px = 0; px < w.blockCols * m; ++px) {
+      const int bc = w.blockCol0 + px / m - span.c0;
+      std::copy_n(blocks + (std::size_t(br) * span.cols + bc) * channels, channels,
+                  tile + (std::size_t(py) * kTileSize + px) * channels);
+    }
+  }
+}
+
+const terrain::Dem& demOf(RenderLayer layer, const TileSource& source) {
+  if (source.dem == nullptr || source.dem->z.empty())
+    throw Error(ErrorCode::InvalidInput, "layer", std::string("the ") + renderLayerName(layer) + " tile needs the DEM");
+  return *source.dem;
+}
+
+}  // namespace
+
+Image renderTile(RenderLayer layer, const TileSource& source, const TileWindow& w) {
+  const terrain::Dem& dem = demOf(layer, source);
+  // Elevation (shaded), hillshade and slope read one block beyond the tile: the 3×3 kernel's halo.
+  const bool kernel = layer == RenderLayer::Elevation || layer == RenderLayer::Hillshade || layer == RenderLayer::Slope;
+  const Span span = spanOf(w, kernel ? 1 : 0);
+  terrain::Dem blocks;
+  Raster<float> shade, slope, mass;
+  Raster<std::uint8_t> classes;
+  RenderInput in;
+  if (kernel) {
+    blocks = blockDem(dem, w.step, span);
+    in.dem = &blocks;
+  }
+  if (layer == RenderLayer::Elevation || layer == RenderLayer::Hillshade) {
+    shade = terrain::hillshade(blocks);
+    in.hillshade = &shade;
+  } else if (layer == RenderLayer::Slope) {
+    slope = terrain::slopeHorn(blocks);
+    in.slopeDeg = &slope;
+  } else if (layer == RenderLayer::Traversability) {
+    if (source.classes == nullptr)
+      throw Error(ErrorCode::InvalidInput, "layer", "the traversability tile needs the class raster");
+    classes = blockWorstClass(*source.classes, w.step, span);
+    in.classes = &classes;
+  } else if (layer == RenderLayer::Pdm) {
+    if (source.pdm == nullptr) throw Error(ErrorCode::InvalidInput, "layer", "the pdm tile needs the PDM raster");
+    mass = blockMean(*source.pdm, w.step, span);
+    in.pdm = &mass;
+  }
+  RenderOptions options;
+  options.legend = false;
+  options.range = &source.range;
+  const Image pic = renderLayer(layer, in, options);  // span.cols × span.rows, one pixel a block
+  Image tile;
+  tile.width = tile.height = kTileSize;
+  tile.rgba.assign(std::size_t(kTileSize) * kTileSize * 4, 0);  // transparent beyond the map
+  placeBlocks(w, span, pic.rgba.data(), 4, tile.rgba.data());
+  return tile;
+}
+
+std::vector<float> tileValues(RenderLayer layer, const TileSource& source, const TileWindow& w) {
+  if (layer != RenderLayer::Elevation && layer != RenderLayer::Slope)
+    throw Error(ErrorCode::InvalidInput, "layer", "value tiles are elevation or slope");
+  const terrain::Dem& dem = demOf(layer, source);
+  const Span span = spanOf(w, layer == RenderLayer::Slope ? 1 : 0);
+  const terrain::Dem blocks = blockDem(dem, w.step, span);
+  const Raster<float> values = layer == RenderLayer::Slope ? terrain::slopeHorn(blocks) : blocks.z;
+  std::vector<float> tile(std::size_t(kTileSize) * kTileSize, kNaN);
+  placeBlocks(w, span, values.values.data(), 1, tile.data());
+  return tile;
+}
+
+}  // namespace rover::maps

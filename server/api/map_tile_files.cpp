@@ -1,0 +1,83 @@
+// MapCatalog::tileFile: tiles of a map's layers (issue 24) as files in the layer cache.
+#include <algorithm>
+#include <cstring>
+#include <filesystem>
+
+#include "maps/map_tiles.hpp"
+#include "server/api/map_catalog.hpp"
+#include "server/http/http_types.hpp"
+#include "server/json/json_edge.hpp"
+
+namespace rover::api {
+
+namespace fs = std::filesystem;
+using http::ApiError;
+
+namespace {
+
+// The tile grid from the stored size, so a hostile address is answered without loading the map.
+maps::TileGrid storedGrid(const store::MapRecord& r, MapCatalog& catalog) {
+  const auto& m = r.meta;
+  if (m.contains("rows") && m["rows"].is_number_integer() && m.contains("cols") && m["cols"].is_number_integer())
+    return maps::tileGridOf(m["rows"].get<int>(), m["cols"].get<int>());
+  const GridGeometry& g = catalog.get(r.id)->dem.geometry();  // a map stored without its size
+  return maps::tileGridOf(g.rows, g.cols);
+}
+
+}  // namespace
+
+std::string MapCatalog::tileFile(const std::string& id, const std::string& layer, const std::string& format,
+                                 long long z, long long x, long long y, const std::string& pdmId) {
+  static const char* const kLayers[] = {"elevation", "hillshade", "slope", "traversability", "pdm"};
+  if (std::none_of(std::begin(kLayers), std::end(kLayers), [&](const char* l) { return layer == l; }))
+    throw ApiError(404, "not_found", "no layer '" + rover::json::shown(layer) + "' (elevation, hillshade, slope, traversability, pdm)", "layer");
+  if (format != "png" && !(format == "f32" && (layer == "elevation" || layer == "slope")))
+    throw ApiError(404, "not_found", "tiles are .png for every layer, .f32 for elevation and slope", "format");
+  auto rec = db_.getMap(id);
+  if (!rec) throw ApiError(404, "not_found", "no map '" + rover::json::shown(id) + "'", "id");
+  if (layer == "pdm") {
+    if (pdmId.empty()) throw ApiError(400, "invalid_parameter", "a pdm tile names its PDM: ?pdm=ID", "pdm");
+    auto p = db_.getPdm(pdmId);
+    if (!p || p->mapId != id) throw ApiError(404, "not_found", "no PDM '" + rover::json::shown(pdmId) + "' on this map", "pdm");
+  }
+  const maps::TileGrid grid = storedGrid(*rec, *this);
+  const auto window = maps::tileWindow(grid, z, x, y);
+  if (!window)
+    throw ApiError(404, "not_found",
+                   "no tile " + std::to_string(z) + "/" + std::to_string(x) + "/" + std::to_string(y) +
+                       " (zoom 0.." + std::to_string(grid.maxZoom()) + ")",
+                   "tile");
+  const fs::path dir = fs::path(dir_.mapDir(id)) / "layers";
+  std::string file = "t1-" + layer;
+  if (layer == "pdm") file += "-" + pdmId;
+  file += "-" + std::to_string(z) + "-" + std::to_string(x) + "-" + std::to_string(y) + "." + format;
+  // Made once per file on the work pool, outside the catalog's lock.
+  return layers_.get((dir / file).string(), [&](const std::string& path) {
+    std::error_code ec;
+    fs::create_directories(dir, ec);
+    auto map = get(id);
+    maps::TileSource src;
+    src.dem = &map->dem;
+    src.classes = &map->traversability.classes;
+    src.range = map->elevationRange;
+    std::shared_ptr<const Raster<float>> mass;
+    if (layer == "pdm") {
+      mass = pdmMass(pdmId);
+      src.pdm = mass.get();
+      src.range = maps::colourRange(maps::RenderLayer::Pdm, *mass);  // one pass over the mass
+    }
+    const auto l = maps::renderLayerFromName(layer);
+    std::string bytes;
+    if (format == "f32") {
+      const auto values = maps::tileValues(l, src, *window);
+      bytes.resize(values.size() * 4);
+      std::memcpy(bytes.data(), values.data(), bytes.size());  // x86-64 and aarch64 are little-endian
+    } else {
+      const auto png = maps::encodePng(maps::renderTile(l, src, *window));
+      bytes.assign(png.begin(), png.end());
+    }
+    store::DataDir::writeFileAtomic(path, bytes);
+  });
+}
+
+}  // namespace rover::api
