@@ -39,8 +39,8 @@ pdm() {  # pdm DX DY FILE
   {"x": $(($1 + 300)), "y": $(($2 + 420)), "sigma_x": 60, "sigma_y": 20, "rotation_deg": -20, "weight": 0.5}]}
 EOF
 }
-pdm 0 0 "$work/cut.json"
-pdm "$x0" "$y0" "$work/big.json"
+pdm 0 0 "$work/pdm-cut.json"
+pdm "$x0" "$y0" "$work/pdm-big.json"
 
 # run NAME ARGS...: one mission under /usr/bin/time -v; NAME.json (result) and NAME.time.
 run() {
@@ -52,12 +52,12 @@ run() {
     exit 1
   fi
 }
-run cut --dem "$work/cut.tif" --start "$(starts 0 0)" --pdm "$work/cut.json"
+run cut --dem "$work/cut.tif" --start "$(starts 0 0)" --pdm "$work/pdm-cut.json"
 run area --dem "$work/big.tif" --area "$x0,$y0,$((x0 + side)),$((y0 + side))" --start "$(starts "$x0" "$y0")" \
-    --pdm "$work/big.json"
+    --pdm "$work/pdm-big.json"
 names=(cut area)
 if [ "${BENCH_WHOLE:-0}" = 1 ]; then
-  run whole --dem "$work/big.tif" --start "$(starts "$x0" "$y0")" --pdm "$work/big.json"
+  run whole --dem "$work/big.tif" --start "$(starts "$x0" "$y0")" --pdm "$work/pdm-big.json"
   names+=(whole)
 fi
 
