@@ -32,7 +32,7 @@ struct AreaDem {
 AreaDem loadDemInArea(const ArgParser& args, const std::string& path, const maps::DemImport& import,
                       const std::string& cellOption);
 
-// {"area": ... | null, "planning_window": {...}} for --json (server/json/area_json.hpp).
+// {"area": ..., "planning_window": {...}} for --json (server/json/area_json.hpp).
 nlohmann::json areaJson(const AreaDem& dem);
 
 }  // namespace rover::cli

@@ -159,7 +159,7 @@ int coverageCommand(const std::vector<std::string>& argv, std::ostream& out) {
       j["world"]["body"] = terrain::bodyName(problem.body);
       j["world"]["dem_rows"] = area->mapGrid.rows;
       j["world"]["dem_cols"] = area->mapGrid.cols;
-      j.update(areaJson(*area));
+      if (area->area) j.update(areaJson(*area));  // a whole-DEM run prints what it printed before
     } else {
       j["world"]["obstacle_fraction"] = wp.obstacleFraction;
       j["world"]["sealed_allowed"] = wp.allowSealed;

@@ -91,8 +91,10 @@ int missionCommand(const std::vector<std::string>& argv, std::ostream& out) {
     const GridGeometry& g = setup.mapGrid;
     j["map"] = {{"dem", setup.demPath}, {"rows", g.rows}, {"cols", g.cols},
                 {"cell_size_m", g.cellWidth}, {"pdm", setup.pdmSource}};
-    j["area"] = setup.area ? json::areaToJson(*setup.area) : nlohmann::json(nullptr);
-    j["planning_window"] = json::windowToJson(setup.window);
+    if (setup.area) {  // (only then: a whole-DEM run prints what it printed before the areas)
+      j["area"] = json::areaToJson(*setup.area);
+      j["planning_window"] = json::windowToJson(setup.window);
+    }
     nlohmann::json starts = nlohmann::json::array();
     for (const auto& s : setup.problem.rovers)
       starts.push_back({{"x", s.position.x() + setup.window.origin.x()},
