@@ -258,11 +258,12 @@ void checkGeotransform(const std::array<double, 6>& gt, int rows, int cols, OGRS
 
 // Band 1 of `grid` into `z` (sized to the grid), in metres: the file's scale and offset and the
 // vertical scale applied, nodata (the file's value where the grid was not warped) made NaN.
+// `col0`, `row0`: the window's first cell (a mission area's window, loadDemWindow).
 void readHeights(GDALDatasetH grid, bool compareNodata, const LoadOptions& opt, Raster<float>& heights,
-                 DemInfo& info, const std::string& shown) {
+                 DemInfo& info, const std::string& shown, int col0 = 0, int row0 = 0) {
   const int cols = heights.geometry.cols, rows = heights.geometry.rows;
   CPLErrorReset();
-  if (GDALRasterIO(GDALGetRasterBand(grid, 1), GF_Read, 0, 0, cols, rows, heights.values.data(), cols,
+  if (GDALRasterIO(GDALGetRasterBand(grid, 1), GF_Read, col0, row0, cols, rows, heights.values.data(), cols,
                    rows, GDT_Float32, 0, 0) != CE_None)
     failFile(shown, "truncated or corrupt " + formatInWords(info.driver) + " (its data does not read)" +
                         (opt.upload ? "" : gdalMessage()));
@@ -288,7 +289,91 @@ void readHeights(GDALDatasetH grid, bool compareNodata, const LoadOptions& opt, 
   info.maxHeight = hi;
 }
 
+// The north-up grid of a file read as it is (a stored map, a CLI user's DEM for a mission
+// area): its header, checked, and its cells' size in metres for every row.
+struct NativeGrid {
+  Dataset src;
+  DemInfo info;
+  std::array<double, 6> gt{};
+  OGRSpatialReferenceH srs = nullptr;
+  CellMetres metres;
+};
+
+NativeGrid openNative(const std::string& path) {
+  NativeGrid n;
+  n.src = openSource(path, nullptr, path);
+  n.info.path = path;
+  describeSource(n.src.get(), n.info);
+  n.srs = GDALGetSpatialRef(n.src.get());
+  n.info.georeferenced = GDALGetGeoTransform(n.src.get(), n.gt.data()) == CE_None;
+  if (n.info.georeferenced) checkGeotransform(n.gt, n.info.sourceRows, n.info.sourceCols, n.srs, path);
+  else n.gt = {0, 1, 0, static_cast<double>(n.info.sourceRows), 0, -1};
+  if (n.gt[2] != 0 || n.gt[4] != 0 || n.gt[5] > 0)
+    failFile(path, "a mission area needs a north-up raster (this one is rotated or south-up): load the "
+                   "map whole, or make it north-up first (gdalwarp)", "area");
+  n.metres = cellMetres(n.srs, n.gt, n.info.sourceRows);
+  if (!(n.metres.dx > 0 && n.metres.dy > 0 && std::isfinite(n.metres.dx) && std::isfinite(n.metres.dy)))
+    failFile(path, "the georeferencing gives cells of " + exactNumber(n.metres.dx) + " x " +
+                       exactNumber(n.metres.dy) + " m, not a positive size",
+             "geotransform.pixel_width");
+  return n;
+}
+
+GeoReference geoOf(const std::array<double, 6>& gt, OGRSpatialReferenceH srs, bool valid) {
+  GeoReference g;
+  g.valid = valid;
+  g.geotransform = gt;
+  if (srs) {
+    char* wkt = nullptr;
+    if (OSRExportToWkt(srs, &wkt) == OGRERR_NONE && wkt) g.crsWkt = wkt;
+    CPLFree(wkt);
+  }
+  return g;
+}
+
 }  // namespace
+
+DemHeader readDemHeader(const std::string& path) {
+  ensureGdal();
+  GdalErrorLog errors;
+  NativeGrid n = openNative(path);
+  DemHeader h;
+  h.geometry = GridGeometry{n.info.sourceRows, n.info.sourceCols, n.metres.dx, n.metres.dy};
+  h.geo = geoOf(n.gt, n.srs, n.info.georeferenced);
+  h.info = n.info;
+  return h;
+}
+
+LoadedDem loadDemWindow(const std::string& path, int row0, int col0, int rows, int cols, double verticalScale) {
+  ensureGdal();
+  GdalErrorLog errors;
+  NativeGrid n = openNative(path);
+  if (row0 < 0 || col0 < 0 || rows < 2 || cols < 2 || row0 + rows > n.info.sourceRows ||
+      col0 + cols > n.info.sourceCols)
+    failFile(path, "the window of " + std::to_string(cols) + " x " + std::to_string(rows) + " cells at column " +
+                       std::to_string(col0) + ", row " + std::to_string(row0) + " does not lie on the raster's " +
+                       std::to_string(n.info.sourceCols) + " x " + std::to_string(n.info.sourceRows) + " cells",
+             "area");
+  LoadedDem out;
+  out.info = n.info;
+  terrain::Dem& dem = out.dem;
+  // The whole raster's cell sizes, so a window position plus the window's origin is the map's
+  // position (the local frame's x is col × cellWidth whatever the row); the window's own rows'
+  // widths for a geographic map.
+  dem.z = Raster<float>(GridGeometry{rows, cols, n.metres.dx, n.metres.dy}, 0.0f);
+  if (!n.metres.rowCellWidth.empty())
+    dem.rowCellWidth.assign(n.metres.rowCellWidth.begin() + row0, n.metres.rowCellWidth.begin() + row0 + rows);
+  LoadOptions opt;
+  opt.verticalScale = verticalScale;
+  // Only the blocks the window touches are read (a tiled or striped GeoTIFF: its tiles or strips
+  // over those rows), so the cost follows the window, not the raster.
+  readHeights(n.src.get(), n.info.nodata.has_value(), opt, dem.z, out.info, path, col0, row0);
+  std::array<double, 6> gt = n.gt;
+  gt[0] += col0 * gt[1];
+  gt[3] += row0 * gt[5];
+  dem.z.geo = geoOf(gt, n.srs, n.info.georeferenced);
+  return out;
+}
 
 LoadedDem loadDem(const std::string& path, const LoadOptions& opt) {
   ensureGdal();

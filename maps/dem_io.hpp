@@ -59,6 +59,26 @@ struct LoadedDem {
 // cell size the map cannot hold twice (field "cell"). PATH may be a /vsizip/ or /vsitar/ member.
 LoadedDem loadDem(const std::string& path, const LoadOptions& options = {});
 
+// A north-up raster's grid from its header alone (no cell is read): rows, columns and cell sizes in
+// metres as loadDem gives them for the file read as it is, and its georeferencing. What a server
+// needs to check a mission area against a stored map without loading the map.
+struct DemHeader {
+  GridGeometry geometry;
+  GeoReference geo;
+  DemInfo info;  // minHeight, maxHeight and nodataCells are not known (0)
+};
+DemHeader readDemHeader(const std::string& path);
+
+// Band 1's cells rows × cols from (row0, col0) (row 0 north) of a north-up raster read as it is —
+// a mission area's planning window (core/planning/mission_area.hpp) — with one GDAL RasterIO
+// window: only the blocks it touches are read, so a 600² window of a 49 M-cell map costs the
+// window, not the map. Heights as loadDem reads them (scale, offset, nodata → NaN); the cell sizes
+// are the whole raster's (loadDem's), so a position in the window plus the window's origin is the
+// map's; the geotransform is the window's. Throws rover::Error like loadDem, field "area" for a
+// window off the raster or a rotated or south-up raster. Memory: the window's floats only.
+LoadedDem loadDemWindow(const std::string& path, int row0, int col0, int rows, int cols,
+                        double verticalScale = 1.0);
+
 // A GeoTIFF write failed because the disk (or the file size limit) is full. The message names
 // only the file name, never its folder; the server answers it 507 (store::StorageFull).
 class DiskFull : public std::runtime_error {

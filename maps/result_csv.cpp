@@ -43,7 +43,8 @@ std::pair<std::string, std::string> crsColumnNames(const GeoReference& geo) {
 }
 
 std::string resultCsv(const std::vector<Track>& tracks, const GridGeometry& g, const GeoReference& geo,
-                      const terrain::Dem* dem, const std::vector<double>& startHeadings) {
+                      const terrain::Dem* dem, const std::vector<double>& startHeadings,
+                      const Eigen::Vector2d& demOrigin) {
   bool clock = false, believed = false;
   for (const auto& t : tracks) {
     clock = clock || !t.samples.empty();
@@ -86,9 +87,14 @@ std::string resultCsv(const std::vector<Track>& tracks, const GridGeometry& g, c
     const double start = t.rover >= 0 && static_cast<std::size_t>(t.rover) < startHeadings.size()
                              ? startHeadings[static_cast<std::size_t>(t.rover)]
                              : 0.0;
-    for (std::size_t i = 0; i < t.points.size(); ++i)
-      row(t.rover, static_cast<double>(i), 0, groundSample(t.points, i, start, dem),
-          i < t.believed.size() ? &t.believed[i] : nullptr);
+    // The DEM may be a mission area's window: its heights are read in the window's frame.
+    std::vector<Eigen::Vector2d> onDem = t.points;
+    for (auto& p : onDem) p -= demOrigin;
+    for (std::size_t i = 0; i < t.points.size(); ++i) {
+      TrackSample s = groundSample(onDem, i, start, dem);
+      s.position = t.points[i];
+      row(t.rover, static_cast<double>(i), 0, s, i < t.believed.size() ? &t.believed[i] : nullptr);
+    }
   }
   return out;
 }

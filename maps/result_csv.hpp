@@ -20,8 +20,10 @@ namespace rover::maps {
 std::pair<std::string, std::string> crsColumnNames(const GeoReference& geo);
 
 // `startHeadings` (radians, one per rover; missing ones count as 0) and `dem` (may be null) give
-// a coverage rover's heading, attitude and height (core/planning/ground_sample.hpp).
+// a coverage rover's heading, attitude and height (core/planning/ground_sample.hpp); `demOrigin`
+// is where the DEM's lower-left corner lies in `g`'s frame (a mission area's planning window).
 std::string resultCsv(const std::vector<Track>& tracks, const GridGeometry& g, const GeoReference& geo,
-                      const terrain::Dem* dem, const std::vector<double>& startHeadings);
+                      const terrain::Dem* dem, const std::vector<double>& startHeadings,
+                      const Eigen::Vector2d& demOrigin = Eigen::Vector2d::Zero());
 
 }  // namespace rover::maps

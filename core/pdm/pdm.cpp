@@ -179,9 +179,11 @@ double discretisationCost(const std::vector<Gaussian>& cs, const GridGeometry& g
   return samples;
 }
 
-Raster<float> discretise(const std::vector<Gaussian>& cs, const GridGeometry& g,
-                         const std::vector<std::uint8_t>& valid) {
-  validateGaussians(cs, g);
+namespace {
+
+// discretise once the components are known to be in range for the map they belong to.
+Raster<float> discretiseChecked(const std::vector<Gaussian>& cs, const GridGeometry& g,
+                                const std::vector<std::uint8_t>& valid) {
   if (const double cost = discretisationCost(cs, g); cost > kMaxDiscretisationSamples) {
     std::ostringstream m;
     m << "would take " << cost << " density evaluations on this map, more than the " << kMaxDiscretisationSamples
@@ -220,6 +222,35 @@ Raster<float> discretise(const std::vector<Gaussian>& cs, const GridGeometry& g,
   Raster<float> out(g, 0.0f);
   for (int i = 0; i < g.cellCount(); ++i) out.at(i) = static_cast<float>(mass[i] / total);
   return out;
+}
+
+}  // namespace
+
+Raster<float> discretise(const std::vector<Gaussian>& cs, const GridGeometry& g,
+                         const std::vector<std::uint8_t>& valid) {
+  validateGaussians(cs, g);
+  return discretiseChecked(cs, g, valid);
+}
+
+Raster<float> discretiseOnWindow(const std::vector<Gaussian>& cs, const GridGeometry& map,
+                                 const GridGeometry& window, const Eigen::Vector2d& origin,
+                                 const std::vector<std::uint8_t>& valid) {
+  // In range for the map they were made on; the window's own bounds (one window diagonal) would
+  // refuse a wide component centred a kilometre off a 150 m area, whose mass there is real.
+  validateGaussians(cs, map);
+  std::vector<Gaussian> moved;
+  const Eigen::Vector2d size(window.widthMetres(), window.heightMetres());
+  for (Gaussian c : cs) {
+    c.mean -= origin;
+    // A component whose kWindowSigmas ellipse cannot reach the window adds nothing there (the scan
+    // would visit no cell): left out, so its distance costs no work.
+    const Eigen::Vector2d gap = (c.mean.cwiseMax(Eigen::Vector2d::Zero()).cwiseMin(size) - c.mean).cwiseAbs();
+    if (gap.norm() > kWindowSigmas * std::max(c.sigmaX, c.sigmaY)) continue;
+    moved.push_back(c);
+  }
+  if (moved.empty())
+    throw Error(ErrorCode::InvalidInput, "components", "no probability mass falls on valid cells of the area");
+  return discretiseChecked(moved, window, valid);
 }
 
 std::vector<Gaussian> randomGaussians(const GridGeometry& g, int count, std::uint64_t seed) {

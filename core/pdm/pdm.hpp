@@ -55,6 +55,15 @@ double discretisationCost(const std::vector<Gaussian>& components, const GridGeo
 Raster<float> discretise(const std::vector<Gaussian>& components, const GridGeometry& g,
                          const std::vector<std::uint8_t>& valid = {});
 
+// The mixture's mass on a window of `map` (a mission area's planning window, core/planning/
+// mission_area.hpp) whose lower-left corner lies at `origin` in the map's frame, normalised over
+// the window's valid cells: the same masses as discretise on the map, restricted to the window and
+// scaled to sum 1 (the components' weights are relative, so leaving out those whose 10σ ellipse
+// misses the window changes nothing). Validates against `map`; the work follows the window.
+Raster<float> discretiseOnWindow(const std::vector<Gaussian>& components, const GridGeometry& map,
+                                 const GridGeometry& window, const Eigen::Vector2d& origin,
+                                 const std::vector<std::uint8_t>& valid = {});
+
 // G random components (paper 001 §4: G = 4): means uniform over the map, σ uniform in
 // [5 %, 20 %] of the shorter side, rotation uniform, equal weights. Seeded.
 std::vector<Gaussian> randomGaussians(const GridGeometry& g, int count, std::uint64_t seed);

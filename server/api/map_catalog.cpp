@@ -47,17 +47,21 @@ int MapCatalog::sweepOrphans() {
   return removed;
 }
 
+terrain::Body mapBody(const store::MapRecord& r, const std::string& crsWkt) {
+  // Maps imported before bodies were stored read theirs from the CRS, as they did then.
+  const auto declared = r.meta.contains("body") && r.meta["body"].is_string()
+                            ? maps::bodyFromName(r.meta["body"].get<std::string>() == "unknown" ? "auto" : r.meta["body"].get<std::string>())
+                            : std::nullopt;
+  return declared ? *declared : maps::bodyOfCrs(crsWkt);
+}
+
 std::shared_ptr<const MapData> MapCatalog::loadFromDisk(const store::MapRecord& r) {
   auto data = std::make_shared<MapData>();
   data->record = r;
   data->dem = maps::loadDem((fs::path(dir_.mapDir(r.id)) / "dem.tif").string()).dem;
   data->traversability = terrain::traversability(data->dem);
   data->elevationRange = maps::colourRange(maps::RenderLayer::Elevation, data->dem.z);
-  // Maps imported before bodies were stored read theirs from the CRS, as they did then.
-  const auto declared = r.meta.contains("body") && r.meta["body"].is_string()
-                            ? maps::bodyFromName(r.meta["body"].get<std::string>() == "unknown" ? "auto" : r.meta["body"].get<std::string>())
-                            : std::nullopt;
-  data->body = declared ? *declared : maps::bodyOfCrs(data->dem.z.geo.crsWkt);
+  data->body = mapBody(r, data->dem.z.geo.crsWkt);
   data->valid.resize(data->dem.geometry().cellCount());
   for (int i = 0; i < data->dem.geometry().cellCount(); ++i) data->valid[i] = !std::isnan(data->dem.z.at(i));
   return data;

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "core/pdm/pdm.hpp"
+#include "core/planning/mission_area.hpp"
 #include "core/terrain/layers.hpp"
 #include "maps/dem_import_options.hpp"
 #include "maps/render.hpp"
@@ -31,6 +32,14 @@ struct MapData {
   std::vector<std::uint8_t> valid;  // cells with data
   terrain::Body body = terrain::Body::Unknown;  // declared at upload, else from the CRS
   maps::ColourRange elevationRange;  // the elevation ramp of every tile (the full-size picture's)
+};
+
+// What a mission needs to know of a map before it plans: its grid, georeferencing and body, from
+// the stored DEM's header (no cell read), so a mission area on a 49 M-cell map never loads it.
+struct MapHeader {
+  GridGeometry geometry;
+  GeoReference geo;
+  terrain::Body body = terrain::Body::Unknown;
 };
 
 struct UploadedFile {
@@ -57,6 +66,20 @@ class MapCatalog {
   // Throws ApiError 404 (field "id") for an unknown map.
   std::shared_ptr<const MapData> get(const std::string& id);
   void remove(const std::string& id);
+
+  // The map's header (map_window.cpp): from the loaded map when it is in memory, else from the
+  // stored DEM's header. Throws ApiError 404 (field "id") for an unknown map.
+  MapHeader header(const std::string& id);
+  // The cells of a planning window of the map (core/planning/mission_area.hpp) read from the
+  // stored GeoTIFF's window alone (maps::loadDemWindow): the whole map is never loaded.
+  std::shared_ptr<const terrain::Dem> demWindow(const std::string& id, const PlanningWindow& window);
+  // The PDM's mass on a planning window, only where `inArea` is 1 (and the window has data),
+  // normalised to sum 1 there: the probability to search, given that it lies in the mission
+  // area. A Gaussian PDM is discretised on the window (its components moved into the window's
+  // frame), a raster PDM read from its stored GeoTIFF's window; neither touches the whole map.
+  std::shared_ptr<const Raster<float>> pdmMassIn(const std::string& pdmId, const PlanningWindow& window,
+                                                 const terrain::Dem& windowDem,
+                                                 const std::vector<std::uint8_t>& inArea);
 
   // The map resampled to a coverage cell size (cached per cell size).
   std::shared_ptr<const terrain::Dem> demAtCell(const std::string& id, double cellSize);

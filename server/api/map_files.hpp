@@ -6,6 +6,8 @@
 #include <string>
 
 #include "core/grid/raster.hpp"
+#include "core/terrain/body.hpp"
+#include "server/store/database.hpp"
 
 namespace rover::api {
 
@@ -18,6 +20,9 @@ int overviewSide(int max, int nativeSide);
 // A PNG overview file named by a size off the ladder (written before the ladder existed): the
 // layer cache drops such files.
 bool offLadderOverview(const std::string& file);
+
+// The map's body: declared at upload (its record's meta), else the body of its CRS.
+terrain::Body mapBody(const store::MapRecord& record, const std::string& crsWkt);
 
 // Runs `write`, a GeoTIFF write into the data dir: a full disk throws store::StorageFull (507),
 // any other failure to write there is the server's (std::runtime_error, 500).

@@ -20,6 +20,8 @@ json missionFile(const store::MissionRecord& m, const std::string& demSha256,
   if (spec.contains("pace")) f["pace"] = spec["pace"];
   // The zones the run kept out of, as the request gave them (local frame): a re-run keeps out too.
   if (spec.contains("keep_out") && !spec["keep_out"].is_null()) f["keep_out"] = spec["keep_out"];
+  // The area it planned in (issue 24): a re-run plans there too (on a big map it must).
+  if (spec.contains("area") && !spec["area"].is_null()) f["area"] = spec["area"];
   // The run's current label (its request's name until renamed; a cleared label clears it).
   if (!m.label.empty()) f["name"] = m.label;
   return f;

@@ -3,9 +3,9 @@
 // mission again — its map (id and the SHA-256 of the grid it was launched on, recorded with the
 // run at launch; maps/dem_digest), PDM, planner, rovers, the
 // parameters as they were given (the rest take the planner's defaults of the version named in
-// the file, seed included), pace and name. POST /api/missions takes it back as it is: the
-// request fields are the same, and the file's own fields are checked (format, version, and the
-// map's digest, so a re-run never silently plans on other ground).
+// the file, seed included), pace, name, keep-out zones and mission area. POST /api/missions
+// takes it back as it is: the request fields are the same, and the file's own fields are checked
+// (format, version, and the map's digest, so a re-run never silently plans on other ground).
 #include <string>
 
 #include <nlohmann/json.hpp>

@@ -1,5 +1,7 @@
 #include "server/api/mission_service.hpp"
 
+#include <sstream>
+
 #include "core/common/error.hpp"
 #include "server/api/mission_file.hpp"
 #include "server/api/route_kit.hpp"
@@ -8,6 +10,7 @@
 #include "server/json/zones_json.hpp"
 #include "server/problems/problem_builder.hpp"
 #include "server/store/disk_budget.hpp"
+#include "core/planning/mission_area.hpp"
 
 namespace rover::api {
 
@@ -18,6 +21,12 @@ namespace {
 // ("params.targets"); one that names no field is the body's.
 [[noreturn]] void rethrowQualified(const Error& e, const std::string& prefix) {
   throw Error(e.code(), e.field().empty() ? "body" : prefix + e.field(), e.what());
+}
+
+std::string metres(double v) {
+  std::ostringstream s;
+  s << v;
+  return s.str();
 }
 
 }  // namespace
@@ -52,31 +61,82 @@ missions::MissionJob buildMission(ApiContext& ctx, const json& body) {
     if (!p || p->mapId != job.record.mapId)
       throw ApiError(400, "not_found", "no PDM '" + rj::shown(job.record.pdmId) + "' on this map", "pdm");
   }
-  // What the planner plans on, as its description says (PlannerSpecs::ground). Its memory is
-  // estimated by the planner and checked against the mission budget first.
-  const GridGeometry mapGeometry = ctx.maps.get(job.record.mapId)->dem.geometry();
+  // What the planner plans on, as its description says (PlannerSpecs::ground), on the map or on
+  // the planning window of the mission's area (issue 24). Its memory is estimated by the planner
+  // on that ground and checked against the mission budget first. The map's header only: a big
+  // map is never loaded whole for a mission in an area of it.
+  const MapHeader map = ctx.maps.header(job.record.mapId);
+  const GridGeometry& mapGeometry = map.geometry;
   rj::checkZonesOnMap(job.problem.keepOut, mapGeometry, "keep_out");
+  if (request.area) {
+    try {
+      checkMissionArea(*request.area, mapGeometry);
+    } catch (const Error& e) {
+      throw ApiError(400, "invalid_field", e.what(), "area");
+    }
+    for (std::size_t i = 0; i < job.problem.rovers.size(); ++i) {
+      const Eigen::Vector2d p = job.problem.rovers[i].position;
+      if (!insidePolygon({request.area->outline}, p))
+        throw ApiError(400, "invalid_field",
+                       "rover " + std::to_string(i) + " starts at (" + metres(p.x()) + ", " + metres(p.y()) +
+                           ") m, outside the mission area: every rover starts inside it",
+                       "rovers[" + std::to_string(i) + "]");
+    }
+    job.area = request.area;
+    job.window = planningWindow(mapGeometry, *request.area);
+  } else {
+    if (static_cast<std::int64_t>(mapGeometry.rows) * mapGeometry.cols > ctx.wholeMapCells)
+      throw ApiError(400, "missing_field",
+                     "map " + job.record.mapId + " is " + std::to_string(mapGeometry.cols) + " x " +
+                         std::to_string(mapGeometry.rows) + " cells, more than a mission plans on whole (" +
+                         std::to_string(ctx.wholeMapCells) + " cells): the traversal lattice, "
+                         "floods and classes would cover every cell before the rovers move. Give the "
+                         "mission an area, {\"bbox\": [x0, y0, x1, y1]} or {\"polygon\": [[x, y], ...]} in the "
+                         "map's local metres; it is planned at the map's full resolution",
+                     "area");
+    job.window = wholeMap(mapGeometry);
+  }
   const int roverCount = static_cast<int>(job.problem.rovers.size());
   MapGround ground;
   try {
-    ground = planner.groundOnMap(mapGeometry, job.params);
-    job.memory = planner.memoryEstimate(mapGeometry, ground, roverCount, !job.record.pdmId.empty(), job.params);
+    ground = planner.groundOnMap(job.window.grid, job.params);
+    job.memory = planner.memoryEstimate(job.window.grid, ground, roverCount, !job.record.pdmId.empty(), job.params);
   } catch (const Error& e) {
     rethrowQualified(e, "params.");
   }
   ctx.missions.admit(job.memory);
-  job.build = [&maps = ctx.maps, ground](missions::MissionJob& j) {
-    auto dem = maps.demAtCell(j.record.mapId, 0);
-    const terrain::Body body = maps.get(j.record.mapId)->body;
+  // Built twice (here to validate, then by the worker): the request's rovers and zones, in the
+  // map's frame, are kept here and moved into the window's each time.
+  job.build = [&maps = ctx.maps, ground, rovers = job.problem.rovers, keepOut = job.problem.keepOut](missions::MissionJob& j) {
+    std::shared_ptr<const terrain::Dem> dem;
     std::shared_ptr<const Raster<float>> pdm;
-    if (ground.kind == Ground::DemAndPdm && !j.record.pdmId.empty()) pdm = maps.pdmMass(j.record.pdmId);
-    PlanningProblem built = problems::problemOnMap(ground, dem, std::move(pdm), body);
-    built.rovers = std::move(j.problem.rovers);  // the request's, kept
-    built.keepOut = std::move(j.problem.keepOut);
+    const bool withPdm = ground.kind == Ground::DemAndPdm && !j.record.pdmId.empty();
+    PlanningProblem built;
+    if (j.area) {
+      dem = maps.demWindow(j.record.mapId, j.window);
+      const MapHeader header = maps.header(j.record.mapId);
+      const auto inArea = cellsInArea(areaInWindow(*j.area, j.window), j.window.grid);
+      if (withPdm)
+        pdm = maps.pdmMassIn(j.record.pdmId, j.window, *dem, inArea);
+      else if (ground.kind == Ground::DemAndPdm)
+        pdm = std::make_shared<const Raster<float>>(problems::uniformPdm(*dem, inArea));
+      built = problems::problemOnMap(ground, dem, std::move(pdm), header.body);
+      built.rovers = rovers;
+      built.keepOut = keepOut;
+      moveIntoWindow(built.rovers, built.keepOut, j.window, *j.area);
+      j.geo = header.geo;
+      j.mapGrid = header.geometry;
+    } else {
+      dem = maps.demAtCell(j.record.mapId, 0);
+      if (withPdm) pdm = maps.pdmMass(j.record.pdmId);
+      built = problems::problemOnMap(ground, dem, std::move(pdm), maps.header(j.record.mapId).body);
+      built.rovers = rovers;
+      built.keepOut = keepOut;
+      j.geo = dem->z.geo;
+      j.mapGrid = dem->geometry();
+    }
     built.threads = j.problem.threads;
     j.problem = std::move(built);
-    j.geo = dem->z.geo;
-    j.mapGrid = dem->geometry();
   };
   job.build(job);
   try {

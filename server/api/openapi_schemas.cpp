@@ -7,6 +7,7 @@
 #include <cmath>
 
 #include "core/pdm/pdm.hpp"
+#include "core/planning/mission_area.hpp"
 #include "maps/dem_import_options.hpp"
 #include "server/api/mission_file.hpp"
 #include "server/api/openapi_kit.hpp"
@@ -74,8 +75,43 @@ json planResultSchema() {
                  {"series", {{"type", "object"}}},
                  {"warnings", {{"type", "array"}, {"items", str()}}},
                  {"incidents", {{"type", "array"}, {"items", incident}}},
-                 {"targets", {{"type", "array"}, {"items", target}}}},
+                 {"targets", {{"type", "array"}, {"items", target}}},
+                 {"area", {{"type", "object"}, {"allOf", {openapi::ref("MissionArea")}}, {"nullable", true},
+                           {"description", "The mission's area as asked; null: the whole map."}}},
+                 {"planning_window", openapi::ref("PlanningWindow")}},
                 {"planner", "stop_reason", "cancelled", "metrics"});
+}
+
+// The mission area (server/json/area_json.hpp) and the window of the map a mission planned on.
+void addAreaSchemas(json& s) {
+  const double maxXY = rover::json::kMaxCoordinateM;
+  const json coordinate = {{"type", "number"}, {"minimum", -maxXY}, {"maximum", maxXY}};
+  const json position = {{"type", "array"}, {"items", coordinate}, {"minItems", 2}, {"maxItems", 2}};
+  json bbox = object({{"bbox", {{"type", "array"}, {"items", coordinate}, {"minItems", 4}, {"maxItems", 4},
+                                {"description", "[x0, y0, x1, y1]: metres in the map's local frame, x1 > x0, y1 > y0."}}}},
+                     {"bbox"}, true);
+  json polygon = object({{"polygon", {{"type", "array"}, {"items", position}, {"minItems", 3},
+                                      {"maxItems", static_cast<double>(kMaxAreaVertices + 1)},
+                                      {"description", "One ring [[x, y], ...] in the map's local frame (the "
+                                                      "closing vertex may be repeated)."}}}},
+                        {"polygon"}, true);
+  s["MissionArea"] = {
+      {"oneOf", {bbox, polygon}},
+      {"description",
+       "Where the mission plans, at the map's full resolution: only this area and a margin of " +
+           std::to_string(kAreaMarginCells) +
+           " cells are read and analysed; ground outside it is keep-out. On the map, at least 2 cells each "
+           "way, its window at most 4096 x 4096 cells. Required on maps of more than 4096 x 4096 cells."}};
+  s["PlanningWindow"] = object(
+      {{"origin", {{"type", "array"}, {"items", num()}, {"minItems", 2}, {"maxItems", 2},
+                   {"description", "The window's lower-left corner in the map's local frame, metres."}}},
+       {"row0", {{"type", "integer"}, {"description", "Its first row on the map (row 0 north)."}}},
+       {"col0", {{"type", "integer"}, {"description", "Its first column on the map."}}},
+       {"rows", {{"type", "integer"}}},
+       {"cols", {{"type", "integer"}}},
+       {"cell_size_m", num()}},
+      {"origin", "row0", "col0", "rows", "cols"});
+  s["PlanningWindow"]["description"] = "The part of the map a mission planned on (the whole map without an area).";
 }
 
 }  // namespace
@@ -130,7 +166,9 @@ json componentSchemas(const PlannerRegistry& planners) {
                                 {"description", "The map's grid digest; a map with another answers 409 map_changed."}})},
        {"map_name", nullable(str("Informative."))},
        {"keep_out", {{"type", "object"}, {"allOf", {openapi::ref("Zones")}}, {"nullable", true},
-                     {"description", "Keep-out zones of this mission, in the local frame."}}}},
+                     {"description", "Keep-out zones of this mission, in the local frame."}}},
+       {"area", {{"type", "object"}, {"allOf", {openapi::ref("MissionArea")}}, {"nullable", true},
+                 {"description", "The mission area (null: the whole map)."}}}},
       {"map", "planner", "rovers"}, true);
   // Every field the parser accepts has its schema, and no other.
   for (const char* f : rover::json::kMissionRequestFields)
@@ -156,6 +194,7 @@ json componentSchemas(const PlannerRegistry& planners) {
   s["Zones"]["description"] = "Keep-out zones: a GeoJSON FeatureCollection of Polygons (at most " +
                               std::to_string(rover::json::kMaxZones) + " zones and " +
                               std::to_string(rover::json::kMaxZoneVertices) + " vertices in all).";
+  addAreaSchemas(s);
   s["MissionLabel"] = object({{"label", name("The run's new label (\"\" clears it).")}}, {"label"}, true);
 
   s["Mission"] = object(

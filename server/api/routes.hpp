@@ -26,6 +26,9 @@ struct ApiContext {
   const PlannerRegistry& planners;
   studies::StudyManager* studies = nullptr;  // null: no /api/studies routes
   std::string version = "0.1.0";
+  // Maps of more cells than this plan only in a mission area (issue 24; core/planning/
+  // mission_area.hpp states the default and why); tests lower it to keep their maps small.
+  std::int64_t wholeMapCells = kWholeMapCells;
 
   // Serialized GET /api/maps/{id} bodies: the hottest read, changed only by the writes below.
   // Writers call invalidateMap *after* their write. A reader takes a ticket before it reads the

@@ -15,6 +15,7 @@
 #include "core/planning/rover_limits.hpp"
 #include "maps/geojson.hpp"
 #include "maps/georef.hpp"
+#include "server/cli/area_option.hpp"
 #include "server/cli/coverage_options.hpp"
 #include "server/cli/dem_options.hpp"
 #include "server/cli/mcap_output.hpp"
@@ -75,6 +76,7 @@ int coverageCommand(const std::vector<std::string>& argv, std::ostream& out) {
   args.option("dem", "FILE", "", "Plan on this DEM instead of a random world.");
   // --dem-cell resamples the DEM itself (GDAL); --coverage-cell is the planner's grid on it.
   addDemOptions(args, "dem-cell", "native");
+  addAreaOption(args);
   args.option("start", "X,Y,DEG[;X,Y,DEG...]", "random",
               "Rover starts in the local frame (metres from the lower-left corner) and headings "
               "(degrees counter-clockwise from east); overrides --rovers.");
@@ -99,9 +101,14 @@ int coverageCommand(const std::vector<std::string>& argv, std::ostream& out) {
   const Planner& planner = registry.get("coverage");
   coverage::CoverageParams typed;
   PlanningProblem problem;
+  std::optional<AreaDem> area;  // the DEM, or with --area its window (issue 24)
   std::optional<maps::LoadedDem> dem;
   const maps::DemImport import = readDemImport(args, "dem-cell");
-  if (args.has("dem")) dem = loadDemOrFail(args.str("dem", ""), import.load);
+  if (args.has("area") && !args.has("dem")) throw UsageError("--area needs --dem");
+  if (args.has("dem")) {
+    area = loadDemInArea(args, args.str("dem", ""), import, "dem-cell");
+    dem = std::move(area->loaded);
+  }
   try {
     typed = coverage::parseCoverageParams(params);
     if (dem) {
@@ -111,7 +118,13 @@ int coverageCommand(const std::vector<std::string>& argv, std::ostream& out) {
     } else {
       problem = problems::problemOnGrid(wp);
     }
-    problem.keepOut = readKeepOutOption(args, dem ? dem->dem.geometry() : problem.world.geometry());
+    problem.keepOut = readKeepOutOption(args, dem ? area->mapGrid : problem.world.geometry());
+    if (area && area->area) {
+      for (std::size_t i = 0; i < starts.size(); ++i)
+        if (!insidePolygon({area->area->outline}, starts[i].position))
+          throw UsageError("invalid value for --start: rover " + std::to_string(i) + " starts outside the --area");
+      moveIntoWindow(starts, problem.keepOut, area->window, *area->area);
+    }
     problem.rovers = !starts.empty() ? starts : planner.defaultStarts(problem, params, rovers, wp.seed);
     planner.validate(problem, params);
   } catch (const Error& e) {
@@ -120,13 +133,15 @@ int coverageCommand(const std::vector<std::string>& argv, std::ostream& out) {
     throwAsUsage(e);
   }
   PlanResult result = planner.run(problem, params, nullptr, nullptr);
+  const Eigen::Vector2d origin = area ? area->window.origin : Eigen::Vector2d::Zero();
+  shiftResult(result, origin);  // an area's window → the DEM's frame
   if (args.has("geojson")) {
     const std::string path = args.str("geojson", "");
-    GeoReference geo = dem ? dem->dem.z.geo : GeoReference{};
+    GeoReference geo = dem ? area->mapGeo : GeoReference{};
     std::string text;
     try {
       // Tracks are in the map's local frame: convert through the map's own grid.
-      text = maps::missionToGeoJson(result, {}, dem ? dem->dem.geometry() : problem.world.geometry(), geo);
+      text = maps::missionToGeoJson(result, {}, dem ? area->mapGrid : problem.world.geometry(), geo);
     } catch (const Error& e) {
       throw UsageError(e.what());
     }
@@ -138,9 +153,10 @@ int coverageCommand(const std::vector<std::string>& argv, std::ostream& out) {
     exports::ReplayInput in;
     in.result = &result;
     in.dem = dem ? &dem->dem : nullptr;
-    in.grid = dem ? dem->dem.geometry() : problem.world.geometry();
-    in.geo = dem ? dem->dem.z.geo : GeoReference{};
-    in.zones = exports::zonesOf(problem.keepOut);
+    in.demOrigin = origin;
+    in.grid = dem ? area->mapGrid : problem.world.geometry();
+    in.geo = dem ? area->mapGeo : GeoReference{};
+    in.zones = exports::zonesOf(problem.keepOut, origin);
     for (const auto& r : problem.rovers) in.startHeadings.push_back(r.heading);
     writeMcapOrFail(in, args.str("mcap", ""));
   }
@@ -156,8 +172,9 @@ int coverageCommand(const std::vector<std::string>& argv, std::ostream& out) {
       j["world"]["dem"] = dem->info.path;
       j["world"]["crs"] = dem->info.crsName;
       j["world"]["body"] = terrain::bodyName(problem.body);
-      j["world"]["dem_rows"] = dem->dem.geometry().rows;
-      j["world"]["dem_cols"] = dem->dem.geometry().cols;
+      j["world"]["dem_rows"] = area->mapGrid.rows;
+      j["world"]["dem_cols"] = area->mapGrid.cols;
+      if (area->area) j.update(areaJson(*area));  // a whole-DEM run prints what it printed before
     } else {
       j["world"]["obstacle_fraction"] = wp.obstacleFraction;
       j["world"]["sealed_allowed"] = wp.allowSealed;
@@ -165,8 +182,8 @@ int coverageCommand(const std::vector<std::string>& argv, std::ostream& out) {
     }
     nlohmann::json starts = nlohmann::json::array();
     for (const auto& s : problem.rovers)
-      starts.push_back({{"x", s.position.x()},
-                        {"y", s.position.y()},
+      starts.push_back({{"x", s.position.x() + origin.x()},
+                        {"y", s.position.y() + origin.y()},
                         {"heading_deg", s.heading * 180.0 / 3.14159265358979323846}});
     j["starts"] = starts;
     nlohmann::json ps = nlohmann::json::object();

@@ -84,18 +84,23 @@ void addPdmOptions(ArgParser& a, const PdmOptionNames& n) {
 }
 
 Raster<float> readPdmOptions(const ArgParser& a, const terrain::Dem& dem, const PdmOptionNames& n,
-                             bool optional) {
+                             bool optional, const PdmArea* area) {
   const int sources = a.has(n.gaussians) + a.has(n.random) + a.has(n.raster);
   if (sources == 0 && optional) return {};
   if (sources != 1)
     throw UsageError("give exactly one of --" + n.gaussians + ", --" + n.random + ", --" + n.raster);
   const GridGeometry& g = dem.geometry();
   auto valid = validMask(dem);
+  if (area)
+    for (std::size_t i = 0; i < valid.size(); ++i) valid[i] = valid[i] && area->inArea[i];
   if (a.has(n.random)) {
     int count = static_cast<int>(a.integer(n.random, 4, 1, 1000));
     const std::string seedOption = a.has(n.seed) ? n.seed : "seed";
     auto seed = static_cast<std::uint64_t>(a.integer(seedOption, 1, 0, INT64_MAX));
-    return orUsage([&] { return problems::randomPdm(dem, count, seed); });
+    if (!area) return orUsage([&] { return problems::randomPdm(dem, count, seed); });
+    Raster<float> p = orUsage([&] { return pdm::discretise(pdm::randomGaussians(g, count, seed), g, valid); });
+    p.geo = dem.z.geo;
+    return p;
   }
   if (a.has(n.gaussians)) {
     const std::string path = a.str(n.gaussians, "");
@@ -103,7 +108,11 @@ Raster<float> readPdmOptions(const ArgParser& a, const terrain::Dem& dem, const 
     if (!in) throw UsageError(path + ": cannot open");
     nlohmann::json j = nlohmann::json::parse(in, nullptr, false);
     if (j.is_discarded()) throw UsageError(path + ": not valid JSON");
-    Raster<float> p = orUsage([&] { return pdm::discretise(json::gaussiansFromJson(j), g, valid); });
+    Raster<float> p = orUsage([&] {
+      const auto components = json::gaussiansFromJson(j);
+      return area ? pdm::discretiseOnWindow(components, area->map, g, area->window.origin, valid)
+                  : pdm::discretise(components, g, valid);
+    });
     p.geo = dem.z.geo;
     return p;
   }

@@ -2,6 +2,7 @@
 // Options shared by every command that reads a DEM: cell size, crop window, vertical scale,
 // resampling and the cell budget.
 #include "core/grid/raster.hpp"
+#include "core/planning/mission_area.hpp"
 #include "core/terrain/dem.hpp"
 #include "maps/dem_import_options.hpp"
 #include "maps/dem_io.hpp"
@@ -29,8 +30,17 @@ struct PdmOptionNames {
   std::string seed = "seed";
 };
 void addPdmOptions(ArgParser& args, const PdmOptionNames& names);
+// A mission area's window (issue 24): `dem` is then the window of `map`, and the PDM's mass lies
+// on the cells `inArea` marks, normalised there. Gaussians are in the map's frame; random ones
+// are drawn over the window; a raster is read on the window's extent.
+struct PdmArea {
+  GridGeometry map;
+  PlanningWindow window;
+  std::vector<std::uint8_t> inArea;
+};
 // Exactly one source required unless `optional` (then an empty raster when none is given).
 Raster<float> readPdmOptions(const ArgParser& args, const terrain::Dem& dem,
-                             const PdmOptionNames& names, bool optional = false);
+                             const PdmOptionNames& names, bool optional = false,
+                             const PdmArea* area = nullptr);
 
 }  // namespace rover::cli

@@ -11,6 +11,7 @@
 #include "server/cli/dem_options.hpp"
 #include "server/cli/mission_setup.hpp"
 #include "server/cli/mcap_output.hpp"
+#include "server/json/area_json.hpp"
 #include "server/json/plan_json.hpp"
 
 namespace rover::cli {
@@ -20,11 +21,17 @@ namespace {
 void printSummary(std::ostream& out, const MissionSetup& s, const PlanResult& r) {
   auto m = [&](const char* key) { return r.metric(key); };
   auto count = [&](const char* key) { return static_cast<long>(m(key)); };
-  const GridGeometry& g = s.problem.dem->geometry();
+  const GridGeometry& g = s.mapGrid;
   out << std::fixed << std::setprecision(2);
   out << "mission    " << r.planner << " on " << s.demPath << ": " << g.rows << " x " << g.cols
       << " cells of " << g.cellWidth << " m; PDM " << s.pdmSource << "; " << count("rovers")
       << " rovers\n";
+  if (s.area) {
+    const auto lo = s.area->lo(), hi = s.area->hi();
+    out << "area       " << lo.x() << "," << lo.y() << " to " << hi.x() << "," << hi.y() << " m; planned on a "
+        << s.window.grid.cols << " x " << s.window.grid.rows << " cell window at (" << s.window.origin.x() << ", "
+        << s.window.origin.y() << ") m\n";
+  }
   out << "route      " << count("targets") << " targets, route mass " << std::setprecision(4)
       << m("route_score") << "\n";
   out << "legs       " << count("targets_reached") << " reached, " << count("targets_skipped")
@@ -75,11 +82,10 @@ int missionCommand(const std::vector<std::string>& argv, std::ostream& out) {
   const Planner& planner = setup.registry.get(setup.plannerName);
   setup.problem.threads = 0;  // the CLI runs one mission: all cores
   PlanResult result = planner.run(setup.problem, setup.params, nullptr, nullptr);
+  shiftResult(result, setup.window.origin);  // the area's window → the DEM's frame
   if (args.has("geojson")) {
     const std::string path = args.str("geojson", "");
-    std::string text = orUsage([&] {
-      return maps::missionToGeoJson(result, {}, setup.problem.dem->geometry(), setup.problem.dem->z.geo);
-    });
+    std::string text = orUsage([&] { return maps::missionToGeoJson(result, {}, setup.mapGrid, setup.mapGeo); });
     std::ofstream f(path);
     f << text;
     if (!f) throw UsageError(path + ": cannot write");
@@ -88,21 +94,26 @@ int missionCommand(const std::vector<std::string>& argv, std::ostream& out) {
     exports::ReplayInput in;
     in.result = &result;
     in.dem = setup.problem.dem.get();
-    in.grid = setup.problem.dem->geometry();
-    in.geo = setup.problem.dem->z.geo;
-    in.zones = exports::zonesOf(setup.problem.keepOut);
+    in.demOrigin = setup.window.origin;
+    in.grid = setup.mapGrid;
+    in.geo = setup.mapGeo;
+    in.zones = exports::zonesOf(setup.problem.keepOut, setup.window.origin);
     for (const auto& r : setup.problem.rovers) in.startHeadings.push_back(r.heading);
     writeMcapOrFail(in, args.str("mcap", ""));
   }
   if (args.isSet("json")) {
     nlohmann::json j = json::toJson(result);
-    const GridGeometry& g = setup.problem.dem->geometry();
+    const GridGeometry& g = setup.mapGrid;
     j["map"] = {{"dem", setup.demPath}, {"rows", g.rows}, {"cols", g.cols},
                 {"cell_size_m", g.cellWidth}, {"pdm", setup.pdmSource}};
+    if (setup.area) {  // (only then: a whole-DEM run prints what it printed before the areas)
+      j["area"] = json::areaToJson(*setup.area);
+      j["planning_window"] = json::windowToJson(setup.window);
+    }
     nlohmann::json starts = nlohmann::json::array();
     for (const auto& s : setup.problem.rovers)
-      starts.push_back({{"x", s.position.x()},
-                        {"y", s.position.y()},
+      starts.push_back({{"x", s.position.x() + setup.window.origin.x()},
+                        {"y", s.position.y() + setup.window.origin.y()},
                         {"heading_deg", s.heading * 180.0 / 3.14159265358979323846}});
     j["starts"] = starts;
     nlohmann::json ps = nlohmann::json::object();

@@ -4,6 +4,7 @@
 #include "core/team/team_entry.hpp"
 #include "core/planning/rover_limits.hpp"
 #include "maps/georef.hpp"
+#include "server/cli/area_option.hpp"
 #include "server/cli/coverage_options.hpp"
 #include "server/cli/dem_options.hpp"
 #include "server/problems/problem_builder.hpp"
@@ -35,6 +36,7 @@ std::string demPlanners(const PlannerRegistry& registry) {
 void addMissionOptions(ArgParser& a) {
   a.option("dem", "FILE", "", "The DEM to plan on (any raster GDAL reads). Required.");
   addDemOptions(a, "cell", "native");
+  addAreaOption(a);
   addPdmOptions(a, missionPdmNames());
   a.option("planner", "NAME", "team-search", demPlanners(makeBuiltinRegistry()) + ".");
   a.option("rovers", "N", "5", "Number of rovers, placed in formation around the map centre.");
@@ -60,10 +62,18 @@ MissionSetup readMissionOptions(const ArgParser& a) {
   }
   s.demPath = a.str("dem", "");
   const maps::DemImport import = readDemImport(a, "cell");
-  maps::LoadedDem loaded = loadDemOrFail(s.demPath, import.load);
-  auto dem = std::make_shared<terrain::Dem>(std::move(loaded.dem));
+  AreaDem loaded = loadDemInArea(a, s.demPath, import, "cell");
+  s.area = loaded.area;
+  s.window = loaded.window;
+  s.mapGrid = loaded.mapGrid;
+  s.mapGeo = loaded.mapGeo;
+  auto dem = std::make_shared<terrain::Dem>(std::move(loaded.loaded.dem));
   const PdmOptionNames names = missionPdmNames();
-  Raster<float> pdm = readPdmOptions(a, *dem, names, true);
+  std::optional<PdmArea> pdmArea;
+  if (s.area) pdmArea = PdmArea{s.mapGrid, s.window, cellsInArea(areaInWindow(*s.area, s.window), s.window.grid)};
+  Raster<float> pdm = readPdmOptions(a, *dem, names, true, pdmArea ? &*pdmArea : nullptr);
+  // No PDM in an area: uniform over the area (not over its window's keep-out margin).
+  if (pdm.empty() && pdmArea) pdm = orUsage([&] { return problems::uniformPdm(*dem, pdmArea->inArea); });
   if (a.has(names.random)) {
     s.pdmSource = "random " + a.str(names.random, "") + " Gaussians, seed " +
                   (a.has(names.seed) ? a.str(names.seed, "") : a.str("seed", "1"));
@@ -78,8 +88,14 @@ MissionSetup readMissionOptions(const ArgParser& a) {
                                      pdm.empty() ? nullptr : std::make_shared<Raster<float>>(std::move(pdm)),
                                      import.body);
 
-  s.problem.keepOut = readKeepOutOption(a, dem->geometry());
+  s.problem.keepOut = readKeepOutOption(a, s.mapGrid);
   std::vector<RoverStart> starts = readStartOption(a);
+  if (s.area) {
+    for (std::size_t i = 0; i < starts.size(); ++i)
+      if (!insidePolygon({s.area->outline}, starts[i].position))
+        throw UsageError("invalid value for --start: rover " + std::to_string(i) + " starts outside the --area");
+    moveIntoWindow(starts, s.problem.keepOut, s.window, *s.area);  // formation starts below are the window's
+  }
   if (starts.empty()) {
     const int n = static_cast<int>(a.integer("rovers", 5, 1, planning::kMaxRovers));
     starts = orUsage([&] { return planner->defaultStarts(s.problem, s.params, n, 0); });

@@ -3,8 +3,10 @@
 // DEM (with --crop/--cell), the PDM source, the rovers and every team planner parameter
 // (generated from the planner's table, so the CLI never drifts from the API).
 #include <memory>
+#include <optional>
 #include <string>
 
+#include "core/planning/mission_area.hpp"
 #include "core/planning/planner.hpp"
 #include "server/cli/arg_parser.hpp"
 
@@ -13,7 +15,13 @@ namespace rover::cli {
 struct MissionSetup {
   PlannerRegistry registry = makeBuiltinRegistry();
   std::string plannerName = "team-search";
-  PlanningProblem problem;  // dem, pdm and rovers filled in and validated
+  PlanningProblem problem;  // dem, pdm and rovers filled in and validated (the window's frame)
+  // With --area (issue 24) the problem is the area's planning window: its result is moved into
+  // the whole DEM's frame by window.origin; mapGrid and mapGeo are the whole DEM's.
+  std::optional<MissionArea> area;
+  PlanningWindow window;
+  GridGeometry mapGrid;
+  GeoReference mapGeo;
   ParamSet params;
   std::string demPath;
   std::string pdmSource;  // how the PDM was made, for the summary ("random 4, seed 1", a file)

@@ -2,15 +2,20 @@
 
 #include <algorithm>
 #include <charconv>
+#include <cerrno>
+#include <fcntl.h>
+#include <unistd.h>
 #include <cmath>
 #include <cstring>
-#include <fstream>
+#include <ostream>
+#include <streambuf>
 #include <nlohmann/json.hpp>
 #include <numbers>
 #include <stdexcept>
 
 #include "core/planning/ground_sample.hpp"
 #include "maps/lon_lat.hpp"
+#include "server/store/data_dir.hpp"
 
 namespace rover::exports {
 
@@ -225,7 +230,7 @@ std::string sceneMessage(const ReplayInput& in) {
 
 // ---- Terrain --------------------------------------------------------------------------------------
 
-std::string terrainMessage(const terrain::Dem& dem) {
+std::string terrainMessage(const terrain::Dem& dem, const Eigen::Vector2d& origin) {
   const GridGeometry& g = dem.geometry();
   const int f = terrainStride(g.rows, g.cols);
   const int rows = (g.rows + f - 1) / f, cols = (g.cols + f - 1) / f;
@@ -256,7 +261,8 @@ std::string terrainMessage(const terrain::Dem& dem) {
   }
   json m{{"timestamp", timeJson(0)},
          {"frame_id", "map"},
-         {"pose", identityPose()},
+         {"pose", {{"position", {{"x", origin.x()}, {"y", origin.y()}, {"z", 0.0}}},
+                   {"orientation", identityPose()["orientation"]}}},
          {"column_count", cols},
          {"cell_size", {{"x", g.cellWidth * f}, {"y", g.cellHeight * f}}},
          {"row_stride", cols * 4},
@@ -276,8 +282,11 @@ std::vector<TrackSample> pointSamples(const Track& t, const ReplayInput& in, std
   std::vector<TrackSample> out;
   out.reserve(t.points.size());
   const double heading = k < in.startHeadings.size() ? in.startHeadings[k] : 0.0;
+  std::vector<Eigen::Vector2d> onDem = t.points;  // the DEM may be a mission area's window
+  for (auto& p : onDem) p -= in.demOrigin;
   for (std::size_t i = 0; i < t.points.size(); ++i) {
-    TrackSample s = groundSample(t.points, i, heading, in.dem);
+    TrackSample s = groundSample(onDem, i, heading, in.dem);
+    s.position = t.points[i];
     s.time = static_cast<double>(i);
     out.push_back(s);
   }
@@ -311,9 +320,13 @@ int logLevel(IncidentKind k) {
 
 }  // namespace
 
-std::vector<maps::Zone> zonesOf(const KeepOut& keepOut) {
+std::vector<maps::Zone> zonesOf(const KeepOut& keepOut, const Eigen::Vector2d& by) {
   std::vector<maps::Zone> out;
-  for (const Polygon& p : keepOut.zones) out.push_back({p, ""});
+  for (Polygon p : keepOut.zones) {
+    for (auto& ring : p)
+      for (auto& v : ring) v += by;
+    out.push_back({std::move(p), ""});
+  }
   return out;
 }
 
@@ -359,7 +372,7 @@ McapTotals writeReplayMcap(const ReplayInput& in, std::ostream& out) {
       if (s.key == key) rovers[k].energy = &s;
   }
 
-  if (in.dem) w.write(terrainC, 0, 0, terrainMessage(*in.dem));
+  if (in.dem) w.write(terrainC, 0, 0, terrainMessage(*in.dem, in.demOrigin));
   w.write(sceneC, 0, 0, sceneMessage(in));
 
   // Everything timed, in time order (ties: incidents first, then rovers in order), so chunks
@@ -452,17 +465,70 @@ McapTotals writeReplayMcap(const ReplayInput& in, std::ostream& out) {
   return w.finish();
 }
 
+namespace {
+
+// An output buffer over a file descriptor that keeps the errno of a failed write: a full disk must
+// be told apart from other failures, and std::ofstream does not say why it failed.
+class FdBuffer : public std::streambuf {
+ public:
+  explicit FdBuffer(int fd) : fd_(fd), buf_(1 << 20) { setp(buf_.data(), buf_.data() + buf_.size()); }
+  int error() const { return error_; }
+
+ protected:
+  int_type overflow(int_type c) override {
+    if (!drain()) return traits_type::eof();
+    if (!traits_type::eq_int_type(c, traits_type::eof())) {
+      *pptr() = traits_type::to_char_type(c);
+      pbump(1);
+    }
+    return traits_type::not_eof(c);
+  }
+  int sync() override { return drain() ? 0 : -1; }
+
+ private:
+  bool drain() {
+    const char* p = pbase();
+    while (p < pptr()) {
+      const ssize_t n = ::write(fd_, p, static_cast<std::size_t>(pptr() - p));
+      if (n < 0 && errno == EINTR) continue;
+      if (n <= 0) {
+        error_ = n < 0 ? errno : EIO;
+        return false;
+      }
+      p += n;
+    }
+    setp(buf_.data(), buf_.data() + buf_.size());
+    return true;
+  }
+  int fd_;
+  std::vector<char> buf_;
+  int error_ = 0;
+};
+
+}  // namespace
+
 McapTotals writeReplayMcapFile(const ReplayInput& in, const std::string& path) {
-  // A buffer of our own (set before the file is opened, or libstdc++ ignores it): the default
-  // one makes a write call every few KB.
-  std::vector<char> buffer(1 << 20);
-  std::ofstream f;
-  f.rdbuf()->pubsetbuf(buffer.data(), static_cast<std::streamsize>(buffer.size()));
-  f.open(path, std::ios::binary | std::ios::trunc);
-  if (!f) throw std::runtime_error("the MCAP replay file cannot be created");
-  McapTotals t = writeReplayMcap(in, f);
-  f.close();
-  if (!f) throw std::runtime_error("the MCAP replay file could not be written");
+  // A full disk is the server's StorageFull like every other result file's (507, and "insufficient
+  // storage" in a mission's message).
+  auto failed = [](int err, const char* what) {
+    if (store::isStorageFullErrno(err)) throw store::StorageFull("cannot store the MCAP replay");
+    throw std::runtime_error(what);
+  };
+  const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0600);
+  if (fd < 0) failed(errno, "the MCAP replay file cannot be created");
+  FdBuffer buffer(fd);
+  std::ostream out(&buffer);
+  McapTotals t;
+  bool ok = true;
+  try {
+    t = writeReplayMcap(in, out);
+    ok = static_cast<bool>(out.flush());
+  } catch (const std::runtime_error&) {
+    ok = false;
+  }
+  const int closed = ::close(fd);
+  if (ok && closed != 0) ok = false;
+  if (!ok) failed(buffer.error() ? buffer.error() : errno, "the MCAP replay file could not be written");
   return t;
 }
 

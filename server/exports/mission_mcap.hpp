@@ -50,14 +50,18 @@ constexpr std::int64_t kMaxTerrainCells = 1 << 20;
 struct ReplayInput {
   const PlanResult* result = nullptr;
   const terrain::Dem* dem = nullptr;  // null: no terrain grid, no heights, no fixes
+  // Where the DEM's lower-left corner lies in the map's frame: a mission area's window is a part
+  // of the map (its heights are read, and its terrain grid placed, there); 0 for the whole map.
+  Eigen::Vector2d demOrigin{0, 0};
   GridGeometry grid;                  // the map's grid (the local frame of the tracks)
   GeoReference geo;                   // the map's georeference ("" CRS: no fixes)
   std::vector<maps::Zone> zones;      // keep-out zones in the local frame
   std::vector<double> startHeadings;  // coverage: each rover's start heading (rad)
 };
 
-// Keep-out zones of a problem as the exports take them (unnamed).
-std::vector<maps::Zone> zonesOf(const KeepOut& keepOut);
+// Keep-out zones of a problem as the exports take them (unnamed), moved by `by` (a mission
+// area's window origin: the window's frame → the map's).
+std::vector<maps::Zone> zonesOf(const KeepOut& keepOut, const Eigen::Vector2d& by = {0, 0});
 
 // The block size (DEM cells a side) the terrain grid is averaged over: the smallest f with
 // ceil(rows/f)·ceil(cols/f) <= kMaxTerrainCells.

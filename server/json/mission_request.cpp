@@ -6,6 +6,7 @@
 
 #include "core/common/error.hpp"
 #include "server/http/http_types.hpp"
+#include "server/json/area_json.hpp"
 #include "server/json/json_edge.hpp"
 #include "server/json/plan_json.hpp"
 #include "server/json/zones_json.hpp"
@@ -125,6 +126,7 @@ MissionRequest parseMissionRequest(const json& body, const PlannerRegistry& plan
   }
   if (auto k = body.find("keep_out"); k != body.end() && !k->is_null())
     req.keepOut = zonesFromJson(*k, "keep_out");
+  if (auto a = body.find("area"); a != body.end() && !a->is_null()) req.area = areaFromJson(*a, "area");
   if (auto pace = body.find("pace"); pace != body.end())
     req.pace = boundedNumber(*pace, "pace", 0, kMaxPace, "a number of steps per second in [0, 1e6]");
 

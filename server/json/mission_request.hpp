@@ -9,6 +9,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "core/planning/mission_area.hpp"
 #include "core/planning/planner.hpp"
 #include "core/planning/rover_limits.hpp"
 
@@ -28,6 +29,9 @@ struct MissionRequest {
   // `keep_out`: a FeatureCollection of Polygons in the local frame (zones_json.hpp); checked
   // against the map's extent by the route, which knows the map.
   KeepOut keepOut;
+  // `area` (optional, null = none): the mission area (server/json/area_json.hpp), checked against
+  // the map by the service.
+  std::optional<MissionArea> area;
 };
 
 // Limits stated in README (API): at most kMaxRovers rovers; x and y finite with |v| <= 1e9 m (the
@@ -40,7 +44,7 @@ inline constexpr double kMaxPace = 1e6;
 inline constexpr const char* kMissionRequestFields[] = {"map",     "pdm",       "planner",    "rovers",
                                                         "params",  "pace",      "name",       "format",
                                                         "version", "roverplan", "dem_sha256", "map_name",
-                                                        "keep_out"};
+                                                        "keep_out", "area"};
 
 // A mission file's own fields are accepted too: format ("roverplan-mission"), version (at most
 // `maxFileVersion`), dem_sha256 (64 hex digits, or null) and the informative roverplan and

@@ -13,6 +13,7 @@
 #include "maps/result_csv.hpp"
 #include "server/errors/domain_error.hpp"
 #include "server/exports/mission_mcap.hpp"
+#include "server/json/area_json.hpp"
 #include "server/json/plan_json.hpp"
 
 namespace rover::missions {
@@ -90,6 +91,7 @@ void MissionManager::submit(MissionJob job) {
   const GridGeometry& g = job.eventGrid;
   Active a;
   a.stream = std::make_shared<MissionStream>(job.record.id, g, static_cast<int>(job.problem.rovers.size()), job.pace);
+  a.stream->setGridOrigin(job.window.origin);
   a.cancel = std::make_shared<CancelToken>();
   a.memoryBytes = job.memory.bytes;
   reserved_ += a.memoryBytes;
@@ -216,6 +218,12 @@ std::shared_ptr<MissionStream> MissionManager::stream(const std::string& id) {
     s->restoreOverlays(nlohmann::json::parse(readFile(dir / "overlays.json"), nullptr, false));
   if (fs::exists(dir / "beliefs.json"))
     s->restoreBeliefs(nlohmann::json::parse(readFile(dir / "beliefs.json"), nullptr, false));
+  if (fs::exists(dir / "window.json")) {
+    const auto w = nlohmann::json::parse(readFile(dir / "window.json"), nullptr, false);
+    if (w.is_object() && w.contains("origin") && w["origin"].is_array() && w["origin"].size() == 2 &&
+        w["origin"][0].is_number() && w["origin"][1].is_number())
+      s->setGridOrigin({w["origin"][0].get<double>(), w["origin"][1].get<double>()});
+  }
   std::lock_guard lock(mutex_);
   rememberFinished(id, s);
   return s;
@@ -282,7 +290,13 @@ void MissionManager::runJob(MissionJob& job, Active a) {
       }
       job.build = nullptr;
     }
-    PlanResult result = planner.run(job.problem, job.params, a.stream.get(), a.cancel.get());
+    // A mission in an area plans in its window's frame: what it reports is moved into the map's.
+    const bool windowed = job.window.origin != Eigen::Vector2d::Zero();
+    std::optional<ShiftedSink> shifted;
+    if (windowed) shifted.emplace(*a.stream, job.window.origin);
+    EventSink* sink = windowed ? static_cast<EventSink*>(&*shifted) : a.stream.get();
+    PlanResult result = planner.run(job.problem, job.params, sink, a.cancel.get());
+    if (windowed) shiftResult(result, job.window.origin);
     cancelledEarly = stopPlanning(id);
     job.problem.world = {};  // the result is saved below; the world is no longer needed
     job.problem.pdm.reset();  // (the DEM gives the CSV's heights and attitudes; dropped below)
@@ -355,7 +369,13 @@ void MissionManager::writeResultFiles(const MissionJob& job, const PlanResult& r
   j["mission"] = job.record.id;
   j["map"] = job.record.mapId;
   j["spec"] = job.record.spec;
+  // Where it was planned (issue 24): the area as asked (null: the whole map) and the window of the
+  // map the planner saw; every position in the result is in the map's frame.
+  j["area"] = job.area ? json::areaToJson(*job.area) : nlohmann::json(nullptr);
+  j["planning_window"] = json::windowToJson(job.window);
   store::DataDir::writeFileAtomic((s / "result.json").string(), j.dump());
+  // The stream's grid lies at the window's origin; a replay from disk reads it here.
+  store::DataDir::writeFileAtomic((s / "window.json").string(), j["planning_window"].dump());
   j = nullptr;  // free the tree before the other files are formatted
   store::DataDir::writeFileAtomic(
       (s / "result.geojson").string(),
@@ -364,12 +384,13 @@ void MissionManager::writeResultFiles(const MissionJob& job, const PlanResult& r
   for (const auto& r : job.problem.rovers) headings.push_back(r.heading);
   store::DataDir::writeFileAtomic(
       (s / "result.csv").string(),
-      maps::resultCsv(result.tracks, job.mapGrid, job.geo, job.problem.dem.get(), headings));
+      maps::resultCsv(result.tracks, job.mapGrid, job.geo, job.problem.dem.get(), headings, job.window.origin));
   // The replay for Foxglove/Lichtblick (issue 28), streamed to the staging folder chunk by chunk
   // (about 1 MB held) and committed, and charged to the map's disk budget, with the other files.
   exports::ReplayInput replay;
   replay.result = &result;
   replay.dem = job.problem.dem.get();
+  replay.demOrigin = job.window.origin;
   replay.grid = job.mapGrid;
   replay.geo = job.geo;
   replay.zones = keepOutZones(job.record.spec);

@@ -26,11 +26,13 @@
 #include <map>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <thread>
 #include <vector>
 
 #include "core/common/cancel.hpp"
+#include "core/planning/mission_area.hpp"
 #include "core/planning/planner.hpp"
 #include "maps/geojson.hpp"
 #include "server/missions/mission_memory.hpp"
@@ -52,6 +54,11 @@ struct MissionJob {
   ParamSet params;
   GeoReference geo;             // the map's georeferencing, for the GeoJSON result
   GridGeometry mapGrid;         // the grid positions are relative to (for the GeoJSON result)
+  // Where the planner plans (issue 24, core/planning/mission_area.hpp): the whole map, or the
+  // planning window of the mission's area. `problem` is in the window's frame; the result and
+  // the stream's positions are moved into the map's by the window's origin.
+  PlanningWindow window;
+  std::optional<MissionArea> area;
   GridGeometry eventGrid;       // the planner's cellsChanged grid (Planner::eventGrid)
   double pace = 0;              // steps per second, 0 = full speed
   MemoryEstimate memory;        // estimated peak while it runs (counted against the budget)

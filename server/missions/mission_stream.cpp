@@ -23,7 +23,8 @@ std::function<streams::Batch()> MissionStream::captureSnapshotLocked() {
   if (grid_.present()) {
     gridFrame = grid_.sharedFullFrame();
     const GridGeometry& g = grid_.geometry();
-    grid = {{"rows", g.rows}, {"cols", g.cols}, {"cell_size_m", g.cellWidth}};
+    grid = {{"rows", g.rows}, {"cols", g.cols}, {"cell_size_m", g.cellWidth},
+            {"origin", {gridOrigin_.x(), gridOrigin_.y()}}};
   }
   nlohmann::json j = {{"type", "snapshot"}, {"mission", id_},          {"status", enumName(status_.status())},
                       {"grid", grid},       {"rovers", nullptr},       {"step", poses_.step()},

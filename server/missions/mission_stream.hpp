@@ -7,7 +7,9 @@
 // dropped: "done" is only handed out once the client has everything before it.
 //
 // Protocol (documented in README.md):
-//   1. text   {"type":"snapshot", mission, status, grid{rows,cols,cell_size_m}|null, rovers[{trail,pose}], progress, metrics}
+//   1. text   {"type":"snapshot", mission, status, grid{rows,cols,cell_size_m,origin}|null, rovers[{trail,pose}], progress, metrics}
+//             — grid.origin [x, y]: where the grid's lower-left corner lies in the map's local
+//             frame ([0, 0] but for a mission in an area: its planning window's origin, issue 24)
 //   2. binary full grid (type 2), then diffs (type 1) as cells change
 //   3. text   {"type":"poses", step, rovers[{rover, append[[x,y]...], pose{x,y,heading_deg}, believed?[[x,y]...]}]}
 //             — a coverage mission under localisation error (issue 15): `append` and `pose` are the
@@ -63,6 +65,10 @@ class MissionStream : public EventSink, public streams::ChannelStream {
   void overlay(std::string_view kind, int rover, std::span<const Point2> points) override;
   void metrics(std::span<const Metric> metrics) override;
 
+  // Where the planner's grid lies on the map (its lower-left corner, local frame); set before the
+  // stream is shared (submit, or a replay from disk).
+  void setGridOrigin(const Eigen::Vector2d& origin) { gridOrigin_ = origin; }
+
   void setStatus(RunStatus status);
   // The final frame's content; wakes every subscriber.
   void finish(RunStatus status, const std::string& message, const nlohmann::json& metrics);
@@ -110,6 +116,7 @@ class MissionStream : public EventSink, public streams::ChannelStream {
   ProgressChannel progress_;
   StatusChannel status_;
   std::shared_ptr<const std::string> doneFrame_;
+  Eigen::Vector2d gridOrigin_{0, 0};
 };
 
 }  // namespace rover::missions

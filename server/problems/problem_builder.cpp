@@ -38,4 +38,12 @@ Raster<float> randomPdm(const terrain::Dem& dem, int components, std::uint64_t s
   return p;
 }
 
+Raster<float> uniformPdm(const terrain::Dem& dem, const std::vector<std::uint8_t>& inArea) {
+  std::vector<std::uint8_t> valid = inArea;
+  for (int i = 0; i < dem.geometry().cellCount(); ++i) valid[static_cast<std::size_t>(i)] &= !std::isnan(dem.z.at(i));
+  Raster<float> p = pdm::normaliseWeights(Raster<float>(dem.geometry(), 1.0f), valid);
+  p.geo = dem.z.geo;
+  return p;
+}
+
 }  // namespace rover::problems

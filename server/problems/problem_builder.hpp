@@ -34,4 +34,9 @@ PlanningProblem problemOnGrid(const coverage::WorldParams& world);
 // with data.
 Raster<float> randomPdm(const terrain::Dem& dem, int components, std::uint64_t seed);
 
+// Every cell `inArea` marks (and with data) the same mass, summing to 1: a mission area's
+// "no PDM" (issue 24), so the probability the team planners report lies in the area, not in the
+// keep-out margin of its window. Throws InvalidInput if no such cell exists.
+Raster<float> uniformPdm(const terrain::Dem& dem, const std::vector<std::uint8_t>& inArea);
+
 }  // namespace rover::problems

@@ -337,5 +337,59 @@ expect_status 0 "mission --keep-out"
 grep -q "^keep-out " "$OUT" || fail "mission --keep-out: no keep-out line in the summary"
 pass "coverage and mission keep out of --keep-out zones; a bad file exits 2 naming it"
 
+# Mission area (issue 24): --area plans in that rectangle at the DEM's resolution, reading only its
+# window (+ 4 cells); everything printed is in the whole DEM's frame. m.tif: 200 x 200 cells of
+# 0.5 m; the area 40 x 40 m (a team needs room to leave its formation: 10 safety distances).
+run terrain --preset mars --size 200 --cell 0.5 --seed 3 --out "$TMP/m.tif"
+expect_status 0 "terrain m.tif"
+run mission --dem "$TMP/m.tif" --area 30,25,70,65 --rovers 2 --targets 3 --seed 3 --json
+expect_status 0 "mission --area"
+python3 -c '
+import json, sys
+d = json.load(open(sys.argv[1]))
+assert d["area"] == {"bbox": [30, 25, 70, 65]}, d["area"]
+w = d["planning_window"]
+near = lambda a, b: abs(a - b) < 1e-6
+assert near(w["origin"][0], 28) and near(w["origin"][1], 23), w
+assert w["cols"] == 88 and w["rows"] == 88 and w["col0"] == 56 and w["row0"] == 66, w
+assert d["map"]["rows"] == 200 and d["map"]["cols"] == 200, d["map"]
+n = 0
+for r in d["rovers"]:
+    for x, y in r["path"]:
+        assert 30 <= x <= 70 and 25 <= y <= 65, (x, y)
+        n += 1
+for s in d["starts"]:
+    assert 30 <= s["x"] <= 70 and 25 <= s["y"] <= 65, s
+for t in d["targets"]:
+    assert 30 <= t["x"] <= 70 and 25 <= t["y"] <= 65, t
+assert n > 10, n
+# no PDM: uniform over the area; only search cells across its edge count as keep-out
+assert d["metrics"]["keep_out_probability"] < 0.1, d["metrics"]["keep_out_probability"]
+' "$OUT" || fail "mission --area: a point outside the area, or a bad window"
+run coverage --dem "$TMP/t.tif" --area 4,4,12,12 --seed 2 --json
+expect_status 0 "coverage --area"
+python3 -c '
+import json, sys
+d = json.load(open(sys.argv[1]))
+o = d["planning_window"]["origin"]
+assert abs(o[0] - 2) < 1e-6 and abs(o[1] - 2) < 1e-6, o
+assert d["world"]["dem_rows"] == 64
+for r in d["rovers"]:
+    for x, y in r["path"]:
+        assert 4 <= x <= 12 and 4 <= y <= 12, (x, y)
+' "$OUT" || fail "coverage --area: a point outside the area"
+run mission --dem "$TMP/m.tif" --area 30,25,170,65
+expect_status 2 "mission --area off the map"
+[ "$(lines "$ERR")" -eq 1 ] && grep -q -- "--area" "$ERR" && grep -q "off the map" "$ERR" || fail "mission --area off the map: stderr"
+run mission --dem "$TMP/m.tif" --area 30,25,70
+expect_status 2 "mission --area with 3 numbers"
+grep -q -- "--area" "$ERR" || fail "mission --area 3 numbers: stderr does not name --area"
+run mission --dem "$TMP/m.tif" --area 30,25,70,65 --cell 1
+expect_status 2 "mission --area with --cell"
+grep -q -- "--area" "$ERR" || fail "mission --area --cell: stderr does not name --area"
+run coverage --area 4,4,12,12
+expect_status 2 "coverage --area without --dem"
+pass "mission and coverage --area plan inside the area and report in the DEM's frame; bad areas exit 2"
+
 echo "$passed passed, 0 failed"
 exit 0

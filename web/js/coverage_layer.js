@@ -1,7 +1,8 @@
 // The coverage planner's cell grid drawn over the map: state (0 unknown, 1 free, 2 obstacle,
 // 3 visited; core/coverage/knowledge_map.hpp) and visit counts, one pixel a cell in an ImageData
-// that is scaled onto the map with the grid's own cell size. The grid covers the map from its
-// lower-left corner; row 0 is the north row. Fed by the stream's binary frames (live_stream.js),
+// that is scaled onto the map with the grid's own cell size. The grid's lower-left corner lies at
+// `origin` in the map's local frame ([0, 0]: the map's own corner; a mission in an area plans on
+// its planning window, whose origin the stream's snapshot gives); row 0 is the north row. Fed by the stream's binary frames (live_stream.js),
 // or rebuilt from the rovers' paths for replay.
 
 import { el } from './util.js';
@@ -31,6 +32,7 @@ export class CoverageLayer {
     this.rows = 0;
     this.cols = 0;
     this.cell = 1;
+    this.origin = [0, 0];
     this.canvas = document.createElement('canvas');
     this.ctx = this.canvas.getContext('2d');
     this.image = null;
@@ -45,10 +47,11 @@ export class CoverageLayer {
     return this.rows > 0;
   }
 
-  reset(rows = 0, cols = 0, cell = 1) {
+  reset(rows = 0, cols = 0, cell = 1, origin = [0, 0]) {
     this.rows = rows;
     this.cols = cols;
     this.cell = cell;
+    this.origin = origin;
     this.final = null;
     if (!rows || !cols) {
       this.image = this.pixels = this.state = this.visits = null;
@@ -69,7 +72,7 @@ export class CoverageLayer {
     if (buffer.byteLength < 16) return 0;
     const type = dv.getUint32(0, true), rows = dv.getUint32(4, true), cols = dv.getUint32(8, true);
     const count = dv.getUint32(12, true);
-    if (rows !== this.rows || cols !== this.cols) this.reset(rows, cols, this.cell);
+    if (rows !== this.rows || cols !== this.cols) this.reset(rows, cols, this.cell, this.origin);
     if (type === 2) {
       const n = rows * cols;
       if (buffer.byteLength < 16 + 5 * n) return 0;
@@ -109,6 +112,7 @@ export class CoverageLayer {
     if (!this.ready) return;
     if (!this.final) this.keepFinal();
     const { state, visits, pixels, rows, cols, cell } = this;
+    const [ox, oy] = this.origin;
     const fs = this.final.state;
     for (let i = 0; i < fs.length; i++) {
       state[i] = fs[i] === 3 ? 1 : fs[i];
@@ -117,7 +121,7 @@ export class CoverageLayer {
     for (const path of paths) {
       const last = Math.min(step, path.length - 1);
       for (let t = 0; t <= last; t++) {
-        const c = Math.floor(path[t][0] / cell), r = rows - 1 - Math.floor(path[t][1] / cell);
+        const c = Math.floor((path[t][0] - ox) / cell), r = rows - 1 - Math.floor((path[t][1] - oy) / cell);
         if (c < 0 || r < 0 || c >= cols || r >= rows) continue;
         const i = r * cols + c;
         state[i] = 3;
@@ -138,7 +142,7 @@ export class CoverageLayer {
 
   cellAt(x, y) {
     if (!this.ready) return null;
-    const c = Math.floor(x / this.cell), r = this.rows - 1 - Math.floor(y / this.cell);
+    const c = Math.floor((x - this.origin[0]) / this.cell), r = this.rows - 1 - Math.floor((y - this.origin[1]) / this.cell);
     if (c < 0 || r < 0 || c >= this.cols || r >= this.rows) return null;
     const i = r * this.cols + c;
     return { state: this.state[i], visits: this.visits[i] };
@@ -156,7 +160,8 @@ export class CoverageLayer {
       this.ctx.putImageData(this.image, 0, 0);
       this.dirty = false;
     }
-    const [sx, sy, sw, sh] = view.rectToScreen(0, 0, this.cols * this.cell, this.rows * this.cell);
+    const [ox, oy] = this.origin;
+    const [sx, sy, sw, sh] = view.rectToScreen(ox, oy, this.cols * this.cell, this.rows * this.cell);
     ctx.globalAlpha = opacity;
     ctx.imageSmoothingEnabled = false;
     ctx.drawImage(this.canvas, sx, sy, sw, sh);

@@ -398,6 +398,9 @@ export class MissionForm {
       input = $('m-pace');
     } else if (field === 'pdm') {
       input = $('m-pdm');
+    } else if (field.startsWith('area')) {
+      key = 'area';
+      input = $('m-area');
     } else if (field === 'planner') {
       input = $('m-planner');
     }
@@ -477,6 +480,11 @@ export class MissionForm {
     const paceText = $('m-pace').value.trim();
     const pace = Number(paceText);
     if (paceText === '' || !Number.isFinite(pace) || pace < 0 || pace > 1e6) errors.push(['pace', 'pace must be a number of steps per second in [0, 1e6]']);
+    // The mission area (issue 24): x0, y0, x1, y1 in the map's local metres; the server checks it
+    // against the map.
+    const areaText = $('m-area').value.trim();
+    const bbox = areaText === '' ? null : areaText.split(/[\s,]+/).map(Number);
+    if (bbox && (bbox.length !== 4 || !bbox.every(Number.isFinite))) errors.push(['area', 'area must be four numbers x0, y0, x1, y1 (metres)']);
     if (errors.length) {
       for (const [f, msg] of errors) this.fieldError(f, msg);
       showError($('m-error'), `not sent: ${errors.map(([f, m]) => `${f}: ${m}`).join('; ')}`);
@@ -493,6 +501,7 @@ export class MissionForm {
     // Keep-out zones (issue 13): the map's saved zones, when the operator keeps the box ticked.
     if ($('m-keep-out').checked && state.zones?.features?.length) body.keep_out = state.zones;
     if ($('m-name').value.trim()) body.name = $('m-name').value.trim();
+    if (bbox) body.area = { bbox };
     const button = $('m-launch');
     button.disabled = true;
     $('m-launch-status').textContent = 'sending…';

@@ -220,7 +220,7 @@ export class MissionView {
   handlers() {
     return {
       snapshot: (m) => {
-        if (m.grid) this.coverage.reset(m.grid.rows, m.grid.cols, m.grid.cell_size_m);
+        if (m.grid) this.coverage.reset(m.grid.rows, m.grid.cols, m.grid.cell_size_m, m.grid.origin ?? [0, 0]);
         this.trails.clear(m.rovers.length);
         for (const r of m.rovers) this.trails.append(r.rover, r.trail, r.pose);
         this.believed.clear();
