@@ -119,6 +119,12 @@ describe('mission area drawn on the map', { skip: missing || false, timeout: 300
     assert.deepEqual(await page.evaluate(() => window.__roverplanApp.areaTool.missionArea()), { bbox: drawn });
     await page.click('#tab-runs');
     await page.screenshot({ path: '/tmp/area-runs.png' });
+    // Duplicate and edit: the mission file keeps the area, the form and its outline get it back.
+    await page.evaluate(() => window.__roverplanApp.areaTool.clear());  // the form is hidden in Runs
+    await page.locator(`#run-list li[data-mission="${launched.id}"] button[aria-label^="duplicate"]`).click();
+    await page.waitForFunction(() => document.getElementById('m-area').value !== '', null, { timeout: 30000 });
+    assert.deepEqual(await fieldBbox(page), drawn);
+    assert.deepEqual(await page.evaluate(() => window.__roverplanApp.areaTool.outline), drawn);
     assert.deepEqual(errors, []);
     await context.close();
   });
