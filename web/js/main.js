@@ -13,6 +13,7 @@ import { counters, state } from './state.js';
 import { $, report, setErrorReporter } from './util.js';
 import { View3D } from './view3d.js';
 import { ZoneEditor } from './zones.js';
+import { AreaTool } from './area_tool.js';
 
 // --- status line: a message part and a live-mission part ---
 const statusParts = { msg: '', live: '' };
@@ -40,6 +41,7 @@ const layers = new LayerStack(view);
 const missionView = new MissionView({ view, layers, statusLine, selectMap, onFinished: () => runs.reload(), onShown: (m) => setAddress(m ? { mission: m.id } : state.map ? { map: state.map.id } : {}) });
 const pdmEditor = new PdmEditor({ view, layers });
 const missionForm = new MissionForm({ view, onLaunched: (m) => launched(m) });
+const areaTool = new AreaTool({ view, missionView, form: missionForm });
 const mapsPanel = new MapsPanel({ selectMap: chooseMap });
 const zoneEditor = new ZoneEditor({ view, layers });
 // The mission form's "respect keep-out zones": on by default when the map has saved zones.
@@ -63,7 +65,7 @@ const studies = new StudiesPanel({
   },
 });
 const view3d = new View3D({ container: $('view3d'), message: $('view3d-message'), layers, missionView });
-window.__roverplanApp = { view, layers, missionView, pdmEditor, missionForm, mapsPanel, zoneEditor, runs, studies, view3d, state };
+window.__roverplanApp = { view, layers, missionView, pdmEditor, missionForm, areaTool, mapsPanel, zoneEditor, runs, studies, view3d, state };
 
 async function selectMap(id) {
   if (!id) {
@@ -164,6 +166,7 @@ const TOOL_HELP = {
   pan: 'drag to pan · wheel or +/− to zoom',
   pdm: 'PDM: click to add a Gaussian · drag handles to shape it · drag elsewhere to pan',
   rovers: 'Mission: click to place the next rover, drag from it to set its heading',
+  area: 'Mission area: drag a rectangle on the map · Escape cancels',
   zones: 'Zones: click to add corners, click the first (or Enter) to close · drag a corner · Delete removes the selected',
 };
 state.on('tool', (tool) => {

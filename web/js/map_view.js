@@ -247,6 +247,7 @@ export class MapView {
     this.canvas.classList.toggle('tool-pdm', name === 'pdm');
     this.canvas.classList.toggle('tool-rovers', name === 'rovers');
     this.canvas.classList.toggle('tool-zones', name === 'zones');
+    this.canvas.classList.toggle('tool-area', name === 'area');
   }
 
   onHover(fn) {

@@ -6,6 +6,7 @@
 // presets ("paper 001", "fast preview") fill the form in.
 
 import { api } from './api.js';
+import { parseBbox } from './area_tool.js';
 import { state } from './state.js';
 import { $, el, fmt, roverColour, showError } from './util.js';
 
@@ -57,6 +58,14 @@ export class MissionForm {
       this.defaultsLoading = this.loadMapDefaults();  // load() waits for it before filling in
     });
     $('m-file').addEventListener('change', (e) => this.runFile(e.target));
+    // Drawing the mission area (area_tool.js) takes the map's pointer from rover placing.
+    state.on('tool', (tool) => {
+      if (tool !== 'area' || !this.placing) return;
+      this.placing = false;
+      $('m-place').setAttribute('aria-pressed', 'false');
+      $('m-place').textContent = 'place on map';
+      this.renderRovers();
+    });
     state.on('pdms', () => this.renderPdms());
     state.on('pdm-selected', () => this.renderPdms());
     this.setCount(Number($('m-rover-count').value) || 1);
@@ -419,6 +428,8 @@ export class MissionForm {
   // "Duplicate and edit": the file's map, planner, PDM, rovers, parameters, pace and name in the
   // form, to change and launch.
   async load(file, selectMap) {
+    // The form sends rectangles (area.bbox); a polygon area runs as it is from "open mission file".
+    if (file.area?.polygon) throw new Error('this mission\'s area is a polygon: the form draws rectangles only; run its mission file (open mission file) to plan it again');
     if (state.map?.id !== file.map) await selectMap(file.map);
     await this.defaultsLoading;
     const sel = $('m-planner');
@@ -442,6 +453,8 @@ export class MissionForm {
     this.renderRovers();
     if (file.pace !== undefined) $('m-pace').value = String(file.pace);
     $('m-name').value = file.name ? `${file.name} (copy)` : '';
+    $('m-area').value = file.area?.bbox ? file.area.bbox.join(', ') : '';
+    $('m-area').dispatchEvent(new Event('input'));  // the outline follows
     this.view.invalidate();
   }
 
@@ -483,8 +496,8 @@ export class MissionForm {
     // The mission area (issue 24): x0, y0, x1, y1 in the map's local metres; the server checks it
     // against the map.
     const areaText = $('m-area').value.trim();
-    const bbox = areaText === '' ? null : areaText.split(/[\s,]+/).map(Number);
-    if (bbox && (bbox.length !== 4 || !bbox.every(Number.isFinite))) errors.push(['area', 'area must be four numbers x0, y0, x1, y1 (metres)']);
+    const bbox = areaText === '' ? null : parseBbox(areaText);
+    if (areaText !== '' && !bbox) errors.push(['area', 'area must be four numbers x0, y0, x1, y1 (metres)']);
     if (errors.length) {
       for (const [f, msg] of errors) this.fieldError(f, msg);
       showError($('m-error'), `not sent: ${errors.map(([f, m]) => `${f}: ${m}`).join('; ')}`);

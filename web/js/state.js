@@ -12,7 +12,7 @@ class AppState extends EventTarget {
     this.pdms = [];        // the selected map's PDMs
     this.pdmId = '';       // the PDM shown and offered to missions
     this.planners = [];    // GET /api/planners
-    this.tool = 'pan';     // 'pan' | 'pdm' | 'rovers' | 'zones'
+    this.tool = 'pan';     // 'pan' | 'pdm' | 'rovers' | 'zones' | 'area'
     this.zones = null;     // the selected map's saved keep-out zones (GeoJSON, local frame)
   }
 
