@@ -286,6 +286,29 @@ class Coordinator {
     return traffic_.standing(k, p, after, end);
   }
 
+  // The steepest |roll| or |pitch| of a try (rad) and which of the two it was: what a leg's note
+  // reports beside the attitude check it was refused against (issue 27: a note that named "the
+  // attitude limit" while the operator's attitude_limit was 45° and the try tilted 15.0°).
+  struct Tilt {
+    double angle = 0;
+    bool pitch = false;
+  };
+  static Tilt steepestTilt(const std::vector<TrajectorySample>& samples) {
+    Tilt t;
+    for (const auto& s : samples) {
+      if (std::abs(s.roll) > t.angle) t = {std::abs(s.roll), false};
+      if (std::abs(s.pitch) > t.angle) t = {std::abs(s.pitch), true};
+    }
+    return t;
+  }
+  std::string tiltNote(const char* what, const Tilt& reached, const char* reachedBy = "the least tilted try") const {
+    constexpr double kDeg = 180.0 / std::numbers::pi;
+    char buf[200];
+    std::snprintf(buf, sizeof buf, "%s tilts past attitude_check %.1f° (%s reached %.1f° %s)",
+                  what, p_.attitudeCheck * kDeg, reachedBy, reached.angle * kDeg, reached.pitch ? "pitch" : "roll");
+    return buf;
+  }
+
   // The first sample with |roll| or |pitch| above the attitude check, if any.
   std::optional<Eigen::Vector2d> firstExceedance(const std::vector<TrajectorySample>& samples) const {
     if (!(p_.attitudeCheck > 0)) return std::nullopt;
@@ -343,6 +366,7 @@ class Coordinator {
     std::optional<PathStatus> noPath;
     int zoneTries = 0;       // tries refused for a sample in a keep-out zone
     int unturnableEnds = 0;  // tries refused for ending where the rover cannot turn
+    std::optional<Tilt> leastTilt;  // of the tries refused for tilting past the attitude check
     std::size_t zonesBefore = 0;  // keep-out zones of the previous try
     bool shortBefore = false;     // the previous try's plan ended short of a cut-off goal
     int unzonedRun = 0;           // policy_.unzonedConflictsEndReplans(): such tries in a row
@@ -386,8 +410,15 @@ class Coordinator {
       const Candidate c0 = simulateTry(k, path.waypoints, 0, slipSeed(0x51ee5ull, k, i, piece, attempt));
       if (cancelled()) return Outcome::Cancelled;
       std::optional<Eigen::Vector2d> steep = firstExceedance(c0.samples);
+      if (steep) {
+        const Tilt t = steepestTilt(c0.samples);
+        if (!leastTilt || t.angle < leastTilt->angle) leastTilt = t;
+      }
       // Tilted while turning in place at the start: no path can help, only driving out straight.
-      if (steep && policy_.recovers() && (*steep - here(k)).norm() < 0.1) return Outcome::TiltsAtStart;
+      if (steep && policy_.recovers() && (*steep - here(k)).norm() < 0.1) {
+        rec.note = tiltNote("turning where it stands, the rover", steepestTilt(c0.samples), "it");
+        return Outcome::TiltsAtStart;
+      }
       // Where the try ends the rover stops, and turns for its next move: ground it may turn on,
       // or the try is refused like a tilted one (a stop 0.2 m short of a valid vertex on 15°
       // ground left rovers unable to turn for the rest of the mission; ConflictPolicy::recovers).
@@ -448,8 +479,8 @@ class Coordinator {
         return Outcome::KeepOut;
       }
       if (!noPath) {
-        rec.note = unturnableEnds > 0 ? "every try tilts past the attitude limit or ends where the rover cannot turn"
-                                      : "every try tilts past the attitude limit";
+        if (!leastTilt) rec.note = "every try ends where the rover cannot turn";
+        else rec.note = tiltNote(unturnableEnds > 0 ? "every try ends where the rover cannot turn or" : "every try", *leastTilt);
         return Outcome::Steep;
       }
       rec.note = "no path: " + std::string(enumName(*noPath));
@@ -677,7 +708,6 @@ class Coordinator {
           rec.note.clear();
           continue;
         }
-        rec.note = "every try tilts past the attitude limit (turning where it stands)";
         rec.reason = LegReason::Steep;
         break;
       }

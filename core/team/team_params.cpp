@@ -81,7 +81,7 @@ ParamTable<P> buildTable() {
          [](auto& p) -> auto& { return p.mission.coordination.rrt.maxVertices; });
   addReal(t, realParam("clearance", 0.01, 1000, "m", "Search bounds: the box of start and goal grown by this (paper 001: 2 m)."),
           [](auto& p) -> auto& { return p.mission.coordination.rrt.clearance; });
-  addReal(t, common(realParam("attitude_limit", 0.1, 90, "deg", "Roll/pitch limit of a valid edge and of the exceedance count (15°).")),
+  addReal(t, common(realParam("attitude_limit", 0.1, 90, "deg", "Roll/pitch limit of a valid RRT* edge (ours 14°, paper 001: 15°). Simulated tries are checked against attitude_check, exceedances counted against exceedance_limit: raise them with it.")),
           [](auto& p) -> auto& { return p.mission.coordination.rrt.attitudeLimit; }, kDeg);
   addReal(t, realParam("goal_bias", 0, 1, "", "RRT* probability of sampling the goal."),
           [](auto& p) -> auto& { return p.mission.coordination.rrt.goalBias; });

@@ -615,6 +615,9 @@ TEST_CASE("stages: a rover that tilts turning where it stands drives straight ou
   const CoordinationResult paper = coordinateWith(tasks, planner, rover, PaperPolicy(p), p, 1);
   CHECK(paper.legs[0].status == LegStatus::Short);
   CHECK(paper.legs[0].reason == LegReason::Steep);
+  // The note names the check that refused the tries, its value and the tilt reached (issue 27:
+  // it said "the attitude limit" while the operator's attitude_limit was 45°).
+  CHECK(paper.legs[0].note == "every try tilts past attitude_check 15.0° (the least tilted try reached 20.0° pitch)");
 }
 
 namespace {
