@@ -14,6 +14,7 @@ import { $, report, setErrorReporter } from './util.js';
 import { View3D } from './view3d.js';
 import { ZoneEditor } from './zones.js';
 import { AreaTool } from './area_tool.js';
+import { bindUndoControls, history as undoHistory } from './undo_stack.js';
 
 // --- status line: a message part and a live-mission part ---
 const statusParts = { msg: '', live: '' };
@@ -65,7 +66,8 @@ const studies = new StudiesPanel({
   },
 });
 const view3d = new View3D({ container: $('view3d'), message: $('view3d-message'), layers, missionView });
-window.__roverplanApp = { view, layers, missionView, pdmEditor, missionForm, areaTool, mapsPanel, zoneEditor, runs, studies, view3d, state };
+bindUndoControls();
+window.__roverplanApp = { view, layers, missionView, pdmEditor, missionForm, areaTool, mapsPanel, zoneEditor, runs, studies, view3d, state, undoHistory };
 
 async function selectMap(id) {
   if (!id) {
@@ -167,7 +169,7 @@ const TOOL_HELP = {
   pdm: 'PDM: click to add a Gaussian · drag handles to shape it · drag elsewhere to pan',
   rovers: 'Mission: click to place the next rover, drag from it to set its heading',
   area: 'Mission area: drag a rectangle on the map · Escape cancels',
-  zones: 'Zones: click to add corners, click the first (or Enter) to close · drag a corner · Delete removes the selected',
+  zones: 'Zones: click to add corners, click the first (or Enter) to close · Backspace: last corner · drag a corner · Delete removes the selected · Ctrl+Z undoes',
 };
 state.on('tool', (tool) => {
   view.setTool(tool);

@@ -8,6 +8,7 @@
 import { api } from './api.js';
 import { parseBbox } from './area_tool.js';
 import { state } from './state.js';
+import { history } from './undo_stack.js';
 import { $, el, fmt, roverColour, showError } from './util.js';
 
 // A number as a person reads it: 6 significant digits, so a default converted from radians shows
@@ -266,9 +267,37 @@ export class MissionForm {
       return;
     }
     $('m-rover-count').classList.remove('invalid');
+    // Fewer rovers drop placements: a step of the undo history (the first call builds the list).
+    if (this.rovers.length && n !== this.rovers.length) {
+      const before = this.snapshot();
+      before.rovers = before.rovers.slice();
+      this.resize(n);
+      history.push(this, `${n} rovers`, before, this.snapshot());
+    } else {
+      this.resize(n);
+    }
+    this.renderRovers();
+    this.view.invalidate();
+  }
+
+  resize(n) {
     while (this.rovers.length < n) this.rovers.push(null);
     this.rovers.length = n;
     this.next = Math.min(this.next, n - 1);
+    const free = this.rovers.findIndex((r) => r === null);
+    if (free >= 0) this.next = free;
+  }
+
+  // --- undo (undo_stack.js): the rovers' starts and headings, their count ---
+  snapshot() {
+    return { rovers: this.rovers, next: this.next };
+  }
+
+  restore(s) {
+    this.rovers = s.rovers;
+    this.next = Math.min(s.next, this.rovers.length - 1);
+    $('m-rover-count').value = String(this.rovers.length);
+    $('m-rover-count').classList.remove('invalid');
     const free = this.rovers.findIndex((r) => r === null);
     if (free >= 0) this.next = free;
     this.renderRovers();
@@ -293,6 +322,7 @@ export class MissionForm {
     const m = state.map;
     if (!m || p.x < 0 || p.y < 0 || p.x > m.width_m || p.y > m.height_m) return false;
     const k = this.next;
+    this.before = JSON.parse(JSON.stringify(this.snapshot()));  // the placement and its heading drag: one step
     const heading = this.rovers[k]?.heading ?? 0;
     this.rovers[k] = { x: p.x, y: p.y, heading };
     this.drag = { k, sx: p.sx, sy: p.sy, x: p.x, y: p.y };
@@ -314,6 +344,7 @@ export class MissionForm {
 
   placeUp() {
     if (!this.drag) return;
+    history.push(this, `place rover ${this.drag.k + 1}`, this.before, this.snapshot());
     this.drag = null;
     const free = this.rovers.findIndex((r) => r === null);
     if (free >= 0) {
@@ -336,7 +367,9 @@ export class MissionForm {
           const v = Number(e.target.value);
           if (e.target.value.trim() === '' || !Number.isFinite(v)) return e.target.classList.add('invalid');
           e.target.classList.remove('invalid');
-          this.rovers[k] = { x: 0, y: 0, heading: 0, ...(this.rovers[k] || {}), [key]: v };
+          history.record(this, `rover ${k + 1} ${label}`, () => {
+            this.rovers[k] = { x: 0, y: 0, heading: 0, ...(this.rovers[k] || {}), [key]: v };
+          });
           this.view.invalidate();
         },
       });
