@@ -39,7 +39,10 @@ export class MissionForm {
       move: (p) => this.placeMove(p),
       up: (p, e, moved) => this.placeUp(moved),
     });
-    $('m-planner').addEventListener('change', () => this.renderParams());
+    $('m-planner').addEventListener('change', () => {
+      this.renderParams();
+      this.renderPdmNote();
+    });
     $('m-preset').addEventListener('change', () => this.applyPreset($('m-preset').value));
     $('m-rover-count').addEventListener('input', () => this.setCount(Number($('m-rover-count').value)));
     $('m-place').addEventListener('click', () => this.setPlacing(!this.placing));
@@ -48,10 +51,12 @@ export class MissionForm {
       this.launch();
     });
     $('m-pdm').addEventListener('change', () => {
+      this.pdmChosen = true;  // the operator's choice ("none" too) is kept over the default
       state.pdmId = $('m-pdm').value;
       state.emit('pdm-selected', state.pdmId);
     });
     state.on('map', () => {
+      this.pdmChosen = false;
       this.rovers = this.rovers.map(() => null);
       this.next = 0;
       this.renderRovers();
@@ -409,10 +414,36 @@ export class MissionForm {
     });
   }
 
+  // The PDM menu: the one shown on the map, else (until the operator picks one, "none" included)
+  // the map's most recently saved PDM — a search planner without one searches the whole map as
+  // equally likely, which sends the routes round the map's edges.
   renderPdms() {
     const sel = $('m-pdm');
     sel.replaceChildren(el('option', { value: '' }, 'none'), ...state.pdms.map((p) => el('option', { value: p.id }, p.name)));
-    sel.value = state.pdms.some((p) => p.id === state.pdmId) ? state.pdmId : '';
+    if (state.pdms.some((p) => p.id === state.pdmId)) {
+      sel.value = state.pdmId;
+    } else if (!this.pdmChosen && state.pdms.length) {
+      const latest = state.pdms.reduce((a, b) => (String(b.created_at || '') > String(a.created_at || '') ? b : a));
+      sel.value = latest.id;
+      state.pdmId = latest.id;
+      queueMicrotask(() => state.emit('pdm-selected', latest.id));  // the map shows it too
+    } else {
+      sel.value = '';
+    }
+    this.renderPdmNote();
+  }
+
+  // A warning under the menu when a planner that searches a PDM (ground dem_pdm) has none.
+  renderPdmNote() {
+    const note = $('m-pdm-note');
+    const p = this.planner;
+    const needs = p && p.ground === 'dem_pdm' && !$('m-pdm').value;
+    note.hidden = !needs;
+    note.textContent = needs
+      ? (state.pdms.length
+        ? `${p.name} without a PDM takes every place as equally likely: its route sweeps the whole map, edges first. Choose a PDM.`
+        : `${p.name} without a PDM takes every place as equally likely: its route sweeps the whole map, edges first. Make one in the PDM tab.`)
+      : '';
   }
 
   // --- errors ---

@@ -158,6 +158,7 @@ export class MissionView {
     this.incidents.clear();
     this.mission = null;
     this.result = null;
+    state.emit('result', null);
     this.cursor = null;
     this.clockTimes = null;
     this.progressCurve = { x: [], y: [] };
@@ -188,6 +189,7 @@ export class MissionView {
     this.incidents.clear();
     this.mission = mission;
     this.result = null;
+    state.emit('result', null);
     this.cursor = null;
     this.clockTimes = null;
     this.progressCurve = { x: [], y: [] };
@@ -327,6 +329,7 @@ export class MissionView {
         this.incidents.set(this.result, unit);
         this.layers.renderLegends();  // the incidents' kinds
         this.replay.enable(unit === 's' ? this.result.metrics.mission_time_s : this.trails.longest - 1, unit);
+        state.emit('result', this.result);  // the route profile's samples
       } catch (err) {
         if (err.status !== 409) report(err);
       }
@@ -555,7 +558,7 @@ export class MissionView {
 
   // The dock's panes: overview charts, the motion charts against time, the incident list.
   bindDockTabs() {
-    const tabs = ['overview', 'motion', 'incidents'];
+    const tabs = ['overview', 'motion', 'incidents', 'profile'];
     for (const name of tabs) {
       $(`dock-tab-${name}`).addEventListener('click', () => {
         for (const other of tabs) {
