@@ -100,17 +100,16 @@ export class RouteProfile {
       const worst = Math.max(Math.abs(rollS ? rollS.y[i] : 0), Math.abs(pitchS ? pitchS.y[i] : 0));
       out.over.push(worst > out.limit);
     }
-    // Slope along the track: the rise over the distance since the last sample that moved.
-    let last = 0;
-    for (let i = 0; i < n; i++) {
-      let s = null;
-      if (i > 0 && out.d[i] - out.d[last] > 1e-9 && out.elevation[i] !== null && out.elevation[last] !== null) {
-        s = (Math.atan2(out.elevation[i] - out.elevation[last], out.d[i] - out.d[last]) * 180) / Math.PI;
-        last = i;
-      } else if (i > 0) {
-        s = out.slope[i - 1];
-      }
-      out.slope.push(s);
+    // Slope along the track: the rise over a run of at least two map cells back along the track
+    // (a shorter run, e.g. a turn on the spot, would divide the elevation's noise by ~0).
+    const m = state.map;
+    const run = m ? 2 * Math.max(m.cell_size_m, m.cell_height_m ?? m.cell_size_m) : 0.5;
+    out.run = run;
+    for (let i = 0, b = 0; i < n; i++) {
+      while (b + 1 < i && out.d[i] - out.d[b + 1] >= run) b++;
+      const zi = out.elevation[i], zb = out.elevation[b];
+      out.slope.push(out.d[i] - out.d[b] >= run && zi !== null && zb !== null
+        ? (Math.atan2(zi - zb, out.d[i] - out.d[b]) * 180) / Math.PI : i > 0 ? out.slope[i - 1] : null);
     }
     return out;
   }
@@ -213,7 +212,7 @@ export class RouteProfile {
       ctx.textBaseline = 'top';
       for (const t of ticks(0, dMax, 3)) ctx.fillText(`${fmt(t)} m`, px(t), B + 3);
       // Reference lines: class limits (dashed amber/red), attitude limit (red).
-      const refLine = (v, colour, dash, label) => {
+      const refLine = (v, colour, dash, label, left = false) => {
         if (v < lo || v > hi) return;
         ctx.strokeStyle = colour;
         ctx.setLineDash(dash);
@@ -224,15 +223,15 @@ export class RouteProfile {
         ctx.setLineDash([]);
         if (label) {
           ctx.fillStyle = colour;
-          ctx.textAlign = 'right';
+          ctx.textAlign = left ? 'left' : 'right';
           ctx.textBaseline = v >= 0 ? 'bottom' : 'top';
-          ctx.fillText(label, R - 2, py(v) + (v >= 0 ? -1 : 1));
+          ctx.fillText(label, left ? L + 2 : R - 2, py(v) + (v >= 0 ? -1 : 1));
         }
       };
       const deg = (v) => `${fmt(Number(v.toPrecision(4)))}°`;
       if (p.key === 'slope') {
         for (const s of [1, -1]) {
-          refLine(s * d.classes.highRisk, '#f0b44c', [4, 3], s > 0 ? `high risk ${deg(d.classes.highRisk)}` : '');
+          refLine(s * d.classes.highRisk, '#f0b44c', [4, 3], s > 0 ? `high risk ${deg(d.classes.highRisk)}` : '', true);
           refLine(s * d.classes.impassable, OVER, [4, 3], s > 0 ? `impassable ${deg(d.classes.impassable)}` : '');
         }
       }
