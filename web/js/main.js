@@ -38,7 +38,8 @@ window.addEventListener('unhandledrejection', (e) => {
 
 // --- the modules ---
 const view = new MapView($('map-canvas'));
-view.padLeft = 256;  // the floating layers/legend panels
+view.padLeft = 256;   // the floating layers panel
+view.padRight = 256;  // the floating legend panel
 const layers = new LayerStack(view);
 const missionView = new MissionView({ view, layers, statusLine, selectMap, onFinished: () => runs.reload(), onShown: (m) => setAddress(m ? { mission: m.id } : state.map ? { map: state.map.id } : {}) });
 const pdmEditor = new PdmEditor({ view, layers });
@@ -218,6 +219,14 @@ for (const t of TABS) {
     }
   });
 }
+
+// --- the layer list folds (a click on its title) to show more of the map ---
+function foldLayers(folded) {
+  $('layers-toggle').setAttribute('aria-expanded', String(!folded));
+  $('layer-list').hidden = folded;
+}
+$('layers-toggle').addEventListener('click', () => foldLayers($('layers-toggle').getAttribute('aria-expanded') === 'true'));
+foldLayers(false);
 
 // --- map / 3D switch, zoom buttons, PNG export ---
 function showView(which) {
