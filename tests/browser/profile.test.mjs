@@ -88,6 +88,24 @@ suiteWithServer('route profile', { timeout: 240000 }, (ctx) => {
     await page.waitForFunction((i) => window.__roverplanApp.routeProfile.hover !== i, h.i);
   });
 
+  test('in the 3D view the hovered sample is a ball on the terrain', async () => {
+    await page.click('#view-3d');
+    await page.waitForFunction(() => window.__roverplan.view3dReady, null, { timeout: 60000 });
+    const box = await page.locator('#profile-chart').boundingBox();
+    await page.mouse.move(box.x + box.width * (0.75 + 0.25 * 0.5), box.y + box.height / 2);
+    await page.waitForFunction(() => window.__roverplanApp.view3d.marker?.parent);
+    const m = await page.evaluate(() => {
+      const { view3d, routeProfile: p } = window.__roverplanApp;
+      const { W, H } = view3d.extent;
+      return { px: view3d.marker.position.x, pz: view3d.marker.position.z, x: p.data.x[p.hover] - W / 2, z: H / 2 - p.data.y[p.hover] };
+    });
+    assert.ok(Math.abs(m.px - m.x) < 1e-6 && Math.abs(m.pz - m.z) < 1e-6, JSON.stringify(m));
+    await page.screenshot({ path: join(shotsDir, 'tools-profile-3d.png') });
+    await page.mouse.move(box.x + 2, box.y - 20);  // off the chart: the ball goes
+    await page.waitForFunction(() => !window.__roverplanApp.view3d.marker);
+    await page.click('#view-map');
+  });
+
   test('the profile exports as CSV (its samples) and PNG', async () => {
     const d = await page.evaluate(() => window.__roverplanApp.routeProfile.data);
     const [csvDl] = await Promise.all([page.waitForEvent('download'), page.click('#profile-csv')]);

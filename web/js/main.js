@@ -71,6 +71,7 @@ const view3d = new View3D({ container: $('view3d'), message: $('view3d-message')
 const routeProfile = new RouteProfile({ view, layers, missionView });
 state.on('result', () => routeProfile.update());
 bindUndoControls();
+routeProfile.onHover = (p) => view3d.setMarker(p);
 window.__roverplanApp = { view, layers, missionView, pdmEditor, missionForm, areaTool, mapsPanel, zoneEditor, runs, studies, view3d, state, undoHistory, routeProfile };
 
 async function selectMap(id) {

@@ -5,7 +5,8 @@
 // class bands (high risk from 10°, impassable from 15°, or the mission's own high_risk_deg /
 // impassable_deg), the roll and pitch panels the mission's attitude limit (metrics
 // attitude_limit_deg); samples past the limit are marked red. A click on a trail (pan tool) or the
-// rover menu chooses the rover; hovering the chart moves a marker on the map; CSV and PNG export.
+// rover menu chooses the rover; hovering the chart moves a marker on the map and in the 3D view;
+// CSV and PNG export.
 //
 // Samples: series point i (x = mission time in s for team missions, a move number for coverage)
 // is path point round(x / Δx) — one path point a second (team) or a move (coverage), as the
@@ -32,6 +33,7 @@ export class RouteProfile {
     this.rover = -1;
     this.data = null;     // {rover, d[], x[], y[], elevation[], slope[], roll[], pitch[], over[], limit, classes}
     this.hover = -1;      // the sample under the chart's cursor
+    this.onHover = () => {};  // set by the page: the 3D view's marker follows
     this.canvas = $('profile-chart');
     this.select = $('profile-rover');
     this.select.addEventListener('change', () => this.choose(Number(this.select.value)));
@@ -60,6 +62,7 @@ export class RouteProfile {
     this.select.value = String(k);
     this.data = k >= 0 ? this.compute(k) : null;
     this.hover = -1;
+    this.onHover(null);
     $('profile-csv').disabled = !this.data;
     $('profile-png').disabled = !this.data;
     this.renderSummary();
@@ -316,6 +319,7 @@ export class RouteProfile {
       : '';
     this.draw();
     this.view.invalidate();
+    this.onHover(d && i >= 0 ? { x: d.x[i], y: d.y[i] } : null);
   }
 
   drawMarker(ctx, view) {
