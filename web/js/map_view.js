@@ -100,7 +100,9 @@ export class MapView {
   fit() {
     // Leave the floating panels (layers left, legend right) free when there is room for it.
     const pad = 16, left = this.cssW - this.padLeft > 400 ? this.padLeft : 0;
-    const right = this.cssW - left - this.padRight > 400 ? this.padRight : 0;
+    // The legend's side is kept free whenever 300 px are left for the map: a smaller map beats
+    // one whose east part lies under the legend (clicks there would land on the panel).
+    const right = this.cssW - left - this.padRight >= 300 ? this.padRight : 0;
     const w = this.cssW - 2 * pad - left - right, h = this.cssH - 2 * pad;
     this.scale = Math.max(1e-6, Math.min(w / this.widthM, h / this.heightM));
     this.cx = this.widthM / 2 - (left - right) / 2 / this.scale;
