@@ -11,8 +11,9 @@
 
 import { api } from './api.js';
 import { state } from './state.js';
+import { rampLegend } from './legend.js';
 import { history } from './undo_stack.js';
-import { $, el, fmt, report, showError } from './util.js';
+import { $, el, report, showError } from './util.js';
 
 const GRID = 160;           // overlay cells on the longer side
 const MAX_COMPONENTS = 256; // the server's limit (core/pdm/pdm.hpp kMaxComponents)
@@ -431,24 +432,8 @@ export class PdmEditor {
 
   legend() {
     if (!this.showOverlay()) return null;
-    const c = document.createElement('canvas');
-    c.width = 200;
-    c.height = 26;
-    const ctx = c.getContext('2d');
-    ctx.fillStyle = '#fff';
-    ctx.fillRect(0, 0, 200, 26);
-    for (let x = 0; x < 190; x++) {
-      const [r, g, b] = rampColour(x / 189);
-      ctx.fillStyle = `rgb(${r},${g},${b})`;
-      ctx.fillRect(5 + x, 2, 1, 12);
-    }
-    ctx.fillStyle = '#000';
-    ctx.font = '10px system-ui, sans-serif';
-    ctx.textBaseline = 'top';
-    ctx.fillText('0', 5, 15);
-    ctx.textAlign = 'right';
-    ctx.fillText(`${fmt(this.overlayMax)} /m² (density)`, 195, 15);
-    return c;
+    const hi = this.overlayMax > 0 ? this.overlayMax : 1;
+    return rampLegend({ lo: 0, hi, unit: '/m²', colourAt: (v) => rampColour(v / hi) });
   }
 
   // --- panel ---
