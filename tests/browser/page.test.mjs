@@ -24,7 +24,8 @@ suiteWithServer('page', { timeout: 180000 }, (ctx) => {
     await page.check('#layer-traversability');
     await page.waitForFunction(() => window.__roverplan.layersLoaded.includes('traversability'));
     await page.waitForFunction(() => window.__roverplanApp.layers.rasters.traversability && window.__roverplanApp.layers.rasters.elevation);
-    await page.waitForSelector('#legend-list [data-layer="traversability"] canvas');
+    // The page draws the class legend itself (legend.js): a swatch and a name per class.
+    await page.waitForSelector('#legend-list [data-layer="traversability"] .legend-class');
     const p = await mapPoint(page, 75, 75);
     await page.mouse.move(p.x, p.y);
     await page.mouse.move(p.x + 3, p.y + 2);

@@ -9,6 +9,7 @@
 // missing_field area).
 
 import { state } from './state.js';
+import { history } from './undo_stack.js';
 import { $ } from './util.js';
 
 const FORM_COLOUR = '#ffd34d';
@@ -37,8 +38,14 @@ export class AreaTool {
       up: (p) => this.up(p),
     });
     $('m-area').addEventListener('input', () => this.fromField());
+    // Typing: one undo step per committed change of the field.
+    this.committed = '';
+    $('m-area').addEventListener('change', () => {
+      history.push(this, 'type the area', { text: this.committed }, this.snapshot());
+      this.committed = $('m-area').value;
+    });
     $('m-area-draw').addEventListener('click', () => state.setTool(state.tool === 'area' ? 'pan' : 'area'));
-    $('m-area-clear').addEventListener('click', () => this.clear());
+    $('m-area-clear').addEventListener('click', () => this.clear(true));
     // Escape wherever the focus is (the canvas after a press, the button after arming it).
     window.addEventListener('keydown', (e) => {
       if (e.key !== 'Escape' || state.tool !== 'area') return;
@@ -69,14 +76,30 @@ export class AreaTool {
   setBbox(b) {
     // Not fmt(): its thousands separators are commas. Micrometres hide the float noise of k × cell.
     $('m-area').value = b.map((v) => String(Number(v.toFixed(6)))).join(', ');
+    this.committed = $('m-area').value;
     this.fromField();
   }
 
-  clear() {
+  // --- undo (undo_stack.js): the area field's text ---
+  snapshot() {
+    return { text: $('m-area').value };
+  }
+
+  restore(s) {
+    $('m-area').value = s.text;
+    this.committed = s.text;
+    this.fromField();
+  }
+
+  // `record`: the "clear" button (a step of the undo history); a new map clears without one.
+  clear(record = false) {
+    const before = this.snapshot();
     $('m-area').value = '';
+    this.committed = '';
     this.drag = null;
     if (state.tool === 'area') state.setTool('pan');
     this.fromField();
+    if (record) history.push(this, 'clear the area', before, this.snapshot());
   }
 
   // Escape: the drawing in progress is dropped, the field keeps what it had.
@@ -127,7 +150,9 @@ export class AreaTool {
     this.drag = null;
     // A click without a drag draws nothing; the tool stays armed for the drag.
     if (d.x1 === d.x || d.y1 === d.y) return this.view.invalidate();
+    const before = this.snapshot();
     this.setBbox([Math.min(d.x, d.x1), Math.min(d.y, d.y1), Math.max(d.x, d.x1), Math.max(d.y, d.y1)]);
+    history.push(this, 'draw the area', before, this.snapshot());
     this.form.clearFieldError('area');
     state.setTool('pan');
   }

@@ -23,7 +23,7 @@ function prepare(canvas) {
 }
 
 // "Nice" tick values covering [lo, hi].
-function ticks(lo, hi, count = 4) {
+export function ticks(lo, hi, count = 4) {
   if (!(hi > lo)) return [lo];
   const raw = (hi - lo) / count;
   const pow = 10 ** Math.floor(Math.log10(raw));

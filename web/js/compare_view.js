@@ -145,7 +145,7 @@ export class CompareView {
       this.results.forEach((r, i) => {
         for (const [k, s] of Object.entries(r.series || {})) {
           if (c.key.endsWith('_') ? !k.startsWith(c.key) : k !== c.key) continue;
-          const rover = c.key.endsWith('_') ? ` rover ${k.slice(c.key.length)}` : '';
+          const rover = c.key.endsWith('_') ? ` rover ${Number(k.slice(c.key.length)) + 1}` : '';  // 1-based for people
           series.push({ x: s.x, y: s.y, colour: i === 0 ? A_COLOUR : B_COLOUR, dash: i === 0 ? null : [5, 3], label: `${i === 0 ? 'A' : 'B'}${rover}` });
         }
       });

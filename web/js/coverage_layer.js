@@ -9,7 +9,9 @@ import { el } from './util.js';
 
 // RGBA per state / visit count.
 const FREE = [110, 170, 255, 70];
-const OBSTACLE = [170, 25, 40, 220];
+// Obstacles near-black violet: far from every visit colour (4+ visits is red), in hue and in
+// lightness, so the two cannot be taken for each other (issue 27).
+const OBSTACLE = [40, 24, 64, 230];
 const VISITS = [
   [60, 205, 95, 170],   // 1 visit
   [245, 215, 55, 190],  // 2
@@ -169,10 +171,10 @@ export class CoverageLayer {
 
   static legend() {
     const css = ([r, g, b, a]) => `rgba(${r},${g},${b},${(a / 255).toFixed(2)})`;
-    const item = (c, label) => el('span', {}, el('span', { class: 'swatch', style: `background:${css(c)}` }), label);
-    return el('div', { class: 'swatches' },
+    const item = (c, label) => el('span', { class: 'legend-class' }, el('span', { class: 'swatch', style: `background:${css(c)}` }), label);
+    return el('div', { class: 'legend-classes' },
       item(FREE, 'sensed free'), item(OBSTACLE, 'obstacle'),
-      item(VISITS[0], '1 visit'), item(VISITS[1], '2'), item(VISITS[2], '3'), item(VISITS[3], '4+'));
+      item(VISITS[0], '1 visit'), item(VISITS[1], '2 visits'), item(VISITS[2], '3 visits'), item(VISITS[3], '4+ visits'));
   }
 }
 

@@ -2,8 +2,9 @@
 // as OpenLayers tile layers under the map view (tiles of GET /api/maps/{id}/tiles/..., at the
 // resolution the view shows: one DEM cell a tile pixel when zoomed in), plus overlay layers other
 // modules register (coverage, trails). Each layer has a visibility checkbox and an opacity slider;
-// the legend panel shows the legend of each visible layer (cut from the strip under the server's
-// small PNG overview of the layer). Also loads the float32 rasters behind the cursor readout.
+// the legend panel shows the legend of each visible layer, drawn by the page (legend.js: ramps
+// with ticks, class swatches; the strip under the server's small PNG overview only for maps too
+// big for the float32 layers). Also loads the float32 rasters behind the cursor readout.
 
 import TileLayer from 'ol/layer/Tile.js';
 import XYZ from 'ol/source/XYZ.js';
@@ -12,6 +13,7 @@ import TileState from 'ol/TileState.js';
 import { fetchF32, fetchImage, layerUrl, request } from './api.js';
 import { counters, state } from './state.js';
 import { $, el, fmt } from './util.js';
+import { CLASSES, HYPSOMETRIC, PERCEPTUAL, SLOPE, classLegend, elevationRange, maxFinite, rampColour, rampLegend } from './legend.js';
 
 const LEGEND_SIZE = 256;             // legends come from the 256-px overview, shown 1:1 (readable)
 const MAX_F32_CELLS = 25_000_000;    // larger maps: no per-cell readout (100 MB a layer)
@@ -211,6 +213,7 @@ export class LayerStack {
       if (gen !== this.generation || (name === 'pdm' && pdm !== state.pdmId)) return;
       this.rasters[name] = r;
       if (name === 'elevation') state.emit('elevation', r);
+      if (name === 'elevation' || name === 'pdm') this.renderLegends();  // their ramps' ranges
     } catch (err) {
       if (err.code !== 'aborted') console.warn(`readout layer ${name}: ${err.message}`);
     }
@@ -269,13 +272,44 @@ export class LayerStack {
     this.renderLegends();
   }
 
+  // The page's own legend of a server layer (legend.js), or null (then the server's strip).
+  drawnLegend(l) {
+    const map = state.map;
+    if (!map) return null;
+    if (l.id === 'elevation') {
+      const r = this.rasters.elevation;
+      if (!r) return null;
+      const { lo, hi } = elevationRange(r);
+      return el('div', {}, rampLegend({ lo, hi, unit: 'm', colourAt: (v) => rampColour(HYPSOMETRIC, (v - lo) / (hi - lo)) }),
+        el('div', { class: 'muted small' }, `2–98 % of the heights; the map spans ${fmt(map.elevation.min)} … ${fmt(map.elevation.max)} m`));
+    }
+    if (l.id === 'slope') {
+      return el('div', {}, rampLegend({
+        lo: 0, hi: 45, unit: '°', colourAt: (v) => rampColour(SLOPE, v),
+        marks: [{ v: 0, label: '0' }, { v: 10, label: '10' }, { v: 15, label: '15' }, { v: 30, label: '30' }, { v: 45, label: '45' }],
+      }), el('div', { class: 'muted small' }, 'high risk from 10°, impassable from 15°'));
+    }
+    if (l.id === 'traversability') {
+      return classLegend(CLASSES.map((c) => ({ colour: c.colour, name: c.name, note: map.classes && map.classes[c.key] !== undefined ? `${fmt(map.classes[c.key], 2)} %` : '' })));
+    }
+    if (l.id === 'hillshade') return el('div', { class: 'muted small' }, 'grey shaded relief (light: slopes facing the sun)');
+    if (l.id === 'pdm') {
+      const r = this.rasters.pdm;
+      if (!r) return null;
+      const hi = maxFinite(r);
+      return el('div', {}, rampLegend({ lo: 0, hi, colourAt: (v) => rampColour(PERCEPTUAL, v / hi) }),
+        el('div', { class: 'muted small' }, 'probability mass per cell'));
+    }
+    return null;
+  }
+
   renderLegends() {
     if (!this.legendNode) return;
     const items = [];
     for (const l of this.layers) {
       if (!l.visible) continue;
       let body = null;
-      if (l.kind === 'png') body = l.legendCanvas;
+      if (l.kind === 'png') body = this.drawnLegend(l) || l.legendCanvas;
       else if (l.legend) body = l.legend();
       if (!body) continue;
       items.push(el('div', { class: 'legend-item', dataset: { layer: l.id } }, el('div', { class: 'legend-name' }, l.legendTitle || l.label), body));

@@ -14,6 +14,8 @@ import { $, report, setErrorReporter } from './util.js';
 import { View3D } from './view3d.js';
 import { ZoneEditor } from './zones.js';
 import { AreaTool } from './area_tool.js';
+import { RouteProfile } from './route_profile.js';
+import { bindUndoControls, history as undoHistory } from './undo_stack.js';
 
 // --- status line: a message part and a live-mission part ---
 const statusParts = { msg: '', live: '' };
@@ -36,7 +38,8 @@ window.addEventListener('unhandledrejection', (e) => {
 
 // --- the modules ---
 const view = new MapView($('map-canvas'));
-view.padLeft = 256;  // the floating layers/legend panels
+view.padLeft = 256;   // the floating layers panel
+view.padRight = 256;  // the floating legend panel
 const layers = new LayerStack(view);
 const missionView = new MissionView({ view, layers, statusLine, selectMap, onFinished: () => runs.reload(), onShown: (m) => setAddress(m ? { mission: m.id } : state.map ? { map: state.map.id } : {}) });
 const pdmEditor = new PdmEditor({ view, layers });
@@ -65,7 +68,11 @@ const studies = new StudiesPanel({
   },
 });
 const view3d = new View3D({ container: $('view3d'), message: $('view3d-message'), layers, missionView });
-window.__roverplanApp = { view, layers, missionView, pdmEditor, missionForm, areaTool, mapsPanel, zoneEditor, runs, studies, view3d, state };
+const routeProfile = new RouteProfile({ view, layers, missionView });
+state.on('result', () => routeProfile.update());
+bindUndoControls();
+routeProfile.onHover = (p) => view3d.setMarker(p);
+window.__roverplanApp = { view, layers, missionView, pdmEditor, missionForm, areaTool, mapsPanel, zoneEditor, runs, studies, view3d, state, undoHistory, routeProfile };
 
 async function selectMap(id) {
   if (!id) {
@@ -165,15 +172,20 @@ view.onHover((p) => {
 const TOOL_HELP = {
   pan: 'drag to pan · wheel or +/− to zoom',
   pdm: 'PDM: click to add a Gaussian · drag handles to shape it · drag elsewhere to pan',
+  'pdm-paint': 'PDM brush: drag to paint Gaussians along the stroke · Shift/Alt + drag erases · the map does not pan · Ctrl+Z undoes a stroke',
   rovers: 'Mission: click to place the next rover, drag from it to set its heading',
   area: 'Mission area: drag a rectangle on the map · Escape cancels',
-  zones: 'Zones: click to add corners, click the first (or Enter) to close · drag a corner · Delete removes the selected',
+  zones: 'Zones: click to add corners, click the first (or Enter) to close · Backspace: last corner · drag a corner · Delete removes the selected · Ctrl+Z undoes',
+};
+const toolHelp = () => {
+  $('tool-label').textContent = TOOL_HELP[state.tool === 'pdm' && pdmEditor.mode === 'paint' ? 'pdm-paint' : state.tool] || '';
 };
 state.on('tool', (tool) => {
   view.setTool(tool);
-  $('tool-label').textContent = TOOL_HELP[tool] || '';
+  toolHelp();
   view.invalidate();
 });
+state.on('pdm-mode', toolHelp);
 state.on('pdm-selected', (id) => layers.setPdm(id));
 
 const TABS = ['maps', 'pdm', 'mission', 'runs', 'studies'];
@@ -208,6 +220,14 @@ for (const t of TABS) {
     }
   });
 }
+
+// --- the layer list folds (a click on its title) to show more of the map ---
+function foldLayers(folded) {
+  $('layers-toggle').setAttribute('aria-expanded', String(!folded));
+  $('layer-list').hidden = folded;
+}
+$('layers-toggle').addEventListener('click', () => foldLayers($('layers-toggle').getAttribute('aria-expanded') === 'true'));
+foldLayers(false);
 
 // --- map / 3D switch, zoom buttons, PNG export ---
 function showView(which) {

@@ -29,6 +29,7 @@ export class MapView {
     this.cy = 50;
     this.scale = 1;          // CSS pixels per metre
     this.padLeft = 0;        // CSS pixels covered by floating panels on the left
+    this.padRight = 0;       // and on the right (the legend)
     this.dpr = 1;
     this.cssW = 1;
     this.cssH = 1;
@@ -97,11 +98,14 @@ export class MapView {
   }
 
   fit() {
-    // Leave the floating layer/legend panels (left) free when there is room for it.
+    // Leave the floating panels (layers left, legend right) free when there is room for it.
     const pad = 16, left = this.cssW - this.padLeft > 400 ? this.padLeft : 0;
-    const w = this.cssW - 2 * pad - left, h = this.cssH - 2 * pad;
+    // The legend's side is kept free whenever 300 px are left for the map: a smaller map beats
+    // one whose east part lies under the legend (clicks there would land on the panel).
+    const right = this.cssW - left - this.padRight >= 300 ? this.padRight : 0;
+    const w = this.cssW - 2 * pad - left - right, h = this.cssH - 2 * pad;
     this.scale = Math.max(1e-6, Math.min(w / this.widthM, h / this.heightM));
-    this.cx = this.widthM / 2 - left / 2 / this.scale;
+    this.cx = this.widthM / 2 - (left - right) / 2 / this.scale;
     this.cy = this.heightM / 2;
     this.viewChanged();
   }

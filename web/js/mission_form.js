@@ -8,6 +8,7 @@
 import { api } from './api.js';
 import { parseBbox } from './area_tool.js';
 import { state } from './state.js';
+import { history } from './undo_stack.js';
 import { $, el, fmt, roverColour, showError } from './util.js';
 
 // A number as a person reads it: 6 significant digits, so a default converted from radians shows
@@ -38,7 +39,10 @@ export class MissionForm {
       move: (p) => this.placeMove(p),
       up: (p, e, moved) => this.placeUp(moved),
     });
-    $('m-planner').addEventListener('change', () => this.renderParams());
+    $('m-planner').addEventListener('change', () => {
+      this.renderParams();
+      this.renderPdmNote();
+    });
     $('m-preset').addEventListener('change', () => this.applyPreset($('m-preset').value));
     $('m-rover-count').addEventListener('input', () => this.setCount(Number($('m-rover-count').value)));
     $('m-place').addEventListener('click', () => this.setPlacing(!this.placing));
@@ -47,10 +51,12 @@ export class MissionForm {
       this.launch();
     });
     $('m-pdm').addEventListener('change', () => {
+      this.pdmChosen = true;  // the operator's choice ("none" too) is kept over the default
       state.pdmId = $('m-pdm').value;
       state.emit('pdm-selected', state.pdmId);
     });
     state.on('map', () => {
+      this.pdmChosen = false;
       this.rovers = this.rovers.map(() => null);
       this.next = 0;
       this.renderRovers();
@@ -266,9 +272,37 @@ export class MissionForm {
       return;
     }
     $('m-rover-count').classList.remove('invalid');
+    // Fewer rovers drop placements: a step of the undo history (the first call builds the list).
+    if (this.rovers.length && n !== this.rovers.length) {
+      const before = this.snapshot();
+      before.rovers = before.rovers.slice();
+      this.resize(n);
+      history.push(this, `${n} rovers`, before, this.snapshot());
+    } else {
+      this.resize(n);
+    }
+    this.renderRovers();
+    this.view.invalidate();
+  }
+
+  resize(n) {
     while (this.rovers.length < n) this.rovers.push(null);
     this.rovers.length = n;
     this.next = Math.min(this.next, n - 1);
+    const free = this.rovers.findIndex((r) => r === null);
+    if (free >= 0) this.next = free;
+  }
+
+  // --- undo (undo_stack.js): the rovers' starts and headings, their count ---
+  snapshot() {
+    return { rovers: this.rovers, next: this.next };
+  }
+
+  restore(s) {
+    this.rovers = s.rovers;
+    this.next = Math.min(s.next, this.rovers.length - 1);
+    $('m-rover-count').value = String(this.rovers.length);
+    $('m-rover-count').classList.remove('invalid');
     const free = this.rovers.findIndex((r) => r === null);
     if (free >= 0) this.next = free;
     this.renderRovers();
@@ -293,6 +327,7 @@ export class MissionForm {
     const m = state.map;
     if (!m || p.x < 0 || p.y < 0 || p.x > m.width_m || p.y > m.height_m) return false;
     const k = this.next;
+    this.before = JSON.parse(JSON.stringify(this.snapshot()));  // the placement and its heading drag: one step
     const heading = this.rovers[k]?.heading ?? 0;
     this.rovers[k] = { x: p.x, y: p.y, heading };
     this.drag = { k, sx: p.sx, sy: p.sy, x: p.x, y: p.y };
@@ -314,6 +349,7 @@ export class MissionForm {
 
   placeUp() {
     if (!this.drag) return;
+    history.push(this, `place rover ${this.drag.k + 1}`, this.before, this.snapshot());
     this.drag = null;
     const free = this.rovers.findIndex((r) => r === null);
     if (free >= 0) {
@@ -336,7 +372,9 @@ export class MissionForm {
           const v = Number(e.target.value);
           if (e.target.value.trim() === '' || !Number.isFinite(v)) return e.target.classList.add('invalid');
           e.target.classList.remove('invalid');
-          this.rovers[k] = { x: 0, y: 0, heading: 0, ...(this.rovers[k] || {}), [key]: v };
+          history.record(this, `rover ${k + 1} ${label}`, () => {
+            this.rovers[k] = { x: 0, y: 0, heading: 0, ...(this.rovers[k] || {}), [key]: v };
+          });
           this.view.invalidate();
         },
       });
@@ -376,10 +414,36 @@ export class MissionForm {
     });
   }
 
+  // The PDM menu: the one shown on the map, else (until the operator picks one, "none" included)
+  // the map's most recently saved PDM — a search planner without one searches the whole map as
+  // equally likely, which sends the routes round the map's edges.
   renderPdms() {
     const sel = $('m-pdm');
     sel.replaceChildren(el('option', { value: '' }, 'none'), ...state.pdms.map((p) => el('option', { value: p.id }, p.name)));
-    sel.value = state.pdms.some((p) => p.id === state.pdmId) ? state.pdmId : '';
+    if (state.pdms.some((p) => p.id === state.pdmId)) {
+      sel.value = state.pdmId;
+    } else if (!this.pdmChosen && state.pdms.length) {
+      const latest = state.pdms.reduce((a, b) => (String(b.created_at || '') > String(a.created_at || '') ? b : a));
+      sel.value = latest.id;
+      state.pdmId = latest.id;
+      queueMicrotask(() => state.emit('pdm-selected', latest.id));  // the map shows it too
+    } else {
+      sel.value = '';
+    }
+    this.renderPdmNote();
+  }
+
+  // A warning under the menu when a planner that searches a PDM (ground dem_pdm) has none.
+  renderPdmNote() {
+    const note = $('m-pdm-note');
+    const p = this.planner;
+    const needs = p && p.ground === 'dem_pdm' && !$('m-pdm').value;
+    note.hidden = !needs;
+    note.textContent = needs
+      ? (state.pdms.length
+        ? `${p.name} without a PDM takes every place as equally likely: its route sweeps the whole map, edges first. Choose a PDM.`
+        : `${p.name} without a PDM takes every place as equally likely: its route sweeps the whole map, edges first. Make one in the PDM tab.`)
+      : '';
   }
 
   // --- errors ---

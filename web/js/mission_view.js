@@ -84,7 +84,7 @@ export class MissionView {
     this.renderTimes = [];
     this.stream = new LiveStream(this.handlers());
 
-    const covLayer = layers.addOverlay({ id: 'coverage', label: 'coverage', legendTitle: 'coverage grid (cell state, visits)', visible: true, opacity: 0.75, legend: () => (this.coverage.ready ? CoverageLayer.legend() : null) });
+    const covLayer = layers.addOverlay({ id: 'coverage', label: 'coverage', legendTitle: 'coverage grid (cell state, visits)', visible: true, opacity: 0.6, legend: () => (this.coverage.ready ? CoverageLayer.legend() : null) });
     const trailLayer = layers.addOverlay({ id: 'trails', label: 'trails', legendTitle: 'rover trails', visible: true, opacity: 0.95, legend: () => this.trailLegend() });
     const planLayer = layers.addOverlay({ id: 'plan', label: 'team plan', legendTitle: 'team plan', visible: true, opacity: 0.9, legend: () => (this.plan.route.length || this.plan.paths.length ? el('div', { class: 'muted small' }, 'white: team route through the numbered targets; dashed: each rover\'s planned RRT* path') : null) });
     view.addLayer({ id: 'coverage', order: 30, draw: (ctx, v) => covLayer.visible && this.coverage.draw(ctx, v, covLayer.opacity) });
@@ -93,6 +93,10 @@ export class MissionView {
     const beliefLayer = layers.addOverlay({ id: 'believed', label: 'believed trails', legendTitle: 'believed trails (localisation error)', visible: true, opacity: 0.95, legend: () => this.beliefLegend() });
     view.addLayer({ id: 'believed', order: 41, draw: (ctx, v) => beliefLayer.visible && this.hasBeliefs() && this.beliefLayer.draw(ctx, v, beliefLayer.opacity, true) });
     view.onRender((t) => this.countFrame(t));
+    view.onHover((p) => {
+      this.plan.hover = p;
+      if (this.plan.route.length) view.invalidate();
+    });
 
     // Incidents: the dock's list, the clock's strip and a map layer; choosing one seeks there.
     this.incidents = new Incidents({
@@ -158,6 +162,7 @@ export class MissionView {
     this.incidents.clear();
     this.mission = null;
     this.result = null;
+    state.emit('result', null);
     this.cursor = null;
     this.clockTimes = null;
     this.progressCurve = { x: [], y: [] };
@@ -188,6 +193,7 @@ export class MissionView {
     this.incidents.clear();
     this.mission = mission;
     this.result = null;
+    state.emit('result', null);
     this.cursor = null;
     this.clockTimes = null;
     this.progressCurve = { x: [], y: [] };
@@ -327,6 +333,7 @@ export class MissionView {
         this.incidents.set(this.result, unit);
         this.layers.renderLegends();  // the incidents' kinds
         this.replay.enable(unit === 's' ? this.result.metrics.mission_time_s : this.trails.longest - 1, unit);
+        state.emit('result', this.result);  // the route profile's samples
       } catch (err) {
         if (err.status !== 409) report(err);
       }
@@ -419,7 +426,8 @@ export class MissionView {
   }
 
   beliefLegend() {
-    if (!this.hasBeliefs()) return el('div', { class: 'muted small' }, 'only with localisation error (odometry_noise, heading_noise, slip_per_deg)');
+    // Nothing to explain without localisation error: the layer's row title says when it applies.
+    if (!this.hasBeliefs()) return null;
     return el('div', { class: 'muted small' }, 'dashed, hollow marker: where each rover believed it was; the solid trails are where it truly went');
   }
 
@@ -555,7 +563,7 @@ export class MissionView {
 
   // The dock's panes: overview charts, the motion charts against time, the incident list.
   bindDockTabs() {
-    const tabs = ['overview', 'motion', 'incidents'];
+    const tabs = ['overview', 'motion', 'incidents', 'profile'];
     for (const name of tabs) {
       $(`dock-tab-${name}`).addEventListener('click', () => {
         for (const other of tabs) {

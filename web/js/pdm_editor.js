@@ -1,13 +1,23 @@
 // The PDM tab: a Gaussian mixture edited on the map (click to add, drag the centre to move,
 // square handles for σx / σy, the round handle to rotate), numbers per component, random (G=4)
-// from the server, clear, save. While editing, the mixture density is drawn on a coarse grid as
+// from the server, clear, save. The brush (issue 27, "paint" mode): a drag lays round Gaussians
+// of the brush's σ and weight along the stroke, one every σ (so neighbours overlap into an even
+// band: the sum of Gaussians σ apart varies by under 1 % across the band); Shift or Alt + drag
+// erases the components whose centre is under the brush. Gaussians rather than a raster brush:
+// the server's PDM is a mixture (components, at most 256), so what is painted is what is saved,
+// editable afterwards like any clicked Gaussian. Painting never pans: the tool takes the drag.
+// A stroke is one step of the undo history. While editing, the mixture density is drawn on a coarse grid as
 // an overlay; once saved, the server's pdm.png for the new id is shown instead.
 
 import { api } from './api.js';
 import { state } from './state.js';
-import { $, el, fmt, report, showError } from './util.js';
+import { rampLegend } from './legend.js';
+import { history } from './undo_stack.js';
+import { $, el, report, showError } from './util.js';
 
 const GRID = 160;           // overlay cells on the longer side
+const MAX_COMPONENTS = 256; // the server's limit (core/pdm/pdm.hpp kMaxComponents)
+const CUTOFF = 4;           // overlay: a component adds to cells within 4σ (e^-8 beyond)
 const HANDLE = 7;           // px, half size
 const ROT_OFFSET = 26;      // px beyond the σx handle
 // A perceptual ramp (viridis-like) for the overlay and its legend.
@@ -17,19 +27,6 @@ function rampColour(t) {
   const u = Math.max(0, Math.min(1, t)) * (RAMP.length - 1);
   const i = Math.min(RAMP.length - 2, Math.floor(u)), f = u - i;
   return RAMP[i].map((a, k) => Math.round(a + (RAMP[i + 1][k] - a) * f));
-}
-
-function density(comps, x, y) {
-  let sum = 0, wsum = 0;
-  for (const g of comps) wsum += g.weight;
-  if (!(wsum > 0)) return 0;
-  for (const g of comps) {
-    const a = (g.rotation_deg * Math.PI) / 180, c = Math.cos(a), s = Math.sin(a);
-    const dx = x - g.x, dy = y - g.y;
-    const u = (c * dx + s * dy) / g.sigma_x, v = (-s * dx + c * dy) / g.sigma_y;
-    sum += (g.weight / (2 * Math.PI * g.sigma_x * g.sigma_y)) * Math.exp(-0.5 * (u * u + v * v));
-  }
-  return sum / wsum;
 }
 
 export class PdmEditor {
@@ -43,13 +40,26 @@ export class PdmEditor {
     this.overlay = document.createElement('canvas');
     this.overlayCtx = this.overlay.getContext('2d');
     this.overlayMax = 0;
+    this.mode = 'shape';    // 'shape': click adds, handles shape · 'paint': the brush
+    this.stroke = null;     // the brush stroke in progress
+    this.brushHover = null;
     this.editLayer = layers.addOverlay({ id: 'pdm-edit', label: 'PDM (editing)', legendTitle: 'PDM being edited (mixture density)', visible: true, opacity: 0.6, legend: () => this.legend() });
     view.addLayer({ id: 'pdm-edit', order: 20, draw: (ctx, v) => this.draw(ctx, v) });
     view.registerTool('pdm', {
-      down: (p) => this.pointerDown(p),
-      move: (p) => this.pointerMove(p),
-      up: () => this.pointerUp(),
+      down: (p, e) => (this.mode === 'paint' ? this.strokeStart(p, e) : this.pointerDown(p)),
+      move: (p) => (this.stroke ? this.strokeMove(p) : this.pointerMove(p)),
+      up: () => (this.stroke ? this.strokeEnd() : this.pointerUp()),
       click: (p) => this.add(p.x, p.y),
+      hover: (p) => {
+        if (this.mode !== 'paint') return;
+        this.brushHover = p;
+        view.invalidate();
+      },
+    });
+    for (const mode of ['shape', 'paint']) $(`pdm-mode-${mode}`).addEventListener('click', () => this.setMode(mode));
+    view.canvas.addEventListener('pointerleave', () => {
+      this.brushHover = null;
+      view.invalidate();
     });
     $('pdm-random').addEventListener('click', () => this.random());
     $('pdm-clear').addEventListener('click', () => this.clear());
@@ -72,32 +82,157 @@ export class PdmEditor {
     return m ? Math.max(m.cell_size_m * 2, Math.min(m.width_m, m.height_m) * 0.08) : 10;
   }
 
+  // --- the brush ---
+  setMode(mode) {
+    this.mode = mode;
+    for (const m of ['shape', 'paint']) {
+      $(`pdm-mode-${m}`).setAttribute('aria-pressed', String(m === mode));
+      $(`pdm-mode-${m}`).classList.toggle('active', m === mode);
+    }
+    $('pdm-brush').hidden = mode !== 'paint';
+    if (mode === 'paint' && !(Number($('pdm-brush-sigma').value) > 0)) $('pdm-brush-sigma').value = String(Number(this.defaultBrushSigma().toPrecision(3)));
+    state.emit('pdm-mode', mode);
+    this.view.invalidate();
+  }
+
+  defaultBrushSigma() {
+    const m = state.map;
+    return m ? Math.max(m.cell_size_m * 2, Math.min(m.width_m, m.height_m) * 0.03) : 5;
+  }
+
+  brush() {
+    const m = state.map;
+    let sigma = Number($('pdm-brush-sigma').value), weight = Number($('pdm-brush-weight').value);
+    const minSigma = m ? m.cell_size_m / 2 : 0.01;
+    $('pdm-brush-sigma').classList.toggle('invalid', !(sigma >= minSigma));
+    $('pdm-brush-weight').classList.toggle('invalid', !(weight > 0));
+    if (!(sigma >= minSigma)) sigma = this.defaultBrushSigma();
+    if (!(weight > 0)) weight = 1;
+    return { sigma, weight };
+  }
+
+  // Always takes the drag (returns true), so a stroke never pans the map.
+  strokeStart(p, e) {
+    const { sigma, weight } = this.brush();
+    this.stroke = { before: JSON.parse(JSON.stringify(this.snapshot())), erase: e.shiftKey || e.altKey, sigma, weight, last: null, added: 0, removed: 0 };
+    this.strokeMove(p);
+    return true;
+  }
+
+  strokeMove(p) {
+    const st = this.stroke;
+    if (!st) return;
+    this.brushHover = p;
+    if (st.erase) {
+      // Along the segment since the last event, every σ/2, so a fast drag leaves no gap.
+      const from = st.last || [p.x, p.y];
+      const n = Math.max(1, Math.ceil(Math.hypot(p.x - from[0], p.y - from[1]) / (st.sigma / 2)));
+      const keep = this.comps.filter((g) => {
+        for (let k = 0; k <= n; k++) {
+          const x = from[0] + ((p.x - from[0]) * k) / n, y = from[1] + ((p.y - from[1]) * k) / n;
+          if (Math.hypot(g.x - x, g.y - y) <= st.sigma) return false;
+        }
+        return true;
+      });
+      st.removed += this.comps.length - keep.length;
+      if (keep.length !== this.comps.length) {
+        this.comps = keep;
+        this.active = -1;
+        this.changed(true, false);
+      }
+      st.last = [p.x, p.y];
+      this.view.invalidate();
+      return;
+    }
+    const m = state.map;
+    const inside = (x, y) => m && x >= 0 && y >= 0 && x <= m.width_m && y <= m.height_m;
+    const place = (x, y) => {
+      if (this.comps.length >= MAX_COMPONENTS) {
+        st.full = true;
+        return;
+      }
+      if (!inside(x, y)) return;
+      this.comps.push({ x, y, sigma_x: st.sigma, sigma_y: st.sigma, rotation_deg: 0, weight: st.weight });
+      st.added++;
+    };
+    const before = this.comps.length;
+    if (!st.last) {
+      place(p.x, p.y);
+      st.last = [p.x, p.y];
+    } else {
+      // One Gaussian every σ along the stroke, from the last one laid.
+      let [lx, ly] = st.last;
+      let d = Math.hypot(p.x - lx, p.y - ly);
+      while (d >= st.sigma) {
+        lx += ((p.x - lx) / d) * st.sigma;
+        ly += ((p.y - ly) / d) * st.sigma;
+        place(lx, ly);
+        d = Math.hypot(p.x - lx, p.y - ly);
+      }
+      st.last = [lx, ly];
+    }
+    if (this.comps.length !== before) {
+      this.active = this.comps.length - 1;
+      this.changed(true, false);
+    } else {
+      this.view.invalidate();
+    }
+  }
+
+  strokeEnd() {
+    const st = this.stroke;
+    this.stroke = null;
+    if (!st) return;
+    const label = st.erase ? `erase ${st.removed} Gaussian${st.removed === 1 ? '' : 's'}` : `paint ${st.added} Gaussian${st.added === 1 ? '' : 's'}`;
+    history.push(this, label, st.before, this.snapshot());
+    $('pdm-save-status').textContent = st.full ? `the PDM is full (${MAX_COMPONENTS} components, the server's limit): erase or save` : '';
+    this.changed(st.added > 0 || st.removed > 0);
+  }
+
   add(x, y) {
     const m = state.map;
     if (!m || x < 0 || y < 0 || x > m.width_m || y > m.height_m) return;
     const s = this.defaultSigma();
-    this.comps.push({ x, y, sigma_x: s, sigma_y: s * 0.6, rotation_deg: 0, weight: 1 });
-    this.active = this.comps.length - 1;
+    history.record(this, 'add Gaussian', () => {
+      this.comps.push({ x, y, sigma_x: s, sigma_y: s * 0.6, rotation_deg: 0, weight: 1 });
+      this.active = this.comps.length - 1;
+    });
     this.changed(true);
   }
 
   remove(i) {
-    this.comps.splice(i, 1);
-    this.active = Math.min(this.active, this.comps.length - 1);
+    history.record(this, `remove Gaussian ${i + 1}`, () => {
+      this.comps.splice(i, 1);
+      this.active = Math.min(this.active, this.comps.length - 1);
+    });
     this.changed(true);
   }
 
   clear() {
-    this.comps = [];
-    this.active = -1;
+    history.record(this, 'clear the PDM', () => {
+      this.comps = [];
+      this.active = -1;
+    });
     this.changed(true);
     showError($('pdm-error'), null);
   }
 
-  changed(edited = false) {
+  // --- undo (undo_stack.js): the components and which one is active ---
+  snapshot() {
+    return { comps: this.comps, active: this.active };
+  }
+
+  restore(s) {
+    this.comps = s.comps;
+    this.active = Math.min(s.active, this.comps.length - 1);
+    this.changed(true);
+  }
+
+  // `list`: false during a brush stroke (the component list is redrawn once, at its end).
+  changed(edited = false, list = true) {
     if (edited) this.dirty = true;
     this.computeOverlay();
-    this.renderComponents();
+    if (list) this.renderComponents();
     this.layers.renderLegends();
     this.view.invalidate();
   }
@@ -130,9 +265,10 @@ export class PdmEditor {
   pointerDown(p) {
     const h = this.hit(p);
     if (!h) return false;
+    const before = this.snapshot();
     this.active = h.i;
     const g = this.comps[h.i];
-    this.drag = { ...h, dx: g.x - p.x, dy: g.y - p.y };
+    this.drag = { ...h, dx: g.x - p.x, dy: g.y - p.y, before: JSON.parse(JSON.stringify(before)) };
     this.renderComponents();
     this.view.invalidate();
     return true;
@@ -161,7 +297,10 @@ export class PdmEditor {
   }
 
   pointerUp() {
+    const d = this.drag;
     this.drag = null;
+    // The whole drag is one step (nothing when the handle was only clicked).
+    if (d) history.push(this, d.kind === 'centre' ? `move Gaussian ${d.i + 1}` : `shape Gaussian ${d.i + 1}`, d.before, this.snapshot());
   }
 
   // --- overlay ---
@@ -175,15 +314,27 @@ export class PdmEditor {
     const cols = Math.max(1, Math.round(m.width_m * k)), rows = Math.max(1, Math.round(m.height_m * k));
     const dx = m.width_m / cols, dy = m.height_m / rows;
     const values = new Float32Array(rows * cols);
-    let max = 0;
-    for (let r = 0; r < rows; r++) {
-      const y = m.height_m - (r + 0.5) * dy;
-      for (let c = 0; c < cols; c++) {
-        const v = density(this.comps, (c + 0.5) * dx, y);
-        values[r * cols + c] = v;
-        if (v > max) max = v;
+    // Each component over the cells within CUTOFF σ of its centre only: a brush stroke of a few
+    // hundred small Gaussians redraws at pointer speed.
+    let wsum = 0;
+    for (const g of this.comps) wsum += g.weight;
+    for (const g of wsum > 0 ? this.comps : []) {
+      const a = (g.rotation_deg * Math.PI) / 180, ca = Math.cos(a), sa = Math.sin(a);
+      const reach = CUTOFF * Math.max(g.sigma_x, g.sigma_y);
+      const c0 = Math.max(0, Math.floor((g.x - reach) / dx)), c1 = Math.min(cols - 1, Math.ceil((g.x + reach) / dx));
+      const r0 = Math.max(0, Math.floor((m.height_m - g.y - reach) / dy)), r1 = Math.min(rows - 1, Math.ceil((m.height_m - g.y + reach) / dy));
+      const k = g.weight / (2 * Math.PI * g.sigma_x * g.sigma_y) / wsum;
+      for (let r = r0; r <= r1; r++) {
+        const ry = m.height_m - (r + 0.5) * dy - g.y;
+        for (let c = c0; c <= c1; c++) {
+          const rx = (c + 0.5) * dx - g.x;
+          const u = (ca * rx + sa * ry) / g.sigma_x, v = (-sa * rx + ca * ry) / g.sigma_y;
+          values[r * cols + c] += k * Math.exp(-0.5 * (u * u + v * v));
+        }
       }
     }
+    let max = 0;
+    for (let i = 0; i < values.length; i++) if (values[i] > max) max = values[i];
     this.overlay.width = cols;
     this.overlay.height = rows;
     const img = this.overlayCtx.createImageData(cols, rows);
@@ -210,7 +361,9 @@ export class PdmEditor {
       ctx.drawImage(this.overlay, sx, sy, sw, sh);
       ctx.globalAlpha = 1;
     }
-    if (state.tool !== 'pdm' || this.comps.length === 0) return;
+    if (state.tool !== 'pdm') return;
+    if (this.mode === 'paint') return this.drawBrush(ctx, view);
+    if (this.comps.length === 0) return;
     this.comps.forEach((g, i) => {
       const h = this.handles(g);
       const activeOne = i === this.active;
@@ -254,26 +407,33 @@ export class PdmEditor {
     });
   }
 
+  // Paint mode: the centres as dots and the brush (radius σ: what Shift/Alt erases) under the cursor.
+  drawBrush(ctx, view) {
+    ctx.fillStyle = 'rgba(255,255,255,0.85)';
+    for (const g of this.comps) {
+      const [x, y] = view.worldToScreen(g.x, g.y);
+      ctx.fillRect(x - 1.5, y - 1.5, 3, 3);
+    }
+    const p = this.brushHover;
+    if (!p) return;
+    const { sigma } = this.brush();
+    const erase = this.stroke ? this.stroke.erase : false;
+    ctx.beginPath();
+    ctx.arc(p.sx, p.sy, sigma * view.scale, 0, 2 * Math.PI);
+    ctx.strokeStyle = 'rgba(0,0,0,0.7)';
+    ctx.lineWidth = 3;
+    ctx.stroke();
+    ctx.strokeStyle = erase ? '#ff6b6b' : '#ffb347';
+    ctx.lineWidth = 1.5;
+    ctx.setLineDash(erase ? [4, 3] : []);
+    ctx.stroke();
+    ctx.setLineDash([]);
+  }
+
   legend() {
     if (!this.showOverlay()) return null;
-    const c = document.createElement('canvas');
-    c.width = 200;
-    c.height = 26;
-    const ctx = c.getContext('2d');
-    ctx.fillStyle = '#fff';
-    ctx.fillRect(0, 0, 200, 26);
-    for (let x = 0; x < 190; x++) {
-      const [r, g, b] = rampColour(x / 189);
-      ctx.fillStyle = `rgb(${r},${g},${b})`;
-      ctx.fillRect(5 + x, 2, 1, 12);
-    }
-    ctx.fillStyle = '#000';
-    ctx.font = '10px system-ui, sans-serif';
-    ctx.textBaseline = 'top';
-    ctx.fillText('0', 5, 15);
-    ctx.textAlign = 'right';
-    ctx.fillText(`${fmt(this.overlayMax)} /m² (density)`, 195, 15);
-    return c;
+    const hi = this.overlayMax > 0 ? this.overlayMax : 1;
+    return rampLegend({ lo: 0, hi, unit: '/m²', colourAt: (v) => rampColour(v / hi) });
   }
 
   // --- panel ---
@@ -297,8 +457,10 @@ export class PdmEditor {
               return;
             }
             e.target.classList.remove('invalid');
-            g[key] = v;
-            this.active = i;
+            history.record(this, `Gaussian ${i + 1} ${label}`, () => {
+              g[key] = v;
+              this.active = i;
+            });
             this.changed(true);
           },
         }));
@@ -328,8 +490,11 @@ export class PdmEditor {
 
   // Shows a saved PDM (the server's layer) and loads its components for further editing.
   select(p) {
-    this.comps = (p.components || []).map((g) => ({ ...g }));
-    this.active = this.comps.length ? 0 : -1;
+    // Loading a saved PDM replaces the components being edited: undoable like an edit.
+    history.record(this, `load PDM ${p.name}`, () => {
+      this.comps = (p.components || []).map((g) => ({ ...g }));
+      this.active = this.comps.length ? 0 : -1;
+    });
     this.dirty = false;
     $('pdm-name').value = p.name;
     state.pdmId = p.id;

@@ -192,6 +192,30 @@ export class View3D {
     return Number.isFinite(v) ? v : this.extent.zMin;
   }
 
+  // The route profile's hovered sample (x, y in local metres), or null: a white ball on the
+  // terrain. Made anew when a rebuild of the terrain removed (and disposed) the last one.
+  setMarker(p) {
+    this.markerAt = p;
+    if (!this.THREE || !this.z || !this.group) return;
+    if (this.marker && this.marker.parent !== this.group) this.marker = null;
+    if (!p) {
+      if (this.marker) this.group.remove(this.marker);
+      this.marker = null;
+      return this.frame();
+    }
+    const THREE = this.THREE;
+    if (!this.marker) {
+      this.marker = new THREE.Mesh(new THREE.SphereGeometry(1, 16, 12), new THREE.MeshBasicMaterial({ color: 0xffffff }));
+      this.marker.name = 'profile-marker';
+      this.group.add(this.marker);
+    }
+    const { W, H, zMin, exag } = this.extent;
+    const r = Math.max(0.3, 0.008 * Math.max(W, H));
+    this.marker.scale.setScalar(r);
+    this.marker.position.set(p.x - W / 2, (this.heightAt(p.x, p.y) - zMin) * exag + r, H / 2 - p.y);
+    this.frame();
+  }
+
   // The shown mission's trails (and compared runs) as lines on the terrain.
   updateTrails() {
     if (!this.THREE || !this.z) return;

@@ -5,13 +5,16 @@
 // Modify interactions need its own Map and projection to replace them.
 //
 // Tool 'zones': a click adds a vertex to the zone being drawn; a click on its first vertex (or
-// Enter, or "finish") closes it (3 points at least); Escape drops it. Without a zone in progress,
-// dragging a vertex moves it, a click inside a zone selects it, Delete removes the selected one.
+// Enter, or "finish") closes it (3 points at least); Backspace removes its last corner; Escape
+// asks, then drops it. Without a zone in progress, dragging a vertex moves it, a click inside a
+// zone selects it, Delete removes the selected one. Every edit is a step of the page's undo
+// history (undo_stack.js).
 // state.zones holds the zones as last saved/loaded (what missions get); edits are kept here until
 // "save zones".
 
 import { api } from './api.js';
 import { state } from './state.js';
+import { history } from './undo_stack.js';
 import { $, el, fmt, showError } from './util.js';
 
 const COLOUR = '#ff7a45';
@@ -88,7 +91,7 @@ export class ZoneEditor {
     view.registerTool('zones', {
       down: (p) => this.pointerDown(p),
       move: (p) => this.pointerMove(p),
-      up: () => { this.drag = null; },
+      up: () => this.pointerUp(),
       click: (p) => this.click(p),
       hover: (p) => { this.hover = p; if (this.drawing) view.invalidate(); },
     });
@@ -100,7 +103,8 @@ export class ZoneEditor {
     view.canvas.addEventListener('keydown', (e) => {
       if (state.tool !== 'zones') return;
       if (e.key === 'Enter') this.finish();
-      else if (e.key === 'Escape') this.cancel();
+      else if (e.key === 'Escape') this.cancel(true);
+      else if (e.key === 'Backspace' && this.drawing) this.removeLastVertex();
       else if (e.key === 'Delete' || e.key === 'Backspace') this.removeSelected();
       else return;
       e.preventDefault();
@@ -156,10 +160,30 @@ export class ZoneEditor {
     if (this.drawing) return false;  // a click adds a vertex (click below)
     const hit = this.hitVertex(p);
     if (!hit) return false;          // a drag pans; a click selects or starts a zone
-    this.drag = hit;
+    this.drag = { ...hit, before: JSON.parse(JSON.stringify(this.snapshot())) };
     this.selected = hit.z;
     this.changed();
     return true;
+  }
+
+  pointerUp() {
+    const d = this.drag;
+    this.drag = null;
+    if (d) history.push(this, `move corner ${d.i + 1} of zone ${d.z + 1}`, d.before, this.snapshot());
+  }
+
+  // --- undo (undo_stack.js): the zones, the ring being drawn, the selection ---
+  snapshot() {
+    return { zones: this.zones, drawing: this.drawing, selected: this.selected };
+  }
+
+  restore(s) {
+    this.zones = s.zones;
+    this.drawing = s.drawing;
+    this.selected = Math.min(s.selected, this.zones.length - 1);
+    // Unsaved unless the zones are back to what the server has.
+    this.dirty = JSON.stringify(this.zones) !== JSON.stringify(zonesFromGeoJson(state.zones));
+    this.changed();
   }
 
   pointerMove(p) {
@@ -181,39 +205,63 @@ export class ZoneEditor {
         return;
       }
       if (p.x < 0 || p.y < 0 || p.x > m.width_m || p.y > m.height_m) return;
-      this.drawing = [];
-      this.selected = -1;
     }
-    const first = this.drawing[0];
+    const first = this.drawing?.[0];
     if (first && this.drawing.length >= 3) {
       const [sx, sy] = this.view.worldToScreen(first[0], first[1]);
       if (Math.hypot(sx - p.sx, sy - p.sy) <= HIT_PX) return this.finish();
     }
-    this.drawing.push([Math.min(Math.max(p.x, 0), m.width_m), Math.min(Math.max(p.y, 0), m.height_m)]);
+    history.record(this, 'add a zone corner', () => {
+      if (!this.drawing) {
+        this.drawing = [];
+        this.selected = -1;
+      }
+      this.drawing.push([Math.min(Math.max(p.x, 0), m.width_m), Math.min(Math.max(p.y, 0), m.height_m)]);
+    });
     this.changed();
   }
 
   finish() {
     if (!this.drawing) return;
     if (this.drawing.length >= 3 && area(this.drawing) > 0) {
-      this.zones.push({ ring: this.drawing, name: '' });
-      this.selected = this.zones.length - 1;
-      this.drawing = null;
+      history.record(this, 'close a zone', () => {
+        this.zones.push({ ring: this.drawing, name: '' });
+        this.selected = this.zones.length - 1;
+        this.drawing = null;
+      });
       this.changed(true);
     } else {
       showError($('zones-error'), 'a zone needs at least 3 points that enclose an area');
     }
   }
 
-  cancel() {
+  // Drops the ring being drawn. `ask`: Escape asks first when corners would be lost; leaving the
+  // tool does not ask, and either way Ctrl+Z brings the ring back.
+  cancel(ask = false) {
     if (!this.drawing) return;
-    this.drawing = null;
+    const n = this.drawing.length;
+    if (ask && n > 0 && !window.confirm(`Discard the unfinished zone (${n} corner${n === 1 ? '' : 's'})?`)) return;
+    history.record(this, 'discard the unfinished zone', () => {
+      this.drawing = null;
+    });
+    this.changed();
+  }
+
+  // Backspace while drawing: the last corner goes (the ring too when it was the only one).
+  removeLastVertex() {
+    if (!this.drawing) return;
+    history.record(this, 'remove the last zone corner', () => {
+      this.drawing.pop();
+      if (!this.drawing.length) this.drawing = null;
+    });
     this.changed();
   }
 
   remove(z) {
-    this.zones.splice(z, 1);
-    this.selected = -1;
+    history.record(this, `delete zone ${z + 1}`, () => {
+      this.zones.splice(z, 1);
+      this.selected = -1;
+    });
     this.changed(true);
   }
 
