@@ -51,6 +51,10 @@ const std::vector<DemOptionInfo>& demImportOptionInfos() {
        four},
       {"vertical_scale", "K", "Multiply heights by K (for files whose values are not metres), 0 < |K| <= 1e6.",
        "^" + n + "$"},
+      {"vertical_offset", "M",
+       "Add M metres to heights after vertical_scale (a file of planet radii: minus the body's radius, "
+       "e.g. -1737400 on the Moon, -3396190 on Mars), |M| <= 1e8.",
+       "^" + n + "$"},
       {"body", "auto|mars|moon|earth",
        "The planetary body (its gravity is the planners' default); auto reads it from the CRS.",
        "^(auto|mars|moon|earth)$"},
@@ -91,6 +95,11 @@ DemImport parseDemImportOptions(const std::map<std::string, std::string>& values
     const double v = number("vertical_scale", k);
     if (v == 0 || std::fabs(v) > 1e6) bad("vertical_scale", "must be non-zero with |K| <= 1e6");
     out.load.verticalScale = v;
+  }
+  if (const std::string m = get("vertical_offset"); !m.empty()) {
+    const double v = number("vertical_offset", m);
+    if (std::fabs(v) > 1e8) bad("vertical_offset", "must be within ±1e8 metres");
+    out.load.verticalOffset = v;
   }
   if (const std::string b = get("body"); !b.empty()) out.body = bodyFromName(b);
   return out;

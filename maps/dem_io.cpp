@@ -191,6 +191,8 @@ Dataset warpToVrt(GDALDatasetH src, const std::vector<std::string>& args, const 
 void checkOptions(const LoadOptions& opt, const std::string& shown) {
   if (!(opt.verticalScale != 0) || !std::isfinite(opt.verticalScale))
     failFile(shown, "vertical scale must be a finite non-zero number", "vertical_scale");
+  if (!std::isfinite(opt.verticalOffset) || std::fabs(opt.verticalOffset) > 1e8)
+    failFile(shown, "vertical offset must be a finite number of metres within ±1e8", "vertical_offset");
   if (opt.cellSize < 0 || !std::isfinite(opt.cellSize))
     failFile(shown, "cell size must be a positive number of metres", "cell");
   const std::vector<std::string> algs{"auto", "near", "average", "bilinear", "cubic"};
@@ -268,7 +270,7 @@ void readHeights(GDALDatasetH grid, bool compareNodata, const LoadOptions& opt, 
     failFile(shown, "truncated or corrupt " + formatInWords(info.driver) + " (its data does not read)" +
                         (opt.upload ? "" : gdalMessage()));
   const float nodataF = info.nodata ? static_cast<float>(*info.nodata) : 0.0f;
-  const double k = info.scale * opt.verticalScale, o = info.offset * opt.verticalScale;
+  const double k = info.scale * opt.verticalScale, o = info.offset * opt.verticalScale + opt.verticalOffset;
   float* z = heights.values.data();
   double lo = INFINITY, hi = -INFINITY;
   for (std::int64_t i = 0; i < static_cast<std::int64_t>(rows) * cols; ++i) {

@@ -24,6 +24,9 @@ struct LoadOptions {
   // (gdal_translate -srcwin); converted to the CRS window through the geotransform.
   std::optional<std::array<double, 4>> cropPixels;
   double verticalScale = 1.0;                // multiplies heights after the file's scale/offset
+  // metres added after verticalScale: radii to heights (−1 737 400 for a lunar file of radii),
+  // or another datum                                                       [vertical_offset]
+  double verticalOffset = 0.0;
   std::int64_t maxCells = 200'000'000;       // refused before anything is allocated
   std::string resampling = "auto";           // auto | near | average | bilinear | cubic
   // Set for a user's file (an upload): opened through openUpload() under this sandbox, which

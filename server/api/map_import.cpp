@@ -202,6 +202,7 @@ store::MapRecord MapCatalog::importDem(const std::vector<UploadedFile>& files, c
     rec.meta["body"] = terrain::bodyName(body);
     rec.meta["body_source"] = options.body ? "declared" : "crs";
     rec.meta["vertical_scale"] = options.load.verticalScale;
+    rec.meta["vertical_offset"] = options.load.verticalOffset;
     if (options.load.crop) rec.meta["crop"] = *options.load.crop;
     if (options.load.cropPixels) rec.meta["crop_px"] = *options.load.cropPixels;
     // Files first, then the row: a crash in between leaves an orphan folder nobody lists.

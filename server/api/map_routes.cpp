@@ -66,7 +66,8 @@ Response listMaps(ApiContext& ctx, const Request& req) {
   return pageResponse(req, page, std::move(out), ctx.db.countMaps());
 }
 
-// The DEM options (maps/dem_import_options: cell, crop, crop_px, vertical_scale, body) as query
+// The DEM options (maps/dem_import_options: cell, crop, crop_px, vertical_scale, vertical_offset,
+// body) as query
 // parameters or plain multipart fields, read by the CLI's own parser.
 Response uploadMap(ApiContext& ctx, const Request& req) {
   std::string name = queryString(req, "name");
@@ -118,7 +119,7 @@ http::RouteOptions uploadOptions() {
   upload.streamBody = true;
   upload.blocking = onPool;
   upload.summary = "Upload a DEM (raw body with ?filename=, or multipart/form-data with file parts; "
-                   "PDS3 .IMG+.LBL pairs as two parts or a zip), ?name=&cell=&crop=|crop_px=&vertical_scale=&body= "
+                   "PDS3 .IMG+.LBL pairs as two parts or a zip), ?name=&cell=&crop=|crop_px=&vertical_scale=&vertical_offset=&body= "
                    "(or plain multipart fields of those names).";
   Operation op;
   op.query("name", {{"type", "string"}}, "The map's name (default: from the file).")

@@ -272,6 +272,15 @@ json componentSchemas(const PlannerRegistry& planners) {
                      {"body", {{"type", "string"}, {"enum", {"mars", "moon", "earth", "unknown"}}}},
                      {"body_source", {{"type", "string"}, {"enum", {"declared", "crs"}}}},
                      {"vertical_scale", num()},
+                     {"vertical_offset", num()},
+                     {"warnings", {{"type", "array"},
+                                   {"description", "What the cell size and heights say about the map's use by a micro-rover "
+                                                   "(never a refusal): coarse_cell (cells over 5 m), heights_look_like_radii "
+                                                   "(import again with the vertical_offset the message gives), "
+                                                   "heights_out_of_range (outside the body's relief)."},
+                                   {"items", object({{"code", {{"type", "string"}, {"enum", {"coarse_cell", "heights_look_like_radii", "heights_out_of_range"}}}},
+                                                     {"field", str()}, {"message", str()}},
+                                                    {"code", "field", "message"})}}},
                      {"crop", {{"type", "array"}, {"items", num()}, {"minItems", 4}, {"maxItems", 4}}},
                      {"crop_px", {{"type", "array"}, {"items", num()}, {"minItems", 4}, {"maxItems", 4}}},
                      {"layers", {{"type", "object"}, {"additionalProperties", str()}}},

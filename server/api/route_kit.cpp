@@ -6,6 +6,7 @@
 #include <cstdlib>
 
 #include "maps/dem_digest.hpp"
+#include "core/terrain/scale_check.hpp"
 #include "maps/tile_grid.hpp"
 #include "server/json/json_edge.hpp"
 
@@ -143,6 +144,25 @@ json tileGridJson(const store::MapRecord& m) {
           {"url", "/api/maps/" + m.id + "/tiles/{layer}/{z}/{x}/{y}.png"}};
 }
 
+json scaleWarningsJson(const json& meta) {
+  auto number = [&](const char* key, const char* sub = nullptr) {
+    const json* v = meta.contains(key) ? &meta[key] : nullptr;
+    if (v && sub) v = v->is_object() && v->contains(sub) ? &(*v)[sub] : nullptr;
+    return v && v->is_number() ? v->get<double>() : std::nan("");
+  };
+  const std::string body = meta.contains("body") && meta["body"].is_string() ? meta["body"].get<std::string>() : "";
+  const terrain::Body b = body == "mars"    ? terrain::Body::Mars
+                          : body == "moon"  ? terrain::Body::Moon
+                          : body == "earth" ? terrain::Body::Earth
+                                            : terrain::Body::Unknown;
+  const double cw = number("cell_size_m");
+  const double ch = std::isnan(number("cell_height_m")) ? cw : number("cell_height_m");
+  json out = json::array();
+  for (const auto& w : terrain::scaleWarnings(cw, ch, number("elevation", "min"), number("elevation", "max"), b))
+    out.push_back({{"code", w.code}, {"field", w.field}, {"message", w.message}});
+  return out;
+}
+
 json mapJson(const store::MapRecord& m) {
   json j = m.meta;
   j["id"] = m.id;
@@ -152,6 +172,7 @@ json mapJson(const store::MapRecord& m) {
   for (const char* l : {"elevation", "hillshade", "slope", "traversability", "pdm"})
     j["layers"][l] = "/api/maps/" + m.id + "/layers/" + l + ".png";
   j["tiles"] = tileGridJson(m);
+  j["warnings"] = scaleWarningsJson(m.meta);
   return j;
 }
 

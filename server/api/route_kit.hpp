@@ -90,6 +90,10 @@ nlohmann::json mapJson(const store::MapRecord& m);
 // ([across, down] per zoom), extent [0, 0, width_m, height_m] and origin (top-left) in the local
 // frame, url (a template with {layer}, {z}, {x}, {y}).
 nlohmann::json tileGridJson(const store::MapRecord& m);
+// What a map's cell size and heights say about its use by a micro-rover (core/terrain/
+// scale_check): [{code, field, message}], from the stored metadata, so maps stored before the
+// check have it too.
+nlohmann::json scaleWarningsJson(const nlohmann::json& meta);
 nlohmann::json pdmJson(const store::PdmRecord& p);
 nlohmann::json missionJson(const store::MissionRecord& m);
 

@@ -84,6 +84,7 @@ void writeImportRequest(const std::string& outDir, const ImportRequest& r) {
                {"crop", window(r.load.crop)},
                {"crop_px", window(r.load.cropPixels)},
                {"vertical_scale", r.load.verticalScale},
+               {"vertical_offset", r.load.verticalOffset},
                {"max_cells", r.load.maxCells},
                {"resampling", r.load.resampling},
                {"allow_hdf5", r.allowHdf5}};
@@ -104,6 +105,7 @@ ImportRequest readImportRequest(const std::string& outDir) {
   r.load.crop = windowFrom(j, "crop");
   r.load.cropPixels = windowFrom(j, "crop_px");
   r.load.verticalScale = number(j, "vertical_scale");
+  r.load.verticalOffset = number(j, "vertical_offset");
   r.load.maxCells = static_cast<std::int64_t>(number(j, "max_cells"));
   r.load.resampling = text(j, "resampling");
   r.allowHdf5 = j.value("allow_hdf5", false);

@@ -208,4 +208,36 @@ suiteWithServer('mission and upload forms', { timeout: 240000 }, (ctx) => {
     assert.deepEqual(errors.filter((e) => !/400 \(Bad Request\)/.test(e)), []);
     await context.close();
   });
+
+  test('upload form: a file of lunar radii gets a warning naming the offset; the offset fixes it', async () => {
+    const site = join(sharedDems, 'moon_kepler_rescaled_025m/kepler_site.tif');
+    if (!existsSync(site)) {
+      console.log(`# ${site} is absent (no ../shared/dems): scale warning test skipped`);
+      return;
+    }
+    const { page, errors, context } = await openPage(ctx.browser, `${ctx.server.url}/`);
+    await waitForMap(page);
+    // The site shifted up by the Moon's radius stands for a cube of radii (issue 27).
+    await page.setInputFiles('#dem-files', site);
+    await page.fill('#dem-name', 'Kepler radii');
+    await page.click('#dem-options > summary');
+    await page.fill('#dem-voffset', '1737400');
+    await page.click('#dem-upload');
+    await page.waitForFunction(() => document.getElementById('map-title').textContent.includes('Kepler radii'), null, { timeout: 60000 });
+    assert.match(await page.textContent('#dem-warnings'), /look like radii of the Moon .*vertical_offset=-1737400/);
+    assert.match(await page.textContent('#map-info'), /heights \+ 1[ ,.]?737[ ,.]?400 m/);
+    assert.match(await page.textContent('#map-info'), /look like radii of the Moon/);
+    assert.match(await page.textContent('#m-scale-note'), /vertical_offset=-1737400/);
+    await screenshot(page, 'form-scale-warning');
+    // Uploaded again with no offset: heights, and no warning anywhere.
+    await page.setInputFiles('#dem-files', site);
+    await page.fill('#dem-name', 'Kepler heights');
+    await page.fill('#dem-voffset', '0');
+    await page.click('#dem-upload');
+    await page.waitForFunction(() => document.getElementById('map-title').textContent.includes('Kepler heights'), null, { timeout: 60000 });
+    assert.equal(await page.textContent('#dem-warnings'), '');
+    assert.equal(await page.textContent('#m-scale-note'), '');
+    assert.deepEqual(errors, []);
+    await context.close();
+  });
 });

@@ -41,6 +41,10 @@ upload gale -F file=@"$DEMS/mars_gale_hirise_1m/missionDEM.tif"
 upload kepler_site -F file=@"$DEMS/moon_kepler_rescaled_025m/kepler_site.tif"
 upload kepler -F file=@"$DEMS/moon_lola_kepler_crater/kepler.tif"
 upload ldem4 -F file=@"$DEMS/moon_lola_ldem4_global/LDEM_4.IMG" -F file=@"$DEMS/moon_lola_ldem4_global/LDEM_4.LBL"
+# LDEM_4 with the offset its warning names: heights, only the coarse cell left to say.
+upload ldem4h -F file=@"$DEMS/moon_lola_ldem4_global/LDEM_4.IMG" -F file=@"$DEMS/moon_lola_ldem4_global/LDEM_4.LBL" -F vertical_offset=-1737400
+# The Kepler site as a file of lunar radii (issue 27's ISIS3 cube): the map says so and names the fix.
+upload radii -F file=@"$DEMS/moon_kepler_rescaled_025m/kepler_site.tif" -F vertical_offset=1737400
 
 python3 - "$S" <<'PY' || fail "tile checks"
 import json, math, struct, sys, urllib.request, urllib.error
@@ -56,6 +60,19 @@ def floats(b):
 def same(a, b):
     return (math.isnan(a) and math.isnan(b)) or a == b
 failures = 0
+# Honest scale (issue 27): what each shared DEM's cells and heights say to a micro-rover planner.
+# LDEM_4 really holds lunar radii (its label: OFFSET 1737400, SCALING_FACTOR 0.5).
+expected = {"lux": ["coarse_cell"], "gale": [], "kepler_site": [], "kepler": ["coarse_cell"],
+            "ldem4": ["coarse_cell", "heights_look_like_radii"], "ldem4h": ["coarse_cell"],
+            "radii": ["heights_look_like_radii"]}
+for m in json.loads(get("/api/maps")[1]):
+    codes = [w["code"] for w in m["warnings"]]
+    if m["name"] in expected and codes != expected[m["name"]]:
+        print(f"{m['name']}: warnings {codes}, expected {expected[m['name']]}"); failures += 1
+    if m["name"] == "radii" and not any("vertical_offset=-1737400" in w["message"] for w in m["warnings"]):
+        print(f"radii: the warning does not name the offset: {m['warnings']}"); failures += 1
+    if m["name"] in expected:
+        print(f"ok: {m['name']} warns {codes or 'nothing'} (cell {m['cell_size_m']:.4g} m, heights {m['elevation']['min']:.0f} to {m['elevation']['max']:.0f} m, {m['body']})")
 for m in json.loads(get("/api/maps")[1]):
     if m["name"] not in ("lux", "gale", "kepler_site", "kepler", "ldem4"):
         continue

@@ -8,6 +8,13 @@ import { $, el, fmt, report, showError } from './util.js';
 
 const LAST_MAP_KEY = 'roverplan.map';
 
+// A map's scale warnings (GET /api/maps/{id} "warnings": coarse cells, heights that look like
+// radii or counts), one line each with the import option that fixes it.
+function scaleWarnings(m) {
+  return (m?.warnings || []).map((w) => el('div', { class: 'scale-warning', dataset: { code: w.code } },
+    '⚠ ', w.message, w.field ? el('span', { class: 'muted' }, ` (${w.field})`) : ''));
+}
+
 export class MapsPanel {
   constructor({ selectMap }) {
     this.selectMap = selectMap;
@@ -64,7 +71,9 @@ export class MapsPanel {
     const crop = $('dem-crop').value.trim().replace(/\s+/g, '');
     const cropKey = $('dem-crop-unit').value;
     const scale = $('dem-vscale').value.trim();
-    const fields = { name: $('dem-name').value.trim(), cell, vertical_scale: scale === '1' ? '' : scale, body: $('dem-body').value === 'auto' ? '' : $('dem-body').value };
+    const offset = $('dem-voffset').value.trim();
+    const fields = { name: $('dem-name').value.trim(), cell, vertical_scale: scale === '1' ? '' : scale,
+      vertical_offset: offset === '0' ? '' : offset, body: $('dem-body').value === 'auto' ? '' : $('dem-body').value };
     if (cell !== '' && !(Number(cell) >= 0)) return [fields, ['cell', 'cell size must be a positive number of metres']];
     if (crop !== '') {
       const v = crop.split(',').map(Number);
@@ -74,17 +83,20 @@ export class MapsPanel {
     }
     if (scale !== '' && !(Number.isFinite(Number(scale)) && Number(scale) !== 0))
       return [fields, ['vertical_scale', 'vertical scale must be a non-zero number']];
+    if (offset !== '' && !(Number.isFinite(Number(offset)) && Math.abs(Number(offset)) <= 1e8))
+      return [fields, ['vertical_offset', 'vertical offset must be a number of metres within ±1e8']];
     return [fields, null];
   }
 
   fieldInput(field) {
-    return { cell: $('dem-cell'), name: $('dem-name'), crop: $('dem-crop'), crop_px: $('dem-crop'), vertical_scale: $('dem-vscale'), body: $('dem-body') }[field];
+    return { cell: $('dem-cell'), name: $('dem-name'), crop: $('dem-crop'), crop_px: $('dem-crop'), vertical_scale: $('dem-vscale'), vertical_offset: $('dem-voffset'), body: $('dem-body') }[field];
   }
 
   async upload() {
     if (this.files.length === 0) return;
     const bar = $('dem-progress'), text = $('dem-progress-text'), button = $('dem-upload');
-    for (const n of ['dem-cell', 'dem-name', 'dem-crop', 'dem-vscale', 'dem-body']) $(n).classList.remove('invalid');
+    for (const n of ['dem-cell', 'dem-name', 'dem-crop', 'dem-vscale', 'dem-voffset', 'dem-body']) $(n).classList.remove('invalid');
+    $('dem-warnings').replaceChildren();
     const [fields, bad] = this.importFields();
     if (bad) {
       showError($('dem-error'), `${bad[1]} (field: ${bad[0]})`);
@@ -108,6 +120,9 @@ export class MapsPanel {
         }
       });
       text.textContent = `added “${map.name}”`;
+      // What the cells and heights say about the map (issue 27: honest scale), shown where the
+      // operator looks after an upload, and kept in the map's details and the mission form.
+      $('dem-warnings').replaceChildren(...scaleWarnings(map));
       this.choose([]);
       $('dem-files').value = '';
       $('dem-name').value = '';
@@ -157,6 +172,7 @@ export class MapsPanel {
   renderInfo() {
     const m = state.map;
     const node = $('map-info');
+    $('m-scale-note').replaceChildren(...scaleWarnings(m));
     if (!m) {
       node.replaceChildren('No map selected.');
       return;
@@ -170,10 +186,12 @@ export class MapsPanel {
       line('classes', `traversable ${fmt(c.traversable_pct, 2)} %, high risk ${fmt(c.high_risk_pct, 2)} %, impassable ${fmt(c.impassable_pct, 2)} %, nodata ${fmt(c.nodata_pct, 2)} %`),
       line('CRS', m.crs || 'none'),
       line('body', `${m.body || 'unknown'}${m.body_source === 'declared' ? ' (declared at upload)' : ''}`),
-      ...(m.crop || m.crop_px || (m.vertical_scale !== undefined && m.vertical_scale !== 1)
+      ...(m.crop || m.crop_px || m.vertical_offset || (m.vertical_scale !== undefined && m.vertical_scale !== 1)
         ? [line('imported', [m.crop ? `crop ${m.crop.map((v) => fmt(v)).join(', ')}` : '', m.crop_px ? `pixels ${m.crop_px.join(', ')}` : '',
-          m.vertical_scale !== undefined && m.vertical_scale !== 1 ? `heights × ${fmt(m.vertical_scale)}` : ''].filter(Boolean).join(' · '))] : []),
-      line('source', `${(m.source_files || []).join(', ')} (${m.driver || '?'})`));
+          m.vertical_scale !== undefined && m.vertical_scale !== 1 ? `heights × ${fmt(m.vertical_scale)}` : '',
+          m.vertical_offset ? `heights + ${fmt(m.vertical_offset)} m` : ''].filter(Boolean).join(' · '))] : []),
+      line('source', `${(m.source_files || []).join(', ')} (${m.driver || '?'})`),
+      ...scaleWarnings(m));
   }
 
   async remove(m) {
