@@ -8,6 +8,8 @@ std::unique_ptr<RouteGenerator> makeRouteGenerator(RouteMethod method, const Rou
       return std::make_unique<LawnmowerRoute>(params.targets);
     case RouteMethod::Lhc:
       return std::make_unique<LhcRoute>(params);
+    case RouteMethod::Orienteering:
+      return std::make_unique<OrienteeringRoute>(params);
     case RouteMethod::LhcGwConv:
       break;
   }

@@ -8,11 +8,12 @@
 
 #include "core/common/enum_names.hpp"
 #include "core/team/rover_sim.hpp"
+#include "core/team/orienteering_route.hpp"
 #include "core/team/route_search.hpp"
 
 namespace rover::team {
 
-enum class RouteMethod { LhcGwConv, Lhc, Lawnmower };
+enum class RouteMethod { LhcGwConv, Lhc, Lawnmower, Orienteering };
 
 class RouteGenerator {
  public:
@@ -59,6 +60,18 @@ class LawnmowerRoute final : public RouteGenerator {
   int targets_;
 };
 
+// ours (issue 25): the whole PDM as an orienteering problem (orienteering_route.hpp).
+class OrienteeringRoute final : public RouteGenerator {
+ public:
+  explicit OrienteeringRoute(const RouteParams& p) : p_(p) {}
+  Route generate(const SearchGrid& grid, CellIndex start) const override {
+    return orienteeringRoute(grid, start, p_);
+  }
+
+ private:
+  RouteParams p_;
+};
+
 std::unique_ptr<RouteGenerator> makeRouteGenerator(RouteMethod method, const RouteParams& params);
 
 // The search cell the team starts in: the one holding the centroid of the rovers' starts.
@@ -74,10 +87,11 @@ Route computeRoute(const SearchGrid& grid, CellIndex start, RouteMethod method,
 namespace rover {
 template <>
 struct EnumNames<team::RouteMethod> {
-  static constexpr std::array<EnumName<team::RouteMethod>, 3> table{{
+  static constexpr std::array<EnumName<team::RouteMethod>, 4> table{{
       {team::RouteMethod::LhcGwConv, "lhc_gw_conv"},
       {team::RouteMethod::Lhc, "lhc"},
       {team::RouteMethod::Lawnmower, "lawnmower"},
+      {team::RouteMethod::Orienteering, "orienteering"},
   }};
 };
 }  // namespace rover

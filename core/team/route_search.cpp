@@ -332,6 +332,17 @@ Route lawnmower(const SearchGrid& grid, CellIndex start, int targets) {
   return r;
 }
 
+Route scoredRoute(const SearchGrid& grid, CellIndex start, std::vector<CellIndex> cells) {
+  checkStart(grid, start);
+  std::vector<std::uint8_t> mark(static_cast<std::size_t>(grid.geometry().cellCount()), 0);
+  int distinct = 0;
+  const double score = scorePath(grid, start, cells, mark, &distinct);
+  Route r = makeRoute(grid, start, std::move(cells));
+  r.score = score;
+  r.distinctCells = distinct;
+  return r;
+}
+
 std::vector<std::pair<double, double>> accumulatedAlongRoute(const SearchGrid& grid,
                                                              const Route& route) {
   checkStart(grid, route.start);

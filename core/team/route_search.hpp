@@ -108,6 +108,10 @@ Route lhcGwConv(const SearchGrid& grid, CellIndex start, const RouteParams& para
 // be shorter). Scored like lhcGwConv. Throws InvalidParameter "targets", InvalidInput "start".
 Route lawnmower(const SearchGrid& grid, CellIndex start, int targets);
 
+// A route through `cells` in order from `start`, with its centres, score and distinct cells (the
+// shared ending of every route method). Throws InvalidInput "start" outside the grid.
+Route scoredRoute(const SearchGrid& grid, CellIndex start, std::vector<CellIndex> cells);
+
 // Accumulated probability vs distance: one point for the start (0 m, its mass) and one per
 // target: (distance in metres along the straight segments between successive centres, original
 // mass of the distinct cells seen so far). The last value equals route.score.

@@ -52,7 +52,8 @@ ParamTable<P> buildTable() {
   t.group("route");
   t.add(common(choiceParam("route", enumNames<RouteMethod>(),
                     "Team route over the PDM: LHC_GW_CONV (paper 001), plain hill climbing without "
-                    "global warming, or a boustrophedon lawnmower (baselines).")),
+                    "global warming, a boustrophedon lawnmower (baselines), or orienteering (ours: the whole PDM, "
+                    "the most mass within targets × footprint metres).")),
         [](const P& p) -> ParamValue { return std::string(enumName(p.mission.routeMethod)); },
         [](P& p, const ParamInfo& i, const ParamValue& v) {
           p.mission.routeMethod = parseEnum<RouteMethod>(paramAsChoice(i, v)).value_or(RouteMethod::LhcGwConv);

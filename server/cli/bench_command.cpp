@@ -8,6 +8,9 @@
 #include "core/pdm/pdm.hpp"
 #include "core/planning/rover_limits.hpp"
 #include "core/team/team_mission.hpp"
+#include "core/team/route_generator.hpp"
+#include "core/terrain/layers.hpp"
+#include "maps/dem_io.hpp"
 #include "maps/synthetic_terrain.hpp"
 #include "server/cli/arg_parser.hpp"
 #include "server/cli/commands.hpp"
@@ -112,15 +115,89 @@ int benchMission(std::ostream& out, const std::vector<int>& teamSizes) {
   return 0;
 }
 
+// The mass a route has seen by `metres` along it (accumulatedAlongRoute's step curve).
+double seenBy(const team::SearchGrid& grid, const team::Route& route, double metres) {
+  double seen = 0;
+  for (const auto& [d, p] : team::accumulatedAlongRoute(grid, route))
+    if (d <= metres) seen = p;
+  return seen;
+}
+
+double routeLength(const team::Route& route) {
+  const auto& c = route.centres;
+  double d = c.empty() ? 0 : (c.front() - route.startCentre).norm();
+  for (std::size_t i = 1; i < c.size(); ++i) d += (c[i] - c[i - 1]).norm();
+  return d;
+}
+
+// Issue 25: the orienteering route (ours) against LHC_GW_CONV on the same PDMs, paired: random
+// PDMs (G = 4, seeds 1..runs) on each map, the team starting at the map's centre, 64 targets of
+// 5 m search cells (SPEC §3 defaults); the mass seen by 300 m along the route (straight segments
+// between target centres: a rover sees at least that), the route's length (the mission's
+// driving) and the time to compute it.
+int benchRoutes(std::ostream& out, int runs, const std::vector<std::string>& dems) {
+  std::vector<std::pair<std::string, terrain::Dem>> worlds;
+  worlds.emplace_back("synthetic Mars 600x600 x 0.25 m", maps::generateTerrain({}));
+  for (const auto& path : dems) worlds.emplace_back(path, maps::loadDem(path).dem);
+  out << "bench routes: " << runs << " random PDMs (G = 4, seeds 1.." << runs
+      << ") per map, start at the centre, 64 targets, 5 m cells; p300 = mass seen by 300 m along the "
+         "route (target: orienteering >= 1.2x LHC_GW_CONV, paired; route no longer)\n";
+  for (const auto& [name, dem] : worlds) {
+    const GridGeometry& g = dem.geometry();
+    const terrain::Traversability t = terrain::traversability(dem);
+    std::vector<std::uint8_t> valid(static_cast<std::size_t>(g.cellCount()), 1);
+    for (std::size_t i = 0; i < valid.size(); ++i)
+      valid[i] = t.classes.at(static_cast<std::int64_t>(i)) != static_cast<std::uint8_t>(terrain::TerrainClass::NoData);
+    team::RouteParams params;
+    std::vector<double> ratios;
+    double lhcP = 0, oursP = 0, lhcLen = 0, oursLen = 0, lhcS = 0, oursS = 0;
+    int wins = 0;
+    for (int s = 1; s <= runs; ++s) {
+      const Raster<float> pdm = pdm::discretise(pdm::randomGaussians(g, 4, static_cast<std::uint64_t>(s)), g, valid);
+      const team::SearchGrid grid = team::makeSearchGrid(pdm, t.classes, 5.0);
+      const CellIndex start = grid.cellAt(Eigen::Vector2d{g.widthMetres() / 2, g.heightMetres() / 2});
+      auto timed = [&](team::RouteMethod m, double& seconds) {
+        const auto t0 = std::chrono::steady_clock::now();
+        team::Route r = team::computeRoute(grid, start, m, params);
+        seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        return r;
+      };
+      const team::Route lhc = timed(team::RouteMethod::LhcGwConv, lhcS);
+      const team::Route ours = timed(team::RouteMethod::Orienteering, oursS);
+      const double a = seenBy(grid, lhc, 300), b = seenBy(grid, ours, 300);
+      lhcP += a;
+      oursP += b;
+      lhcLen += routeLength(lhc);
+      oursLen += routeLength(ours);
+      if (a > 0) ratios.push_back(b / a);
+      if (b >= a) ++wins;
+    }
+    double logSum = 0;
+    for (double r : ratios) logSum += std::log(r);
+    std::sort(ratios.begin(), ratios.end());
+    out << name << ":\n" << std::fixed << std::setprecision(4)
+        << "  p300 mean      LHC_GW_CONV " << lhcP / runs << "   orienteering " << oursP / runs << "\n"
+        << std::setprecision(2) << "  paired ratio   geometric mean x" << std::exp(logSum / std::max<std::size_t>(1, ratios.size()))
+        << ", min x" << (ratios.empty() ? 0 : ratios.front()) << ", median x"
+        << (ratios.empty() ? 0 : ratios[ratios.size() / 2]) << ", orienteering >= LHC in " << wins << "/" << runs << "\n"
+        << std::setprecision(1) << "  route length   LHC_GW_CONV " << lhcLen / runs << " m   orienteering "
+        << oursLen / runs << " m\n"
+        << std::setprecision(2) << "  compute        LHC_GW_CONV " << 1000 * lhcS / runs << " ms   orienteering "
+        << 1000 * oursS / runs << " ms per route\n";
+  }
+  return 0;
+}
+
 }  // namespace
 
 int benchCommand(const std::vector<std::string>& argv, std::ostream& out) {
-  ArgParser args("bench", "Benchmarks that print their figures. Targets: coverage, mission, "
+  ArgParser args("bench", "Benchmarks that print their figures. Targets: coverage, mission, routes, "
                          "localisation.");
-  args.positional("TARGET", "coverage | mission | localisation");
+  args.positional("TARGET", "coverage | mission | routes | localisation");
   args.option("runs", "N", "2000", "Runs per measurement.");
   args.option("team-sizes", "N,N,...", "20,64",
               "mission: the team sizes planned after the 5-rover table.");
+  args.option("dem", "FILE", "", "routes: a DEM compared beside the synthetic Mars map (e.g. the Kepler rover site).");
   addLocalisationBenchOptions(args);
   if (!args.parse(argv)) {
     out << args.help();
@@ -139,10 +216,13 @@ int benchCommand(const std::vector<std::string>& argv, std::ostream& out) {
     }
     return benchMission(out, sizes);
   }
+  if (args.positionals()[0] == "routes")
+    return benchRoutes(out, static_cast<int>(args.integer("runs", 20, 1, 100000)),
+                       args.has("dem") ? std::vector<std::string>{args.str("dem", "")} : std::vector<std::string>{});
   if (args.positionals()[0] == "localisation")
     return benchLocalisation(args, static_cast<int>(args.integer("runs", 100, 1, 100000)), out);
   if (args.positionals()[0] != "coverage")
-    throw UsageError("unknown benchmark '" + args.positionals()[0] + "' (coverage, mission, localisation)");
+    throw UsageError("unknown benchmark '" + args.positionals()[0] + "' (coverage, mission, routes, localisation)");
   int runs = static_cast<int>(args.integer("runs", 2000, 1, 10000000));
   unsigned all = hardwareThreads();
   out << "bench coverage: spiral to 95 % on 60x60, 5 % obstacles, " << runs

@@ -406,10 +406,11 @@ json presetSpecJson(const std::string& name, const PresetOptions& o) {
         {"lhc_gw_conv", {{"planner", "team-search"}, {"params", {{"route", "lhc_gw_conv"}}}}},
         {"lhc", {{"planner", "team-search"}, {"params", {{"route", "lhc"}}}}},
         {"lawnmower", {{"planner", "team-search"}, {"params", {{"route", "lawnmower"}}}}},
+        {"orienteering", {{"planner", "team-search"}, {"params", {{"route", "orienteering"}}}}},
         {"hybrid", {{"planner", "hybrid"}, {"params", {{"route", "lhc_gw_conv"}}}}}};
     for (const auto& c : o.configs)
       if (std::none_of(all.begin(), all.end(), [&](const auto& a) { return a.first == c; }))
-        throwInvalidParameter("configs", "unknown config '" + c + "' (lhc_gw_conv, lhc, lawnmower, hybrid)");
+        throwInvalidParameter("configs", "unknown config '" + c + "' (lhc_gw_conv, lhc, lawnmower, orienteering, hybrid)");
     const std::vector<std::string> modes = o.coordination.empty() ? std::vector<std::string>{"timed"} : o.coordination;
     json configs = json::array();
     for (const auto& mode : modes) {
