@@ -33,7 +33,7 @@ int sweepCommand(const std::vector<std::string>& argv, std::ostream& out) {
   args.option("runs", "N", "3000 (frontier: 1000, swinton: 20)", "Seeded runs per configuration (swinton: random PDMs per site).");
   args.option("hirise", "FILE", "../shared/dems/mars_gale_hirise_1m/missionDEM.tif",
               "swinton: the HiRISE DEM cropped to its central 150 × 150 m at 0.25 m ('none' = synthetic site only).");
-  args.option("configs", "LIST", "all", "swinton: any of lhc_gw_conv,lhc,lawnmower,orienteering,hybrid.");
+  args.option("configs", "LIST", "all", "swinton: any of lhc_gw_conv,lhc,lawnmower,orienteering,hybrid (all: the paper's four, orienteering by name).");
   args.option("coordination", "LIST", "timed", "swinton: timed and/or paper; paper rows are named CONFIG+paper.");
   args.option("rovers", "N", "5", "swinton: rovers per mission.");
   args.option("targets", "N", "64", "swinton: route targets per mission.");
