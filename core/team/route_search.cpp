@@ -321,15 +321,7 @@ Route lawnmower(const SearchGrid& grid, CellIndex start, int targets) {
   for (int r = start.row + 1; r < rows; ++r) lane(r);               // rows below (south)
   for (int r = start.row - 1; r >= 0; --r) lane(r);                 // rows above (north)
   for (int c = start.col - 1; c >= 0; --c) take(start.row, c);      // start row, westward part
-
-  std::vector<std::uint8_t> mark(static_cast<std::size_t>(grid.geometry().cellCount()), 0);
-  int distinct = 0;
-  const double score = scorePath(grid, start, cells, mark, &distinct);
-  Route r = makeRoute(grid, start, std::move(cells));
-  r.score = score;
-  r.distinctCells = distinct;
-  r.warmingLevel = 0;
-  return r;
+  return scoredRoute(grid, start, std::move(cells));
 }
 
 Route scoredRoute(const SearchGrid& grid, CellIndex start, std::vector<CellIndex> cells) {
