@@ -87,13 +87,17 @@ def kib(s, key):
     return int(v)
 
 
-def descendants(pid):
+def import_workers():
+    """The pids of running `roverplan import-worker` processes (under bwrap or not)."""
     out = []
-    try:
-        for child in open(f"/proc/{pid}/task/{pid}/children").read().split():
-            out += [int(child)] + descendants(int(child))
-    except OSError:
-        pass
+    for p in os.listdir("/proc"):
+        if p.isdigit():
+            try:
+                with open(f"/proc/{p}/cmdline", "rb") as f:
+                    if b"import-worker" in f.read() and int(p) != os.getpid():
+                        out.append(int(p))
+            except OSError:
+                pass
     return out
 
 
@@ -131,7 +135,7 @@ def bench(work, cols, rows):
 
         def sample():  # the import worker's resident size (a child of the server), every 50 ms
             while not done.is_set():
-                for c in descendants(server.pid):
+                for c in import_workers():
                     worker_peak[0] = max(worker_peak[0], kib(status_of(c), "VmRSS"))
                 time.sleep(0.05)
 
@@ -181,11 +185,25 @@ def bench(work, cols, rows):
             if addr not in addrs and addr not in first:
                 addrs.append(addr)
 
-        def run():
+        def run(n=clients, todo=None):
+            todo = todo or addrs
             t = time.perf_counter()
-            with cf.ThreadPoolExecutor(clients) as ex:
-                res = list(ex.map(lambda a: get(url + a), addrs))
+            with cf.ThreadPoolExecutor(n) as ex:
+                res = list(ex.map(lambda a: get(url + a), todo))
             return res, time.perf_counter() - t
+
+        # One client first, on other tiles: a cold tile's own service time, without queueing.
+        solo_addrs = []
+        while len(solo_addrs) < 24:
+            z = rnd.choice(range(0, n + 1))
+            a, d = tiles["tile_counts"][z]
+            addr = f"{rnd.choice(layers)}/{z}/{rnd.randrange(a)}/{rnd.randrange(d)}.png"
+            if addr not in addrs and addr not in first and addr not in solo_addrs:
+                solo_addrs.append(addr)
+        solo, _ = run(1, solo_addrs)
+        ms = [x[0] for x in solo]
+        print(f"cold, one client, {len(solo_addrs)} tiles over zooms 0..{n}: p50 {pct(ms, .5):.1f} ms, "
+              f"p99 {pct(ms, .99):.1f} ms")
 
         cold, secs = run()
         ms = [x[0] for x in cold]
@@ -194,7 +212,8 @@ def bench(work, cols, rows):
               f"statuses {sorted(set(x[1] for x in cold))}")
         warm, secs = run()
         ms = [x[0] for x in warm]
-        print(f"warm: p50 {pct(ms, .5):.2f} ms, p99 {pct(ms, .99):.2f} ms, {len(addrs) / secs:.0f} requests/s")
+        print(f"warm, {clients} clients: p50 {pct(ms, .5):.2f} ms, p99 {pct(ms, .99):.2f} ms, "
+              f"{len(addrs) / secs:.0f} requests/s")
         print(f"server peak RSS after the tiles {kib(status_of(server.pid), 'VmHWM') / 1024:.0f} MiB; "
               f"load average {os.getloadavg()[0]:.2f}")
     finally:
