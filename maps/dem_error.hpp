@@ -13,6 +13,11 @@ namespace rover::maps {
   throw Error(ErrorCode::InvalidInput, field, shownPath + ": " + reason);
 }
 
+// Whether a failed raster write into `path`'s folder was the disk's fault: errno `err` (ENOSPC,
+// EDQUOT, EFBIG), GDAL's last message, or less free space there than `bytes` plus 64 KiB (libtiff
+// often names only the symptom). dem_io.cpp.
+bool lacksSpace(const std::string& path, int err, double bytes);
+
 // A number as the warper and messages take it: 17 significant digits, no trailing zeros.
 std::string exactNumber(double v);
 

@@ -156,6 +156,8 @@ void checkBlockSize(GDALDatasetH ds, const std::string& shownPath) {
 // ("TIFFWriteDirectoryTagData:IO error writing tag data", sometimes "_tiffWriteProc:No space left
 // on device") and errno may be overwritten by the time the file is closed, so a folder with less
 // free space than the uncompressed raster (`bytes`) plus 64 KiB counts as full too.
+}  // namespace
+
 bool lacksSpace(const std::string& path, int err, double bytes) {
   if (err == ENOSPC || err == EDQUOT || err == EFBIG) return true;
   const std::string msg = CPLGetLastErrorMsg();
@@ -168,6 +170,8 @@ bool lacksSpace(const std::string& path, int err, double bytes) {
   if (statvfs(dir.c_str(), &fs) != 0) return false;
   return static_cast<double>(fs.f_bavail) * static_cast<double>(fs.f_frsize) < bytes + 65536.0;
 }
+
+namespace {
 
 // Runs GDAL's warper into a lazy in-memory VRT: nothing is read until RasterIO, so the size can be
 // checked against the budget first.
@@ -341,6 +345,7 @@ DemHeader readDemHeader(const std::string& path) {
   NativeGrid n = openNative(path);
   DemHeader h;
   h.geometry = GridGeometry{n.info.sourceRows, n.info.sourceCols, n.metres.dx, n.metres.dy};
+  h.rowCellWidth = n.metres.rowCellWidth;
   h.geo = geoOf(n.gt, n.srs, n.info.georeferenced);
   h.info = n.info;
   return h;

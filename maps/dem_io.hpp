@@ -9,6 +9,7 @@
 #include <optional>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "core/terrain/dem.hpp"
 
@@ -67,6 +68,7 @@ LoadedDem loadDem(const std::string& path, const LoadOptions& options = {});
 // needs to check a mission area against a stored map without loading the map.
 struct DemHeader {
   GridGeometry geometry;
+  std::vector<double> rowCellWidth;  // a geographic map's east-west cell width per row (else empty)
   GeoReference geo;
   DemInfo info;  // minHeight, maxHeight and nodataCells are not known (0)
 };

@@ -13,10 +13,7 @@ namespace {
 
 constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
 
-// A rectangle of blocks (in the blocks of the tile's zoom).
-struct Span {
-  int r0 = 0, c0 = 0, rows = 0, cols = 0;
-};
+using Span = BlockSpan;
 
 // The tile's blocks grown by `halo` on each side, clipped to the map.
 Span spanOf(const TileWindow& w, int halo) {
@@ -39,8 +36,23 @@ void forCells(const GridGeometry& g, int step, const Span& s, Fn&& fn) {
   }
 }
 
-// The mean of the finite values of each block of `s` (NaN where a block has none): the values
-// themselves when step is 1.
+// Copies the tile's blocks out of `span`-sized pixels (`px` per block, `channels` values each) into
+// a kTileSize² tile, each block magnified; the rest of `tile` is left as it was.
+template <class T>
+void placeBlocks(const TileWindow& w, const Span& span, const T* blocks, int channels, T* tile) {
+  const int m = w.magnify;
+  for (int py = 0; py < w.blockRows * m; ++py) {
+    const int br = w.blockRow0 + py / m - span.r0;
+    for (int px = 0; px < w.blockCols * m; ++px) {
+      const int bc = w.blockCol0 + px / m - span.c0;
+      std::copy_n(blocks + (std::size_t(br) * span.cols + bc) * channels, channels,
+                  tile + (std::size_t(py) * kTileSize + px) * channels);
+    }
+  }
+}
+
+}  // namespace
+
 Raster<float> blockMean(const Raster<float>& src, int step, const Span& s) {
   const GridGeometry& g = src.geometry;
   Raster<float> out(GridGeometry{s.rows, s.cols, g.cellWidth * step, g.cellHeight * step}, kNaN);
@@ -62,23 +74,19 @@ Raster<float> blockMean(const Raster<float>& src, int step, const Span& s) {
   return out;
 }
 
-// The block-mean DEM of `s`, with the east-west spacing of geographic maps per block row.
-terrain::Dem blockDem(const terrain::Dem& dem, int step, const Span& s) {
-  terrain::Dem out;
-  out.z = blockMean(dem.z, step, s);
-  if (!dem.rowCellWidth.empty()) {
-    out.rowCellWidth.resize(s.rows);
-    for (int i = 0; i < s.rows; ++i) {
-      const int rBegin = (s.r0 + i) * step, rEnd = std::min(dem.geometry().rows, rBegin + step);
-      double sum = 0;
-      for (int r = rBegin; r < rEnd; ++r) sum += dem.rowCellWidth[r];
-      out.rowCellWidth[i] = sum / (rEnd - rBegin) * step;
-    }
+std::vector<double> blockRowWidths(const std::vector<double>& rowCellWidth, int rows, int step, const Span& s) {
+  std::vector<double> out;
+  if (rowCellWidth.empty()) return out;
+  out.resize(s.rows);
+  for (int i = 0; i < s.rows; ++i) {
+    const int rBegin = (s.r0 + i) * step, rEnd = std::min(rows, rBegin + step);
+    double sum = 0;
+    for (int r = rBegin; r < rEnd; ++r) sum += rowCellWidth[r];
+    out[i] = sum / (rEnd - rBegin) * step;
   }
   return out;
 }
 
-// The worst class of each block (the highest code below NoData; NoData when it has none).
 Raster<std::uint8_t> blockWorstClass(const Raster<std::uint8_t>& src, int step, const Span& s) {
   constexpr auto kNoData = static_cast<std::uint8_t>(terrain::TerrainClass::NoData);
   const GridGeometry& g = src.geometry;
@@ -93,31 +101,38 @@ Raster<std::uint8_t> blockWorstClass(const Raster<std::uint8_t>& src, int step, 
   return out;
 }
 
-// Copies the tile's blocks out of `span`-sized pixels (`px` per block, `channels` values each) into
-// a kTileSize² tile, each block magnified; the rest of `tile` is left as it was.
-template <class T>
-void placeBlocks(const TileWindow& w, const Span& span, const T* blocks, int channels, T* tile) {
-  const int m = w.magnify;
-  for (int py = 0; py < w.blockRows * m; ++py) {
-    const int br = w.blockRow0 + py / m - span.r0;
-    for (int px = 0; px < w.blockCols * m; ++px) {
-      const int bc = w.blockCol0 + px / m - span.c0;
-      std::copy_n(blocks + (std::size_t(br) * span.cols + bc) * channels, channels,
-                  tile + (std::size_t(py) * kTileSize + px) * channels);
-    }
-  }
-}
+namespace {
 
-const terrain::Dem& demOf(RenderLayer layer, const TileSource& source) {
-  if (source.dem == nullptr || source.dem->z.empty())
-    throw Error(ErrorCode::InvalidInput, "layer", std::string("the ") + renderLayerName(layer) + " tile needs the DEM");
-  return *source.dem;
-}
+// The whole map in memory as TileBlocks.
+class MemoryBlocks final : public TileBlocks {
+ public:
+  explicit MemoryBlocks(const TileSource& s) : s_(s) {}
+  terrain::Dem dem(int step, const Span& span) const override {
+    if (s_.dem == nullptr || s_.dem->z.empty())
+      throw Error(ErrorCode::InvalidInput, "layer", "the tile needs the DEM");
+    terrain::Dem out;
+    out.z = blockMean(s_.dem->z, step, span);
+    out.rowCellWidth = blockRowWidths(s_.dem->rowCellWidth, s_.dem->geometry().rows, step, span);
+    return out;
+  }
+  Raster<std::uint8_t> classes(int step, const Span& span) const override {
+    if (s_.classes == nullptr)
+      throw Error(ErrorCode::InvalidInput, "layer", "the traversability tile needs the class raster");
+    return blockWorstClass(*s_.classes, step, span);
+  }
+  Raster<float> pdm(int step, const Span& span) const override {
+    if (s_.pdm == nullptr) throw Error(ErrorCode::InvalidInput, "layer", "the pdm tile needs the PDM raster");
+    return blockMean(*s_.pdm, step, span);
+  }
+  ColourRange range() const override { return s_.range; }
+
+ private:
+  const TileSource& s_;
+};
 
 }  // namespace
 
-Image renderTile(RenderLayer layer, const TileSource& source, const TileWindow& w) {
-  const terrain::Dem& dem = demOf(layer, source);
+Image renderTile(RenderLayer layer, const TileBlocks& source, const TileWindow& w) {
   // Elevation (shaded), hillshade and slope read one block beyond the tile: the 3×3 kernel's halo.
   const bool kernel = layer == RenderLayer::Elevation || layer == RenderLayer::Hillshade || layer == RenderLayer::Slope;
   const Span span = spanOf(w, kernel ? 1 : 0);
@@ -126,7 +141,7 @@ Image renderTile(RenderLayer layer, const TileSource& source, const TileWindow& 
   Raster<std::uint8_t> classes;
   RenderInput in;
   if (kernel) {
-    blocks = blockDem(dem, w.step, span);
+    blocks = source.dem(w.step, span);
     in.dem = &blocks;
   }
   if (layer == RenderLayer::Elevation || layer == RenderLayer::Hillshade) {
@@ -136,18 +151,16 @@ Image renderTile(RenderLayer layer, const TileSource& source, const TileWindow& 
     slope = terrain::slopeHorn(blocks);
     in.slopeDeg = &slope;
   } else if (layer == RenderLayer::Traversability) {
-    if (source.classes == nullptr)
-      throw Error(ErrorCode::InvalidInput, "layer", "the traversability tile needs the class raster");
-    classes = blockWorstClass(*source.classes, w.step, span);
+    classes = source.classes(w.step, span);
     in.classes = &classes;
   } else if (layer == RenderLayer::Pdm) {
-    if (source.pdm == nullptr) throw Error(ErrorCode::InvalidInput, "layer", "the pdm tile needs the PDM raster");
-    mass = blockMean(*source.pdm, w.step, span);
+    mass = source.pdm(w.step, span);
     in.pdm = &mass;
   }
   RenderOptions options;
   options.legend = false;
-  options.range = &source.range;
+  const ColourRange range = source.range();
+  options.range = &range;
   const Image pic = renderLayer(layer, in, options);  // span.cols × span.rows, one pixel a block
   Image tile;
   tile.width = tile.height = kTileSize;
@@ -156,16 +169,23 @@ Image renderTile(RenderLayer layer, const TileSource& source, const TileWindow& 
   return tile;
 }
 
-std::vector<float> tileValues(RenderLayer layer, const TileSource& source, const TileWindow& w) {
+Image renderTile(RenderLayer layer, const TileSource& source, const TileWindow& w) {
+  return renderTile(layer, MemoryBlocks(source), w);
+}
+
+std::vector<float> tileValues(RenderLayer layer, const TileBlocks& source, const TileWindow& w) {
   if (layer != RenderLayer::Elevation && layer != RenderLayer::Slope)
     throw Error(ErrorCode::InvalidInput, "layer", "value tiles are elevation or slope");
-  const terrain::Dem& dem = demOf(layer, source);
   const Span span = spanOf(w, layer == RenderLayer::Slope ? 1 : 0);
-  const terrain::Dem blocks = blockDem(dem, w.step, span);
+  const terrain::Dem blocks = source.dem(w.step, span);
   const Raster<float> values = layer == RenderLayer::Slope ? terrain::slopeHorn(blocks) : blocks.z;
   std::vector<float> tile(std::size_t(kTileSize) * kTileSize, kNaN);
   placeBlocks(w, span, values.values.data(), 1, tile.data());
   return tile;
+}
+
+std::vector<float> tileValues(RenderLayer layer, const TileSource& source, const TileWindow& w) {
+  return tileValues(layer, MemoryBlocks(source), w);
 }
 
 }  // namespace rover::maps

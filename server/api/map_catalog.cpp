@@ -58,7 +58,7 @@ terrain::Body mapBody(const store::MapRecord& r, const std::string& crsWkt) {
 std::shared_ptr<const MapData> MapCatalog::loadFromDisk(const store::MapRecord& r) {
   auto data = std::make_shared<MapData>();
   data->record = r;
-  data->dem = maps::loadDem((fs::path(dir_.mapDir(r.id)) / "dem.tif").string()).dem;
+  data->dem = maps::loadDem((fs::path(dir_.mapDir(r.id)) / kDemFile).string()).dem;
   data->traversability = terrain::traversability(data->dem);
   data->elevationRange = maps::colourRange(maps::RenderLayer::Elevation, data->dem.z);
   data->body = mapBody(r, data->dem.z.geo.crsWkt);
@@ -92,6 +92,7 @@ void MapCatalog::remove(const std::string& id) {
     std::lock_guard lock(mutex_);
     cache_.remove_if([&](const auto& m) { return m->record.id == id; });
     cellCache_.remove_if([&](const auto& e) { return e.first.rfind(id + "@", 0) == 0; });
+    headerCache_.remove_if([&](const auto& e) { return e.first == id; });
   }
   for (const auto& p : pdms) dir_.remove(dir_.pdmDir(p.id));
   layers_.forgetUnder(dir_.mapDir(id));
@@ -112,7 +113,7 @@ std::shared_ptr<const terrain::Dem> MapCatalog::demAtCell(const std::string& id,
   o.cellSize = cellSize;
   o.maxCells = maxCells_;
   std::shared_ptr<const terrain::Dem> dem;
-  const std::string stored = (fs::path(dir_.mapDir(id)) / "dem.tif").string();
+  const std::string stored = (fs::path(dir_.mapDir(id)) / kDemFile).string();
   try {
     dem = std::make_shared<terrain::Dem>(maps::loadDem(stored, o).dem);
   } catch (const Error& e) {

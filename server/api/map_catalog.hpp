@@ -16,6 +16,7 @@
 #include "core/planning/mission_area.hpp"
 #include "core/terrain/layers.hpp"
 #include "maps/dem_import_options.hpp"
+#include "maps/dem_io.hpp"
 #include "maps/render.hpp"
 #include "server/api/layer_cache.hpp"
 #include "server/jail/import_jail.hpp"
@@ -51,7 +52,11 @@ class MapCatalog {
  public:
   // Layer files (PNG/GeoTIFF/f32 renderings) are a cache of at most layerCacheBytes per data dir.
   static constexpr std::uint64_t kDefaultLayerCacheBytes = 1ull << 30;
-  MapCatalog(store::Database& db, store::DataDir& dir, std::int64_t maxCells = 50'000'000,
+  // The cell budget of a map (issue 24: a full HiRISE DTM is 50–300 M cells). What holds a map of
+  // this size whole is the import (a float grid and its classes, README) and the paths that load
+  // it whole (get()): whole-map layer files, PDMs, missions without an area, which big maps refuse.
+  static constexpr std::int64_t kDefaultMaxCells = 300'000'000;
+  MapCatalog(store::Database& db, store::DataDir& dir, std::int64_t maxCells = kDefaultMaxCells,
              std::uint64_t layerCacheBytes = kDefaultLayerCacheBytes);
 
   // Validates and stores a DEM; throws http::ApiError 400 (field "file"/"cell"/"name") on bad input.
@@ -92,7 +97,10 @@ class MapCatalog {
 
   // A tile of a layer (maps/tile_grid.hpp, maps/map_tiles.hpp) as png (any layer) or f32
   // (elevation, slope: kTileSize² little-endian float32), created on first use in the layer cache
-  // (file layers/t1-LAYER[-PDM]-Z-X-Y.FORMAT). The address is checked against the map's stored
+  // (file layers/t1-LAYER[-PDM]-Z-X-Y.FORMAT). A map stored as its pyramid (maps/dem_pyramid.hpp)
+  // draws elevation, hillshade, slope and traversability tiles from the level of the tile's zoom,
+  // never loading the map; pdm tiles, and every tile of a map stored before the pyramid, come from
+  // the map in memory (get()). The address is checked against the map's stored
   // size before anything is loaded: z/x/y outside the grid, an unknown layer or format → ApiError
   // 404; a pdm tile names its PDM (`pdmId` required: a tile never changes, "the newest" would).
   std::string tileFile(const std::string& id, const std::string& layer, const std::string& format,
@@ -128,6 +136,9 @@ class MapCatalog {
   // file's faults (its own message, a crash with the signal, a deadline), 500 when it cannot start.
   maps::LoadedDem importJailed(const std::string& inDir, jail::ImportRequest req, std::string& rasterName);
   std::shared_ptr<const MapData> loadFromDisk(const store::MapRecord& r);
+  // The stored DEM's header (grid, per-row widths), read once per map for its tiles
+  // (map_tile_files.cpp); a few maps are kept.
+  std::shared_ptr<const maps::DemHeader> storedHeader(const std::string& id);
   // Writes the PDM's files (`write` fills the staging folder) and its row, charged to the map.
   store::PdmRecord storePdm(const std::string& mapId, const std::string& name, const nlohmann::json& meta,
                             const std::function<void(const std::string& staging)>& write);
@@ -140,6 +151,7 @@ class MapCatalog {
   LayerCache layers_;
   std::list<std::shared_ptr<const MapData>> cache_;  // most recent first, a few maps
   std::list<std::pair<std::string, std::shared_ptr<const terrain::Dem>>> cellCache_;
+  std::list<std::pair<std::string, std::shared_ptr<const maps::DemHeader>>> headerCache_;  // most recent first
   std::list<std::pair<std::string, std::shared_ptr<const Raster<float>>>> massCache_;  // most recent first
   void keepMass(const std::string& pdmId, std::shared_ptr<const Raster<float>> mass);
 };

@@ -13,6 +13,11 @@ namespace rover::api {
 
 struct MapData;
 
+// A stored map's folder: the elevation (a COG since issue 24's pyramid; a tiled GeoTIFF without
+// overviews before) and the class pyramid (maps/dem_pyramid.hpp; absent for a map stored before).
+inline constexpr const char* kDemFile = "dem.tif";
+inline constexpr const char* kClassFile = "classes.tif";
+
 // The longest side of the PNG overview for ?max= on a map whose longest side is `nativeSide`: the
 // next rung of the ladder 256, 512, 1024, 2048, 4096; 0 (full size) for max 0 or a rung at least
 // the map's own size.

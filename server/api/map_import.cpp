@@ -15,7 +15,9 @@
 #include "core/common/error.hpp"
 #include "maps/dem_digest.hpp"
 #include "maps/dem_io.hpp"
+#include "maps/dem_pyramid.hpp"
 #include "maps/georef.hpp"
+#include "maps/tile_grid.hpp"
 #include "maps/synthetic_terrain.hpp"
 #include "server/api/map_files.hpp"
 #include "server/http/http_types.hpp"
@@ -183,8 +185,14 @@ store::MapRecord MapCatalog::importDem(const std::vector<UploadedFile>& files, c
     req.load.maxCells = maxCells_;
     std::string raster;
     maps::LoadedDem d = importJailed(staging, req, raster);
+    // The heights (one float copy, the worker's grid) and their classes (a byte a cell) are the
+    // import's whole memory; the map is stored as its tile pyramid (maps/dem_pyramid.hpp), so no
+    // tile ever needs the whole raster again.
     terrain::Traversability t = terrain::traversability(d.dem);
-    storingGeoTiff([&] { maps::writeGeoTiff((fs::path(staging) / "dem.tif").string(), d.dem.z); });
+    storingGeoTiff([&] {
+      maps::writeDemCog((fs::path(staging) / kDemFile).string(), d.dem.z);
+      maps::writeClassPyramid((fs::path(staging) / kClassFile).string(), t.classes);
+    });
     store::MapRecord rec;
     rec.id = store::DataDir::newId();
     // A default name comes from the file (a zip member's may hold anything): its last path part,
@@ -197,6 +205,12 @@ store::MapRecord MapCatalog::importDem(const std::vector<UploadedFile>& files, c
     }
     rec.createdAt = store::nowIso();
     rec.meta = metaFor(d, t, sources);
+    // Every tile's ramp, fixed at import (the full-size picture's: maps::colourRange).
+    const maps::ColourRange ramp = maps::colourRange(maps::RenderLayer::Elevation, d.dem.z);
+    rec.meta["colour_range"] = {ramp.lo, ramp.hi};
+    rec.meta["storage"] = {{"elevation", "cog"},
+                           {"codec", "deflate"},
+                           {"overviews", maps::tileGridOf(d.dem.geometry().rows, d.dem.geometry().cols).nativeZoom}};
     // The body the planners assume: declared with the upload, else read from the CRS.
     const terrain::Body body = options.body ? *options.body : maps::bodyOfCrs(d.dem.z.geo.crsWkt);
     rec.meta["body"] = terrain::bodyName(body);

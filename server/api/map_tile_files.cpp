@@ -2,8 +2,12 @@
 #include <algorithm>
 #include <cstring>
 #include <filesystem>
+#include <stdexcept>
 
+#include "core/common/error.hpp"
+#include "maps/dem_pyramid.hpp"
 #include "maps/map_tiles.hpp"
+#include "server/api/map_files.hpp"
 #include "server/api/map_catalog.hpp"
 #include "server/http/http_types.hpp"
 #include "server/json/json_edge.hpp"
@@ -24,7 +28,53 @@ maps::TileGrid storedGrid(const store::MapRecord& r, MapCatalog& catalog) {
   return maps::tileGridOf(g.rows, g.cols);
 }
 
+// A map stored as its pyramid: its class pyramid on disk and its ramp in the record.
+bool storedAsPyramid(const store::MapRecord& r, const fs::path& dir) {
+  const auto it = r.meta.find("colour_range");
+  std::error_code ec;
+  return it != r.meta.end() && it->is_array() && it->size() == 2 && (*it)[0].is_number() && (*it)[1].is_number() &&
+         fs::exists(dir / kClassFile, ec);
+}
+
+// A tile's bytes: f32 values or an encoded PNG, from the stored pyramid (maps::TileBlocks) or the
+// map in memory (maps::TileSource).
+template <class Source>
+std::string tileBytes(const Source& blocks, maps::RenderLayer layer, const std::string& format,
+                      const maps::TileWindow& window) {
+  std::string bytes;
+  if (format == "f32") {
+    const auto values = maps::tileValues(layer, blocks, window);
+    bytes.resize(values.size() * 4);
+    std::memcpy(bytes.data(), values.data(), bytes.size());  // x86-64 and aarch64 are little-endian
+  } else {
+    const auto png = maps::encodePng(maps::renderTile(layer, blocks, window));
+    bytes.assign(png.begin(), png.end());
+  }
+  return bytes;
+}
+
 }  // namespace
+
+std::shared_ptr<const maps::DemHeader> MapCatalog::storedHeader(const std::string& id) {
+  {
+    std::lock_guard lock(mutex_);
+    for (auto it = headerCache_.begin(); it != headerCache_.end(); ++it)
+      if (it->first == id) {
+        headerCache_.splice(headerCache_.begin(), headerCache_, it);
+        return it->second;
+      }
+  }
+  std::shared_ptr<const maps::DemHeader> h;
+  try {
+    h = std::make_shared<const maps::DemHeader>(maps::readDemHeader((fs::path(dir_.mapDir(id)) / kDemFile).string()));
+  } catch (const Error& e) {
+    throw std::runtime_error(e.what());  // the stored file is the server's: 500, its path in the log only
+  }
+  std::lock_guard lock(mutex_);
+  headerCache_.emplace_front(id, h);
+  if (headerCache_.size() > 16) headerCache_.pop_back();
+  return h;
+}
 
 std::string MapCatalog::tileFile(const std::string& id, const std::string& layer, const std::string& format,
                                  long long z, long long x, long long y, const std::string& pdmId) {
@@ -55,7 +105,17 @@ std::string MapCatalog::tileFile(const std::string& id, const std::string& layer
   return layers_.get((dir / file).string(), [&](const std::string& path) {
     std::error_code ec;
     fs::create_directories(dir, ec);
-    auto map = get(id);
+    const auto l = maps::renderLayerFromName(layer);
+    const fs::path mapDir = dir_.mapDir(id);
+    if (layer != "pdm" && storedAsPyramid(*rec, mapDir)) {
+      // The level of the tile's zoom, about (256 + 2)² cells: the map is never loaded.
+      const auto& ramp = rec->meta["colour_range"];
+      const maps::PyramidBlocks blocks((mapDir / kDemFile).string(), (mapDir / kClassFile).string(), storedHeader(id),
+                                       {ramp[0].get<double>(), ramp[1].get<double>()});
+      store::DataDir::writeFileAtomic(path, tileBytes(blocks, l, format, *window));
+      return;
+    }
+    auto map = get(id);  // a PDM, or a map stored before the pyramid: the whole map in memory
     maps::TileSource src;
     src.dem = &map->dem;
     src.classes = &map->traversability.classes;
@@ -66,16 +126,7 @@ std::string MapCatalog::tileFile(const std::string& id, const std::string& layer
       src.pdm = mass.get();
       src.range = maps::colourRange(maps::RenderLayer::Pdm, *mass);  // one pass over the mass
     }
-    const auto l = maps::renderLayerFromName(layer);
-    std::string bytes;
-    if (format == "f32") {
-      const auto values = maps::tileValues(l, src, *window);
-      bytes.resize(values.size() * 4);
-      std::memcpy(bytes.data(), values.data(), bytes.size());  // x86-64 and aarch64 are little-endian
-    } else {
-      const auto png = maps::encodePng(maps::renderTile(l, src, *window));
-      bytes.assign(png.begin(), png.end());
-    }
+    const std::string bytes = tileBytes(src, l, format, *window);
     store::DataDir::writeFileAtomic(path, bytes);
   });
 }

@@ -38,7 +38,7 @@ MapHeader MapCatalog::header(const std::string& id) {
   }
   auto rec = db_.getMap(id);
   if (!rec) throw ApiError(404, "not_found", "no map '" + rover::json::shown(id) + "'", "id");
-  const std::string stored = (fs::path(dir_.mapDir(id)) / "dem.tif").string();
+  const std::string stored = (fs::path(dir_.mapDir(id)) / kDemFile).string();
   maps::DemHeader h;
   try {
     h = maps::readDemHeader(stored);
@@ -50,7 +50,7 @@ MapHeader MapCatalog::header(const std::string& id) {
 
 std::shared_ptr<const terrain::Dem> MapCatalog::demWindow(const std::string& id, const PlanningWindow& w) {
   if (!db_.getMap(id)) throw ApiError(404, "not_found", "no map '" + rover::json::shown(id) + "'", "id");
-  const std::string stored = (fs::path(dir_.mapDir(id)) / "dem.tif").string();
+  const std::string stored = (fs::path(dir_.mapDir(id)) / kDemFile).string();
   try {
     return std::make_shared<const terrain::Dem>(
         maps::loadDemWindow(stored, w.row0, w.col0, w.grid.rows, w.grid.cols).dem);

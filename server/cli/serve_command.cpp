@@ -103,7 +103,8 @@ int serveCommand(const std::vector<std::string>& argv, std::ostream& out) {
   a.option("mission-memory-mb", "M", "half the RAM",
            "Memory the running + queued missions may take together (their estimates): one larger "
            "is refused with 413, more with 429.");
-  a.option("max-upload-mb", "M", "512", "Largest accepted upload.");
+  // A 300 M-cell map (the cell budget) is 1.2 GB as an uncompressed float32 GeoTIFF.
+  a.option("max-upload-mb", "M", "2048", "Largest accepted upload.");
   a.option("disk-budget-mb", "M", "90% of the data directory's file system",
            "Disk the data directory may fill: maps, PDMs, layer files, mission results and studies "
            "together. Beyond it a write is refused with 507 disk_budget_full, a mission or study fails.");
@@ -151,7 +152,7 @@ int serveCommand(const std::vector<std::string>& argv, std::ostream& out) {
   config.token = serverToken(a);
   config.corsOrigin = a.str("cors", "");
   config.publicNames = commaList(a.str("public-name", ""));
-  config.maxUploadBytes = static_cast<std::uint64_t>(a.integer("max-upload-mb", 512, 1, 1 << 20)) << 20;
+  config.maxUploadBytes = static_cast<std::uint64_t>(a.integer("max-upload-mb", 2048, 1, 1 << 20)) << 20;
   config.logRequests = !a.isSet("quiet");
   config.workThreads = static_cast<unsigned>(a.integer("work-threads", 2, 1, 256));
   config.workQueue = static_cast<std::size_t>(a.integer("work-queue", 32, 0, 100000));
@@ -191,7 +192,7 @@ int serveCommand(const std::vector<std::string>& argv, std::ostream& out) {
                            : store::defaultDiskBudget(dir.root());
   budget.perMapBytes = static_cast<std::uint64_t>(a.integer("map-disk-budget-mb", 2048, 1, 1ll << 40)) << 20;
   dir.budget().setLimits(budget);
-  api::MapCatalog maps(db, dir, 50'000'000,
+  api::MapCatalog maps(db, dir, api::MapCatalog::kDefaultMaxCells,
                        static_cast<std::uint64_t>(a.integer("layer-cache-mb", 1024, 1, 1ll << 40)) << 20);
   const int orphans = maps.sweepOrphans();
   store::recountDiskUse(dir, db);  // the layer files were counted by the catalog

@@ -5,9 +5,15 @@
 #include <cmath>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <vector>
 
+#include <gdal.h>
+
 #include "api_server.hpp"
+#include "maps/dem_pyramid.hpp"
+#include "maps/gdal_env.hpp"
 
 using namespace rover;
 using rover::test::ApiServer;
@@ -118,4 +124,68 @@ TEST_CASE("tiles api: hostile tile addresses are 404 JSON errors, never 500") {
     CHECK(r.json()["error"]["code"] == "not_found");
   }
   checkError(s.get("/api/maps/nope/tiles/elevation/0/0/0.png"), 404, "id");
+}
+
+TEST_CASE("tiles api: a map is stored as its pyramid; a map stored before (no overviews, no class pyramid) gives the same native tiles") {
+  TempDir tmp;
+  ApiServer s(tmp.str("data"));
+  const std::string a = s.defaultMap();
+  const json map = s.get("/api/maps/" + a).json();
+  CHECK(map["storage"]["elevation"] == "cog");
+  CHECK(map["storage"]["overviews"] == 2);  // 600 × 600: zooms 1 and 0 below the native zoom 2
+  REQUIRE(map["colour_range"].size() == 2);
+  const maps::PyramidInfo cog = maps::pyramidInfo(s.dir.mapDir(a) + "/dem.tif");
+  CHECK(cog.layout == "COG");
+  CHECK(cog.blockWidth == 256);
+  CHECK(cog.overviews.size() == 2u);
+  // The same cells uploaded again as a plain GeoTIFF (the elevation export), then turned back into
+  // a map as stored before the pyramid: the old writer's dem.tif, no classes.tif.
+  const auto exported = s.get("/api/maps/" + a + "/layers/elevation.tif");
+  REQUIRE(exported.status == 200);
+  const auto up = s.post("/api/maps?name=old&filename=dem.tif", exported.body, "image/tiff");
+  REQUIRE(up.status == 201);
+  const std::string b = up.json()["id"];
+  const std::string bDir = s.dir.mapDir(b);
+  std::filesystem::remove(bDir + "/classes.tif");
+  {
+    std::ofstream out(bDir + "/dem.tif", std::ios::binary | std::ios::trunc);
+    out << exported.body;  // maps::writeGeoTiff's file: tiled, nodata -9999, no overviews
+  }
+  REQUIRE(maps::pyramidInfo(bDir + "/dem.tif").overviews.empty());
+  for (const char* tile : {"elevation/2/0/0.png", "hillshade/2/1/1.png", "slope/2/2/2.png", "traversability/2/1/0.png",
+                           "slope/3/2/1.png", "elevation/2/2/1.f32", "slope/2/1/2.f32"}) {
+    CAPTURE(tile);
+    const auto fromPyramid = s.get("/api/maps/" + a + "/tiles/" + tile);
+    const auto fromOld = s.get("/api/maps/" + b + "/tiles/" + tile);
+    REQUIRE(fromPyramid.status == 200);
+    REQUIRE(fromOld.status == 200);
+    CHECK(fromPyramid.body == fromOld.body);
+  }
+  // Below the native zoom both answer (the old map from the whole map in memory, as before).
+  for (const std::string& id : {a, b})
+    for (const char* tile : {"elevation/0/0/0.png", "traversability/1/1/1.png", "slope/0/0/0.f32"})
+      CHECK(s.get("/api/maps/" + id + "/tiles/" + tile).status == 200);
+}
+
+TEST_CASE("tiles api: the cell budget is 300 M cells, checked from the file's header before a cell is read") {
+  TempDir tmp;
+  ApiServer s(tmp.str("data"));
+  CHECK(api::MapCatalog::kDefaultMaxCells == 300'000'000);
+  // A sparse tiled GeoTIFF of 17 321 × 17 321 cells (300 017 041, just over): a few hundred KB on
+  // disk, refused from its header alone (nothing of 1.2 GB is allocated).
+  maps::ensureGdal();
+  const std::string path = tmp.str("big.tif");
+  {
+    const char* options[] = {"TILED=YES", "SPARSE_OK=YES", "COMPRESS=DEFLATE", nullptr};
+    GDALDatasetH ds = GDALCreate(GDALGetDriverByName("GTiff"), path.c_str(), 17321, 17321, 1, GDT_Float32,
+                                 const_cast<char**>(options));
+    REQUIRE(ds != nullptr);
+    GDALClose(ds);
+  }
+  std::ifstream in(path, std::ios::binary);
+  const std::string bytes((std::istreambuf_iterator<char>(in)), {});
+  REQUIRE(bytes.size() < (4u << 20));
+  const auto r = s.post("/api/maps?name=big&filename=big.tif", bytes, "image/tiff");
+  checkError(r, 400, "too_large", "file");
+  CHECK(r.json()["error"]["message"].get<std::string>().find("300000000") != std::string::npos);
 }

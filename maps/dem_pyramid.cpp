@@ -1,0 +1,272 @@
+#include "maps/dem_pyramid.hpp"
+
+#include <cpl_conv.h>
+#include <cpl_error.h>
+#include <gdal.h>
+
+#include <cerrno>
+#include <cinttypes>
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <limits>
+#include <stdexcept>
+#include <vector>
+
+#include "core/terrain/layers.hpp"
+#include "maps/dem_error.hpp"
+#include "maps/gdal_env.hpp"
+#include "maps/tile_grid.hpp"
+
+namespace rover::maps {
+
+namespace {
+
+namespace fs = std::filesystem;
+constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+
+int ceilDiv(int a, int b) { return static_cast<int>((static_cast<long long>(a) + b - 1) / b); }
+
+std::string fileName(const std::string& path) { return fs::path(path).filename().string(); }
+
+// A failed write into the data dir: DiskFull when the disk is to blame, else the server's fault
+// (std::runtime_error, its path stays in the server's log).
+[[noreturn]] void failWrite(const std::string& path, const std::string& tmp, int err, double bytes) {
+  const std::string gdal = CPLGetLastErrorMsg();
+  std::error_code ec;
+  for (const std::string& f : {tmp, tmp + ".aux.xml", tmp + ".ovr.tmp"}) fs::remove(f, ec);
+  if (lacksSpace(path, err, bytes)) throw DiskFull(fileName(path));
+  throw std::runtime_error("cannot write " + path + (gdal.empty() ? "" : " (" + gdal + ")"));
+}
+
+void moveIntoPlace(const std::string& tmp, const std::string& path) {
+  std::error_code ec;
+  fs::rename(tmp, path, ec);
+  if (ec) throw std::runtime_error("cannot move " + tmp + " into place: " + ec.message());
+}
+
+// The geotransform and CRS a stored raster carries (writeGeoTiff's convention for a grid
+// without georeferencing: 1 cell = its size in metres, origin at the lower-left corner).
+void georeference(GDALDatasetH ds, const GridGeometry& g, const GeoReference& geo) {
+  double gt[6] = {0, g.cellWidth, 0, g.rows * g.cellHeight, 0, -g.cellHeight};
+  if (geo.valid) std::copy(geo.geotransform.begin(), geo.geotransform.end(), gt);
+  GDALSetGeoTransform(ds, gt);
+  if (!geo.crsWkt.empty()) GDALSetProjection(ds, geo.crsWkt.c_str());
+}
+
+// One overview per zoom below the native one (none for a map of one tile).
+int overviewLevels(const GridGeometry& g) { return tileGridOf(g.rows, g.cols).nativeZoom; }
+
+Dataset openStored(const std::string& path) {
+  ensureGdal();
+  Dataset ds(GDALOpenEx(path.c_str(), GDAL_OF_RASTER | GDAL_OF_READONLY, nullptr, nullptr, nullptr));
+  if (!ds || GDALGetRasterCount(ds.get()) < 1) throw std::runtime_error("cannot read the stored raster " + path);
+  return ds;
+}
+
+// The band whose cells are the blocks of `step`: band 1 itself, or its overview of that factor;
+// null when the file has no such level (a map stored before the pyramid). The tile grid's blocks
+// are ceil(size / step) along a side; GDAL's COG driver sizes its overviews by halving the level
+// above, rounding down (530 → 265 → 132), so a level may lack the last, cut block (readLevel).
+GDALRasterBandH levelBand(GDALDatasetH ds, int step) {
+  GDALRasterBandH band = GDALGetRasterBand(ds, 1);
+  if (step == 1) return band;
+  const int w = ceilDiv(GDALGetRasterXSize(ds), step), h = ceilDiv(GDALGetRasterYSize(ds), step);
+  for (int i = 0; i < GDALGetOverviewCount(band); ++i) {
+    GDALRasterBandH o = GDALGetOverview(band, i);
+    if (!o) continue;
+    const int ow = GDALGetRasterBandXSize(o), oh = GDALGetRasterBandYSize(o);
+    if ((ow == w || ow == w - 1) && (oh == h || oh == h - 1) && ow > 0 && oh > 0) return o;
+  }
+  return nullptr;
+}
+
+void readWindow(GDALRasterBandH band, int c0, int r0, int cols, int rows, void* out, GDALDataType type,
+                const std::string& path) {
+  CPLErrorReset();
+  if (GDALRasterIO(band, GF_Read, c0, r0, cols, rows, out, cols, rows, type, 0, 0) != CE_None)
+    throw std::runtime_error("cannot read a window of the stored raster " + path + " (" + CPLGetLastErrorMsg() + ")");
+}
+
+// `span`'s blocks from `level`: a block past the level's last row or column (the cut block a
+// rounded-down overview lacks) takes its nearest neighbour's value.
+template <class T>
+void readLevel(GDALRasterBandH level, const BlockSpan& s, T* out, GDALDataType type, const std::string& path) {
+  const int rows = GDALGetRasterBandYSize(level), cols = GDALGetRasterBandXSize(level);
+  if (s.r0 + s.rows <= rows && s.c0 + s.cols <= cols) {
+    readWindow(level, s.c0, s.r0, s.cols, s.rows, out, type, path);
+    return;
+  }
+  const int r0 = std::min(s.r0, rows - 1), r1 = std::min(s.r0 + s.rows, rows);
+  const int c0 = std::min(s.c0, cols - 1), c1 = std::min(s.c0 + s.cols, cols);
+  std::vector<T> got(std::size_t(r1 - r0) * (c1 - c0));
+  readWindow(level, c0, r0, c1 - c0, r1 - r0, got.data(), type, path);
+  for (int i = 0; i < s.rows; ++i) {
+    const int r = std::min(s.r0 + i, rows - 1) - r0;
+    for (int j = 0; j < s.cols; ++j)
+      out[std::size_t(i) * s.cols + j] = got[std::size_t(r) * (c1 - c0) + (std::min(s.c0 + j, cols - 1) - c0)];
+  }
+}
+
+// The cells of `span`'s blocks at full resolution (clipped to the raster): what a level the file
+// lacks is computed from.
+BlockSpan cellsOf(const BlockSpan& s, int step, int rows, int cols) {
+  const int r0 = s.r0 * step, c0 = s.c0 * step;
+  return {r0, c0, std::min(rows, (s.r0 + s.rows) * step) - r0, std::min(cols, (s.c0 + s.cols) * step) - c0};
+}
+
+}  // namespace
+
+void writeDemCog(const std::string& path, const Raster<float>& dem) {
+  ensureGdal();
+  GdalErrorLog errors;
+  const GridGeometry& g = dem.geometry;
+  // The cells as they are, through a MEM band over the raster's own memory: no second copy.
+  Dataset src(GDALCreate(GDALGetDriverByName("MEM"), "", g.cols, g.rows, 0, GDT_Float32, nullptr));
+  if (!src) throw std::runtime_error("cannot make the in-memory dataset for " + path);
+  char pointer[64];
+  std::snprintf(pointer, sizeof pointer, "DATAPOINTER=%p", static_cast<const void*>(dem.values.data()));
+  const char* bandOptions[] = {pointer, nullptr};
+  if (GDALAddBand(src.get(), GDT_Float32, const_cast<char**>(bandOptions)) != CE_None)
+    throw std::runtime_error("cannot wrap the grid for " + path);
+  georeference(src.get(), g, dem.geo);
+  GDALSetRasterNoDataValue(GDALGetRasterBand(src.get(), 1), std::numeric_limits<double>::quiet_NaN());
+  // DEFLATE with the floating-point predictor: lossless, and what every GeoTIFF reader decodes.
+  // Level 1: the import's time budget (upload to first tile) prefers speed to the last few percent.
+  const std::string count = "OVERVIEW_COUNT=" + std::to_string(overviewLevels(g));
+  const char* options[] = {"BLOCKSIZE=256",        "COMPRESS=DEFLATE",  "LEVEL=1",
+                           "PREDICTOR=YES",        "OVERVIEW_RESAMPLING=AVERAGE",
+                           count.c_str(),          "NUM_THREADS=ALL_CPUS", "BIGTIFF=IF_SAFER",
+                           overviewLevels(g) == 0 ? "OVERVIEWS=NONE" : "OVERVIEWS=AUTO", nullptr};
+  const std::string tmp = path + ".tmp";
+  CPLErrorReset();
+  errno = 0;
+  Dataset out(GDALCreateCopy(GDALGetDriverByName("COG"), tmp.c_str(), src.get(), FALSE,
+                             const_cast<char**>(options), nullptr, nullptr));
+  const int err = errno;
+  const bool failed = !out || CPLGetLastErrorType() >= CE_Failure;
+  out.reset();  // flushes and closes
+  if (failed || CPLGetLastErrorType() >= CE_Failure)
+    failWrite(path, tmp, err ? err : errno, static_cast<double>(g.cellCount()) * 4.0);
+  moveIntoPlace(tmp, path);
+}
+
+void writeClassPyramid(const std::string& path, const Raster<std::uint8_t>& classes) {
+  ensureGdal();
+  GdalErrorLog errors;
+  const GridGeometry& g = classes.geometry;
+  const char* options[] = {"TILED=YES", "BLOCKXSIZE=256", "BLOCKYSIZE=256", "COMPRESS=DEFLATE", "ZLEVEL=1",
+                           "BIGTIFF=IF_SAFER", nullptr};
+  const std::string tmp = path + ".tmp";
+  CPLErrorReset();
+  errno = 0;
+  Dataset ds(GDALCreate(GDALGetDriverByName("GTiff"), tmp.c_str(), g.cols, g.rows, 1, GDT_Byte,
+                        const_cast<char**>(options)));
+  if (!ds) failWrite(path, tmp, errno, static_cast<double>(g.cellCount()));
+  georeference(ds.get(), g, classes.geo);
+  GDALRasterBandH band = GDALGetRasterBand(ds.get(), 1);
+  bool ok = GDALRasterIO(band, GF_Write, 0, 0, g.cols, g.rows, const_cast<std::uint8_t*>(classes.values.data()),
+                         g.cols, g.rows, GDT_Byte, 0, 0) == CE_None;
+  const int levels = overviewLevels(g);
+  if (ok && levels > 0) {
+    // Overviews allocated empty ("NONE"), then filled with the exact worst class of each block:
+    // level k from level k − 1, 2 × 2 blocks at a time (blocks are aligned on the whole map).
+    std::vector<int> factors;
+    for (int k = 1; k <= levels; ++k) factors.push_back(1 << k);
+    ok = GDALBuildOverviews(ds.get(), "NONE", levels, factors.data(), 0, nullptr, nullptr, nullptr) == CE_None;
+    Raster<std::uint8_t> level;
+    const Raster<std::uint8_t>* finer = &classes;
+    for (int k = 0; ok && k < levels; ++k) {
+      const GridGeometry& f = finer->geometry;
+      Raster<std::uint8_t> next = blockWorstClass(*finer, 2, BlockSpan{0, 0, ceilDiv(f.rows, 2), ceilDiv(f.cols, 2)});
+      GDALRasterBandH o = GDALGetOverview(band, k);
+      ok = o && GDALGetRasterBandXSize(o) == next.geometry.cols && GDALGetRasterBandYSize(o) == next.geometry.rows &&
+           GDALRasterIO(o, GF_Write, 0, 0, next.geometry.cols, next.geometry.rows, next.values.data(),
+                        next.geometry.cols, next.geometry.rows, GDT_Byte, 0, 0) == CE_None;
+      level = std::move(next);
+      finer = &level;
+    }
+  }
+  const int err = errno;
+  ds.reset();
+  if (!ok || CPLGetLastErrorType() >= CE_Failure) failWrite(path, tmp, err ? err : errno, static_cast<double>(g.cellCount()));
+  moveIntoPlace(tmp, path);
+}
+
+terrain::Dem readDemBlocks(const std::string& path, const DemHeader& header, int step, const BlockSpan& s) {
+  GdalErrorLog errors;
+  Dataset ds = openStored(path);
+  const GridGeometry& g = header.geometry;
+  GDALRasterBandH base = GDALGetRasterBand(ds.get(), 1);
+  int hasNodata = 0;
+  const float nodata = static_cast<float>(GDALGetRasterNoDataValue(base, &hasNodata));
+  auto toNaN = [&](Raster<float>& r) {
+    if (!hasNodata || std::isnan(nodata)) return;  // NaN cells are NaN already
+    float* v = r.values.data();
+    for (std::size_t i = 0, n = std::size_t(r.values.size()); i < n; ++i)
+      if (v[i] == nodata) v[i] = kNaN;
+  };
+  terrain::Dem out;
+  out.rowCellWidth = blockRowWidths(header.rowCellWidth, g.rows, step, s);
+  if (GDALRasterBandH level = levelBand(ds.get(), step)) {
+    out.z = Raster<float>(GridGeometry{s.rows, s.cols, g.cellWidth * step, g.cellHeight * step}, kNaN);
+    readLevel(level, s, out.z.values.data(), GDT_Float32, path);
+    toNaN(out.z);
+  } else {
+    const BlockSpan c = cellsOf(s, step, g.rows, g.cols);
+    Raster<float> cells(GridGeometry{c.rows, c.cols, g.cellWidth, g.cellHeight}, kNaN);
+    readWindow(base, c.c0, c.r0, c.cols, c.rows, cells.values.data(), GDT_Float32, path);
+    toNaN(cells);
+    out.z = blockMean(cells, step, BlockSpan{0, 0, s.rows, s.cols});
+  }
+  return out;
+}
+
+Raster<std::uint8_t> readClassBlocks(const std::string& path, int step, const BlockSpan& s) {
+  GdalErrorLog errors;
+  Dataset ds = openStored(path);
+  double gt[6] = {0, 1, 0, 0, 0, -1};
+  GDALGetGeoTransform(ds.get(), gt);
+  const int rows = GDALGetRasterYSize(ds.get()), cols = GDALGetRasterXSize(ds.get());
+  if (GDALRasterBandH level = levelBand(ds.get(), step)) {
+    Raster<std::uint8_t> out(GridGeometry{s.rows, s.cols, std::fabs(gt[1]) * step, std::fabs(gt[5]) * step}, 0);
+    readLevel(level, s, out.values.data(), GDT_Byte, path);
+    return out;
+  }
+  const BlockSpan c = cellsOf(s, step, rows, cols);
+  Raster<std::uint8_t> cells(GridGeometry{c.rows, c.cols, std::fabs(gt[1]), std::fabs(gt[5])}, 0);
+  readWindow(GDALGetRasterBand(ds.get(), 1), c.c0, c.r0, c.cols, c.rows, cells.values.data(), GDT_Byte, path);
+  return blockWorstClass(cells, step, BlockSpan{0, 0, s.rows, s.cols});
+}
+
+terrain::Dem PyramidBlocks::dem(int step, const BlockSpan& span) const {
+  return readDemBlocks(dem_, *header_, step, span);
+}
+
+Raster<std::uint8_t> PyramidBlocks::classes(int step, const BlockSpan& span) const {
+  return readClassBlocks(classes_, step, span);
+}
+
+Raster<float> PyramidBlocks::pdm(int, const BlockSpan&) const {
+  throw Error(ErrorCode::InvalidInput, "layer", "a stored map's pyramid holds no PDM");
+}
+
+PyramidInfo pyramidInfo(const std::string& path) {
+  GdalErrorLog errors;
+  Dataset ds = openStored(path);
+  PyramidInfo p;
+  p.rows = GDALGetRasterYSize(ds.get());
+  p.cols = GDALGetRasterXSize(ds.get());
+  GDALRasterBandH band = GDALGetRasterBand(ds.get(), 1);
+  GDALGetBlockSize(band, &p.blockWidth, &p.blockHeight);
+  for (int i = 0; i < GDALGetOverviewCount(band); ++i) {
+    GDALRasterBandH o = GDALGetOverview(band, i);
+    p.overviews.emplace_back(GDALGetRasterBandXSize(o), GDALGetRasterBandYSize(o));
+  }
+  if (const char* c = GDALGetMetadataItem(ds.get(), "COMPRESSION", "IMAGE_STRUCTURE")) p.compression = c;
+  if (const char* l = GDALGetMetadataItem(ds.get(), "LAYOUT", "IMAGE_STRUCTURE")) p.layout = l;
+  return p;
+}
+
+}  // namespace rover::maps

@@ -1,0 +1,79 @@
+#pragma once
+// A stored map as tiled, overviewed rasters (issue 24), so a tile at any zoom reads about 256²
+// cells (plus its halo) whatever the map's size:
+// - dem.tif, the elevation as a Cloud-Optimised GeoTIFF (GDAL's COG driver): 256² internal tiles,
+//   DEFLATE with the floating-point predictor (lossless), NaN as nodata, and one overview per
+//   zoom below the tile grid's native zoom, each GDAL's AVERAGE over 2^k × 2^k cells: the blocks
+//   of zoom native − k (maps/tile_grid.hpp), except that the driver rounds a level's size down
+//   (floor(size / 2^k) where the grid has ceil), so a level's pixels drift by up to one cell
+//   of the full grid across the map and a cut last block reads its neighbour.
+// - classes.tif, the traversability classes (uint8, tiled) with internal overviews of exactly the
+//   grid's blocks (ceil sizes) filled with the worst class of each block, computed exactly (the
+//   worst of the worst is the worst, level by level).
+// The readers answer a tile's blocks (maps/map_tiles.hpp BlockSpan) from the level of its zoom; a
+// file without that level (a map stored before the pyramid: a tiled GeoTIFF without overviews) is
+// read at full resolution over the blocks' cells and reduced the way the in-memory tiles are
+// (blockMean, blockWorstClass), so old maps keep giving the same tiles, only slower.
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "core/terrain/dem.hpp"
+#include "maps/dem_io.hpp"
+#include "maps/map_tiles.hpp"
+
+namespace rover::maps {
+
+// Writes `dem` as the map's COG, atomically (PATH.tmp, then rename). Memory: the COG driver reads
+// `dem` in place (a MEM dataset over its cells, no copy) plus GDAL's block cache; disk: a temporary
+// overview file of about a third of the result next to it. A full disk throws DiskFull.
+void writeDemCog(const std::string& path, const Raster<float>& dem);
+
+// Writes the class pyramid, atomically. Memory: the levels below full resolution (a third of
+// `classes`' bytes). A full disk throws DiskFull.
+void writeClassPyramid(const std::string& path, const Raster<std::uint8_t>& classes);
+
+// The mean heights of `span`'s blocks of `step` × step cells of the stored DEM at `path` (whose
+// header is `header`, read once per map with readDemHeader): cell sizes × step, a geographic
+// map's block-row widths, NaN where a block has no data (an all-nodata window is no error).
+// Throws std::runtime_error when the stored file does not read (the server's fault, not a
+// request's).
+terrain::Dem readDemBlocks(const std::string& path, const DemHeader& header, int step, const BlockSpan& span);
+
+// The worst class of `span`'s blocks of the stored class pyramid at `path`.
+Raster<std::uint8_t> readClassBlocks(const std::string& path, int step, const BlockSpan& span);
+
+// A stored map's tiles (elevation, hillshade, slope, traversability) drawn from its pyramid:
+// `demPath` (the COG, or an older tiled GeoTIFF), `classPath` (the class pyramid), the DEM's
+// header (readDemHeader, once per map) and the map's ramp (fixed at import). No PDM: pdm() throws
+// rover::Error (InvalidInput, "layer").
+class PyramidBlocks final : public TileBlocks {
+ public:
+  PyramidBlocks(std::string demPath, std::string classPath, std::shared_ptr<const DemHeader> header,
+                ColourRange range)
+      : dem_(std::move(demPath)), classes_(std::move(classPath)), header_(std::move(header)), range_(range) {}
+  terrain::Dem dem(int step, const BlockSpan& span) const override;
+  Raster<std::uint8_t> classes(int step, const BlockSpan& span) const override;
+  Raster<float> pdm(int step, const BlockSpan& span) const override;
+  ColourRange range() const override { return range_; }
+
+ private:
+  std::string dem_, classes_;
+  std::shared_ptr<const DemHeader> header_;
+  ColourRange range_;
+};
+
+// What a stored raster's layout is (gdalinfo's "Image Structure" and overview list): for tests,
+// the benchmark and GET /api/maps/{id}.
+struct PyramidInfo {
+  int rows = 0, cols = 0;
+  int blockWidth = 0, blockHeight = 0;
+  std::vector<std::pair<int, int>> overviews;  // cols × rows of each, largest first
+  std::string compression;                     // DEFLATE, ZSTD, …, "" when none
+  std::string layout;                          // "COG" for a Cloud-Optimised GeoTIFF
+};
+PyramidInfo pyramidInfo(const std::string& path);
+
+}  // namespace rover::maps

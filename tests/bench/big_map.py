@@ -1,0 +1,234 @@
+#!/usr/bin/env python3
+"""Full-size DEMs through the server (issue 24), printed, never asserted.
+
+  tests/bench/big_map.py [ROVERPLAN] [--sizes 7000x7000,20000x15000] [--clients 16] [--tiles 128]
+
+For each size, a deterministic DEM (seed 24) is made with GDAL's command-line tools alone: three
+octaves of seeded random heights on small grids (Python's random, written as raw float32 with an
+EHdr header), summed at full size by a VRT's built-in "sum" pixel function with cubic-spline
+resampling, and written as a tiled DEFLATE GeoTIFF (1 m cells, a UTM CRS). Then, on a fresh
+`roverplan serve` (free loopback port, scratch data dir, default limits):
+- upload -> first tiles: seconds from the start of the upload until the z = 0 tile and a native
+  tile (elevation, hillshade) have both been answered;
+- peak RSS of the server process during the import (VmHWM from /proc, reset is not possible, so
+  each size runs on its own server), and of the import worker (the jail's child, sampled);
+- cold tiles: T distinct tiles over every zoom (native and below, elevation/hillshade/slope/
+  traversability) fetched by C concurrent clients: p50, p99, max in ms;
+- warm: the same tiles again (files of the layer cache): requests/s;
+- the stored DEM's layout (gdalinfo: block size, overviews, compression) and its size on disk.
+The machine's load average is printed: on a shared machine compare runs made back to back."""
+import concurrent.futures as cf, http.client, json, os, random, shutil, socket, struct, subprocess, sys, tempfile
+import threading, time, urllib.request
+
+root = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+args = sys.argv[1:]
+opts = {"--sizes": "7000x7000,20000x15000", "--clients": "16", "--tiles": "128"}
+binary = os.path.join(root, "build/bin/roverplan")
+while args:
+    a = args.pop(0)
+    if a in opts: opts[a] = args.pop(0)
+    else: binary = a
+clients, ntiles = int(opts["--clients"]), int(opts["--tiles"])
+
+
+def free_port():
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def pct(xs, q):
+    xs = sorted(xs)
+    return xs[min(len(xs) - 1, int(round(q * (len(xs) - 1))))]
+
+
+def octave(path, cols, rows, amplitude, rng):
+    """A cols x rows grid of seeded random heights in [-amplitude, amplitude] as EHdr float32."""
+    with open(path + ".bil", "wb") as f:
+        for _ in range(rows):
+            f.write(struct.pack(f"<{cols}f", *(amplitude * (2 * rng.random() - 1) for _ in range(cols))))
+    with open(path + ".hdr", "w") as f:
+        f.write(f"NROWS {rows}\nNCOLS {cols}\nNBANDS 1\nNBITS 32\nPIXELTYPE FLOAT\nBYTEORDER I\n")
+
+
+def make_dem(work, cols, rows):
+    rng = random.Random(24)
+    sources = []
+    for i, (div, amp) in enumerate(((200, 60.0), (25, 6.0), (6, 0.4))):
+        w, h = max(2, cols // div), max(2, rows // div)
+        base = os.path.join(work, f"oct{i}")
+        octave(base, w, h, amp, rng)
+        sources.append(f"""<SimpleSource resampling="cubicspline"><SourceFilename relativeToVRT="1">oct{i}.bil</SourceFilename>
+<SourceBand>1</SourceBand><SrcRect xOff="0" yOff="0" xSize="{w}" ySize="{h}"/>
+<DstRect xOff="0" yOff="0" xSize="{cols}" ySize="{rows}"/></SimpleSource>""")
+    vrt = os.path.join(work, "dem.vrt")
+    with open(vrt, "w") as f:
+        f.write(f"""<VRTDataset rasterXSize="{cols}" rasterYSize="{rows}">
+<GeoTransform>500000, 1, 0, 4000000, 0, -1</GeoTransform>
+<VRTRasterBand dataType="Float32" band="1" subClass="VRTDerivedRasterBand">
+<PixelFunctionType>sum</PixelFunctionType>{''.join(sources)}</VRTRasterBand></VRTDataset>""")
+    out = os.path.join(work, f"dem-{cols}x{rows}.tif")
+    subprocess.run(["gdal_translate", "-q", "-a_srs", "EPSG:32633", "-co", "TILED=YES", "-co", "COMPRESS=DEFLATE",
+                    "-co", "PREDICTOR=3", "-co", "BIGTIFF=IF_SAFER", "-co", "NUM_THREADS=ALL_CPUS", vrt, out],
+                   check=True)
+    return out
+
+
+def status_of(pid):
+    try:
+        with open(f"/proc/{pid}/status") as f:
+            return {l.split(":")[0]: l.split(":")[1].strip() for l in f if ":" in l}
+    except OSError:
+        return {}
+
+
+def kib(s, key):
+    v = s.get(key, "0 kB").split()[0]
+    return int(v)
+
+
+def import_workers():
+    """The pids of running `roverplan import-worker` processes (under bwrap or not)."""
+    out = []
+    for p in os.listdir("/proc"):
+        if p.isdigit():
+            try:
+                with open(f"/proc/{p}/cmdline", "rb") as f:
+                    if b"import-worker" in f.read() and int(p) != os.getpid():
+                        out.append(int(p))
+            except OSError:
+                pass
+    return out
+
+
+def get(url, headers=None):
+    req = urllib.request.Request(url, headers=headers or {})
+    t = time.perf_counter()
+    try:
+        with urllib.request.urlopen(req, timeout=600) as r:
+            body, status = r.read(), r.status
+    except urllib.error.HTTPError as e:
+        body, status = e.read(), e.code
+    return (time.perf_counter() - t) * 1000, status, len(body)
+
+
+def bench(work, cols, rows):
+    print(f"== {cols} x {rows} ({cols * rows / 1e6:.0f} M cells, 1 m)")
+    t = time.perf_counter()
+    dem = make_dem(work, cols, rows)
+    print(f"generated with gdal in {time.perf_counter() - t:.0f} s: {os.path.getsize(dem) / 1e6:.0f} MB upload")
+    port = free_port()
+    data = os.path.join(work, "data")
+    server = subprocess.Popen([binary, "serve", "--port", str(port), "--data", data, "--quiet"],
+                              stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+    try:
+        base = f"http://127.0.0.1:{port}"
+        for _ in range(600):
+            try:
+                urllib.request.urlopen(base + "/api/health")
+                break
+            except Exception:
+                time.sleep(0.1)
+        rss_before = kib(status_of(server.pid), "VmRSS")
+        worker_peak = [0]
+        done = threading.Event()
+
+        def sample():  # the import worker's resident size (a child of the server), every 50 ms
+            while not done.is_set():
+                for c in import_workers():
+                    worker_peak[0] = max(worker_peak[0], kib(status_of(c), "VmRSS"))
+                time.sleep(0.05)
+
+        sampler = threading.Thread(target=sample)
+        sampler.start()
+        t0 = time.perf_counter()
+        conn = http.client.HTTPConnection("127.0.0.1", port, timeout=900)
+        with open(dem, "rb") as f:
+            conn.request("POST", "/api/maps?name=big&filename=dem.tif", body=f,
+                         headers={"Content-Type": "image/tiff", "Content-Length": str(os.path.getsize(dem))})
+            r = conn.getresponse()
+            body = r.read()
+        t_import = time.perf_counter() - t0
+        if r.status != 201:
+            print(f"upload refused: {r.status} {body[:300]!r}")
+            return
+        m = json.loads(body)
+        tiles = m["tiles"]
+        n = tiles["native_zoom"]
+        url = base + f"/api/maps/{m['id']}/tiles/"
+        across, down = tiles["tile_counts"][n]
+        first = [f"elevation/0/0/0.png", f"hillshade/0/0/0.png",
+                 f"elevation/{n}/{across // 2}/{down // 2}.png", f"hillshade/{n}/{across // 2}/{down // 2}.png"]
+        with cf.ThreadPoolExecutor(4) as ex:
+            firsts = list(ex.map(lambda a: get(url + a), first))
+        t_first = time.perf_counter() - t0
+        done.set()
+        sampler.join()
+        st = status_of(server.pid)
+        print(f"upload + import: {t_import:.1f} s; upload -> first tiles (z=0 and native, elevation and hillshade): "
+              f"{t_first:.1f} s; statuses {[x[1] for x in firsts]}")
+        print(f"server peak RSS {kib(st, 'VmHWM') / 1024:.0f} MiB (before the upload {rss_before / 1024:.0f} MiB); "
+              f"import worker peak RSS (sampled) {worker_peak[0] / 1024:.0f} MiB")
+        stored = os.path.join(data, "maps", m["id"], "dem.tif")
+        info = subprocess.run(["gdalinfo", stored], capture_output=True, text=True).stdout
+        layout = [l.strip() for l in info.splitlines() if "Block=" in l or "Overviews:" in l or "COMPRESSION" in l
+                  or "LAYOUT" in l][:4]
+        print(f"stored dem.tif: {os.path.getsize(stored) / 1e6:.0f} MB; " + "; ".join(x[:120] for x in layout))
+        # Cold tiles: spread over every zoom up to the native one, four layers.
+        rnd = random.Random(7)
+        addrs = []
+        layers = ("elevation", "hillshade", "slope", "traversability")
+        while len(addrs) < ntiles:
+            z = rnd.choice([n, n, n - 1, n - 2] + list(range(0, max(1, n - 2))))
+            a, d = tiles["tile_counts"][z]
+            addr = f"{rnd.choice(layers)}/{z}/{rnd.randrange(a)}/{rnd.randrange(d)}.png"
+            if addr not in addrs and addr not in first:
+                addrs.append(addr)
+
+        def run(n=clients, todo=None):
+            todo = todo or addrs
+            t = time.perf_counter()
+            with cf.ThreadPoolExecutor(n) as ex:
+                res = list(ex.map(lambda a: get(url + a), todo))
+            return res, time.perf_counter() - t
+
+        # One client first, on other tiles: a cold tile's own service time, without queueing.
+        solo_addrs = []
+        while len(solo_addrs) < 24:
+            z = rnd.choice(range(0, n + 1))
+            a, d = tiles["tile_counts"][z]
+            addr = f"{rnd.choice(layers)}/{z}/{rnd.randrange(a)}/{rnd.randrange(d)}.png"
+            if addr not in addrs and addr not in first and addr not in solo_addrs:
+                solo_addrs.append(addr)
+        solo, _ = run(1, solo_addrs)
+        ms = [x[0] for x in solo]
+        print(f"cold, one client, {len(solo_addrs)} tiles over zooms 0..{n}: p50 {pct(ms, .5):.1f} ms, "
+              f"p99 {pct(ms, .99):.1f} ms")
+
+        cold, secs = run()
+        ms = [x[0] for x in cold]
+        print(f"cold, {len(addrs)} tiles over zooms 0..{n}, {clients} clients: p50 {pct(ms, .5):.1f} ms, "
+              f"p99 {pct(ms, .99):.1f} ms, max {max(ms):.1f} ms, {len(addrs) / secs:.0f} tiles/s; "
+              f"statuses {sorted(set(x[1] for x in cold))}")
+        warm, secs = run()
+        ms = [x[0] for x in warm]
+        print(f"warm, {clients} clients: p50 {pct(ms, .5):.2f} ms, p99 {pct(ms, .99):.2f} ms, "
+              f"{len(addrs) / secs:.0f} requests/s")
+        print(f"server peak RSS after the tiles {kib(status_of(server.pid), 'VmHWM') / 1024:.0f} MiB; "
+              f"load average {os.getloadavg()[0]:.2f}")
+    finally:
+        server.terminate()
+        server.wait(timeout=60)
+        shutil.rmtree(os.path.join(work, "data"), ignore_errors=True)
+
+
+work = tempfile.mkdtemp(prefix="roverplan-big-map-")
+try:
+    print(f"load average at start: {os.getloadavg()[0]:.2f} ({os.cpu_count()} cores)")
+    for size in opts["--sizes"].split(","):
+        cols, rows = (int(v) for v in size.split("x"))
+        bench(work, cols, rows)
+        for f in os.listdir(work):
+            os.remove(os.path.join(work, f))
+finally:
+    shutil.rmtree(work, ignore_errors=True)

@@ -1,0 +1,259 @@
+// A stored map as its tile pyramid (issue 24, maps/dem_pyramid.hpp): the elevation written as a
+// Cloud-Optimised GeoTIFF (tiled, overviews, lossless), the class pyramid with exact worst classes,
+// tiles drawn from them equal to the in-memory tiles at the native zoom and within the overview's
+// averaging below it, and a map stored before the pyramid (no overviews) read the old way.
+#include <doctest/doctest.h>
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <limits>
+#include <memory>
+#include <vector>
+
+#include "core/common/error.hpp"
+#include "core/terrain/layers.hpp"
+#include "maps/dem_io.hpp"
+#include "maps/dem_pyramid.hpp"
+#include "maps/map_tiles.hpp"
+#include "maps/tile_grid.hpp"
+
+using namespace rover;
+using namespace rover::maps;
+namespace fs = std::filesystem;
+
+namespace {
+
+constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+
+struct TempDir {
+  fs::path path;
+  TempDir() {
+    path = fs::temp_directory_path() / ("roverplan-pyramid-" + std::to_string(::getpid()) + "-" + std::to_string(std::rand()));
+    fs::create_directories(path);
+  }
+  ~TempDir() {
+    std::error_code ec;
+    fs::remove_all(path, ec);
+  }
+  std::string file(const std::string& name) const { return (path / name).string(); }
+};
+
+// Uneven, deterministic heights with a nodata hole and steep ridges (every class appears).
+terrain::Dem wavyDem(int rows, int cols, double cell) {
+  terrain::Dem dem;
+  dem.z = Raster<float>(GridGeometry{rows, cols, cell, cell}, 0.0f);
+  for (int r = 0; r < rows; ++r)
+    for (int c = 0; c < cols; ++c)
+      dem.z(r, c) = static_cast<float>(6 * std::sin(r * 0.07) + 4 * std::cos(c * 0.045) + 0.002 * r * c +
+                                       0.6 * std::sin(r * 1.3 + c * 0.9));
+  for (int r = rows / 3; r < rows / 3 + 7; ++r)
+    for (int c = cols / 2; c < cols / 2 + 9; ++c) dem.z(r, c) = kNaN;
+  return dem;
+}
+
+bool sameFloat(float a, float b) { return (std::isnan(a) && std::isnan(b)) || a == b; }
+
+// The stored map's files, as the server writes them at import.
+struct StoredMap {
+  TempDir dir;
+  terrain::Dem dem;
+  terrain::Traversability trav;
+  std::shared_ptr<const DemHeader> header;
+  explicit StoredMap(terrain::Dem d) : dem(std::move(d)), trav(terrain::traversability(dem)) {
+    writeDemCog(dir.file("dem.tif"), dem.z);
+    writeClassPyramid(dir.file("classes.tif"), trav.classes);
+    header = std::make_shared<const DemHeader>(readDemHeader(dir.file("dem.tif")));
+  }
+  PyramidBlocks blocks() const {
+    return PyramidBlocks(dir.file("dem.tif"), dir.file("classes.tif"), header,
+                         colourRange(RenderLayer::Elevation, dem.z));
+  }
+  TileSource memory() const {
+    TileSource s;
+    s.dem = &dem;
+    s.classes = &trav.classes;
+    s.range = colourRange(RenderLayer::Elevation, dem.z);
+    return s;
+  }
+};
+
+}  // namespace
+
+TEST_CASE("pyramid: the elevation is a COG of 256² tiles, DEFLATE, one overview per zoom below native, values unchanged") {
+  StoredMap m(wavyDem(700, 530, 0.5));
+  const PyramidInfo info = pyramidInfo(m.dir.file("dem.tif"));
+  CHECK(info.layout == "COG");
+  CHECK(info.compression == "DEFLATE");
+  CHECK(info.blockWidth == 256);
+  CHECK(info.blockHeight == 256);
+  // 700 rows → native zoom 2: overviews of 2 × 2 and 4 × 4 cells, the blocks of zooms 1 and 0
+  // (the COG driver rounds 530 / 4 down: 132 where the tile grid has 133 blocks).
+  REQUIRE(tileGridOf(700, 530).nativeZoom == 2);
+  REQUIRE(info.overviews.size() == 2u);
+  CHECK(info.overviews[0] == std::pair{265, 350});
+  CHECK(info.overviews[1] == std::pair{132, 175});
+  // Lossless: every cell reads back as written, the hole as NaN.
+  const LoadedDem back = loadDem(m.dir.file("dem.tif"));
+  REQUIRE(back.dem.geometry().rows == 700);
+  REQUIRE(back.dem.geometry().cols == 530);
+  CHECK(back.dem.geometry().cellWidth == doctest::Approx(0.5));
+  for (int i = 0; i < 700 * 530; ++i) REQUIRE(sameFloat(back.dem.z.at(i), m.dem.z.at(i)));
+  CHECK(back.info.nodataCells == 63);
+  // The class pyramid: tiled, its levels exactly the tile grid's blocks.
+  const PyramidInfo classes = pyramidInfo(m.dir.file("classes.tif"));
+  CHECK(classes.blockWidth == 256);
+  REQUIRE(classes.overviews.size() == 2u);
+  CHECK(classes.overviews[0] == std::pair{265, 350});
+  CHECK(classes.overviews[1] == std::pair{133, 175});
+}
+
+TEST_CASE("pyramid: a map of one tile has no overviews") {
+  StoredMap m(wavyDem(200, 130, 1.0));
+  CHECK(pyramidInfo(m.dir.file("dem.tif")).overviews.empty());
+  CHECK(pyramidInfo(m.dir.file("classes.tif")).overviews.empty());
+  const TileGrid g = tileGridOf(200, 130);
+  const auto w = tileWindow(g, 0, 0, 0);
+  REQUIRE(w);
+  const auto stored = tileValues(RenderLayer::Slope, m.blocks(), *w);
+  const auto memory = tileValues(RenderLayer::Slope, m.memory(), *w);
+  for (std::size_t i = 0; i < stored.size(); ++i) REQUIRE(sameFloat(stored[i], memory[i]));
+}
+
+TEST_CASE("pyramid: native-zoom tiles from the stored map are byte for byte the in-memory tiles, every layer") {
+  StoredMap m(wavyDem(700, 530, 0.5));
+  const TileGrid g = tileGridOf(700, 530);
+  const PyramidBlocks stored = m.blocks();
+  const TileSource memory = m.memory();
+  for (auto layer : {RenderLayer::Elevation, RenderLayer::Hillshade, RenderLayer::Slope, RenderLayer::Traversability}) {
+    CAPTURE(renderLayerName(layer));
+    for (int z : {g.nativeZoom, g.maxZoom()})
+      for (auto [x, y] : {std::pair{0, 0}, std::pair{1, 1}, std::pair{tilesAcross(g, z) - 1, tilesDown(g, z) - 1}}) {
+        const auto w = tileWindow(g, z, x, y);
+        REQUIRE(w);
+        CHECK(renderTile(layer, stored, *w).rgba == renderTile(layer, memory, *w).rgba);
+      }
+  }
+  for (auto layer : {RenderLayer::Elevation, RenderLayer::Slope})
+    for (int y = 0; y < tilesDown(g, g.nativeZoom); ++y)
+      for (int x = 0; x < tilesAcross(g, g.nativeZoom); ++x) {
+        const auto w = tileWindow(g, g.nativeZoom, x, y);
+        const auto a = tileValues(layer, stored, *w), b = tileValues(layer, memory, *w);
+        for (std::size_t i = 0; i < a.size(); ++i) REQUIRE(sameFloat(a[i], b[i]));
+      }
+}
+
+TEST_CASE("pyramid: below the native zoom, heights come from the overview: the block means where blocks are whole") {
+  // 1024 × 768: every block of every zoom is whole, so GDAL's AVERAGE overview is the block mean
+  // (up to float rounding) wherever the block has no nodata (a level averages the level above it,
+  // so blocks at the hole weigh their cells differently); elsewhere, and on 700 × 530 whose edge
+  // blocks are cut, each value must lie within the heights of the cells it stands for and their
+  // neighbours' (the overview's resampling window).
+  for (auto [rows, cols] : {std::pair{1024, 768}, std::pair{700, 530}}) {
+    CAPTURE(rows);
+    StoredMap m(wavyDem(rows, cols, 1.0));
+    const TileGrid g = tileGridOf(rows, cols);
+    for (int z = 0; z < g.nativeZoom; ++z) {
+      const int step = 1 << (g.nativeZoom - z);
+      const BlockSpan all{0, 0, (rows + step - 1) / step, (cols + step - 1) / step};
+      const terrain::Dem stored = m.blocks().dem(step, all);
+      const Raster<float> exact = blockMean(m.dem.z, step, all);
+      REQUIRE(stored.z.geometry.rows == all.rows);
+      CHECK(stored.z.geometry.cellWidth == doctest::Approx(step));
+      int compared = 0;
+      for (int i = 0; i < all.rows; ++i)
+        for (int j = 0; j < all.cols; ++j) {
+          const float v = stored.z(i, j), e = exact(i, j);
+          if (std::isnan(e)) continue;  // a block inside the hole
+          REQUIRE(std::isfinite(v));
+          bool whole = rows == 1024;
+          for (int r = i * step; whole && r < (i + 1) * step; ++r)
+            for (int c = j * step; whole && c < (j + 1) * step; ++c) whole = std::isfinite(m.dem.z(r, c));
+          if (whole) {
+            REQUIRE(v == doctest::Approx(e).epsilon(1e-5));
+          } else {
+            float lo = INFINITY, hi = -INFINITY;
+            for (int r = std::max(0, (i - 1) * step); r < std::min(rows, (i + 2) * step); ++r)
+              for (int c = std::max(0, (j - 1) * step); c < std::min(cols, (j + 2) * step); ++c)
+                if (std::isfinite(m.dem.z(r, c))) lo = std::min(lo, m.dem.z(r, c)), hi = std::max(hi, m.dem.z(r, c));
+            REQUIRE(v >= lo - 1e-4f);
+            REQUIRE(v <= hi + 1e-4f);
+          }
+          ++compared;
+        }
+      CHECK(compared > all.rows * all.cols / 2);
+    }
+    // Tiles below the native zoom render (no seams asked here: the overview is one raster).
+    const auto w = tileWindow(g, 0, 0, 0);
+    CHECK(renderTile(RenderLayer::Hillshade, m.blocks(), *w).rgba.size() == 256u * 256u * 4u);
+  }
+}
+
+TEST_CASE("pyramid: the class levels hold the exact worst class of every block, cut edge blocks included") {
+  StoredMap m(wavyDem(700, 530, 0.5));
+  const TileGrid g = tileGridOf(700, 530);
+  for (int z = 0; z <= g.nativeZoom; ++z) {
+    const int step = 1 << (g.nativeZoom - z);
+    const BlockSpan all{0, 0, (700 + step - 1) / step, (530 + step - 1) / step};
+    const Raster<std::uint8_t> stored = m.blocks().classes(step, all);
+    const Raster<std::uint8_t> exact = blockWorstClass(m.trav.classes, step, all);
+    CHECK(stored.values == exact.values);
+    // A window inside the level reads the same blocks.
+    const BlockSpan part{all.rows / 3, all.cols / 4, all.rows / 2, all.cols / 2};
+    CHECK(m.blocks().classes(step, part).values == blockWorstClass(m.trav.classes, step, part).values);
+  }
+  // Not a trivial map: it has impassable cells, and the hole.
+  CHECK(m.trav.shares.counts[2] > 0);
+  CHECK(m.trav.shares.counts[3] == 63);
+}
+
+TEST_CASE("pyramid: a map stored before the pyramid (a tiled GeoTIFF, no overviews) gives the in-memory tiles at every zoom") {
+  TempDir dir;
+  const terrain::Dem dem = wavyDem(700, 530, 0.5);
+  const auto trav = terrain::traversability(dem);
+  writeGeoTiff(dir.file("dem.tif"), dem.z);  // the writer maps were stored with before (nodata -9999)
+  writeClassesGeoTiff(dir.file("classes.tif"), trav.classes);
+  REQUIRE(pyramidInfo(dir.file("dem.tif")).overviews.empty());
+  const PyramidBlocks stored(dir.file("dem.tif"), dir.file("classes.tif"),
+                             std::make_shared<const DemHeader>(readDemHeader(dir.file("dem.tif"))),
+                             colourRange(RenderLayer::Elevation, dem.z));
+  TileSource memory;
+  memory.dem = &dem;
+  memory.classes = &trav.classes;
+  memory.range = stored.range();
+  const TileGrid g = tileGridOf(700, 530);
+  for (int z = 0; z <= g.maxZoom(); ++z)
+    for (auto layer : {RenderLayer::Elevation, RenderLayer::Slope, RenderLayer::Traversability}) {
+      CAPTURE(z);
+      const auto w = tileWindow(g, z, tilesAcross(g, z) - 1, 0);
+      REQUIRE(w);
+      CHECK(renderTile(layer, stored, *w).rgba == renderTile(layer, memory, *w).rgba);
+      if (layer != RenderLayer::Traversability) {
+        const auto a = tileValues(layer, stored, *w), b = tileValues(layer, memory, *w);
+        for (std::size_t i = 0; i < a.size(); ++i) REQUIRE(sameFloat(a[i], b[i]));
+      }
+    }
+  CHECK_THROWS_AS(stored.pdm(1, BlockSpan{0, 0, 2, 2}), Error);
+}
+
+TEST_CASE("pyramid: a geographic map's block rows keep their own widths") {
+  TempDir dir;
+  terrain::Dem dem = wavyDem(600, 300, 1.0);
+  // Ten degrees of latitude near the pole, 0.01° cells: the east-west width shrinks northwards.
+  dem.z.geo.valid = true;
+  dem.z.geo.geotransform = {10.0, 0.01, 0, 80.0, 0, -0.01};
+  dem.z.geo.crsWkt = "GEOGCS[\"WGS 84\",DATUM[\"WGS_1984\",SPHEROID[\"WGS 84\",6378137,298.257223563]],"
+                     "PRIMEM[\"Greenwich\",0],UNIT[\"degree\",0.0174532925199433],AUTHORITY[\"EPSG\",\"4326\"]]";
+  writeDemCog(dir.file("dem.tif"), dem.z);
+  const LoadedDem whole = loadDem(dir.file("dem.tif"));
+  REQUIRE(whole.dem.rowCellWidth.size() == 600u);
+  const auto header = std::make_shared<const DemHeader>(readDemHeader(dir.file("dem.tif")));
+  REQUIRE(header->rowCellWidth == whole.dem.rowCellWidth);
+  const BlockSpan span{10, 5, 40, 30};
+  const terrain::Dem blocks = PyramidBlocks(dir.file("dem.tif"), "", header, {}).dem(2, span);
+  CHECK(blocks.rowCellWidth == blockRowWidths(whole.dem.rowCellWidth, 600, 2, span));
+  CHECK(blocks.rowCellWidth.front() < blocks.rowCellWidth.back());  // north is narrower
+}
