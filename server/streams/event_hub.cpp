@@ -57,6 +57,9 @@ class EventHub::Stream : public ChannelStream {
       : ChannelStream(Pacing{std::chrono::milliseconds(0), std::chrono::milliseconds(0), std::chrono::milliseconds(10)}),
         channel_(hub, std::move(filter)) {
     addChannel(channel_);
+    // The first joiner takes a cut: a new stream stands where the hub is, not at seq 0.
+    std::lock_guard lock(mutex_);
+    changedLocked();
   }
   void published() {
     {
