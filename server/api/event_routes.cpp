@@ -7,9 +7,10 @@ namespace rover::api {
 void addEventRoutes(http::Router& router, ApiContext& ctx) {
   http::RouteOptions ws;
   ws.openapi = Operation().errors({400, 404, 503}).toJson();  // 503: subscriber limits (ws_admission.hpp)
+  ws.openapi["x-messages"] = openapi::eventMessageSchema();      // what the server sends
   ws.summary =
       "WebSocket: every create/change/delete of maps, PDMs, zones, missions and studies, and operators' presence, as "
-      "{type:\"events\", events:[{seq, kind, object, id, map, version, by, at}]} (schema EventMessage), seq global "
+      "{type:\"events\", events:[{seq, kind, object, id, map, version, by, at}]} (x-websockets messages), seq global "
       "and gap-free. ?since=N replays the events after N (the last " +
       std::to_string(streams::EventHub::kRingEvents) +
       " are kept; older: one {type:\"resync_required\"} message, then close), then {type:\"ready\", seq, presence}; "

@@ -215,6 +215,7 @@ json document(const http::Router& router, const PlannerRegistry& planners, const
                                {"tags", {tagOf(r.pattern)}},
                                {"parameters", params},
                                {"errors", errorResponses}};
+      if (extra.contains("x-messages")) websockets[r.pattern]["messages"] = extra["x-messages"];
       continue;
     }
     std::string method = r.method;

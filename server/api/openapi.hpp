@@ -57,6 +57,8 @@ nlohmann::json studySchemas();
 // The schemas of issue 26 (server/api/openapi_collab.cpp): Zone, ZoneDeleted, VersionConflict,
 // Event, EventMessage, History, HistoryEntry, PdmChange; `zoneFeature` is the Zones' feature.
 nlohmann::json collabSchemas(const nlohmann::json& zoneFeature);
+// The messages of WS /api/events (each event's fields, their kinds and objects).
+nlohmann::json eventMessageSchema();
 
 // The document of every route of `router`; the planners' parameter tables and presets give the
 // mission request's and planner listing's schemas.

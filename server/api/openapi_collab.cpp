@@ -29,30 +29,6 @@ json collabSchemas(const json& zoneFeature) {
   s["Zone"] = zone;
   s["ZoneDeleted"] = object({{"deleted", str("The zone's id.")}, {"zones_version", {{"type", "integer"}}}},
                             {"deleted", "zones_version"});
-  s["Event"] = object(
-      {{"seq", {{"type", "integer"}, {"description", "Global, gap-free (a map-filtered stream skips other maps' numbers)."}}},
-       {"kind", {{"type", "string"}, {"enum", {"created", "changed", "deleted", "presence", "left"}}}},
-       {"object", {{"type", "string"}, {"enum", {"map", "pdm", "zone", "zones", "mission", "study", "presence"}}}},
-       {"id", str("The object's id (a zone's id on its map; the map's id for a zone set; a connection's for presence).")},
-       {"map", str("The map it belongs to, \"\" when none.")},
-       {"version", {{"type", "integer"}, {"description", "Its version after the change, 0 when deleted or unversioned."}}},
-       {"by", str("The operator (named token, X-Operator or hello name), \"\" when unknown.")},
-       {"at", str("ISO 8601 UTC.")},
-       {"extra", object({{"name", str()}, {"editing", str()}})}},
-      {"seq", "kind", "object", "id", "map", "version", "by", "at"});
-  s["EventMessage"] = {
-      {"description",
-       "A message of WS /api/events: {type:\"events\", events:[Event...]} (in seq order), {type:\"ready\", seq, "
-       "connection, ring, presence:[{id,name,map,editing}]} once the replay is sent, or {type:\"resync_required\", "
-       "since, oldest, message} (then the server closes) when the events asked for are older than the last " +
-           std::to_string(streams::EventHub::kRingEvents) + " kept."},
-      {"type", "object"},
-      {"properties",
-       {{"type", {{"type", "string"}, {"enum", {"events", "ready", "resync_required"}}}},
-        {"events", {{"type", "array"}, {"items", ref("Event")}}},
-        {"seq", {{"type", "integer"}}},
-        {"presence", {{"type", "array"}, {"items", {{"type", "object"}}}}}}},
-      {"required", {"type"}}};
   s["HistoryEntry"] = object({{"version", {{"type", "integer"}}},
                               {"by", str("Who saved it (\"\" when unknown).")},
                               {"at", str("When, ISO 8601 UTC.")},
@@ -67,6 +43,35 @@ json collabSchemas(const json& zoneFeature) {
                            {"components", {{"type", "array"}, {"minItems", 1}, {"items", {{"type", "object"}}}}},
                            {"version", version}});
   return s;
+}
+
+// What WS /api/events sends (listed under x-websockets: OpenAPI 3.0 components only count as used
+// from paths).
+json eventMessageSchema() {
+  const json event = object(
+      {{"seq", {{"type", "integer"}, {"description", "Global, gap-free (a map-filtered stream skips other maps' numbers)."}}},
+       {"kind", {{"type", "string"}, {"enum", {"created", "changed", "deleted", "presence", "left"}}}},
+       {"object", {{"type", "string"}, {"enum", {"map", "pdm", "zone", "zones", "mission", "study", "presence"}}}},
+       {"id", str("The object's id (a zone's id on its map; the map's id for a zone set; a connection's for presence).")},
+       {"map", str("The map it belongs to, \"\" when none.")},
+       {"version", {{"type", "integer"}, {"description", "Its version after the change, 0 when deleted or unversioned."}}},
+       {"by", str("The operator (named token, X-Operator or hello name), \"\" when unknown.")},
+       {"at", str("ISO 8601 UTC.")},
+       {"extra", object({{"name", str()}, {"editing", str()}})}},
+      {"seq", "kind", "object", "id", "map", "version", "by", "at"});
+  return {
+      {"description",
+       "A message of WS /api/events: {type:\"events\", events:[Event...]} (in seq order), {type:\"ready\", seq, "
+       "connection, ring, presence:[{id,name,map,editing}]} once the replay is sent, or {type:\"resync_required\", "
+       "since, oldest, message} (then the server closes) when the events asked for are older than the last " +
+           std::to_string(streams::EventHub::kRingEvents) + " kept."},
+      {"type", "object"},
+      {"properties",
+       {{"type", {{"type", "string"}, {"enum", {"events", "ready", "resync_required"}}}},
+        {"events", {{"type", "array"}, {"items", event}}},
+        {"seq", {{"type", "integer"}}},
+        {"presence", {{"type", "array"}, {"items", {{"type", "object"}}}}}}},
+      {"required", {"type"}}};
 }
 
 }  // namespace rover::api::openapi
