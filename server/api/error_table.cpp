@@ -44,6 +44,11 @@ ErrorAnswer errorAnswer(std::exception_ptr error) {
     std::rethrow_exception(error);
   } catch (const http::ApiError& e) {
     http::Response r = http::Response::error(e.status(), e.code(), e.what(), e.field());
+    if (!e.details().empty()) {
+      nlohmann::json body = nlohmann::json::parse(r.body);
+      for (const auto& [k, v] : e.details().items()) body["error"][k] = v;
+      r.body = body.dump();
+    }
     r.headers = e.headers();
     return {std::move(r), ""};
   } catch (const DomainError& e) {

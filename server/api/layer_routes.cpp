@@ -59,9 +59,14 @@ Response getTile(ApiContext& ctx, const Request& req) {
                   y = tileNumber(last.substr(0, dot), "row");
   const std::string pdm = queryString(req, "pdm");
   const std::string path = ctx.maps.tileFile(id, layer, format, z, x, y, pdm);  // 404s checked first
+  // A PDM can be edited (issue 26): its tiles name its version, and are revalidated (ETag) rather
+  // than kept a year.
+  std::string pdmTag;
+  if (layer == "pdm")
+    if (auto p = ctx.db.getPdm(pdm)) pdmTag = pdm + MapCatalog::pdmVersionTag(p->version);
   // Appended piece by piece: GCC 12's -Wrestrict misreads a chain of operator+ here.
   std::string etag = "\"";
-  for (const std::string& part : {std::string(kTileVersion), id, layer, layer == "pdm" ? pdm : std::string(),
+  for (const std::string& part : {std::string(kTileVersion), id, layer, pdmTag,
                                   std::to_string(z), std::to_string(x)}) {
     if (part.empty()) continue;
     etag += part;
@@ -75,7 +80,7 @@ Response getTile(ApiContext& ctx, const Request& req) {
   if (etagMatches(req.header("if-none-match"), etag)) r.status = 304;
   else r = fileResponse(path, format == "png" ? "image/png" : "application/octet-stream");
   r.headers.emplace_back("ETag", etag);
-  r.headers.emplace_back("Cache-Control", "public, max-age=31536000, immutable");
+  r.headers.emplace_back("Cache-Control", layer == "pdm" ? "no-cache" : "public, max-age=31536000, immutable");
   if (format == "f32")
     r.headers.insert(r.headers.end(), {{"X-Rows", std::to_string(maps::kTileSize)},
                                        {"X-Cols", std::to_string(maps::kTileSize)},

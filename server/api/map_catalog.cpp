@@ -143,15 +143,17 @@ std::string MapCatalog::layerFile(const std::string& id, const std::string& laye
     if (list.empty()) throw ApiError(404, "not_found", "the map has no PDM yet", "pdm");
     pdm = list.back().id;
   }
+  std::string pdmVersion;  // an edited PDM's layers are new files (issue 26)
   if (layer == "pdm") {
     auto rec = db_.getPdm(pdm);
     if (!rec || rec->mapId != id) throw ApiError(404, "not_found", "no PDM '" + rover::json::shown(pdm) + "' on this map", "pdm");
+    pdmVersion = pdmVersionTag(rec->version);
   }
   const fs::path dir = fs::path(dir_.mapDir(id)) / "layers";
   const GridGeometry& geom = map->dem.geometry();
   const int side = format == "png" ? overviewSide(max, std::max(geom.rows, geom.cols)) : 0;
   std::string file = layer;
-  if (layer == "pdm") file += "-" + pdm;
+  if (layer == "pdm") file += "-" + pdm + pdmVersion;
   if (side > 0) {
     file += '-';
     file += std::to_string(side);

@@ -114,9 +114,19 @@ class MapCatalog {
   // stored as pdm.tif by an older version is read as it is. Each PDM is charged to its map's disk
   // budget (413/507 beyond it, field "body").
   store::PdmRecord createPdm(const std::string& mapId, const std::string& name,
-                             const std::vector<pdm::Gaussian>& components, const nlohmann::json& meta);
+                             const std::vector<pdm::Gaussian>& components, const nlohmann::json& meta,
+                             const std::string& by = "");
   store::PdmRecord createPdmFromRaster(const std::string& mapId, const std::string& name,
-                                       const std::string& rasterPath);
+                                       const std::string& rasterPath, const std::string& by = "");
+  // A PDM's new name and (Gaussian PDMs only) components as version expected+1 (issue 26):
+  // discretised first (400 when they put no mass on the map), then its components.json and row
+  // written in the row's transaction once the version matches. Returns the row's outcome (Stale:
+  // nothing written) and, when Done, the new record in `out`.
+  store::Cas changePdm(const store::PdmRecord& current, const std::string& name,
+                       const std::optional<std::vector<pdm::Gaussian>>& components, long long expected,
+                       const std::string& by, store::PdmRecord& out);
+  // The file-name part that names a PDM's version in layer and tile files ("" for version 1).
+  static std::string pdmVersionTag(long long version);
   // The PDM's probability mass on its map's grid. The last few are kept in memory (at most
   // kMassCacheCells cells together: one PDM of a 50 M-cell map), so launching missions with a PDM
   // just made or viewed costs no second discretisation.
@@ -141,7 +151,7 @@ class MapCatalog {
   std::shared_ptr<const maps::DemHeader> storedHeader(const std::string& id);
   // Writes the PDM's files (`write` fills the staging folder) and its row, charged to the map.
   store::PdmRecord storePdm(const std::string& mapId, const std::string& name, const nlohmann::json& meta,
-                            const std::function<void(const std::string& staging)>& write);
+                            const std::function<void(const std::string& staging)>& write, const std::string& by);
 
   store::Database& db_;
   store::DataDir& dir_;

@@ -4,6 +4,7 @@
 // stored in the data dir charged to their map, and their mass on the map's grid kept in memory.
 #include <filesystem>
 #include <fstream>
+#include <optional>
 
 #include "core/common/error.hpp"
 #include "maps/dem_io.hpp"
@@ -23,7 +24,7 @@ std::string MapCatalog::pdmFile(const std::string& pdmId) const {
 
 store::PdmRecord MapCatalog::createPdm(const std::string& mapId, const std::string& name,
                                        const std::vector<pdm::Gaussian>& components,
-                                       const nlohmann::json& meta) {
+                                       const nlohmann::json& meta, const std::string& by) {
   auto map = get(mapId);
   dir_.budget().requireRoom(store::DiskUse::Pdm, mapId, "body");
   // Discretised now to refuse components that put no mass on the map (400), as every later use
@@ -39,13 +40,13 @@ store::PdmRecord MapCatalog::createPdm(const std::string& mapId, const std::stri
   const store::PdmRecord rec =
       storePdm(mapId, name.empty() ? "PDM " + store::nowIso() : name, meta, [&](const std::string& staging) {
         store::DataDir::writeFileAtomic((fs::path(staging) / "components.json").string(), stored);
-      });
+      }, by);
   keepMass(rec.id, std::make_shared<const Raster<float>>(std::move(mass)));  // a mission often follows
   return rec;
 }
 
 store::PdmRecord MapCatalog::storePdm(const std::string& mapId, const std::string& name, const nlohmann::json& meta,
-                                      const std::function<void(const std::string&)>& write) {
+                                      const std::function<void(const std::string&)>& write, const std::string& by) {
   // Files first, then the row, as for maps.
   const std::string staging = dir_.stagingDir();
   try {
@@ -57,7 +58,7 @@ store::PdmRecord MapCatalog::storePdm(const std::string& mapId, const std::strin
     rec.createdAt = store::nowIso();
     rec.meta = meta;
     dir_.commitDir(staging, dir_.pdmDir(rec.id), store::DiskCharge{store::DiskUse::Pdm, mapId, "body"});
-    db_.insertPdm(rec);
+    db_.insertPdm(rec, by);
     return rec;
   } catch (...) {
     store::DataDir::removeTree(staging);
@@ -66,7 +67,7 @@ store::PdmRecord MapCatalog::storePdm(const std::string& mapId, const std::strin
 }
 
 store::PdmRecord MapCatalog::createPdmFromRaster(const std::string& mapId, const std::string& name,
-                                                 const std::string& rasterPath) {
+                                                 const std::string& rasterPath, const std::string& by) {
   auto map = get(mapId);
   const GridGeometry& g = map->dem.geometry();
   maps::LoadOptions o;
@@ -107,7 +108,57 @@ store::PdmRecord MapCatalog::createPdmFromRaster(const std::string& mapId, const
   mass.geo = map->dem.z.geo;
   return storePdm(mapId, name.empty() ? "raster PDM" : name, {{"kind", "raster"}}, [&](const std::string& staging) {
     storingGeoTiff([&] { maps::writeGeoTiff((fs::path(staging) / "pdm.tif").string(), mass); });
-  });
+  }, by);
+}
+
+std::string MapCatalog::pdmVersionTag(long long version) {
+  return version > 1 ? "-v" + std::to_string(version) : std::string();
+}
+
+store::Cas MapCatalog::changePdm(const store::PdmRecord& current, const std::string& name,
+                                 const std::optional<std::vector<pdm::Gaussian>>& components, long long expected,
+                                 const std::string& by, store::PdmRecord& out) {
+  out = current;
+  out.name = name;
+  std::shared_ptr<const Raster<float>> mass;
+  std::string stored;
+  if (components) {
+    auto map = get(current.mapId);
+    Raster<float> m;
+    try {
+      m = pdm::discretise(*components, map->dem.geometry(), map->valid);
+    } catch (const Error& e) {
+      throw ApiError(400, "invalid_parameter", e.what(), e.field().empty() ? "components" : e.field());
+    }
+    m.geo = map->dem.z.geo;
+    mass = std::make_shared<const Raster<float>>(std::move(m));
+    stored = rover::json::toStoredJson(*components).dump();
+    // An edited random PDM is a Gaussian one from now on (its seed no longer makes it).
+    out.meta = {{"kind", "gaussians"}, {"components", rover::json::toJson(*components)["components"]}};
+  }
+  const nlohmann::json body{{"name", out.name}, {"meta", out.meta}};
+  const std::string file = (fs::path(dir_.pdmDir(current.id)) / "components.json").string();
+  store::Cas done;
+  try {
+    done = db_.updatePdm(out, expected, body, by, [&] {
+      if (components) store::DataDir::writeFileAtomic(file, stored);
+    });
+  } catch (...) {
+    // The row was rolled back (a full disk): the file goes back to the components it names.
+    if (components && current.meta.contains("components")) {
+      try {
+        const auto old = rover::json::gaussiansFromJson({{"components", current.meta["components"]}});
+        store::DataDir::writeFileAtomic(file, rover::json::toStoredJson(old).dump());
+      } catch (...) {
+      }
+    }
+    throw;
+  }
+  if (done == store::Cas::Done) {
+    out.version = expected + 1;
+    if (mass) keepMass(current.id, mass);
+  }
+  return done;
 }
 
 void MapCatalog::keepMass(const std::string& pdmId, std::shared_ptr<const Raster<float>> mass) {

@@ -79,7 +79,9 @@ Response uploadMap(ApiContext& ctx, const Request& req) {
     for (const auto& [key, value] : options)
       if (value.size() > 200) throw ApiError(400, "invalid_parameter", key + " is longer than 200 bytes", key);
     const maps::DemImport import = maps::parseDemImportOptions(options);
-    return Response::json(201, mapJson(ctx.maps.importDem(files, name, import)));
+    const store::MapRecord m = ctx.maps.importDem(files, name, import);
+    publishEvent(ctx, "created", "map", m.id, m.id, 1, req.operatorName);
+    return Response::json(201, mapJson(m));
   } catch (...) {
     for (auto& f : files) store::DataDir::removeTree(f.path);
     throw;
@@ -111,6 +113,7 @@ Response getMap(ApiContext& ctx, const Request& req) {
 Response deleteMap(ApiContext& ctx, const Request& req) {
   InvalidateMapAfter after{ctx, req.params.at("id")};
   ctx.maps.remove(req.params.at("id"));
+  publishEvent(ctx, "deleted", "map", req.params.at("id"), req.params.at("id"), 0, req.operatorName);
   return Response::json(200, {{"deleted", req.params.at("id")}});
 }
 

@@ -85,10 +85,12 @@ std::string MapCatalog::tileFile(const std::string& id, const std::string& layer
     throw ApiError(404, "not_found", "tiles are .png for every layer, .f32 for elevation and slope", "format");
   auto rec = db_.getMap(id);
   if (!rec) throw ApiError(404, "not_found", "no map '" + rover::json::shown(id) + "'", "id");
+  std::string pdmVersion;  // an edited PDM's tiles are new files (issue 26)
   if (layer == "pdm") {
     if (pdmId.empty()) throw ApiError(400, "invalid_parameter", "a pdm tile names its PDM: ?pdm=ID", "pdm");
     auto p = db_.getPdm(pdmId);
     if (!p || p->mapId != id) throw ApiError(404, "not_found", "no PDM '" + rover::json::shown(pdmId) + "' on this map", "pdm");
+    pdmVersion = pdmVersionTag(p->version);
   }
   const maps::TileGrid grid = storedGrid(*rec, *this);
   const auto window = maps::tileWindow(grid, z, x, y);
@@ -99,7 +101,7 @@ std::string MapCatalog::tileFile(const std::string& id, const std::string& layer
                    "tile");
   const fs::path dir = fs::path(dir_.mapDir(id)) / "layers";
   std::string file = "t1-" + layer;
-  if (layer == "pdm") file += "-" + pdmId;
+  if (layer == "pdm") file += "-" + pdmId + pdmVersion;
   file += "-" + std::to_string(z) + "-" + std::to_string(x) + "-" + std::to_string(y) + "." + format;
   // Made once per file on the work pool, outside the catalog's lock.
   return layers_.get((dir / file).string(), [&](const std::string& path) {

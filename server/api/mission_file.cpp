@@ -22,6 +22,8 @@ json missionFile(const store::MissionRecord& m, const std::string& demSha256,
   if (spec.contains("keep_out") && !spec["keep_out"].is_null()) f["keep_out"] = spec["keep_out"];
   // The area it planned in (issue 24): a re-run plans there too (on a big map it must).
   if (spec.contains("area") && !spec["area"].is_null()) f["area"] = spec["area"];
+  // The versions it used (issue 26): duplicate-and-edit reopens those.
+  if (spec.contains("used") && spec["used"].is_object()) f["used"] = spec["used"];
   // The run's current label (its request's name until renamed; a cleared label clears it).
   if (!m.label.empty()) f["name"] = m.label;
   return f;

@@ -6,6 +6,7 @@
 #include "server/api/mission_file.hpp"
 #include "server/api/mission_map_file.hpp"
 #include "server/api/mission_service.hpp"
+#include "server/api/preconditions.hpp"
 #include "server/api/route_kit.hpp"
 #include "server/json/json_edge.hpp"
 #include "server/json/mission_request.hpp"
@@ -20,7 +21,7 @@ namespace {
 constexpr const char* kMcapMediaType = "application/octet-stream";
 
 Response launchMission(ApiContext& ctx, const Request& req) {
-  return Response::json(202, missionJson(submitMission(ctx, jsonBody(req, rj::kMissionJsonLimits))));
+  return Response::json(202, missionJson(submitMission(ctx, jsonBody(req, rj::kMissionJsonLimits), req.operatorName)));
 }
 
 Response listMissions(ApiContext& ctx, const Request& req) {
@@ -44,7 +45,7 @@ Response getMission(ApiContext& ctx, const Request& req) {
   j["result"] = pending || !isFinal(m.status)                                     ? "pending"
                 : fs::exists(fs::path(ctx.dir.missionDir(m.id)) / "result.json") ? "ready"
                                                                                   : "none";
-  return Response::json(200, j);
+  return withETag(Response::json(200, j), m.version);
 }
 
 Response cancelOrDeleteMission(ApiContext& ctx, const Request& req) {
@@ -52,6 +53,7 @@ Response cancelOrDeleteMission(ApiContext& ctx, const Request& req) {
   const store::MissionRecord m = missionOr404(ctx, id);
   switch (ctx.missions.cancel(id)) {
     case missions::MissionManager::CancelOutcome::Cancelled:
+      // Its "cancelled" status is an event from the manager (ApiContext wires onStatus).
       return Response::json(202, {{"id", id}, {"status", "cancelling"}});
     case missions::MissionManager::CancelOutcome::Finishing:
       throw ApiError(409, "not_finished",
@@ -67,6 +69,7 @@ Response cancelOrDeleteMission(ApiContext& ctx, const Request& req) {
   if (!ctx.db.deleteMission(id)) throw missionNotFound(id);
   ctx.missions.forget(id);
   ctx.dir.remove(ctx.dir.missionDir(id));
+  publishEvent(ctx, "deleted", "mission", id, m.mapId, 0, req.operatorName);
   return Response::json(200, {{"deleted", id}});
 }
 
@@ -75,15 +78,28 @@ Response renameMission(ApiContext& ctx, const Request& req) {
   json body = jsonBody(req, rj::kMissionJsonLimits);
   if (!body.is_object()) throw ApiError(400, "bad_json", "the request body must be a JSON object", "body");
   for (const auto& item : body.items())
-    if (item.key() != "label")
+    if (item.key() != "label" && item.key() != "version")
       throw ApiError(400, "unknown_field", "only 'label' can be changed, not '" + rj::shown(item.key()) + "'",
                      rj::shown(item.key()));
   auto label = body.find("label");
   if (label == body.end() || !label->is_string()) throw ApiError(400, "invalid_field", "label must be a string", "label");
   rj::checkName(label->get<std::string>(), "label");
+  const std::string what = "mission " + rj::shown(id);
+  missionOr404(ctx, id);
+  const long long expected = requiredVersion(req, &body, what);
+  std::lock_guard lock(ctx.versionedWrites);
+  switch (ctx.db.relabelMission(id, label->get<std::string>(), expected)) {
+    case store::Cas::Done: break;
+    case store::Cas::Missing: throw missionNotFound(id);
+    case store::Cas::Stale: {
+      const store::MissionRecord now = missionOr404(ctx, id);
+      throw versionConflict(what, expected, now.version, missionJson(now));
+    }
+  }
   // A DELETE may land between the update and the read back: then it is gone (404).
-  if (!ctx.db.setMissionLabel(id, label->get<std::string>())) throw missionNotFound(id);
-  return Response::json(200, missionJson(missionOr404(ctx, id)));
+  const store::MissionRecord m = missionOr404(ctx, id);
+  publishEvent(ctx, "changed", "mission", id, m.mapId, m.version, req.operatorName);
+  return withETag(Response::json(200, missionJson(m)), m.version);
 }
 
 // mission.json: recorded at launch; runs launched before that name their map's current grid.
@@ -154,7 +170,7 @@ void addMissionRoutes(http::Router& router, ApiContext& ctx) {
                       Operation().listing("Mission")));
   router.add("GET", "/api/missions/{id}", handler(ctx, getMission),
              routeDoc("One mission: status, progress, metrics, and whether its result files are there (`result`).",
-                      Operation().returns(200, "The mission.", ref("Mission")).errors({404})));
+                      Operation().returns(200, "The mission.", ref("Mission")).etag().errors({404})));
   router.add("DELETE", "/api/missions/{id}", handler(ctx, cancelOrDeleteMission),
              routeDoc("Cancel a queued or running mission (202: its status is cancelled at once, the planner stops "
                       "within one step and its partial result is stored after: `result` says when), or delete "
@@ -164,8 +180,15 @@ void addMissionRoutes(http::Router& router, ApiContext& ctx) {
                           .returns(202, "Cancelling (it was queued or running).", ref("Cancelling"))
                           .errors({404, 409})));
   router.add("PATCH", "/api/missions/{id}", handler(ctx, renameMission),
-             routeDoc("Rename a run: {\"label\": \"...\"} (at most 200 characters, no control characters).",
-                      Operation().body(ref("MissionLabel")).returns(200, "Renamed.", ref("Mission")).errors({400, 404, 415})));
+             routeDoc("Rename a run: {\"label\": \"...\"} (at most 200 characters, no control characters), naming "
+                      "the version read (If-Match \"v<N>\" or \"version\"): 412 with the current mission when "
+                      "stale, 428 without one.",
+                      Operation()
+                          .ifMatch()
+                          .body(ref("MissionLabel"))
+                          .returns(200, "Renamed.", ref("Mission"))
+                          .etag()
+                          .errors({400, 404, 412, 415, 428})));
   router.add("GET", "/api/missions/{id}/{file}", handler(ctx, getMissionFile),
              routeDoc("A mission's file (mission.json: everything to run it again, POST it to /api/missions), or "
                       "a finished mission's result: result.json, result.geojson (map CRS: tracks, route, targets, "

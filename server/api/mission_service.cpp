@@ -56,11 +56,16 @@ missions::MissionJob buildMission(ApiContext& ctx, const json& body) {
                    "(its dem_sha256 differs): upload the same DEM with the same crop and cell size, "
                    "and put that map's id in the file",
                    "dem_sha256");
+  // The versions the run uses (issue 26): its PDM's now, and the zone set's its keep_out was read at.
+  json used{{"pdm_version", nullptr}, {"zones_version", nullptr}};
   if (!job.record.pdmId.empty()) {
     auto p = ctx.db.getPdm(job.record.pdmId);
     if (!p || p->mapId != job.record.mapId)
       throw ApiError(400, "not_found", "no PDM '" + rj::shown(job.record.pdmId) + "' on this map", "pdm");
+    used["pdm_version"] = p->version;
   }
+  if (auto k = body.find("keep_out"); k != body.end() && k->is_object())
+    if (auto v = k->find("version"); v != k->end() && v->is_number_unsigned()) used["zones_version"] = *v;
   // What the planner plans on, as its description says (PlannerSpecs::ground), on the map or on
   // the planning window of the mission's area (issue 24). Its memory is estimated by the planner
   // on that ground and checked against the mission budget first. The map's header only: a big
@@ -148,19 +153,22 @@ missions::MissionJob buildMission(ApiContext& ctx, const json& body) {
   }
   job.record.spec = std::move(request.spec);
   job.record.spec["dem_sha256"] = digest;
+  job.record.spec["used"] = used;
   job.problem.world = {};
   job.problem.dem.reset();
   job.problem.pdm.reset();
   return job;
 }
 
-store::MissionRecord submitMission(ApiContext& ctx, const json& body) {
+store::MissionRecord submitMission(ApiContext& ctx, const json& body, const std::string& by) {
   missions::MissionJob job = buildMission(ctx, body);
   job.record.id = store::DataDir::newId();
   job.record.createdAt = store::nowIso();
   const std::string id = job.record.id;
   ctx.missions.submit(std::move(job));
-  return *ctx.db.getMission(id);
+  auto m = *ctx.db.getMission(id);
+  publishEvent(ctx, "created", "mission", m.id, m.mapId, m.version, by);
+  return m;
 }
 
 }  // namespace rover::api

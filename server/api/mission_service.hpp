@@ -17,6 +17,7 @@ namespace rover::api {
 missions::MissionJob buildMission(ApiContext& ctx, const nlohmann::json& request);
 
 // buildMission, then queued under a new id: the stored record, status "queued".
-store::MissionRecord submitMission(ApiContext& ctx, const nlohmann::json& request);
+// `by`: the operator, for the "created" event (issue 26).
+store::MissionRecord submitMission(ApiContext& ctx, const nlohmann::json& request, const std::string& by = "");
 
 }  // namespace rover::api

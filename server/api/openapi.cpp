@@ -24,6 +24,10 @@ std::string errorText(int status) {
                      "start the server with --cors ORIGIN to allow one.";
     case 404: return "No such resource (the field names which).";
     case 409: return "Conflict with the resource's state (not ready, not finished, another map).";
+    case 412: return "version_conflict: the object changed since the version named (If-Match or \"version\"); "
+                     "nothing was written, error.current holds the object as stored now.";
+    case 428: return "precondition_required: the object exists and the write named no version (If-Match or "
+                     "\"version\"), so it could overwrite another operator's change.";
     case 413: return "Too large (body, upload, mission memory estimate, an import's memory/CPU/file limits, "
                      "or one object larger than a map's disk budget).";
     case 415: return "The body is not sent as application/json.";
@@ -149,6 +153,22 @@ Operation& Operation::query(const std::string& name, json schema, const std::str
   return *this;
 }
 
+Operation& Operation::ifMatch() {
+  op_["parameters"].push_back(
+      {{"name", "If-Match"},
+       {"in", "header"},
+       {"required", false},
+       {"description", "The version this write was read at, as its ETag: \"v<N>\" (or a \"version\" member in the "
+                       "body). A stale one is answered 412 with the current object; a write to an object that "
+                       "exists without either is answered 428."},
+       {"schema", {{"type", "string"}, {"pattern", "^(W/)?\"?v[0-9]{1,16}\"?$"}}}});
+  return *this;
+}
+
+Operation& Operation::etag() {
+  return header("ETag", "string", "The object's version, \"v<N>\": send it back in If-Match to change it.");
+}
+
 Operation& Operation::errors(std::initializer_list<int> statuses) {
   for (int s : statuses) op_["x-errors"].push_back(s);
   return *this;
@@ -182,8 +202,9 @@ json document(const http::Router& router, const PlannerRegistry& planners, const
     errors.push_back(500);
     json errorResponses = json::object();
     for (int e : errors)
-      errorResponses[std::to_string(e)] = {{"description", errorText(e)},
-                                           {"content", {{"application/json", {{"schema", openapi::ref("Error")}}}}}};
+      errorResponses[std::to_string(e)] = {
+          {"description", errorText(e)},
+          {"content", {{"application/json", {{"schema", openapi::ref(e == 412 ? "VersionConflict" : "Error")}}}}}};
     // OpenAPI 3.0 has no way to say "WebSocket": a 101 is no success a linter or a generated client
     // knows. The streams are listed apart, with the errors their upgrade may answer.
     if (r.method == "WS") {
@@ -194,6 +215,7 @@ json document(const http::Router& router, const PlannerRegistry& planners, const
                                {"tags", {tagOf(r.pattern)}},
                                {"parameters", params},
                                {"errors", errorResponses}};
+      if (extra.contains("x-messages")) websockets[r.pattern]["messages"] = extra["x-messages"];
       continue;
     }
     std::string method = r.method;
@@ -203,6 +225,14 @@ json document(const http::Router& router, const PlannerRegistry& planners, const
             {"operationId", operationId(r.method, r.pattern)},
             {"tags", {tagOf(r.pattern)}}};
     for (const auto& q : extra.value("parameters", json::array())) params.push_back(q);
+    // Who is asking (issue 26): events and history say it (a named token's name wins).
+    if (r.options.requireAuth && r.method != "GET")
+      params.push_back({{"name", "X-Operator"},
+                        {"in", "header"},
+                        {"required", false},
+                        {"description", "The operator's name for events and history when the token names none: at "
+                                        "most 40 printable characters (400 naming X-Operator otherwise)."},
+                        {"schema", {{"type", "string"}, {"maxLength", 160}}}});
     if (!params.empty()) op["parameters"] = params;
     if (extra.contains("requestBody")) op["requestBody"] = extra["requestBody"];
     json responses = extra.value("responses", json::object());

@@ -31,6 +31,10 @@ class Operation {
   Operation& body(nlohmann::json schema, const std::string& contentType = "application/json");
   Operation& query(const std::string& name, nlohmann::json schema, const std::string& description,
                    bool required = false);
+  // The If-Match request header (preconditions.hpp): the version the write was read at.
+  Operation& ifMatch();
+  // The ETag response header ("v<N>") of the last added status.
+  Operation& etag();
   // Error statuses besides the ones every route may answer (401 with a token, 500).
   Operation& errors(std::initializer_list<int> statuses);
   // ?limit=&offset=, X-Total-Count and Link on the 200 of a listing of `item`.
@@ -49,6 +53,12 @@ nlohmann::json componentSchemas(const PlannerRegistry& planners);
 // The schemas of /api/studies (server/api/openapi_studies.cpp): Study, StudyDetail, StudySummary,
 // StudyConfiguration, StudyPreset, StudyRun.
 nlohmann::json studySchemas();
+
+// The schemas of issue 26 (server/api/openapi_collab.cpp): Zone, ZoneDeleted, VersionConflict,
+// Event, EventMessage, History, HistoryEntry, PdmChange; `zoneFeature` is the Zones' feature.
+nlohmann::json collabSchemas(const nlohmann::json& zoneFeature);
+// The messages of WS /api/events (each event's fields, their kinds and objects).
+nlohmann::json eventMessageSchema();
 
 // The document of every route of `router`; the planners' parameter tables and presets give the
 // mission request's and planner listing's schemas.

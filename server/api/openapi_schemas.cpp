@@ -168,8 +168,13 @@ json componentSchemas(const PlannerRegistry& planners) {
        {"keep_out", {{"type", "object"}, {"allOf", {openapi::ref("Zones")}}, {"nullable", true},
                      {"description", "Keep-out zones of this mission, in the local frame."}}},
        {"area", {{"type", "object"}, {"allOf", {openapi::ref("MissionArea")}}, {"nullable", true},
-                 {"description", "The mission area (null: the whole map)."}}}},
+                 {"description", "The mission area (null: the whole map)."}}},
+       {"used", nullable(object({{"pdm_version", nullable({{"type", "integer"}})},
+                                 {"zones_version", nullable({{"type", "integer"}})}}))}},
       {"map", "planner", "rovers"}, true);
+  request["properties"]["used"]["description"] =
+      "The versions the run used (written by the server, informative in a request): its PDM's, and its "
+      "keep_out's when it was the map's saved zone set (keep_out.version as read).";
   // Every field the parser accepts has its schema, and no other.
   for (const char* f : rover::json::kMissionRequestFields)
     if (!request["properties"].contains(f)) throw std::logic_error(std::string("openapi: no schema for ") + f);
@@ -194,14 +199,20 @@ json componentSchemas(const PlannerRegistry& planners) {
   s["Zones"]["description"] = "Keep-out zones: a GeoJSON FeatureCollection of Polygons (at most " +
                               std::to_string(rover::json::kMaxZones) + " zones and " +
                               std::to_string(rover::json::kMaxZoneVertices) + " vertices in all).";
+  s.update(collabSchemas(feature));
+  s["Zones"]["properties"]["version"] = {{"type", "integer"}, {"minimum", 0},
+                                         {"description", "The set's version: +1 per save, 0 when never saved."}};
   addAreaSchemas(s);
-  s["MissionLabel"] = object({{"label", name("The run's new label (\"\" clears it).")}}, {"label"}, true);
+  s["MissionLabel"] = object({{"label", name("The run's new label (\"\" clears it).")},
+                              {"version", {{"type", "integer"}, {"description", "The version read (or If-Match)."}}}},
+                             {"label"}, true);
 
   s["Mission"] = object(
       {{"id", str()},
        {"map", str()},
        {"pdm", nullable(str())},
        {"label", str()},
+       {"version", {{"type", "integer"}, {"description", "+1 per label change; send it back (If-Match) to relabel."}}},
        {"map_name", nullable(str("Null once the map is deleted."))},
        {"pdm_name", nullable(str())},
        {"planner", str()},
@@ -232,6 +243,7 @@ json componentSchemas(const PlannerRegistry& planners) {
                      {"map", str()},
                      {"name", str()},
                      {"created_at", str()},
+                     {"version", {{"type", "integer"}, {"description", "1 when created, +1 per change (PUT)."}}},
                      {"kind", {{"type", "string"}, {"enum", {"gaussians", "random", "raster"}}}},
                      {"seed", {{"type", "integer"}}},
                      {"components", {{"type", "array"}, {"items", {{"type", "object"}}}}},

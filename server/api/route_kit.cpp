@@ -182,14 +182,17 @@ json pdmJson(const store::PdmRecord& p) {
   j["map"] = p.mapId;
   j["name"] = p.name;
   j["created_at"] = p.createdAt;
-  j["layer"] = "/api/maps/" + p.mapId + "/layers/pdm.png?pdm=" + p.id;
-  j["raster"] = "/api/maps/" + p.mapId + "/layers/pdm.tif?pdm=" + p.id;
+  j["version"] = p.version;
+  // An edited PDM's links name its version, so a browser's cached overview is not shown for it.
+  const std::string v = p.version > 1 ? "&v=" + std::to_string(p.version) : std::string();
+  j["layer"] = "/api/maps/" + p.mapId + "/layers/pdm.png?pdm=" + p.id + v;
+  j["raster"] = "/api/maps/" + p.mapId + "/layers/pdm.tif?pdm=" + p.id + v;
   return j;
 }
 
 json missionJson(const store::MissionRecord& m) {
   return {{"id", m.id},          {"map", m.mapId},          {"pdm", m.pdmId.empty() ? json(nullptr) : json(m.pdmId)},
-          {"label", m.label},
+          {"label", m.label}, {"version", m.version},
           {"map_name", m.mapName.empty() ? json(nullptr) : json(m.mapName)},
           {"pdm_name", m.pdmName.empty() ? json(nullptr) : json(m.pdmName)},
           {"planner", m.planner}, {"status", enumName(m.status)},      {"message", m.message},
@@ -202,6 +205,19 @@ json missionJson(const store::MissionRecord& m) {
             {"result_csv", "/api/missions/" + m.id + "/result.csv"},
             {"map_png", "/api/missions/" + m.id + "/map.png"},
             {"map_tif", "/api/missions/" + m.id + "/map.tif"}}}};
+}
+
+void publishEvent(ApiContext& ctx, const std::string& kind, const std::string& object, const std::string& id,
+                  const std::string& map, long long version, const std::string& by) {
+  if (!ctx.events) return;
+  streams::Event e;
+  e.kind = kind;
+  e.object = object;
+  e.id = id;
+  e.map = map;
+  e.version = version;
+  e.by = by;
+  ctx.events->publish(std::move(e));
 }
 
 }  // namespace rover::api

@@ -83,6 +83,10 @@ store::MissionRecord missionOr404(ApiContext& ctx, const std::string& id);
 // computed from the loaded grid for older ones.
 std::string mapDigest(ApiContext& ctx, const std::string& mapId);
 
+// Sends an event on the live stream (issue 26; server/streams/event_hub.hpp).
+void publishEvent(ApiContext& ctx, const std::string& kind, const std::string& object, const std::string& id,
+                  const std::string& map, long long version, const std::string& by);
+
 // The JSON views of the stored resources, with their links.
 nlohmann::json mapJson(const store::MapRecord& m);
 // A map's tile grid (maps/tile_grid.hpp) for a tiled viewer: tile_size, zmin/zmax, native_zoom,

@@ -1,6 +1,7 @@
 #include "server/api/routes.hpp"
 
 #include "core/common/error.hpp"
+#include "server/api/route_kit.hpp"
 #include "server/api/zone_routes.hpp"
 
 namespace rover::api {
@@ -22,6 +23,19 @@ http::RouteOptions routeDoc(const std::string& summary, const openapi::Operation
 // One file per resource (planner_routes, map_routes, layer_routes, zone_routes, pdm_routes,
 // mission_routes, study_routes), registered in this order.
 void addApiRoutes(http::Router& router, ApiContext& ctx) {
+  if (!ctx.events) {
+    store::Database& db = ctx.db;
+    ctx.events = std::make_shared<streams::EventHub>(static_cast<std::uint64_t>(db.counter("event_seq")),
+                                                     [&db](std::uint64_t seq) { db.setCounter("event_seq", static_cast<long long>(seq)); });
+  }
+  // Mission statuses from the workers go out as events too.
+  ctx.missions.onStatus = [&ctx](const std::string& id, RunStatus) {
+    try {
+      if (auto m = ctx.db.getMission(id)) publishEvent(ctx, "changed", "mission", id, m->mapId, m->version, "");
+    } catch (const std::exception&) {
+      // An event lost to a failing database: the row is what clients reload.
+    }
+  };
   http::RouteOptions open;
   open.requireAuth = false;
   open.summary = "Liveness and a few counters (no token needed).";
@@ -46,6 +60,8 @@ void addApiRoutes(http::Router& router, ApiContext& ctx) {
   addPdmRoutes(router, ctx);
   addMissionRoutes(router, ctx);
   if (ctx.studies) addStudyRoutes(router, ctx);
+  addHistoryRoutes(router, ctx);
+  addEventRoutes(router, ctx);
 }
 
 }  // namespace rover::api

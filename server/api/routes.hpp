@@ -11,6 +11,7 @@
 #include "server/api/openapi.hpp"
 #include "server/http/router.hpp"
 #include "server/missions/mission_manager.hpp"
+#include "server/streams/event_hub.hpp"
 #include "server/studies/study_manager.hpp"
 
 namespace rover::api {
@@ -29,6 +30,12 @@ struct ApiContext {
   // Maps of more cells than this plan only in a mission area (issue 24; core/planning/
   // mission_area.hpp states the default and why); tests lower it to keep their maps small.
   std::int64_t wholeMapCells = kWholeMapCells;
+  // The live event stream (issue 26): made by addApiRoutes when not set, its numbering continued
+  // from the database.
+  std::shared_ptr<streams::EventHub> events;
+  // Versioned writes (zones, PDM edits, labels) and their events happen one at a time, so the
+  // events of one object always come in version order. They are small and rare.
+  std::mutex versionedWrites;
 
   // Serialized GET /api/maps/{id} bodies: the hottest read, changed only by the writes below.
   // Writers call invalidateMap *after* their write. A reader takes a ticket before it reads the
@@ -68,5 +75,7 @@ void addLayerRoutes(http::Router& router, ApiContext& ctx);    // /api/maps/{id}
 void addPdmRoutes(http::Router& router, ApiContext& ctx);      // /api/maps/{id}/pdms...
 void addMissionRoutes(http::Router& router, ApiContext& ctx);  // /api/missions...
 void addStudyRoutes(http::Router& router, ApiContext& ctx);    // /api/studies...
+void addEventRoutes(http::Router& router, ApiContext& ctx);    // WS /api/events
+void addHistoryRoutes(http::Router& router, ApiContext& ctx);  // .../history, .../restore
 
 }  // namespace rover::api

@@ -162,6 +162,7 @@ void addStudyRoutes(http::Router& router, ApiContext& ctx) {
   router.add("POST", "/api/studies", [&ctx](const Request& req) {
     const json body = jsonBody(req, kStudyJsonLimits);
     const studies::StudyState s = ctx.studies->submit(studyOfRequest(body));
+    publishEvent(ctx, "created", "study", s.id, "", 0, req.operatorName);
     return Response::json(202, studies::toJson(s));
   }, routeDoc("Launch a study: a study document (see README \"Studies\") or {\"preset\": NAME, \"runs\": N, "
                "\"master_seed\"?, \"name\"?}; validated (400 naming the field), stored and queued (202). At most " +
@@ -190,9 +191,11 @@ void addStudyRoutes(http::Router& router, ApiContext& ctx) {
     switch (ctx.studies->remove(id)) {
       case studies::StudyManager::Removal::NotFound: throw ApiError(404, "not_found", "no study '" + id + "'", "id");
       case studies::StudyManager::Removal::Cancelling:
+        publishEvent(ctx, "changed", "study", id, "", 0, req.operatorName);
         return Response::json(202, {{"id", id}, {"status", "cancelling"}});
       case studies::StudyManager::Removal::Deleted: break;
     }
+    publishEvent(ctx, "deleted", "study", id, "", 0, req.operatorName);
     return Response::json(200, {{"deleted", id}});
   }, routeDoc("Cancel a queued or running study (202; the runs done are kept), or delete an ended one with "
                "its database (200).", Operation().returns(202, "Cancelling.", ref("Cancelling")).returns(200, "Deleted.", ref("Deleted")).errors({404}), true));
@@ -250,7 +253,7 @@ void addStudyRoutes(http::Router& router, ApiContext& ctx) {
       ctx.invalidateMap(mapId);
       body["pdm"] = p.id;
     }
-    return Response::json(202, missionJson(submitMission(ctx, body)));
+    return Response::json(202, missionJson(submitMission(ctx, body, req.operatorName)));
   }, routeDoc("Open a run as a mission: the same map, planner, parameters, seed, starts (and PDM, created on "
                "the map) queued as a new mission (202, the mission); 409 not_a_mission when the run's world "
                "is no stored map.", Operation().returns(202, "Queued mission.", ref("Mission")).errors({404, 409, 429}), true));

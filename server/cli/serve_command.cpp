@@ -13,6 +13,7 @@
 #include "server/api/routes.hpp"
 #include "server/cli/arg_parser.hpp"
 #include "server/cli/commands.hpp"
+#include "server/cli/token_file.hpp"
 #include "server/http/http_server.hpp"
 #include "server/jail/import_jail.hpp"
 #include "server/missions/mission_manager.hpp"
@@ -42,8 +43,10 @@ std::string defaultWebRoot() {
 }
 
 // The bearer token, from at most one of --token, --token-file and ROVERPLAN_TOKEN. The variable is
-// removed once read, so no child (a study launcher, an import worker) inherits it.
-std::string serverToken(const ArgParser& a) {
+// removed once read, so no child (a study launcher, an import worker) inherits it. A token file
+// may hold several tokens, `name:token` lines naming their operator (token_file.hpp): they go in
+// `named`, and the first is returned.
+std::string serverToken(const ArgParser& a, std::vector<std::pair<std::string, std::string>>& named) {
   const char* env = std::getenv("ROVERPLAN_TOKEN");
   const std::string fromEnv = env ? env : "";
   ::unsetenv("ROVERPLAN_TOKEN");
@@ -53,9 +56,13 @@ std::string serverToken(const ArgParser& a) {
   if (a.has("token-file")) {
     const std::string path = a.str("token-file", "");
     std::ifstream in(path);
-    if (!in || !std::getline(in, token)) throw UsageError("--token-file: cannot read " + path);
-    while (!token.empty() && (token.back() == '\r' || token.back() == ' ' || token.back() == '\t')) token.pop_back();
-    if (token.empty()) throw UsageError("--token-file: the first line of " + path + " is empty");
+    if (!in) throw UsageError("--token-file: cannot read " + path);
+    try {
+      named = parseTokenFile(in);
+    } catch (const std::invalid_argument& e) {
+      throw UsageError("--token-file " + path + ": " + e.what());
+    }
+    return named.front().second;
   } else {
     token = a.has("token") ? a.str("token", "") : fromEnv;
   }
@@ -97,7 +104,8 @@ int serveCommand(const std::vector<std::string>& argv, std::ostream& out) {
   a.option("token", "T", "",
            "Require 'Authorization: Bearer T' on every /api route except health. Visible to every "
            "local user in `ps`: prefer ROVERPLAN_TOKEN or --token-file.");
-  a.option("token-file", "F", "", "Read the token from the first line of F (keep it 0600).");
+  a.option("token-file", "F", "", "Read the tokens from F (keep it 0600): one a line, `token` or `name:token` (that operator's name "
+           "in events and history).");
   a.option("workers", "N", "cores", "Missions run in parallel.");
   a.option("queue", "N", "64", "Missions that may wait; more are refused with 429.");
   a.option("mission-memory-mb", "M", "half the RAM",
@@ -149,7 +157,7 @@ int serveCommand(const std::vector<std::string>& argv, std::ostream& out) {
   } else {
     config.webRoot = defaultWebRoot();  // "" = API only, said at start
   }
-  config.token = serverToken(a);
+  config.token = serverToken(a, config.namedTokens);
   config.corsOrigin = a.str("cors", "");
   config.publicNames = commaList(a.str("public-name", ""));
   config.maxUploadBytes = static_cast<std::uint64_t>(a.integer("max-upload-mb", 2048, 1, 1 << 20)) << 20;

@@ -111,8 +111,28 @@ Routing routeHead(const ServerState& state, const bhttp::request_header<>& head,
 
   Router::Match m = state.router.match(req.method, req.path, isUpgrade);
   const bool wsRoute = m.route && m.route->method == "WS";
-  const bool needAuth = !cfg.token.empty() && (m.route ? m.route->options.requireAuth : isApiPath(req.path));
-  if (needAuth && !bearerAuthorized(req, cfg.token, wsRoute)) return {unauthorized(), false, nullptr};
+  const bool authOn = !cfg.token.empty() || !cfg.namedTokens.empty();
+  const bool needAuth = authOn && (m.route ? m.route->options.requireAuth : isApiPath(req.path));
+  if (needAuth) {
+    if (!cfg.namedTokens.empty()) {
+      auto name = bearerName(req, cfg.namedTokens, wsRoute);
+      if (!name) return {unauthorized(), false, nullptr};
+      req.operatorName = std::move(*name);
+    } else if (!bearerAuthorized(req, cfg.token, wsRoute)) {
+      return {unauthorized(), false, nullptr};
+    }
+  }
+  // A token's name says who it is; without one, the client may say so itself.
+  if (req.operatorName.empty() && req.headers.count("x-operator")) {
+    auto name = validOperatorName(req.header("x-operator"));
+    if (!name)
+      return {Response::error(400, "invalid_header",
+                              "X-Operator must be at most " + std::to_string(kMaxOperatorChars) +
+                                  " printable characters (UTF-8, no control characters)",
+                              "X-Operator"),
+              false, nullptr};
+    req.operatorName = std::move(*name);
+  }
   if (!m.route) return {unrouted(state, req, method, isUpgrade, m.pathKnown), false, nullptr};
   req.params = std::move(m.params);
   return {std::nullopt, false, m.route};

@@ -19,6 +19,9 @@ struct ServerConfig {
   unsigned threads = 2;                         // io threads
   std::string webRoot;                          // static files for "/" ("" = none)
   std::string token;                            // non-empty: bearer auth on /api (except health)
+  // More tokens, each with its operator's name (--token-file "name:token" lines; "" for a plain
+  // line): any of them (or `token`) is accepted, and the request carries its name.
+  std::vector<std::pair<std::string, std::string>> namedTokens;
   std::string corsOrigin;                       // non-empty: CORS for this origin
   // Host names answered besides the loopback names and `host` (request_origin.hpp); "*" = any.
   std::vector<std::string> publicNames;

@@ -25,6 +25,9 @@ struct Request {
   std::string bodyFile;  // streamed routes: the body on disk (deleted after the handler returns)
   std::uint64_t bodySize = 0;
   std::string remote;  // peer address
+  // Who sends it (issue 26): the name of the bearer token (--token-file "name:token" lines), else
+  // the X-Operator header (validated by dispatch), else "". Events and history say `by` with it.
+  std::string operatorName;
   std::string header(const std::string& lowerName) const;
 };
 
@@ -58,8 +61,15 @@ class ApiError : public std::runtime_error {
     return *this;
   }
   const std::vector<std::pair<std::string, std::string>>& headers() const { return headers_; }
+  // Extra members of the error object, e.g. "current" (the stored object) on a 412.
+  ApiError& withDetail(const std::string& key, nlohmann::json value) {
+    details_[key] = std::move(value);
+    return *this;
+  }
+  const nlohmann::json& details() const { return details_; }
 
  private:
+  nlohmann::json details_ = nlohmann::json::object();
   int status_;
   std::string code_;
   std::string field_;
@@ -99,6 +109,9 @@ class WsSource {
   virtual std::optional<WsFrame> next() = 0;
   // Minimum spacing of frames that are not `last`, so a fast planner does not flood a browser.
   virtual std::chrono::milliseconds minInterval() const { return std::chrono::milliseconds(30); }
+  // A whole text message from the client (at most kMaxClientMessageBytes); ignored by default.
+  // Called on the session's strand, never at the same time as next().
+  virtual void onMessage(const std::string& /*text*/) {}
 };
 
 // Builds the source for an upgrade request (may throw ApiError: answered as HTTP, no upgrade).

@@ -110,7 +110,9 @@ std::optional<Response> refuseByOrigin(const OriginPolicy& policy, const Request
   return std::nullopt;
 }
 
-bool bearerAuthorized(const Request& req, const std::string& token, bool allowQueryToken) {
+namespace {
+// The token a request presents: "Authorization: Bearer T", or ?token=T on an upgrade.
+std::optional<std::string> presentedToken(const Request& req, bool allowQueryToken) {
   std::string presented;
   bool found = false;
   const std::string h = req.header("authorization");
@@ -127,7 +129,45 @@ bool bearerAuthorized(const Request& req, const std::string& token, bool allowQu
       found = true;
     }
   }
-  return found && constantTimeEquals(presented, token);
+  if (!found) return std::nullopt;
+  return presented;
+}
+}  // namespace
+
+bool bearerAuthorized(const Request& req, const std::string& token, bool allowQueryToken) {
+  const auto presented = presentedToken(req, allowQueryToken);
+  return presented && constantTimeEquals(*presented, token);
+}
+
+std::optional<std::string> bearerName(const Request& req,
+                                      const std::vector<std::pair<std::string, std::string>>& tokens,
+                                      bool allowQueryToken) {
+  const auto presented = presentedToken(req, allowQueryToken);
+  if (!presented) return std::nullopt;
+  std::optional<std::string> name;
+  for (const auto& [who, token] : tokens)
+    if (constantTimeEquals(*presented, token) && !name) name = who;
+  return name;
+}
+
+std::optional<std::string> validOperatorName(const std::string& value) {
+  std::size_t chars = 0;
+  for (std::size_t i = 0; i < value.size();) {
+    const auto c = static_cast<unsigned char>(value[i]);
+    std::size_t len = c < 0x80 ? 1 : (c >> 5) == 0x6 ? 2 : (c >> 4) == 0xe ? 3 : (c >> 3) == 0x1e ? 4 : 0;
+    if (len == 0 || i + len > value.size()) return std::nullopt;
+    if (len == 1 && (c < 0x20 || c == 0x7f)) return std::nullopt;
+    for (std::size_t k = 1; k < len; ++k)
+      if ((static_cast<unsigned char>(value[i + k]) & 0xc0) != 0x80) return std::nullopt;
+    // C1 controls (U+0080..U+009F) are not printable either.
+    if (len == 2 && c == 0xc2 && static_cast<unsigned char>(value[i + 1]) < 0xa0) return std::nullopt;
+    i += len;
+    if (++chars > kMaxOperatorChars) return std::nullopt;
+  }
+  std::string out = value;
+  while (!out.empty() && out.back() == ' ') out.pop_back();
+  while (!out.empty() && out.front() == ' ') out.erase(out.begin());
+  return out;
 }
 
 Response unauthorized() {

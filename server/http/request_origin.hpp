@@ -58,6 +58,16 @@ std::optional<Response> refuseByOrigin(const OriginPolicy& policy, const Request
 // Whether `req` presents `token`: "Authorization: Bearer TOKEN", or with `allowQueryToken` (a
 // WebSocket upgrade: browsers cannot set its headers) ?token=TOKEN. Compared in constant time.
 bool bearerAuthorized(const Request& req, const std::string& token, bool allowQueryToken);
+// The same against several (name, token) pairs: the name of the one presented, nullopt when none
+// matches. Every token is compared (in constant time), so the time says nothing of which matched.
+std::optional<std::string> bearerName(const Request& req,
+                                      const std::vector<std::pair<std::string, std::string>>& tokens,
+                                      bool allowQueryToken);
+// The X-Operator header (issue 26): who a client without a named token says it is. At most
+// kMaxOperatorChars characters of printable UTF-8 (no control characters); "" when absent;
+// nullopt when invalid (answered 400 naming the header).
+constexpr std::size_t kMaxOperatorChars = 40;
+std::optional<std::string> validOperatorName(const std::string& value);
 // 401 unauthorized with WWW-Authenticate: Bearer.
 Response unauthorized();
 

@@ -113,14 +113,28 @@ void WebsocketSession::onRead(beast::error_code ec, std::size_t bytes) {
     // timer and the parked state all stop holding it once their handlers return).
     return finish(ec == websocket::error::closed ? "closed" : ec.message());
   }
-  readBuffer_.consume(readBuffer_.size());
   messageBytes_ += bytes;
   if (messageBytes_ > kMaxClientMessageBytes) {
     // No further read: the close handshake reads (and drops) the rest up to the close reply.
+    readBuffer_.consume(readBuffer_.size());
     if (state_->config.logRequests) state_->log("WS " + path_ + " client message over the limit: closing (1009)");
     return closeWith(websocket::close_code::too_big);
   }
-  if (ws_.is_message_done()) messageBytes_ = 0;
+  // A text message is handed to the source whole (bounded above); binary ones are dropped.
+  if (ws_.got_text()) message_.append(static_cast<const char*>(readBuffer_.data().data()), readBuffer_.size());
+  readBuffer_.consume(readBuffer_.size());
+  if (ws_.is_message_done()) {
+    messageBytes_ = 0;
+    std::string text = std::move(message_);
+    message_.clear();
+    if (!text.empty() && !finished_) {
+      try {
+        source_->onMessage(text);
+      } catch (const std::exception& e) {
+        if (state_->config.logRequests) state_->log("WS " + path_ + " message refused: " + e.what());
+      }
+    }
+  }
   readLoop();
 }
 

@@ -3,7 +3,8 @@
 // write (and initially) the session asks the source for the next frame; "nothing now" parks it
 // until WsConnection::wake(). Frames that are not `last` are spaced by
 // source->minInterval() (the wait happens before next(), so the frame written is the freshest
-// state). A read loop discards client messages and notices closes. Only wake() runs on other
+// state). A read loop hands whole text messages to source->onMessage (the event stream's
+// presence; other sources ignore them) and notices closes. Only wake() runs on other
 // threads.
 //
 // Closing (issue 22): every close the server starts — the last frame, a source failure, a client
@@ -130,6 +131,7 @@ class WebsocketSession : public Closable, public std::enable_shared_from_this<We
   bool finished_ = false;
   bool droppedSlow_ = false;
   std::size_t messageBytes_ = 0;  // of the client message being read
+  std::string message_;           // its text so far (source->onMessage)
   std::uint64_t frames_ = 0;
   std::uint64_t bytes_ = 0;
   std::chrono::steady_clock::time_point opened_;

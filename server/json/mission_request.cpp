@@ -154,7 +154,8 @@ MissionRequest parseMissionRequest(const json& body, const PlannerRegistry& plan
   }
 
   req.spec = body;
-  for (const char* key : {"map", "pdm", "planner", "format", "version", "roverplan", "dem_sha256", "map_name"})
+  // "used" (the versions a run used, issue 26) is the server's to write: informative in a file.
+  for (const char* key : {"map", "pdm", "planner", "format", "version", "roverplan", "dem_sha256", "map_name", "used"})
     req.spec.erase(key);
   return req;
 }

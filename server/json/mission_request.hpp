@@ -44,7 +44,7 @@ inline constexpr double kMaxPace = 1e6;
 inline constexpr const char* kMissionRequestFields[] = {"map",     "pdm",       "planner",    "rovers",
                                                         "params",  "pace",      "name",       "format",
                                                         "version", "roverplan", "dem_sha256", "map_name",
-                                                        "keep_out", "area"};
+                                                        "keep_out", "area",     "used"};
 
 // A mission file's own fields are accepted too: format ("roverplan-mission"), version (at most
 // `maxFileVersion`), dem_sha256 (64 hex digits, or null) and the informative roverplan and

@@ -110,6 +110,7 @@ void MissionManager::recordStatus(const std::string& id, RunStatus status,
                                   const std::string& message, const nlohmann::json& metrics) {
   try {
     db_.updateMission(id, status, message, metrics);
+    if (onStatus) onStatus(id, status);
     return;
   } catch (const std::exception&) {
     // A full (or failing) disk: the stream holds the status for clients; the row is retried.

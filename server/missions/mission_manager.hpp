@@ -102,6 +102,9 @@ class MissionManager {
   std::uint64_t memoryReserved() const;  // estimates of the running + queued missions
   // Cancels everything, marks running/queued missions interrupted, joins the workers.
   void stop();
+  // Told every status a mission's row is given (the API's event stream, issue 26); set before the
+  // first submit. Runs on the worker (or the cancelling request's) thread; must not throw.
+  std::function<void(const std::string& id, RunStatus status)> onStatus;
 
  private:
   struct Active {

@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <ctime>
 #include <stdexcept>
+#include <type_traits>
 #include <utility>
 
 #include "server/store/data_dir.hpp"
@@ -40,14 +41,16 @@ MapRecord readMap(const Stmt& s) {
 }
 
 PdmRecord readPdm(const Stmt& s) {
-  return PdmRecord{s.text(0), s.text(1), s.text(2), s.text(3), parseJson(s, 4, "PDM meta")};
+  return PdmRecord{s.text(0), s.text(1), s.text(2), s.text(3), parseJson(s, 4, "PDM meta"), s.integer(5)};
 }
+
+constexpr const char* kPdmColumns = "SELECT id, map_id, name, created_at, meta, version FROM pdms ";
 
 // A mission row with the names of its map and PDM (empty once they are deleted).
 constexpr const char* kMissionSelect =
     "SELECT m.id, m.map_id, m.pdm_id, m.planner, m.spec, m.status, m.message, m.created_at, "
     "m.started_at, m.finished_at, m.metrics, m.label, COALESCE(maps.name, ''), "
-    "COALESCE(pdms.name, '') FROM missions m LEFT JOIN maps ON maps.id = m.map_id "
+    "COALESCE(pdms.name, ''), m.version FROM missions m LEFT JOIN maps ON maps.id = m.map_id "
     "LEFT JOIN pdms ON pdms.id = m.pdm_id ";
 
 // A status as an SQL string literal (the names hold no quote).
@@ -85,6 +88,7 @@ MissionRecord readMission(const Stmt& s) {
   m.label = s.text(11);
   m.mapName = s.text(12);
   m.pdmName = s.text(13);
+  m.version = s.integer(14);
   return m;
 }
 
@@ -98,6 +102,74 @@ auto Database::withReserve(Reserve& r, F&& write) -> decltype(write()) {
     if (!release(r)) throw;
     return write();
   }
+}
+
+template <class F>
+auto Database::transaction(F&& body) -> decltype(body()) {
+  exec(db_, "BEGIN IMMEDIATE");
+  try {
+    if constexpr (std::is_void_v<decltype(body())>) {
+      body();
+      exec(db_, "COMMIT");
+    } else {
+      auto out = body();
+      exec(db_, "COMMIT");
+      return out;
+    }
+  } catch (...) {
+    sqlite3_exec(db_, "ROLLBACK", nullptr, nullptr, nullptr);
+    throw;
+  }
+}
+
+void Database::recordHistoryLocked(const std::string& kind, const std::string& objectId, long long version,
+                                   const std::string& body, const std::string& by) {
+  {
+    Stmt s(db_, "INSERT OR REPLACE INTO history(kind, object_id, version, by, at, body) VALUES (?1, ?2, ?3, ?4, ?5, ?6)");
+    s.bind(1, kind).bind(2, objectId).bindInt(3, version).bind(4, by).bind(5, nowIso()).bind(6, body).run();
+  }
+  Stmt trim(db_, "DELETE FROM history WHERE kind = ?1 AND object_id = ?2 AND version <= ?3");
+  trim.bind(1, kind).bind(2, objectId).bindInt(3, version - kHistoryPerObject).run();
+}
+
+void Database::recordHistory(const std::string& kind, const std::string& objectId, long long version,
+                             const nlohmann::json& body, const std::string& by) {
+  const std::string text = dumpJson(body, "history");
+  std::lock_guard lock(mutex_);
+  ensureReserves();
+  transaction([&] { recordHistoryLocked(kind, objectId, version, text, by); });
+}
+
+std::vector<HistoryEntry> Database::history(const std::string& kind, const std::string& objectId) {
+  std::lock_guard lock(mutex_);
+  Stmt s(db_, "SELECT version, by, at FROM history WHERE kind = ?1 AND object_id = ?2 ORDER BY version DESC");
+  s.bind(1, kind).bind(2, objectId);
+  std::vector<HistoryEntry> out;
+  while (s.step()) out.push_back(HistoryEntry{s.integer(0), s.text(1), s.text(2), nullptr});
+  return out;
+}
+
+std::optional<HistoryEntry> Database::historyVersion(const std::string& kind, const std::string& objectId,
+                                                     long long version) {
+  std::lock_guard lock(mutex_);
+  Stmt s(db_, "SELECT version, by, at, body FROM history WHERE kind = ?1 AND object_id = ?2 AND version = ?3");
+  s.bind(1, kind).bind(2, objectId).bindInt(3, version);
+  if (!s.step()) return std::nullopt;
+  return HistoryEntry{s.integer(0), s.text(1), s.text(2), parseJson(s, 3, "history")};
+}
+
+long long Database::counter(const std::string& name) {
+  std::lock_guard lock(mutex_);
+  Stmt s(db_, "SELECT value FROM counters WHERE name = ?1");
+  s.bind(1, name);
+  return s.step() ? s.integer(0) : 0;
+}
+
+void Database::setCounter(const std::string& name, long long value) {
+  std::lock_guard lock(mutex_);
+  ensureReserves();
+  Stmt s(db_, "INSERT INTO counters(name, value) VALUES (?1, ?2) ON CONFLICT(name) DO UPDATE SET value = excluded.value");
+  s.bind(1, name).bindInt(2, value).run();
 }
 
 // ---- maps -------------------------------------------------------------------------------------
@@ -152,7 +224,7 @@ bool Database::setZones(const std::string& mapId, const nlohmann::json& zones) {
   Stmt s(db_,
          "INSERT INTO zones(map_id, body, updated_at) SELECT ?1, ?2, ?3 WHERE EXISTS "
          "(SELECT 1 FROM maps WHERE id = ?1) ON CONFLICT(map_id) DO UPDATE SET "
-         "body = excluded.body, updated_at = excluded.updated_at");
+         "body = excluded.body, updated_at = excluded.updated_at, version = zones.version + 1");
   s.bind(1, mapId).bind(2, body).bind(3, nowIso()).run();
   return sqlite3_changes(db_) > 0;
 }
@@ -165,19 +237,58 @@ std::optional<nlohmann::json> Database::getZones(const std::string& mapId) {
   return parseJson(s, 0, "zones");
 }
 
-// ---- PDMs -------------------------------------------------------------------------------------
+std::optional<ZoneSet> Database::getZoneSet(const std::string& mapId) {
+  std::lock_guard lock(mutex_);
+  Stmt s(db_, "SELECT body, version, next_zone FROM zones WHERE map_id = ?1");
+  s.bind(1, mapId);
+  if (!s.step()) return std::nullopt;
+  return ZoneSet{parseJson(s, 0, "zones"), s.integer(1), s.integer(2)};
+}
 
-void Database::insertPdm(const PdmRecord& p) {
-  const std::string meta = dumpJson(p.meta, "PDM meta");
+Cas Database::putZoneSet(const std::string& mapId, const ZoneSet& set, long long expected, const std::string& by) {
+  const std::string body = dumpJson(set.body, "zones");
   std::lock_guard lock(mutex_);
   ensureReserves();
-  Stmt s(db_, "INSERT INTO pdms(id, map_id, name, created_at, meta) VALUES (?1, ?2, ?3, ?4, ?5)");
-  s.bind(1, p.id).bind(2, p.mapId).bind(3, p.name).bind(4, p.createdAt).bind(5, meta).run();
+  return transaction([&] {
+    {
+      Stmt m(db_, "SELECT 1 FROM maps WHERE id = ?1");
+      m.bind(1, mapId);
+      if (!m.step()) return Cas::Missing;
+    }
+    long long stored = 0;
+    {
+      Stmt v(db_, "SELECT version FROM zones WHERE map_id = ?1");
+      v.bind(1, mapId);
+      if (v.step()) stored = v.integer(0);
+    }
+    if (stored != expected) return Cas::Stale;
+    Stmt w(db_,
+           "INSERT INTO zones(map_id, body, updated_at, version, next_zone) VALUES (?1, ?2, ?3, ?4, ?5) "
+           "ON CONFLICT(map_id) DO UPDATE SET body = excluded.body, updated_at = excluded.updated_at, "
+           "version = excluded.version, next_zone = excluded.next_zone");
+    w.bind(1, mapId).bind(2, body).bind(3, nowIso()).bindInt(4, expected + 1).bindInt(5, set.nextZone).run();
+    recordHistoryLocked("zones", mapId, expected + 1, body, by);
+    return Cas::Done;
+  });
+}
+
+// ---- PDMs -------------------------------------------------------------------------------------
+
+void Database::insertPdm(const PdmRecord& p, const std::string& by) {
+  const std::string meta = dumpJson(p.meta, "PDM meta");
+  const std::string first = dumpJson(nlohmann::json{{"name", p.name}, {"meta", p.meta}}, "history");
+  std::lock_guard lock(mutex_);
+  ensureReserves();
+  transaction([&] {
+    Stmt s(db_, "INSERT INTO pdms(id, map_id, name, created_at, meta, version) VALUES (?1, ?2, ?3, ?4, ?5, 1)");
+    s.bind(1, p.id).bind(2, p.mapId).bind(3, p.name).bind(4, p.createdAt).bind(5, meta).run();
+    recordHistoryLocked("pdm", p.id, 1, first, by);
+  });
 }
 
 std::optional<PdmRecord> Database::getPdm(const std::string& id) {
   std::lock_guard lock(mutex_);
-  Stmt s(db_, "SELECT id, map_id, name, created_at, meta FROM pdms WHERE id = ?1");
+  Stmt s(db_, (std::string(kPdmColumns) + "WHERE id = ?1").c_str());
   s.bind(1, id);
   if (!s.step()) return std::nullopt;
   return readPdm(s);
@@ -186,8 +297,8 @@ std::optional<PdmRecord> Database::getPdm(const std::string& id) {
 std::vector<PdmRecord> Database::listPdms(const std::string& mapId, long long limit, long long offset) {
   std::lock_guard lock(mutex_);
   Stmt s(db_,
-         "SELECT id, map_id, name, created_at, meta FROM pdms WHERE map_id = ?1 "
-         "ORDER BY created_at ASC, id ASC LIMIT ?2 OFFSET ?3");
+         (std::string(kPdmColumns) + "WHERE map_id = ?1 "
+         "ORDER BY created_at ASC, id ASC LIMIT ?2 OFFSET ?3").c_str());
   s.bind(1, mapId).bindInt(2, limit).bindInt(3, offset);
   std::vector<PdmRecord> out;
   while (s.step()) out.push_back(readPdm(s));
@@ -208,6 +319,26 @@ bool Database::deletePdm(const std::string& id) {
     Stmt s(db_, "DELETE FROM pdms WHERE id = ?1");
     s.bind(1, id).run();
     return sqlite3_changes(db_) > 0;
+  });
+}
+
+Cas Database::updatePdm(const PdmRecord& p, long long expected, const nlohmann::json& body, const std::string& by,
+                       const std::function<void()>& before) {
+  const std::string meta = dumpJson(p.meta, "PDM meta"), text = dumpJson(body, "history");
+  std::lock_guard lock(mutex_);
+  ensureReserves();
+  return transaction([&] {
+    {
+      Stmt v(db_, "SELECT version FROM pdms WHERE id = ?1");
+      v.bind(1, p.id);
+      if (!v.step()) return Cas::Missing;
+      if (v.integer(0) != expected) return Cas::Stale;
+    }
+    if (before) before();
+    Stmt w(db_, "UPDATE pdms SET name = ?2, meta = ?3, version = ?4 WHERE id = ?1");
+    w.bind(1, p.id).bind(2, p.name).bind(3, meta).bindInt(4, expected + 1).run();
+    recordHistoryLocked("pdm", p.id, expected + 1, text, by);
+    return Cas::Done;
   });
 }
 
@@ -287,9 +418,20 @@ void Database::updateMission(const std::string& id, RunStatus status,
 bool Database::setMissionLabel(const std::string& id, const std::string& label) {
   std::lock_guard lock(mutex_);
   ensureReserves();
-  Stmt s(db_, "UPDATE missions SET label = ?2 WHERE id = ?1");
+  Stmt s(db_, "UPDATE missions SET label = ?2, version = version + 1 WHERE id = ?1");
   s.bind(1, id).bind(2, label).run();
   return sqlite3_changes(db_) > 0;
+}
+
+Cas Database::relabelMission(const std::string& id, const std::string& label, long long expected) {
+  std::lock_guard lock(mutex_);
+  ensureReserves();
+  Stmt s(db_, "UPDATE missions SET label = ?2, version = version + 1 WHERE id = ?1 AND version = ?3");
+  s.bind(1, id).bind(2, label).bindInt(3, expected).run();
+  if (sqlite3_changes(db_) > 0) return Cas::Done;
+  Stmt e(db_, "SELECT 1 FROM missions WHERE id = ?1");
+  e.bind(1, id);
+  return e.step() ? Cas::Stale : Cas::Missing;
 }
 
 bool Database::deleteMission(const std::string& id) {

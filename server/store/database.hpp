@@ -3,6 +3,7 @@
 // (issue: server, "Mission manager and storage"). Thread-safe: one connection behind a mutex; every
 // write is one transaction, so a crash (even kill -9) leaves either the old or the new row.
 #include <cstdint>
+#include <functional>
 #include <mutex>
 #include <optional>
 #include <string>
@@ -29,7 +30,29 @@ struct PdmRecord {
   std::string name;
   std::string createdAt;
   nlohmann::json meta;  // kind (gaussians | random | raster), components, files
+  long long version = 1;  // 1 when created, +1 per saved change (issue 26)
 };
+
+// A map's keep-out zones as saved: a FeatureCollection whose features carry their ids ("z1", ...)
+// and their own version (properties.version); `version` counts saves of the set, 0 = never saved.
+struct ZoneSet {
+  nlohmann::json body;
+  long long version = 0;
+  long long nextZone = 1;  // the number of the next zone id handed out
+};
+
+// A compare-and-set write: done, refused because the stored version is not the one named (the
+// caller answers 412 with the current object), or the object is gone.
+enum class Cas { Done, Stale, Missing };
+
+// One saved version of a PDM ("pdm", its id) or of a map's zone set ("zones", the map id).
+struct HistoryEntry {
+  long long version = 0;
+  std::string by, at;
+  nlohmann::json body;  // null in listings
+};
+// The saved versions kept per object: the newest 50 (older ones are dropped on write).
+inline constexpr long long kHistoryPerObject = 50;
 
 struct MissionRecord {
   std::string id;
@@ -42,6 +65,7 @@ struct MissionRecord {
   std::string createdAt, startedAt, finishedAt;
   nlohmann::json metrics;  // final metrics (object), null until finished
   std::string label;       // the operator's name for the run (the request's "name", editable)
+  long long version = 1;   // +1 per label change (issue 26)
   // Read only, from the maps / PDMs tables: "" once the map or PDM is deleted.
   std::string mapName, pdmName;
 };
@@ -72,12 +96,27 @@ class Database {
   // when the map does not exist. Deleted with the map.
   bool setZones(const std::string& mapId, const nlohmann::json& zones);
   std::optional<nlohmann::json> getZones(const std::string& mapId);  // nullopt: never set
+  // The versioned zone set (issue 26); nullopt when never saved.
+  std::optional<ZoneSet> getZoneSet(const std::string& mapId);
+  // Saves `set.body` as version expected+1 when the stored version is `expected` (0: none stored
+  // yet), with a history entry by `by`; one transaction.
+  Cas putZoneSet(const std::string& mapId, const ZoneSet& set, long long expected, const std::string& by);
 
-  void insertPdm(const PdmRecord& p);
+  void insertPdm(const PdmRecord& p, const std::string& by = "");  // with its history entry, version 1
   std::optional<PdmRecord> getPdm(const std::string& id);
   std::vector<PdmRecord> listPdms(const std::string& mapId, long long limit = -1, long long offset = 0);
   long long countPdms(const std::string& mapId);
   bool deletePdm(const std::string& id);
+  // Saves p.name and p.meta as version expected+1 when the stored version is `expected`, with a
+  // history entry (`body`) by `by`; one transaction. `before` runs inside it once the version
+  // matched (the PDM's files are written there, so a refused write never touches them).
+  Cas updatePdm(const PdmRecord& p, long long expected, const nlohmann::json& body, const std::string& by,
+                const std::function<void()>& before = {});
+  // A history entry written on its own (tests; writes above record theirs in their transaction).
+  void recordHistory(const std::string& kind, const std::string& objectId, long long version,
+                     const nlohmann::json& body, const std::string& by);
+  std::vector<HistoryEntry> history(const std::string& kind, const std::string& objectId);  // newest first
+  std::optional<HistoryEntry> historyVersion(const std::string& kind, const std::string& objectId, long long version);
 
   void insertMission(const MissionRecord& m);
   std::optional<MissionRecord> getMission(const std::string& id);
@@ -88,9 +127,15 @@ class Database {
   void updateMission(const std::string& id, RunStatus status, const std::string& message,
                      const nlohmann::json& metrics = nullptr);
   bool setMissionLabel(const std::string& id, const std::string& label);  // false if absent
+  // The label change of a client that read version `expected` (issue 26).
+  Cas relabelMission(const std::string& id, const std::string& label, long long expected);
   bool deleteMission(const std::string& id);                                // false if absent
   // After a restart: every queued or running mission becomes interrupted. Returns how many.
   int markUnfinishedInterrupted();
+
+  // A named counter kept across restarts (the event stream's last sequence number).
+  long long counter(const std::string& name);
+  void setCounter(const std::string& name, long long value);
 
  private:
   struct Reserve {
@@ -104,6 +149,11 @@ class Database {
   auto withReserve(Reserve& r, F&& write) -> decltype(write());
   static bool release(Reserve& r);  // true if its file was there to remove
   void ensureReserves();            // best effort: (re)creates them when there is room
+  // Runs `body` in one BEGIN IMMEDIATE .. COMMIT (caller holds mutex_); rolls back on a throw.
+  template <class F>
+  auto transaction(F&& body) -> decltype(body());
+  void recordHistoryLocked(const std::string& kind, const std::string& objectId, long long version,
+                           const std::string& body, const std::string& by);
 
   sqlite3* db_ = nullptr;
   std::mutex mutex_;

@@ -8,7 +8,7 @@ namespace rover::store {
 
 namespace {
 
-constexpr int kSchemaVersion = 3;
+constexpr int kSchemaVersion = 4;
 
 // Version 1 of the schema. Later versions add a migrate step from N-1 below.
 constexpr const char* kSchemaV1 = R"sql(
@@ -61,6 +61,36 @@ CREATE TABLE IF NOT EXISTS zones(
 );
 )sql";
 
+// Version 4 (issue 26, several operators): a version on every mutable row (a write names the
+// version it read: a stale one is refused, never applied), the zones' own ids, the saved versions
+// of PDMs and zone sets (history, at most kHistoryPerObject per object, trimmed on write; gone
+// with their object through the triggers), and the event stream's last sequence number.
+constexpr const char* kMigrateV3toV4 = R"sql(
+ALTER TABLE pdms ADD COLUMN version INTEGER NOT NULL DEFAULT 1;
+ALTER TABLE missions ADD COLUMN version INTEGER NOT NULL DEFAULT 1;
+ALTER TABLE zones ADD COLUMN version INTEGER NOT NULL DEFAULT 1;
+ALTER TABLE zones ADD COLUMN next_zone INTEGER NOT NULL DEFAULT 1;
+CREATE TABLE IF NOT EXISTS history(
+  kind      TEXT NOT NULL,
+  object_id TEXT NOT NULL,
+  version   INTEGER NOT NULL,
+  by        TEXT NOT NULL DEFAULT '',
+  at        TEXT NOT NULL,
+  body      TEXT NOT NULL,
+  PRIMARY KEY(kind, object_id, version)
+);
+CREATE TRIGGER IF NOT EXISTS pdm_history_gone AFTER DELETE ON pdms BEGIN
+  DELETE FROM history WHERE kind = 'pdm' AND object_id = old.id;
+END;
+CREATE TRIGGER IF NOT EXISTS zones_history_gone AFTER DELETE ON maps BEGIN
+  DELETE FROM history WHERE kind = 'zones' AND object_id = old.id;
+END;
+CREATE TABLE IF NOT EXISTS counters(
+  name  TEXT PRIMARY KEY,
+  value INTEGER NOT NULL
+);
+)sql";
+
 }  // namespace
 
 void migrateSchema(sqlite3* db, const std::string& path) {
@@ -94,6 +124,12 @@ void migrateSchema(sqlite3* db, const std::string& path) {
       Stmt s(db, "INSERT INTO schema_version(version) VALUES (3)");
       s.run();
       version = 3;
+    }
+    if (version == 3) {
+      exec(db, kMigrateV3toV4);
+      Stmt s(db, "INSERT INTO schema_version(version) VALUES (4)");
+      s.run();
+      version = 4;
     }
     exec(db, "COMMIT");
   } catch (...) {

@@ -12,13 +12,13 @@ const Position& Cursor::operator[](std::string_view channel) const {
 // and the shared batch it is sending — its queue, in chat-multi's terms.
 class ChannelStream::Subscription : public http::WsSource {
  public:
-  explicit Subscription(std::shared_ptr<ChannelStream> s) : stream_(std::move(s)) {}
+  Subscription(std::shared_ptr<ChannelStream> s, Join join) : stream_(std::move(s)), join_(std::move(join)) {}
 
   std::optional<http::WsFrame> next() override {
     ChannelStream& s = *stream_;
     if (!snapshot_) {
       // Built (or reused) outside the stream's lock; the cursor is that of its cut.
-      snapshot_ = s.snapshot();
+      snapshot_ = join_ ? s.joinAt(join_) : s.snapshot();
       at_ = snapshot_->at;
     }
     if (sentOfSnapshot_ < snapshot_->frames.size()) return snapshot_->frames[sentOfSnapshot_++];
@@ -46,6 +46,7 @@ class ChannelStream::Subscription : public http::WsSource {
 
  private:
   std::shared_ptr<ChannelStream> stream_;
+  Join join_;
   std::shared_ptr<const Snapshot> snapshot_;
   std::size_t sentOfSnapshot_ = 0;
   bool doneSent_ = false;
@@ -77,6 +78,16 @@ std::shared_ptr<const ChannelStream::Snapshot> ChannelStream::snapshot() {
   return snap;
 }
 
+std::shared_ptr<const ChannelStream::Snapshot> ChannelStream::joinAt(const Join& join) {
+  auto snap = std::make_shared<Snapshot>();
+  std::lock_guard lock(mutex_);
+  if (dirtyLocked()) cutLocked();
+  snap->at = head_;
+  snap->builtAt = std::chrono::steady_clock::now();
+  snap->frames = join(head_);
+  return snap;
+}
+
 void ChannelStream::cutLocked() {
   Cursor c;
   c.cut = head_.cut + 1;
@@ -102,12 +113,16 @@ std::shared_ptr<const Batch> ChannelStream::batchLocked(const Cursor& from) {
 }
 
 std::shared_ptr<http::WsSource> ChannelStream::subscribe(std::shared_ptr<http::WsConnection> connection) {
+  return subscribe(std::move(connection), nullptr);
+}
+
+std::shared_ptr<http::WsSource> ChannelStream::subscribe(std::shared_ptr<http::WsConnection> connection, Join join) {
   {
     std::lock_guard lock(mutex_);
     std::erase_if(subscribers_, [](const auto& w) { return w.expired(); });
     subscribers_.push_back(connection);
   }
-  return std::make_shared<Subscription>(shared_from_this());
+  return std::make_shared<Subscription>(shared_from_this(), std::move(join));
 }
 
 std::size_t ChannelStream::subscriberCount() const {

@@ -73,6 +73,11 @@ class ChannelStream : public std::enable_shared_from_this<ChannelStream> {
   ChannelStream& operator=(const ChannelStream&) = delete;
 
   std::shared_ptr<http::WsSource> subscribe(std::shared_ptr<http::WsConnection> connection);
+  // A subscriber that starts from its own point instead of the shared snapshot (the event
+  // stream's ?since=): `join` is called under the lock at a fresh cut, with that cut, and returns
+  // the frames that bring this subscriber to it (a replay); it then follows as every subscriber.
+  using Join = std::function<Batch(const Cursor&)>;
+  std::shared_ptr<http::WsSource> subscribe(std::shared_ptr<http::WsConnection> connection, Join join);
   std::size_t subscriberCount() const;
   // How many snapshots were built so far: one per state that clients joined at.
   std::uint64_t snapshotBuilds() const { return snapshotBuilds_.load(); }
@@ -107,6 +112,7 @@ class ChannelStream : public std::enable_shared_from_this<ChannelStream> {
  private:
   class Subscription;
   std::shared_ptr<const Snapshot> snapshot();
+  std::shared_ptr<const Snapshot> joinAt(const Join& join);
   bool dirtyLocked() const { return stateVersion_ != headState_; }
   void cutLocked();
   std::shared_ptr<const Batch> batchLocked(const Cursor& from);

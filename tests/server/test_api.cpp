@@ -256,7 +256,7 @@ TEST_CASE("api: runs carry their map and PDM names and a label, an ended run can
   CHECK(s.get("/api/missions").json()[0]["map_name"] == "small site");
 
   // PATCH renames; nothing else can be changed, and the label follows the names' rule.
-  auto p = request(s.port(), "PATCH", "/api/missions/" + id, R"({"label":"transect A"})", "application/json");
+  auto p = request(s.port(), "PATCH", "/api/missions/" + id, R"({"label":"transect A","version":1})", "application/json");
   CHECK(p.status == 200);
   CHECK(p.json()["label"] == "transect A");
   CHECK(s.get("/api/missions/" + id).json()["label"] == "transect A");
@@ -278,7 +278,7 @@ TEST_CASE("api: runs carry their map and PDM names and a label, an ended run can
   REQUIRE(fs::exists(s.dir.missionDir(id)));
   REQUIRE(s.manager.stream(id) != nullptr);  // finished, kept for late subscribers
   // A label cleared is cleared in the mission file too.
-  CHECK(request(s.port(), "PATCH", "/api/missions/" + id, R"({"label":""})", "application/json").status == 200);
+  CHECK(request(s.port(), "PATCH", "/api/missions/" + id, R"({"label":"","version":2})", "application/json").status == 200);
   CHECK_FALSE(s.get("/api/missions/" + id + "/mission.json").json().contains("name"));
   auto d = request(s.port(), "DELETE", "/api/missions/" + id);
   CHECK(d.status == 200);

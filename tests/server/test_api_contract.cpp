@@ -182,15 +182,18 @@ TEST_CASE("openapi: the document is structurally valid 3.0.3 and every $ref reso
       for (const auto& [status, resp] : op["responses"].items()) {
         CHECK_MESSAGE(std::regex_match(status, statusRe), path << " " << status);
         CHECK(resp["description"].is_string());
-        // Every error answers the Error schema.
+        // Every error answers the Error schema (a 412 its VersionConflict form: Error with the current object).
         if (status[0] == '4' || status[0] == '5')
-          CHECK(resp["content"]["application/json"]["schema"]["$ref"] == "#/components/schemas/Error");
+          CHECK(resp["content"]["application/json"]["schema"]["$ref"] ==
+                (status == "412" ? "#/components/schemas/VersionConflict" : "#/components/schemas/Error"));
       }
       // Path parameters declared, once each, required.
       std::set<std::string> declared;
       for (const auto& p : op.value("parameters", json::array())) {
         CHECK(p["schema"].is_object());
-        CHECK((p["in"] == "path" || p["in"] == "query"));
+        // Headers: If-Match and X-Operator (issue 26).
+        CHECK((p["in"] == "path" || p["in"] == "query" ||
+               (p["in"] == "header" && (p["name"] == "If-Match" || p["name"] == "X-Operator"))));
         if (p["in"] == "path") {
           CHECK(p["required"] == true);
           declared.insert(p["name"].get<std::string>());
@@ -277,7 +280,7 @@ TEST_CASE("openapi: the main routes answer what their schemas say") {
   s.waitFinished(id);
   c.expect(s.get("/api/missions/" + id), "/api/missions/{id}", "get", 200);
   c.expect(s.get("/api/missions"), "/api/missions", "get", 200);
-  c.expect(request(s.port(), "PATCH", "/api/missions/" + id, R"({"label":"strip A"})", "application/json"),
+  c.expect(request(s.port(), "PATCH", "/api/missions/" + id, R"({"label":"strip A","version":1})", "application/json"),
            "/api/missions/{id}", "patch", 200);
   const json file = c.expect(s.get("/api/missions/" + id + "/mission.json"), "/api/missions/{id}/{file}", "get", 200);
   CHECK(c.checker.check(file, c.checker.resolve(json{{"$ref", "#/components/schemas/MissionFile"}})).empty());
@@ -370,8 +373,44 @@ TEST_CASE("openapi: every route answers what the document says, errors included"
   c.expect(request(s.port(), "PUT", "/api/maps/" + map + "/zones", zones.dump(), "text/plain"), "/api/maps/{id}/zones", "put", 415);
   c.expect(s.get("/api/maps/" + map + "/zones"), "/api/maps/{id}/zones", "get", 200);
   c.expect(s.get("/api/maps/nope/zones"), "/api/maps/{id}/zones", "get", 404);
-  c.expect(send("PUT", "/api/maps/" + map + "/zones", {{"type", "FeatureCollection"}, {"features", json::array()}}),
+  const json empty = {{"type", "FeatureCollection"}, {"features", json::array()}};
+  c.expect(send("PUT", "/api/maps/" + map + "/zones", empty), "/api/maps/{id}/zones", "put", 428);
+  c.expect(request(s.port(), "PUT", "/api/maps/" + map + "/zones", empty.dump(), "application/json", {{"If-Match", "\"v0\""}}),
+           "/api/maps/{id}/zones", "put", 412);
+  c.expect(request(s.port(), "PUT", "/api/maps/" + map + "/zones", empty.dump(), "application/json", {{"If-Match", "\"v1\""}}),
            "/api/maps/{id}/zones", "put", 200);
+  // One zone at a time (issue 26).
+  const std::string zonesPath = "/api/maps/" + map + "/zones";
+  const json zone = zones["features"][0];
+  const std::string zoneId = c.expect(send("POST", zonesPath, zone), "/api/maps/{id}/zones", "post", 201)["id"];
+  c.expect(send("POST", zonesPath, {{"type", "Point"}}), "/api/maps/{id}/zones", "post", 400);
+  c.expect(s.get(zonesPath + "/" + zoneId), "/api/maps/{id}/zones/{zone}", "get", 200);
+  c.expect(s.get(zonesPath + "/z999"), "/api/maps/{id}/zones/{zone}", "get", 404);
+  const auto v1 = std::map<std::string, std::string>{{"If-Match", "\"v1\""}};
+  c.expect(send("PUT", zonesPath + "/" + zoneId, zone), "/api/maps/{id}/zones/{zone}", "put", 428);
+  c.expect(request(s.port(), "PUT", zonesPath + "/" + zoneId, zone.dump(), "application/json", v1),
+           "/api/maps/{id}/zones/{zone}", "put", 200);
+  c.expect(request(s.port(), "PUT", zonesPath + "/" + zoneId, zone.dump(), "application/json", v1),
+           "/api/maps/{id}/zones/{zone}", "put", 412);
+  c.expect(request(s.port(), "DELETE", zonesPath + "/" + zoneId, "", "", v1), "/api/maps/{id}/zones/{zone}", "delete", 412);
+  c.expect(request(s.port(), "DELETE", zonesPath + "/" + zoneId, "", "", {{"If-Match", "x"}}), "/api/maps/{id}/zones/{zone}",
+           "delete", 400);
+  c.expect(request(s.port(), "DELETE", zonesPath + "/" + zoneId), "/api/maps/{id}/zones/{zone}", "delete", 428);
+  c.expect(request(s.port(), "DELETE", zonesPath + "/" + zoneId, "", "", {{"If-Match", "\"v2\""}}),
+           "/api/maps/{id}/zones/{zone}", "delete", 200);
+  c.expect(request(s.port(), "DELETE", zonesPath + "/" + zoneId, "", "", v1), "/api/maps/{id}/zones/{zone}", "delete", 404);
+  c.expect(s.get(zonesPath + "/history"), "/api/maps/{id}/zones/history", "get", 200);
+  c.expect(s.get("/api/maps/nope/zones/history"), "/api/maps/{id}/zones/history", "get", 404);
+  c.expect(s.get(zonesPath + "/history/1"), "/api/maps/{id}/zones/history/{version}", "get", 200);
+  c.expect(s.get(zonesPath + "/history/99"), "/api/maps/{id}/zones/history/{version}", "get", 404);
+  const long long zonesNow = s.get(zonesPath).json()["version"];
+  c.expect(send("POST", zonesPath + "/restore", {{"restore", 1}, {"version", zonesNow}}), "/api/maps/{id}/zones/restore", "post", 200);
+  c.expect(send("POST", zonesPath + "/restore", {{"restore", 1}, {"version", 1}}), "/api/maps/{id}/zones/restore", "post", 412);
+  c.expect(send("POST", zonesPath + "/restore", {{"restore", 1}}), "/api/maps/{id}/zones/restore", "post", 428);
+  c.expect(send("POST", zonesPath + "/restore", {{"version", 1}}), "/api/maps/{id}/zones/restore", "post", 400);
+  // The event stream: its upgrade's refusals (test_events_api.cpp reads it).
+  c.expectRefusedUpgrade("/api/events?since=-1", "/api/events", 400);
+  c.expectRefusedUpgrade("/api/events?map=nope", "/api/events", 404);
 
   // PDMs.
   const json pdm = c.expect(s.postJson("/api/maps/" + map + "/pdms", {{"random", 2}, {"seed", 3}}), "/api/maps/{id}/pdms", "post", 201);
@@ -381,6 +420,23 @@ TEST_CASE("openapi: every route answers what the document says, errors included"
   const std::string pdmPath = "/api/maps/" + map + "/pdms/" + pdm["id"].get<std::string>();
   c.expect(s.get(pdmPath), "/api/maps/{id}/pdms/{pdm}", "get", 200);
   c.expect(s.get("/api/maps/" + map + "/pdms/nope"), "/api/maps/{id}/pdms/{pdm}", "get", 404);
+  const std::string onePdm = "/api/maps/{id}/pdms/{pdm}";
+  c.expect(send("PUT", pdmPath, {{"name", "renamed"}}), onePdm, "put", 428);
+  c.expect(send("PUT", pdmPath, {{"name", "renamed"}, {"version", 1}}), onePdm, "put", 200);
+  c.expect(send("PUT", pdmPath, {{"name", "again"}, {"version", 1}}), onePdm, "put", 412);
+  c.expect(send("PUT", pdmPath, {{"colour", "red"}, {"version", 2}}), onePdm, "put", 400);
+  c.expect(send("PUT", "/api/maps/" + map + "/pdms/nope", {{"name", "x"}, {"version", 1}}), onePdm, "put", 404);
+  c.expect(s.get(pdmPath + "/history"), "/api/maps/{id}/pdms/{pdm}/history", "get", 200);
+  c.expect(s.get("/api/maps/" + map + "/pdms/nope/history"), "/api/maps/{id}/pdms/{pdm}/history", "get", 404);
+  c.expect(s.get(pdmPath + "/history/1"), "/api/maps/{id}/pdms/{pdm}/history/{version}", "get", 200);
+  c.expect(s.get(pdmPath + "/history/7"), "/api/maps/{id}/pdms/{pdm}/history/{version}", "get", 404);
+  c.expect(send("POST", pdmPath + "/restore", {{"restore", 1}, {"version", 2}}), "/api/maps/{id}/pdms/{pdm}/restore", "post", 200);
+  c.expect(send("POST", pdmPath + "/restore", {{"restore", 1}, {"version", 2}}), "/api/maps/{id}/pdms/{pdm}/restore", "post", 412);
+  c.expect(send("POST", pdmPath + "/restore", {{"restore", 1}}), "/api/maps/{id}/pdms/{pdm}/restore", "post", 428);
+  c.expect(send("POST", pdmPath + "/restore", {{"restore", 0}, {"version", 3}}), "/api/maps/{id}/pdms/{pdm}/restore", "post", 400);
+  c.expect(send("POST", "/api/maps/" + map + "/pdms/nope/restore", {{"restore", 1}, {"version", 3}}),
+           "/api/maps/{id}/pdms/{pdm}/restore", "post", 404);
+  c.expect(request(s.port(), "DELETE", pdmPath, "", "", {{"If-Match", "\"v1\""}}), onePdm, "delete", 412);
   c.expect(request(s.port(), "DELETE", pdmPath), "/api/maps/{id}/pdms/{pdm}", "delete", 200);
   c.expect(request(s.port(), "DELETE", pdmPath), "/api/maps/{id}/pdms/{pdm}", "delete", 404);
 
@@ -395,7 +451,9 @@ TEST_CASE("openapi: every route answers what the document says, errors included"
   c.expect(s.get("/api/missions?offset=-1"), "/api/missions", "get", 400);
   c.expect(s.get("/api/missions/" + id), "/api/missions/{id}", "get", 200);
   c.expect(s.get("/api/missions/nope"), "/api/missions/{id}", "get", 404);
-  c.expect(send("PATCH", "/api/missions/" + id, {{"label", "strip B"}}), "/api/missions/{id}", "patch", 200);
+  c.expect(send("PATCH", "/api/missions/" + id, {{"label", "strip B"}}), "/api/missions/{id}", "patch", 428);
+  c.expect(send("PATCH", "/api/missions/" + id, {{"label", "strip B"}, {"version", 1}}), "/api/missions/{id}", "patch", 200);
+  c.expect(send("PATCH", "/api/missions/" + id, {{"label", "strip C"}, {"version", 1}}), "/api/missions/{id}", "patch", 412);
   c.expect(send("PATCH", "/api/missions/" + id, {{"colour", "red"}}), "/api/missions/{id}", "patch", 400);
   const std::string files = "/api/missions/{id}/{file}";
   c.expect(s.get("/api/missions/" + id + "/mission.json"), files, "get", 200);

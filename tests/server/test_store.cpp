@@ -27,6 +27,9 @@ using rover::store::DataDir;
 using rover::store::MapRecord;
 using rover::store::MissionRecord;
 using rover::store::PdmRecord;
+using rover::store::Cas;
+using rover::store::ZoneSet;
+using rover::store::kHistoryPerObject;
 using rover::RunStatus;
 using rover::enumName;
 using nlohmann::json;
@@ -348,26 +351,26 @@ TEST_CASE("database: WAL mode and schema version") {
     db.insertMap(makeMap("m", "2026-01-01T00:00:00.000Z"));
     CHECK(fs::exists(t.db() + "-wal"));
     CHECK(rawQuery(t.db(), "PRAGMA journal_mode") == "wal");
-    CHECK(rawQuery(t.db(), "SELECT MAX(version) FROM schema_version") == "3");
-    CHECK(rawQuery(t.db(), "SELECT COUNT(*) FROM schema_version") == "3");  // 1, 1 -> 2, 2 -> 3
+    CHECK(rawQuery(t.db(), "SELECT MAX(version) FROM schema_version") == "4");
+    CHECK(rawQuery(t.db(), "SELECT COUNT(*) FROM schema_version") == "4");  // 1, 1 -> 2, 2 -> 3, 3 -> 4
   }
   {
     Database again(t.db());  // reopening an existing schema is a no-op
     CHECK(again.getMap("m").has_value());
   }
-  CHECK(rawQuery(t.db(), "SELECT COUNT(*) FROM schema_version") == "3");
+  CHECK(rawQuery(t.db(), "SELECT COUNT(*) FROM schema_version") == "4");
 
   // A database written by a newer server is refused rather than misread.
-  rawQuery(t.db(), "INSERT INTO schema_version(version) VALUES (4)");
+  rawQuery(t.db(), "INSERT INTO schema_version(version) VALUES (5)");
   try {
     Database newer(t.db());
     FAIL("expected an exception");
   } catch (const std::runtime_error& e) {
-    CHECK(std::string(e.what()).find("schema version 4") != std::string::npos);
+    CHECK(std::string(e.what()).find("schema version 5") != std::string::npos);
   }
 }
 
-TEST_CASE("database: a version 1 file migrates to 3, its runs labelled with their request's name") {
+TEST_CASE("database: a version 1 file migrates to 4, its runs labelled with their request's name") {
   TempDir t;
   {  // The version 1 schema as servers before the migration wrote it.
     sqlite3* db = nullptr;
@@ -390,7 +393,7 @@ TEST_CASE("database: a version 1 file migrates to 3, its runs labelled with thei
     sqlite3_close(db);
   }
   Database db(t.db());
-  CHECK(rawQuery(t.db(), "SELECT MAX(version) FROM schema_version") == "3");
+  CHECK(rawQuery(t.db(), "SELECT MAX(version) FROM schema_version") == "4");
   auto a = db.getMission("a");
   REQUIRE(a);
   CHECK(a->label == "old run");
@@ -696,4 +699,42 @@ TEST_CASE("database: a map's keep-out zones are replaced on write and go with th
   CHECK(db.deleteMap("m"));
   CHECK_FALSE(db.getZones("m"));
   CHECK(rawQuery(t.db(), "SELECT COUNT(*) FROM zones") == "0");
+}
+
+TEST_CASE("database: versioned zone sets and PDMs: compare-and-set, bounded history gone with its object") {
+  TempDir t;
+  Database db(t.db());
+  db.insertMap(makeMap("m", "2026-01-01T00:00:00.000Z"));
+  ZoneSet set{nlohmann::json{{"type", "FeatureCollection"}, {"features", nlohmann::json::array()}}, 0, 1};
+  CHECK(db.putZoneSet("m", set, 1, "ada") == Cas::Stale);  // nothing stored yet: version 0
+  for (long long v = 0; v < kHistoryPerObject + 5; ++v) REQUIRE(db.putZoneSet("m", set, v, "ada") == Cas::Done);
+  CHECK(db.putZoneSet("m", set, 3, "bob") == Cas::Stale);
+  CHECK(db.putZoneSet("absent", set, 0, "bob") == Cas::Missing);
+  CHECK(db.getZoneSet("m")->version == kHistoryPerObject + 5);
+  const auto hist = db.history("zones", "m");
+  REQUIRE(hist.size() == static_cast<std::size_t>(kHistoryPerObject));
+  CHECK(hist.front().version == kHistoryPerObject + 5);
+  CHECK(hist.front().by == "ada");
+  CHECK_FALSE(db.historyVersion("zones", "m", 5));
+
+  PdmRecord p{"p", "m", "pdm", "2026-01-01T00:00:00.000Z", {{"kind", "gaussians"}}, 1};
+  db.insertPdm(p, "ada");
+  CHECK(db.getPdm("p")->version == 1);
+  p.name = "renamed";
+  bool wrote = false;
+  CHECK(db.updatePdm(p, 2, {{"name", "renamed"}}, "bob", [&] { wrote = true; }) == Cas::Stale);
+  CHECK_FALSE(wrote);  // a refused write runs nothing
+  CHECK(db.updatePdm(p, 1, {{"name", "renamed"}}, "bob", [&] { wrote = true; }) == Cas::Done);
+  CHECK(wrote);
+  CHECK(db.getPdm("p")->version == 2);
+  CHECK(db.history("pdm", "p").size() == 2);
+  CHECK(db.historyVersion("pdm", "p", 1)->by == "ada");
+  CHECK(db.deletePdm("p"));
+  CHECK(db.history("pdm", "p").empty());
+  CHECK(db.deleteMap("m"));
+  CHECK(rawQuery(t.db(), "SELECT COUNT(*) FROM history") == "0");
+
+  db.setCounter("event_seq", 41);
+  CHECK(db.counter("event_seq") == 41);
+  CHECK(db.counter("none") == 0);
 }

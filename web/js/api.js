@@ -40,7 +40,10 @@ async function errorFrom(response) {
   let body = null;
   try { body = await response.json(); } catch { /* not JSON */ }
   const e = body && body.error ? body.error : {};
-  return new ApiError(response.status, e.code, e.message || `${response.status} ${response.statusText}`, e.field);
+  const err = new ApiError(response.status, e.code, e.message || `${response.status} ${response.statusText}`, e.field);
+  // A 412 version_conflict carries the object as stored now (issue 26).
+  if (e.current !== undefined) err.current = e.current;
+  return err;
 }
 
 // fetch() with the token; throws ApiError on a non-2xx answer or a network failure.
@@ -60,10 +63,10 @@ export async function getJson(path) {
   return (await request(path)).json();
 }
 
-export async function sendJson(method, path, body) {
+export async function sendJson(method, path, body, headers = {}) {
   const response = await request(path, {
     method,
-    headers: { 'Content-Type': 'application/json' },
+    headers: { 'Content-Type': 'application/json', ...headers },
     body: body === undefined ? undefined : JSON.stringify(body),
   });
   return response.json();
@@ -84,6 +87,27 @@ export async function getAllPages(path, maxPages = 100) {
   return items;
 }
 
+// Versions (issue 26): a write names the version it was read at (If-Match), so a change saved
+// meanwhile by another operator is answered 412 version_conflict instead of being overwritten.
+// The zone set's version per map, as last read or saved here.
+const zoneVersions = new Map();
+const ifMatch = (version) => (Number.isInteger(version) ? { 'If-Match': `"v${version}"` } : {});
+
+async function readZones(mapId) {
+  const fc = await getJson(`/api/maps/${mapId}/zones`);
+  zoneVersions.set(mapId, fc.version);
+  return fc;
+}
+
+async function writeZones(mapId, fc, crs) {
+  const body = { ...fc };
+  delete body.version;  // the version read goes in If-Match
+  const out = await sendJson('PUT', `/api/maps/${mapId}/zones${crs === 'map' ? '?crs=map' : ''}`, body,
+    ifMatch(zoneVersions.get(mapId)));
+  zoneVersions.set(mapId, out.version);
+  return out;
+}
+
 export const api = {
   health: () => getJson('/api/health'),
   planners: () => getJson('/api/planners'),
@@ -95,14 +119,16 @@ export const api = {
   pdms: (mapId) => getAllPages(`/api/maps/${mapId}/pdms`),
   createPdm: (mapId, body) => sendJson('POST', `/api/maps/${mapId}/pdms`, body),
   deletePdm: (mapId, pdmId) => sendJson('DELETE', `/api/maps/${mapId}/pdms/${pdmId}`),
-  zones: (mapId) => getJson(`/api/maps/${mapId}/zones`),
-  saveZones: (mapId, fc, crs = 'local') => sendJson('PUT', `/api/maps/${mapId}/zones${crs === 'map' ? '?crs=map' : ''}`, fc),
+  zones: (mapId) => readZones(mapId),
+  // 412 (err.code 'version_conflict') when another operator saved zones since they were read here.
+  saveZones: (mapId, fc, crs = 'local') => writeZones(mapId, fc, crs),
   missions: () => getAllPages('/api/missions'),
   mission: (id) => getJson(`/api/missions/${id}`),
   launch: (body) => sendJson('POST', '/api/missions', body),
   cancel: (id) => sendJson('DELETE', `/api/missions/${id}`),
   deleteMission: (id) => sendJson('DELETE', `/api/missions/${id}`),
-  labelMission: (id, label) => sendJson('PATCH', `/api/missions/${id}`, { label }),
+  // `version`: the mission's as read (412 when someone relabelled it since).
+  labelMission: (id, label, version) => sendJson('PATCH', `/api/missions/${id}`, { label }, ifMatch(version)),
   missionFile: (id) => request(`/api/missions/${id}/mission.json`).then((r) => r.json()),
   result: (id) => getJson(`/api/missions/${id}/result.json`),
 };

@@ -96,7 +96,7 @@ export class RunsPanel {
       done = true;
       if (save && input.value.trim() !== (m.label || '')) {
         try {
-          Object.assign(m, await api.labelMission(m.id, input.value.trim()));
+          Object.assign(m, await api.labelMission(m.id, input.value.trim(), m.version));
         } catch (err) {
           report(err);
         }

@@ -284,7 +284,8 @@ export class ZoneEditor {
       state.emit('zones', state.zones);
     } catch (err) {
       $('zones-status').textContent = '';
-      showError($('zones-error'), `zones refused: ${err.message}${err.field ? ` (field: ${err.field})` : ''}`);
+      if (err.code === 'version_conflict') await this.conflicted(m);
+      else showError($('zones-error'), `zones refused: ${err.message}${err.field ? ` (field: ${err.field})` : ''}`);
     } finally {
       button.disabled = false;
       this.changed();
@@ -314,9 +315,18 @@ export class ZoneEditor {
         (all.length > polygons.length ? `, skipped ${all.length - polygons.length} other features` : '');
       state.emit('zones', state.zones);
     } catch (err) {
-      showError($('zones-error'), `import refused: ${err.message}${err.field ? ` (field: ${err.field})` : ''}`);
+      if (err.code === 'version_conflict') await this.conflicted(m);
+      else showError($('zones-error'), `import refused: ${err.message}${err.field ? ` (field: ${err.field})` : ''}`);
     }
     this.changed();
+  }
+
+  // A 412 (issue 26): another operator saved this map's zones after they were loaded here. Nothing
+  // was overwritten; their zones are loaded and shown, with why.
+  async conflicted(map) {
+    await this.load(map);
+    showError($('zones-error'), 'zones not saved: another operator saved this map\'s zones since you loaded them; ' +
+      'theirs are shown now — redo your change');
   }
 
   changed(edited = false) {
