@@ -462,13 +462,22 @@ TEST_CASE("bench usage errors") {
   std::ostringstream out;
   CHECK_THROWS_WITH_AS(rover::cli::benchCommand({}, out), "missing argument TARGET", UsageError);
   CHECK_THROWS_WITH_AS(rover::cli::benchCommand({"planner"}, out),
-                       "unknown benchmark 'planner' (coverage, mission, localisation)", UsageError);
+                       "unknown benchmark 'planner' (coverage, mission, routes, localisation)", UsageError);
   try {
     rover::cli::benchCommand({"coverage", "--runs", "0"}, out);
     FAIL("bench --runs 0 ran");
   } catch (const UsageError& e) {
     CHECK(contains(e.what(), "--runs"));
   }
+  // bench routes: the paired comparison's lines, with the same figures on a second run.
+  std::ostringstream routes, again;
+  CHECK(rover::cli::benchCommand({"routes", "--runs", "2"}, routes) == 0);
+  CHECK(contains(routes.str(), "synthetic Mars 600x600"));
+  CHECK(contains(routes.str(), "paired ratio   geometric mean x"));
+  CHECK(contains(routes.str(), "route length   LHC_GW_CONV"));
+  CHECK(rover::cli::benchCommand({"routes", "--runs", "2"}, again) == 0);
+  auto figures = [](const std::string& s) { return s.substr(0, s.find("  compute")); };
+  CHECK(figures(routes.str()) == figures(again.str()));
   std::ostringstream help;
   CHECK(rover::cli::benchCommand({"--help"}, help) == 0);
   CHECK(contains(help.str(), "--runs"));
