@@ -435,7 +435,8 @@ TEST_CASE("stages: the coordinator with a fake planner and rover: the policy dec
   const CoordinationResult skipped = coordinateWith(tasks, planner, rover, TimedPolicy(none), none, 1);
   CHECK(skipped.legs[1].status == LegStatus::Skipped);
   CHECK(skipped.legs[1].reason == LegReason::Conflict);
-  CHECK(skipped.legs[1].note.find("of rover 0") != std::string::npos);
+  // Notes count rovers from 1 (rover id 0 is "rover 1") and name the limit (issue 27).
+  CHECK(skipped.legs[1].note.find("of rover 1, under safety_distance") != std::string::npos);
 }
 
 TEST_CASE("stages: the coordinator reports an invalid and an unreachable goal and goes on") {
