@@ -190,10 +190,12 @@ MissionMap renderMissionMap(const MissionMapInput& in) {
 
   // Legend of what is drawn, below the elevation ramp.
   std::vector<LegendItem> items;
-  for (const Track& t : in.tracks)
-    if (t.rover >= 0 && (items.empty() || items.back().label != "rover " + std::to_string(t.rover)))
-      items.push_back({LegendItem::Mark::Line, kRover[static_cast<std::size_t>(t.rover) % std::size(kRover)],
-                       "rover " + std::to_string(t.rover)});
+  for (const Track& t : in.tracks) {
+    // People count rovers from 1, as the page does (issue 27); the data files keep the ids.
+    const std::string name = "rover " + std::to_string(t.rover + 1);
+    if (t.rover >= 0 && (items.empty() || items.back().label != name))
+      items.push_back({LegendItem::Mark::Line, kRover[static_cast<std::size_t>(t.rover) % std::size(kRover)], name});
+  }
   if (!in.coverageStates.empty()) items.push_back({LegendItem::Mark::Box, kVisited, "covered cell"});
   if (in.route.size() > 1) items.push_back({LegendItem::Mark::Line, {140, 140, 140}, "route"});
   for (const auto& [s, name] : EnumNames<TargetStatus>::table) {

@@ -4,6 +4,7 @@
 
 #include "core/common/error.hpp"
 #include "core/coverage/coverage_specs.hpp"
+#include "core/coverage/recorder.hpp"
 #include "core/grid/direction.hpp"
 #include "core/planning/mission_check.hpp"
 #include "core/coverage/terrain_world.hpp"
@@ -68,18 +69,7 @@ PlanResult toPlanResult(const CoverageResult& r, const GridGeometry& g, bool met
         {"bumps", static_cast<double>(m.bumps), "moves"},
         {"loop_closures", static_cast<double>(m.loopClosures), ""},
     });
-    for (const Bump& b : r.bumps) {
-      const Eigen::Vector2d cell = cellToLocal(g, g.cell(b.cell));
-      char note[160];
-      std::snprintf(note, sizeof note,
-                    "step %lld: %s; the cell at (%.2f, %.2f) is now an obstacle in its map",
-                    static_cast<long long>(b.step),
-                    b.offField ? "the move would have left the field" : "drove into an obstacle its map held free",
-                    cell.x(), cell.y());
-      Incident inc{IncidentKind::Bump, b.rover, -1, 0.0, b.truePosition, static_cast<double>(b.cell), note};
-      inc.step = b.step;
-      out.incidents.push_back(std::move(inc));
-    }
+    for (const Bump& b : r.bumps) out.incidents.push_back(bumpIncident(b, g));
     if (m.bumps > 0)
       out.warnings.push_back(std::to_string(m.bumps) + " bump" + (m.bumps == 1 ? "" : "s") +
                              ": moves into obstacles the rovers' maps held free (localisation error)" +
@@ -244,6 +234,7 @@ class CoveragePlanner final : public Planner {
     }
     PlanResult out = toPlanResult(runCoverage(*world, cells, p, sink, cancel),
                                   problem.world.geometry(), problem.metricsOnly);
+    if (sink) sink->incidents(out.incidents, true);
     out.metrics.push_back({"keep_out_cells", static_cast<double>(keepOutCells), "cells"});
     out.metrics.push_back({"gravity_m_s2", p.energy.gravity, "m/s²"});
     out.metrics.push_back({"coverage_cell_m", problem.world.geometry().cellWidth, "m"});

@@ -115,7 +115,10 @@ Drive DeadReckoningPlant::drive(CoverageRover& r, int next, std::int64_t step, M
   // A bump: the rover stays, faces the cell it tried and marks it an obstacle in its map.
   ++recorder_.track(r.id).bumps;
   ++bumpCount_;
-  if (bumps_.size() < kMaxBumpRecords) bumps_.push_back({r.id, step, next, from, !end});
+  if (bumps_.size() < kMaxBumpRecords) {
+    bumps_.push_back({r.id, step, next, from, !end});
+    recorder_.bumped(bumps_.back());
+  }
   if (team_.map(r.mapId).markObstacle(next)) recorder_.cellChanged(next, CellState::Obstacle, 0);
   recorder_.turned(r.id, r.heading, dir);
   r.heading = dir;

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <numbers>
 
@@ -11,6 +12,30 @@
 #include "core/grid/direction.hpp"
 
 namespace rover::coverage {
+
+Incident bumpIncident(const Bump& b, const GridGeometry& g) {
+  const Eigen::Vector2d cell = cellToLocal(g, g.cell(b.cell));
+  char note[160];
+  std::snprintf(note, sizeof note, "step %lld: %s; the cell at (%.2f, %.2f) is now an obstacle in its map",
+                static_cast<long long>(b.step),
+                b.offField ? "the move would have left the field" : "drove into an obstacle its map held free",
+                cell.x(), cell.y());
+  Incident inc;
+  inc.kind = IncidentKind::Bump;
+  inc.rover = b.rover;
+  inc.position = b.truePosition;
+  inc.value = static_cast<double>(b.cell);
+  inc.note = note;
+  inc.step = b.step;
+  inc.cause = b.offField ? "off_field" : "unmapped_obstacle";
+  return inc;
+}
+
+void Recorder::bumped(const Bump& b) {
+  if (!sink_) return;
+  const Incident i = bumpIncident(b, g_);
+  sink_->incidents({&i, 1}, false);
+}
 
 MoveEnergy::MoveEnergy(const EnergyModel& e, double cell)
     : e_(e), straight_(cell * 1.0), diagonal_(cell * std::numbers::sqrt2) {

@@ -36,6 +36,9 @@ class MoveEnergy {
   double straight_, diagonal_, flatStraight_, flatDiagonal_;
 };
 
+// A bump as the incident the result lists and the sink is told (the same note in both).
+Incident bumpIncident(const Bump& b, const GridGeometry& g);
+
 class Recorder {
  public:
   Recorder(const World& world, const CoverageParams& params, EventSink* sink,
@@ -52,6 +55,8 @@ class Recorder {
   // A spot turn without a move (back onto a circumnavigated line, or towards a bump).
   void turned(int rover, int fromDir, int toDir) { track(rover).energyJ += energy_.turn(fromDir, toDir); }
   void waited(int rover) { ++track(rover).waits; }
+  // A bump that is listed (kMaxBumpRecords): told to the sink at once as an incident.
+  void bumped(const Bump& b);
   // The curve's point after a step, and the step's events when there is a sink.
   void stepEnded(std::int64_t step, std::int64_t moves, const TeamOccupancy& team, const Plant& plant,
                  const std::vector<CoverageRover>& rovers);

@@ -70,6 +70,13 @@ class EventSink {
   }
   // Metrics known before the run ends (the team planners report theirs once simulation is done).
   virtual void metrics(std::span<const Metric> metrics) { (void)metrics; }
+  // Incidents as they are found (`complete` false: appended to those reported so far), or the
+  // run's whole list, the same as PlanResult::incidents (`complete` true: it replaces them; the
+  // planner's final word, e.g. once collisions are checked over the whole plan).
+  virtual void incidents(std::span<const Incident> found, bool complete) {
+    (void)found;
+    (void)complete;
+  }
 };
 
 }  // namespace rover

@@ -172,6 +172,12 @@ void ShiftedSink::roverPoses(std::int64_t step, std::span<const RoverPose> poses
   inner_.roverPoses(step, poses_);
 }
 
+void ShiftedSink::incidents(std::span<const Incident> found, bool complete) {
+  incidents_.assign(found.begin(), found.end());
+  for (auto& i : incidents_) i.position += by_;
+  inner_.incidents(incidents_, complete);
+}
+
 void ShiftedSink::overlay(std::string_view kind, int rover, std::span<const Point2> points) {
   points_.assign(points.begin(), points.end());
   for (auto& p : points_) {

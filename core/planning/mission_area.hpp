@@ -101,12 +101,14 @@ class ShiftedSink final : public EventSink {
   void progress(const Progress& p) override { inner_.progress(p); }
   void overlay(std::string_view kind, int rover, std::span<const Point2> points) override;
   void metrics(std::span<const Metric> metrics) override { inner_.metrics(metrics); }
+  void incidents(std::span<const Incident> found, bool complete) override;
 
  private:
   EventSink& inner_;
   Eigen::Vector2d by_;
   std::vector<RoverPose> poses_;  // reused buffers
   std::vector<Point2> points_;
+  std::vector<Incident> incidents_;
 };
 
 }  // namespace rover

@@ -75,6 +75,10 @@ struct Incident {
   double value = 0;  // collision: the closest distance, m
   std::string note;
   std::int64_t step = -1;  // a planner without a clock (coverage's bump): the step, else -1
+  // Why, as a short name the page groups incidents by (issue 27: 163 rows of one cause are one
+  // group): the limit hit ("exceedance_limit", "safety_distance") or a leg's reason ("steep",
+  // "no_path", …); "" when the planner gives none.
+  std::string cause;
 };
 
 struct PlanResult {

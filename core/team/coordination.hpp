@@ -216,4 +216,16 @@ struct EnumNames<team::CoordinationMode> {
       {team::CoordinationMode::Paper, "paper"},
   }};
 };
+template <>
+struct EnumNames<team::LegReason> {
+  static constexpr std::array<EnumName<team::LegReason>, 7> table{{
+      {team::LegReason::None, "none"},
+      {team::LegReason::InvalidGoal, "invalid_goal"},
+      {team::LegReason::NoPath, "no_path"},
+      {team::LegReason::Steep, "steep"},
+      {team::LegReason::Conflict, "conflict"},
+      {team::LegReason::PiecesExhausted, "pieces_exhausted"},
+      {team::LegReason::KeepOut, "keep_out"},
+  }};
+};
 }  // namespace rover

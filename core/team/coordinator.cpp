@@ -44,6 +44,12 @@ namespace {
 
 Eigen::Vector2d xyOf(const TrajectorySample& s) { return {s.x, s.y}; }
 
+std::string oneDecimal(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.1f", v);
+  return buf;
+}
+
 std::uint64_t seedFor(std::uint64_t seed, int rover, int leg, int piece, int attempt) {
   std::uint64_t s = deriveSeed(seed, static_cast<std::uint64_t>(rover));
   s = deriveSeed(s, static_cast<std::uint64_t>(leg));
@@ -347,10 +353,10 @@ class Coordinator {
       keepOut.push_back(zone);
   }
 
-  static std::string conflictNote(const Conflict& c) {
-    char buf[160];
-    std::snprintf(buf, sizeof buf, "within %.2f m of rover %d at t = %.1f s (%.2f, %.2f)",
-                  c.distance, c.other, c.time, c.position.x(), c.position.y());
+  std::string conflictNote(const Conflict& c) const {
+    char buf[200];
+    std::snprintf(buf, sizeof buf, "within %.2f m of rover %d, under safety_distance %.2f m, at t = %.1f s (%.2f, %.2f)",
+                  c.distance, c.other + 1, p_.safetyDistance, c.time, c.position.x(), c.position.y());
     return buf;
   }
 
@@ -730,13 +736,14 @@ class Coordinator {
         break;
       }
       if ((here(k) - goal).norm() > before - 0.25) {  // no progress: stop chaining
-        rec.note = "the tree ends short of the goal and makes no progress";
+        rec.note = "the tree ends " + oneDecimal((here(k) - goal).norm()) + " m short of the goal and makes no progress";
         rec.reason = LegReason::NoPath;
         break;
       }
       ++piece;
       if (piece == p_.maxPieces) {
-        rec.note = "goal not reached after max_pieces RRT* pieces";
+        rec.note = "goal still " + oneDecimal((here(k) - goal).norm()) + " m away after max_pieces = " +
+                   std::to_string(p_.maxPieces) + " RRT* pieces";
         rec.reason = LegReason::PiecesExhausted;
       }
     }

@@ -84,7 +84,7 @@ class TeamPlanner final : public Planner {
     std::vector<Pose> starts;
     for (const auto& s : problem.rovers) starts.push_back({s.position.x(), s.position.y(), s.heading});
     std::optional<SinkObserver> observer;
-    if (sink) observer.emplace(*sink);
+    if (sink) observer.emplace(*sink, starts, p.mission.exceedanceLimit);
     const Raster<float> noPdm;
     TeamMissionParams mission = p.mission;
     mission.coordination.threads = problem.threads;
@@ -101,6 +101,7 @@ class TeamPlanner final : public Planner {
     out.assumptions.push_back({"body", terrain::bodyName(problem.body)});
     out.assumptions.push_back({"gravity", problem.body != terrain::Body::Unknown ? "the map's body"
                                                                                : "default (Mars)"});
+    if (sink) sink->incidents(out.incidents, true);
     if (sink && !out.cancelled) {
       sink->metrics(out.metrics);
       observer->replay(r, p.poseInterval, p.mission.coordination.controller.samplePeriod, cancel);

@@ -7,6 +7,7 @@
 
 #include "core/common/cancel.hpp"
 #include "core/planning/planner.hpp"
+#include "core/team/team_incidents.hpp"
 #include "core/team/team_mission.hpp"
 
 namespace rover::team {
@@ -15,9 +16,19 @@ namespace rover::team {
 // is chosen, each rover's planned path as it is accepted, progress per leg; then, once every
 // rover is simulated, a replay of the team's poses in time order and the search cells they
 // enter, at one event per pose interval of mission time.
+//
+// Incidents go to the sink as they are found (issue 27): an attitude exceedance episode as soon
+// as a committed piece closes it, a leg that did not reach when it is done; the planner then
+// sends the complete list (collisions need the whole plan).
 class SinkObserver final : public TeamObserver {
  public:
-  explicit SinkObserver(EventSink& sink) : sink_(sink) {}
+  // `starts`: each rover's start; `exceedanceLimit`: rad, the mission's exceedance_limit.
+  SinkObserver(EventSink& sink, const std::vector<Pose>& starts, double exceedanceLimit) : sink_(sink) {
+    for (std::size_t k = 0; k < starts.size(); ++k) {
+      last_.emplace_back(starts[k].x, starts[k].y);
+      scans_.emplace_back(static_cast<int>(k), exceedanceLimit);
+    }
+  }
 
   void routeChosen(const SearchGrid& grid, const Route& route) override {
     std::vector<Point2> pts{{route.startCentre.x(), route.startCentre.y()}};
@@ -30,12 +41,21 @@ class SinkObserver final : public TeamObserver {
   }
   void pieceAccepted(int rover, std::span<const Eigen::Vector2d> path,
                      std::span<const TrajectorySample> samples) override {
-    (void)samples;
     std::vector<Point2> pts;
     for (std::size_t i = 1; i < path.size(); ++i) pts.push_back({path[i].x(), path[i].y()});
     if (!pts.empty()) sink_.overlay("path", rover, pts);
+    if (rover < 0 || static_cast<std::size_t>(rover) >= scans_.size()) return;
+    std::vector<Incident> found;
+    for (const TrajectorySample& s : samples)
+      if (auto i = scans_[rover].add(s)) found.push_back(std::move(*i));
+    if (!samples.empty()) last_[rover] = {samples.back().x, samples.back().y};
+    if (!found.empty()) sink_.incidents(found, false);
   }
   void legDone(const LegRecord& leg, int done, int total) override {
+    if (leg.status != LegStatus::Reached && leg.rover >= 0 && static_cast<std::size_t>(leg.rover) < last_.size()) {
+      const Incident i = legIncident(leg, last_[leg.rover]);
+      sink_.incidents({&i, 1}, false);
+    }
     replans_ += leg.replans;
     waits_ += leg.waits;
     Progress p;
@@ -102,6 +122,8 @@ class SinkObserver final : public TeamObserver {
  private:
   EventSink& sink_;
   int replans_ = 0, waits_ = 0;
+  std::vector<Eigen::Vector2d> last_;  // per rover: where its last committed sample lies
+  std::vector<ExceedanceScan> scans_;  // per rover
 };
 
 }  // namespace rover::team

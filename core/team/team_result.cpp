@@ -7,6 +7,7 @@
 
 #include "core/team/motion_series.hpp"
 #include "core/team/team_entry.hpp"
+#include "core/team/team_incidents.hpp"
 
 namespace rover::team {
 
@@ -167,50 +168,25 @@ PlanResult toPlanResult(const TeamMissionResult& r, const TeamPlannerParams& p, 
   out.series.push_back(curveSeries("probability_vs_distance_team", "mean distance per rover (m)", r.curves.team));
   out.series.push_back(curveSeries("probability_vs_distance_single", "distance (m)", r.curves.single));
   out.series.push_back(curveSeries("probability_vs_distance_route", "route distance (m)", r.routeCurve));
-  for (const Conflict& c : r.plan.conflicts) {
-    char note[120];
-    std::snprintf(note, sizeof note, "rovers %d and %d within %.2f m for %.1f s", c.other, c.rover,
-                  c.distance, c.duration);
-    out.incidents.push_back({IncidentKind::Collision, c.rover, c.other, c.time, c.position, c.distance, note});
-  }
+  for (const Conflict& c : r.plan.conflicts)
+    out.incidents.push_back(collisionIncident(c, p.mission.coordination.safetyDistance));
   // Exceedance episodes: consecutive samples over the limit, reported once with the worst angle.
-  const double limit = p.mission.exceedanceLimit;
   for (std::size_t k = 0; k < r.plan.trajectories.size(); ++k) {
-    const auto& samples = r.plan.trajectories[k].samples;
-    for (std::size_t i = 0; i < samples.size();) {
-      auto over = [&](std::size_t j) {
-        return std::max(std::abs(samples[j].roll), std::abs(samples[j].pitch));
-      };
-      if (over(i) <= limit) {
-        ++i;
-        continue;
-      }
-      std::size_t j = i;
-      double worst = 0;
-      for (; j < samples.size() && over(j) > limit; ++j) worst = std::max(worst, over(j));
-      char note[120];
-      std::snprintf(note, sizeof note, "|roll| or |pitch| up to %.2f° for %zu samples",
-                    worst * 180.0 / std::numbers::pi, j - i);
-      out.incidents.push_back({IncidentKind::Exceedance, static_cast<int>(k), -1, samples[i].time,
-                               {samples[i].x, samples[i].y}, worst * 180.0 / std::numbers::pi, note});
-      i = j;
-    }
+    ExceedanceScan scan(static_cast<int>(k), p.mission.exceedanceLimit);
+    for (const TrajectorySample& s : r.plan.trajectories[k].samples)
+      if (auto i = scan.add(s)) out.incidents.push_back(std::move(*i));
+    if (auto i = scan.finish()) out.incidents.push_back(std::move(*i));
   }
   for (const LegRecord& leg : r.plan.legs) {
     if (leg.status == LegStatus::Reached) continue;
     const Trajectory& t = r.plan.trajectories[leg.rover];
     const std::size_t i = std::min(t.samples.size() - 1,
                                    static_cast<std::size_t>(std::lround(leg.endTime / period)));
-    out.incidents.push_back({leg.status == LegStatus::Short ? IncidentKind::Short : IncidentKind::Skipped, leg.rover, -1, leg.endTime,
-                             {t.samples[i].x, t.samples[i].y}, static_cast<double>(leg.target),
-                             "target " + std::to_string(leg.target) + ": " + leg.note});
+    out.incidents.push_back(legIncident(leg, {t.samples[i].x, t.samples[i].y}));
   }
-  for (const auto& [rover, target] : r.noSlot) {
-    const Eigen::Vector2d at = r.route.centres[static_cast<std::size_t>(target)];
-    out.incidents.push_back({IncidentKind::NoSlot, rover, -1, 0.0, at, static_cast<double>(target),
-                             "target " + std::to_string(target) +
-                                 ": no valid ground for the rover's slot within half a footprint"});
-  }
+  for (const auto& [rover, target] : r.noSlot)
+    out.incidents.push_back(noSlotIncident(rover, target, r.route.centres[static_cast<std::size_t>(target)],
+                                           p.mission.footprint));
   return out;
 }
 

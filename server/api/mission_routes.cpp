@@ -197,8 +197,10 @@ void addMissionRoutes(http::Router& router, ApiContext& ctx) {
                       "telemetry on the mission clock; the terrain as a foxglove.Grid; route, paths, targets and "
                       "zones as a SceneUpdate; incidents as foxglove.Log; JSON encoding, zstd chunks, indexed), "
                       "map.png (the map with its "
-                      "legend and scale bar, at most 4096 px a side), map.tif (the same map as a GeoTIFF in the "
-                      "map's CRS).",
+                      "legend and scale bar, rovers numbered from 1, at most 4096 px a side), map.tif (the mission's values "
+                      "as Float32 bands over the map's extent in its CRS, each with its description, nodata -9999: "
+                      "elevation (m), traversability class at the mission's slope thresholds, visits of the final "
+                      "coverage or team search grid, and the PDM when the mission had one).",
                       Operation()
                           .returns(200, "mission.json (MissionFile), result.json, result.geojson or result.csv.",
                                    {{"oneOf", {ref("MissionFile"), ref("PlanResult")}}})
@@ -207,13 +209,14 @@ void addMissionRoutes(http::Router& router, ApiContext& ctx) {
                           .returns(200, "replay.mcap (MCAP, https://mcap.dev/spec).", {{"type", "string"}, {"format", "binary"}},
                                    kMcapMediaType)
                           .returns(200, "map.png.", nullptr, "image/png")
-                          .returns(200, "map.tif.", nullptr, "image/tiff")
+                          .returns(200, "map.tif: value bands (GeoTIFF).", nullptr, "image/tiff")
                           .errors({404, 409, 503}),
                       onPool));
 
   http::RouteOptions ws;
   ws.openapi = Operation().errors({404, 503}).toJson();  // 503: subscriber limits (ws_admission.hpp)
-  ws.summary = "WebSocket: a snapshot, then live events (binary grid frames, JSON poses/progress), "
+  ws.summary = "WebSocket: a snapshot, then live events (binary grid frames, JSON poses/progress/overlay, "
+               "incidents as they are found: {\"type\":\"incidents\",from,complete,incidents}), "
                "then {\"type\":\"done\"}; see README for the protocol.";
   router.addWebSocket("/api/missions/{id}/stream", [&ctx](const Request& req, std::shared_ptr<http::WsConnection> c) {
     auto s = ctx.missions.stream(req.params.at("id"));

@@ -51,7 +51,10 @@ json planResultSchema() {
                           {"step", {{"type", "integer"}}},
                           {"x", num("Metres, local frame.")},
                           {"y", num("Metres, local frame.")},
-                          {"note", str()},
+                          {"note", str("What happened, with the limit hit (parameter name and value) and the value reached.")},
+                          {"cause", str("Why, as a short name incidents are grouped by: the limit hit (exceedance_limit, safety_distance), "
+                                        "a leg's reason (steep, no_path, conflict, pieces_exhausted, keep_out, invalid_goal), "
+                                        "no_ground (no_slot), off_field or unmapped_obstacle (bump).")},
                           {"distance_m", num("collision: the closest distance.")},
                           {"max_angle_deg", num("exceedance: the worst |roll| or |pitch|.")},
                           {"cell", {{"type", "integer"}, {"description", "bump: the cell driven into."}}},

@@ -53,6 +53,19 @@ json metricsObject(const std::vector<Metric>& metrics) {
 }
 }  // namespace
 
+json toJson(const Incident& i) {
+  json x{{"kind", enumName(i.kind)}, {"rover", i.rover}, {"time_s", i.time},
+         {"x", i.position.x()}, {"y", i.position.y()}, {"note", i.note}};
+  if (i.other >= 0) x["other"] = i.other;
+  if (i.step >= 0) x["step"] = i.step;
+  if (!i.cause.empty()) x["cause"] = i.cause;
+  if (i.kind == IncidentKind::Collision) x["distance_m"] = i.value;
+  else if (i.kind == IncidentKind::Exceedance) x["max_angle_deg"] = i.value;
+  else if (i.kind == IncidentKind::Bump) x["cell"] = static_cast<int>(i.value);
+  else if (i.value >= 0) x["target"] = static_cast<int>(i.value);
+  return x;
+}
+
 json toJson(const PlanResult& r) {
   json j{{"planner", r.planner},
          {"stop_reason", enumName(r.stopReason)},
@@ -95,17 +108,7 @@ json toJson(const PlanResult& r) {
     j["assumptions"] = a;
   }
   json incidents = json::array();
-  for (const auto& i : r.incidents) {
-    json x{{"kind", enumName(i.kind)}, {"rover", i.rover}, {"time_s", i.time},
-           {"x", i.position.x()}, {"y", i.position.y()}, {"note", i.note}};
-    if (i.other >= 0) x["other"] = i.other;
-    if (i.step >= 0) x["step"] = i.step;
-    if (i.kind == IncidentKind::Collision) x["distance_m"] = i.value;
-    else if (i.kind == IncidentKind::Exceedance) x["max_angle_deg"] = i.value;
-    else if (i.kind == IncidentKind::Bump) x["cell"] = static_cast<int>(i.value);
-    else if (i.value >= 0) x["target"] = static_cast<int>(i.value);
-    incidents.push_back(std::move(x));
-  }
+  for (const auto& i : r.incidents) incidents.push_back(toJson(i));
   j["incidents"] = incidents;
   if (!r.targets.empty()) {
     json targets = json::array();

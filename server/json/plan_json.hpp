@@ -14,6 +14,8 @@ nlohmann::json toJson(const std::vector<ParamInfo>& infos);
 nlohmann::json toJson(const ParamSet& values);
 nlohmann::json toJson(const std::vector<ParamPreset>& presets);
 nlohmann::json toJson(const PlanResult& r);
+// One incident as result.json's `incidents` and the live stream's incident frames hold it.
+nlohmann::json toJson(const Incident& i);
 // Reads a JSON value as a parameter of the declared type; throws rover::Error naming the key.
 ParamValue paramFromJson(const ParamInfo& info, const nlohmann::json& v);
 

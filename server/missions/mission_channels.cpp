@@ -1,5 +1,7 @@
 #include "server/missions/mission_channels.hpp"
 
+#include "server/json/plan_json.hpp"
+
 #include <algorithm>
 #include <numbers>
 
@@ -253,6 +255,29 @@ std::size_t PosesChannel::frames(const Position& from, const Position& to, Batch
   }
   if (rovers.empty()) return 0;
   return textFrame(out, {{"type", "poses"}, {"step", static_cast<std::int64_t>(to[0])}, {"rovers", std::move(rovers)}});
+}
+
+// --- incidents ---
+
+void IncidentChannel::add(std::span<const Incident> found, bool complete) {
+  if (complete) {
+    items_ = nlohmann::json::array();
+    ++replaced_;
+    complete_ = true;
+  }
+  for (const Incident& i : found) items_.push_back(json::toJson(i));
+}
+
+std::size_t IncidentChannel::frames(const Position& from, const Position& to, Batch& out) {
+  // From the reader's position to the list as it is now (it may have grown, or been replaced,
+  // since the cut `to`): the frame says where its incidents start, so a reader that is sent some
+  // of them again keeps its list right.
+  (void)to;
+  const bool sameList = streams::lengthAt(from, 0) == replaced_;
+  const std::size_t start = sameList ? std::min<std::size_t>(streams::lengthAt(from, 1), items_.size()) : 0;
+  if (sameList && start == items_.size()) return 0;
+  nlohmann::json list(items_.begin() + static_cast<std::ptrdiff_t>(start), items_.end());
+  return textFrame(out, {{"type", "incidents"}, {"from", start}, {"complete", complete_}, {"incidents", std::move(list)}});
 }
 
 // --- values: progress and status ---

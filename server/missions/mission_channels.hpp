@@ -103,6 +103,26 @@ class PosesChannel : public streams::Channel {
   std::int64_t step_ = 0;
 };
 
+// The incidents found so far (issue 27: streamed as they are found), appended as the planner
+// reports them, then replaced by the run's complete list (the same as result.json's). Position:
+// how many times the list was replaced, then its length. Frame: {"type":"incidents", from,
+// complete, incidents[...]}: a reader keeps its first `from` incidents and appends these.
+// Memory: one JSON object per incident, as many as the result lists.
+class IncidentChannel : public streams::Channel {
+ public:
+  IncidentChannel() : Channel("incidents") {}
+  void add(std::span<const Incident> found, bool complete);
+  const nlohmann::json& items() const { return items_; }
+  bool complete() const { return complete_; }
+  Position position() const override { return {replaced_, items_.size()}; }
+  std::size_t frames(const Position& from, const Position& to, Batch& out) override;
+
+ private:
+  nlohmann::json items_ = nlohmann::json::array();
+  std::uint64_t replaced_ = 0;
+  bool complete_ = false;
+};
+
 // A value overwritten in place, sent whole when it changed: its frame is encoded at the cut
 // (position = its version).
 class ValueChannel : public streams::Channel {

@@ -11,7 +11,7 @@ MissionStream::MissionStream(std::string missionId, const GridGeometry& grid, in
       pace_(paceStepsPerSecond),
       grid_(grid),
       poses_(rovers) {
-  for (streams::Channel* c : std::initializer_list<streams::Channel*>{&overlay_, &grid_, &poses_, &progress_, &status_})
+  for (streams::Channel* c : std::initializer_list<streams::Channel*>{&overlay_, &grid_, &poses_, &incidents_, &progress_, &status_})
     addChannel(*c);
 }
 
@@ -29,6 +29,8 @@ std::function<streams::Batch()> MissionStream::captureSnapshotLocked() {
   nlohmann::json j = {{"type", "snapshot"}, {"mission", id_},          {"status", enumName(status_.status())},
                       {"grid", grid},       {"rovers", nullptr},       {"step", poses_.step()},
                       {"progress", progress_.progress()}, {"metrics", status_.metrics()}};
+  j["incidents"] = incidents_.items();
+  j["incidents_complete"] = incidents_.complete();
   if (!overlay_.empty()) {
     j["route"] = overlay_.route();
     j["paths"] = overlay_.paths();
@@ -126,6 +128,15 @@ void MissionStream::metrics(std::span<const Metric> metrics) {
   {
     std::lock_guard lock(mutex_);
     progress_.setMetrics(metrics);
+    changedLocked();
+  }
+  wakeAll(false);
+}
+
+void MissionStream::incidents(std::span<const Incident> found, bool complete) {
+  {
+    std::lock_guard lock(mutex_);
+    incidents_.add(found, complete);
     changedLocked();
   }
   wakeAll(false);

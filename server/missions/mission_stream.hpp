@@ -19,6 +19,10 @@
 //      text   {"type":"overlay", route?[[x,y]...], paths[{rover, append[[x,y]...]}]} — the team
 //             route (replaces the last) and each rover's planned path as it is accepted; the
 //             snapshot carries both whole as "route" and "paths"
+//      text   {"type":"incidents", from, complete, incidents[...]} — incidents as the planner finds
+//             them (result.json's shape, issue 27): keep the first `from` already held, append
+//             these; `complete`: the run's whole list (as result.json's) has been sent. The
+//             snapshot carries the list so far as "incidents" (and "incidents_complete")
 //   5. text   {"type":"done", status, message, metrics} — the last frame, then a normal close
 // Binary frames, little-endian: u32 type, u32 rows, u32 cols, u32 count, then
 //   type 1: count × (u32 cell index, u8 state, u8×3 zero, u32 visits)
@@ -29,8 +33,8 @@
 // copy for all); the snapshot's JSON is formatted outside the lock the planner's events take.
 // A queued mission's grid is allocated when the planner first reports cells.
 //
-// Fan-out (issue 22): a ChannelStream (server/streams/channel_stream.hpp) of five channels,
-// whose frames make a batch in this order: overlay, grid, poses, progress, status
+// Fan-out (issue 22): a ChannelStream (server/streams/channel_stream.hpp) of six channels,
+// whose frames make a batch in this order: overlay, grid, poses, incidents, progress, status
 // (mission_channels.hpp). What subscribers are sent is published in cuts, at most one every
 // kCutEvery (taken on the planner's event that finds one due, then the subscribers are woken;
 // the end of the mission and a joiner's snapshot cut at once); a subscriber that fell behind gets
@@ -64,6 +68,7 @@ class MissionStream : public EventSink, public streams::ChannelStream {
   void progress(const Progress& p) override;
   void overlay(std::string_view kind, int rover, std::span<const Point2> points) override;
   void metrics(std::span<const Metric> metrics) override;
+  void incidents(std::span<const Incident> found, bool complete) override;
 
   // Where the planner's grid lies on the map (its lower-left corner, local frame); set before the
   // stream is shared (submit, or a replay from disk).
@@ -113,6 +118,7 @@ class MissionStream : public EventSink, public streams::ChannelStream {
   OverlayChannel overlay_;
   GridChannel grid_;
   PosesChannel poses_;
+  IncidentChannel incidents_;
   ProgressChannel progress_;
   StatusChannel status_;
   std::shared_ptr<const std::string> doneFrame_;

@@ -9,6 +9,7 @@
 #include <type_traits>
 #include <utility>
 
+#include "server/json/json_edge.hpp"
 #include "server/store/data_dir.hpp"
 #include "server/store/sqlite_stmt.hpp"
 
@@ -174,10 +175,32 @@ void Database::setCounter(const std::string& name, long long value) {
 
 // ---- maps -------------------------------------------------------------------------------------
 
-void Database::insertMap(const MapRecord& m) {
+void Database::insertMap(MapRecord& m) {
   const std::string meta = dumpJson(m.meta, "map meta");
   std::lock_guard lock(mutex_);
   ensureReserves();
+  const auto taken = [&](const std::string& name) {
+    Stmt q(db_, "SELECT 1 FROM maps WHERE name = ?1 LIMIT 1");
+    q.bind(1, name);
+    return q.step();
+  };
+  if (taken(m.name)) {
+    // Room for the suffix within the name rule's length, cut at a UTF-8 character boundary.
+    std::string base = m.name;
+    constexpr std::size_t kRoom = 8;  // " (99999)"
+    if (base.size() + kRoom > rover::json::kMaxNameChars) {
+      std::size_t cut = rover::json::kMaxNameChars > kRoom ? rover::json::kMaxNameChars - kRoom : 0;
+      while (cut > 0 && (static_cast<unsigned char>(base[cut]) & 0xC0) == 0x80) --cut;
+      base.resize(cut);
+    }
+    for (int k = 2;; ++k) {
+      std::string candidate = base + " (" + std::to_string(k) + ")";
+      if (!taken(candidate)) {
+        m.name = std::move(candidate);
+        break;
+      }
+    }
+  }
   Stmt s(db_, "INSERT INTO maps(id, name, created_at, meta) VALUES (?1, ?2, ?3, ?4)");
   s.bind(1, m.id).bind(2, m.name).bind(3, m.createdAt).bind(4, meta).run();
 }

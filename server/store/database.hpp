@@ -86,7 +86,15 @@ class Database {
   Database(const Database&) = delete;
   Database& operator=(const Database&) = delete;
 
-  void insertMap(const MapRecord& m);
+  // Inserts the map under a name no other map has: a taken name gets the first free " (k)",
+  // k = 2, 3, … (issue 27: two uploads of one PDS3 pair both listed as "megt90n000cb.lbl"), written
+  // back to `m.name`. Unique in the catalog, not only in one list: the API, the page and the
+  // exports name one map the same way.
+  void insertMap(MapRecord& m);
+  void insertMap(const MapRecord& m) {
+    MapRecord copy = m;
+    insertMap(copy);
+  }
   std::optional<MapRecord> getMap(const std::string& id);
   // Listings page in SQL (LIMIT/OFFSET): `limit` < 0 means all, `offset` rows are skipped.
   std::vector<MapRecord> listMaps(long long limit = -1, long long offset = 0);  // oldest first

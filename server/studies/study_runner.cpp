@@ -9,6 +9,7 @@
 #include <condition_variable>
 #include <ctime>
 #include <exception>
+#include <filesystem>
 #include <limits>
 #include <mutex>
 #include <thread>
@@ -21,6 +22,8 @@
 namespace rover::studies {
 
 namespace {
+
+namespace fs = std::filesystem;
 
 // CPU seconds of the calling thread: with mission_threads = 1 a run's own cost, whatever else the
 // machine is doing (its wall time is not, on a shared machine).
@@ -84,9 +87,32 @@ std::string levelLabel(double level) {
   return buf;
 }
 
+// A generated terrain as a map stored from it reads back (issue 27: a run opened as a mission must
+// reproduce its row). The server stores the default map as a GeoTIFF in the body's equirectangular
+// CRS and loads it as any map: the loader measures a cell's ground width at the map's centre
+// latitude, 0.24999999994 m for the default map's 0.25 m, so the generated raster and the stored
+// map differ in the last digits and every RRT* tree after them (mean trajectory 41.30 m in the
+// study's row against 35.48 m as a mission, same seed). The study's world goes through the same
+// write and load; the file is deleted at once.
+terrain::Dem asStoredMap(const terrain::Dem& generated) {
+  static std::atomic<unsigned> counter{0};
+  const fs::path path = fs::temp_directory_path() /
+                        ("roverplan-terrain-" + std::to_string(::getpid()) + "-" + std::to_string(counter++) + ".tif");
+  struct Remove {
+    fs::path p;
+    ~Remove() {
+      std::error_code ec;
+      fs::remove(p, ec);
+    }
+  } remove{path};
+  maps::writeGeoTiff(path.string(), generated.z);
+  return maps::loadDem(path.string()).dem;
+}
+
 std::shared_ptr<const terrain::Dem> loadMap(const WorldSpec& w, const std::string& field) {
   try {
-    if (w.kind == WorldSpec::Kind::Terrain) return std::make_shared<const terrain::Dem>(maps::generateTerrain(w.terrain));
+    if (w.kind == WorldSpec::Kind::Terrain)
+      return std::make_shared<const terrain::Dem>(asStoredMap(maps::generateTerrain(w.terrain)));
     maps::LoadOptions lo;
     lo.cellSize = w.cellSize;
     if (w.cropM > 0) {

@@ -28,6 +28,27 @@ const state = (page) => page.evaluate(() => {
   };
 });
 
+// Clicks an incident's row, opening its group first when the group is closed.
+async function clickIncident(page, index) {
+  const row = page.locator(`#incident-list tr[data-incident="${index}"]`);
+  if (await row.isHidden()) {
+    const key = await row.getAttribute('data-group');
+    await page.$$eval('#incident-list tr.incident-group', (rows, k) => rows.find((r) => r.dataset.group === k).click(), key);
+  }
+  await row.click();
+}
+
+// The page's groups of incidents: kind and cause (result.json `cause`).
+function groupsOf(incidents) {
+  const g = new Map();
+  for (const [i, inc] of incidents.entries()) {
+    const key = `${inc.kind}|${inc.cause}`;
+    if (!g.has(key)) g.set(key, []);
+    g.get(key).push(i);
+  }
+  return g;
+}
+
 function boxesOverlap(a, b) {
   return a.x < b.x + b.width - 0.5 && b.x < a.x + a.width - 0.5 && a.y < b.y + b.height - 0.5 && b.y < a.y + a.height - 0.5;
 }
@@ -58,6 +79,18 @@ suiteWithServer('incidents and the mission clock', { timeout: 300000 }, (ctx) =>
     await page.fill('#m-param-attitude_limit', '5');
     await page.fill('#m-param-exceedance_limit', '2');
     await page.fill('#m-pace', '0');
+    // Live incidents (issue 27): the stream's incident frames reach the list before the done
+    // frame (frames are handled in order, so "no done frame yet" is exact).
+    await page.evaluate(() => {
+      const inc = window.__roverplanApp.missionView.incidents;
+      const live = inc.live.bind(inc);
+      window.__liveIncidents = { frames: 0, beforeDone: 0 };
+      inc.live = (msg) => {
+        window.__liveIncidents.frames++;
+        if (window.__roverplan.doneFrames === 0) window.__liveIncidents.beforeDone += msg.incidents.length;
+        live(msg);
+      };
+    });
     await page.click('#m-launch');
     await page.waitForFunction(() => window.__roverplan.doneFrames > 0, null, { timeout: 180000 });
     await page.waitForFunction(() => !document.getElementById('replay-slider').disabled, null, { timeout: 30000 });
@@ -68,13 +101,19 @@ suiteWithServer('incidents and the mission clock', { timeout: 300000 }, (ctx) =>
     console.log(`mission ${id}: ${result.incidents.length} incidents ${JSON.stringify(kinds)}, mission time ${result.metrics.mission_time_s} s`);
     assert.ok(result.incidents.length > 0, 'the tight limit gives incidents');
     assert.ok(kinds.exceedance > 0 && Object.keys(kinds).length > 1, JSON.stringify(kinds));
+    const live = await page.evaluate(() => window.__liveIncidents);
+    console.log(`live: ${live.frames} incident frames, ${live.beforeDone} incidents before the done frame`);
+    assert.ok(live.frames > 0 && live.beforeDone > 0, JSON.stringify(live));
+    // Every note names the limit hit with its value and the value reached.
+    for (const i of result.incidents.filter((x) => x.kind === 'exceedance'))
+      assert.match(i.note, /^\|(roll|pitch)\| reached \d+\.\d\d° over exceedance_limit 2\.0° for \d+ samples$/, i.note);
     // The summary counts each kind.
     for (const [k, n] of Object.entries(kinds)) assert.match(await page.textContent('#incident-summary'), new RegExp(`${k.replace(/_/g, ' ')} ${n}`));
     // Every incident has its time and place.
     for (const i of result.incidents) assert.ok(Number.isFinite(i.time_s) && Number.isFinite(i.x) && Number.isFinite(i.y), JSON.stringify(i));
     assert.equal(Number(await page.textContent('#incident-count')), result.incidents.length);
     await page.click('#dock-tab-incidents');
-    assert.equal(await page.locator('#incident-list tr').count(), result.incidents.length);
+    assert.equal(await page.locator('#incident-list tr[data-incident]').count(), result.incidents.length);
     // The clock is in mission time: its end is the mission's, its label min:s.
     assert.equal(Number(await page.getAttribute('#replay-slider', 'max')), result.metrics.mission_time_s);
     assert.match(await page.textContent('#replay-label'), /^\d+:\d\d(\.\d)? \/ \d+:\d\d(\.\d)? \(end\)$/);
@@ -86,13 +125,50 @@ suiteWithServer('incidents and the mission clock', { timeout: 300000 }, (ctx) =>
     await page.check('#layer-incidents');
   });
 
+  test('incidents are grouped by kind and cause with counts; a group opens; a member seeks the replay', async (t) => {
+    if (!result) return t.skip('no team mission');
+    await page.click('#dock-tab-incidents');
+    const groups = groupsOf(result.incidents);
+    const many = [...groups].filter(([, members]) => members.length > 1);
+    console.log(`groups: ${[...groups].map(([k, m]) => `${k} ×${m.length}`).join(', ')}`);
+    assert.ok(many.length > 0, 'the tight limits give a group of several incidents');
+    // One head row per group of several, with its count; its members start hidden.
+    assert.equal(await page.locator('#incident-list tr.incident-group').count(), many.length);
+    for (const [key, members] of many) {
+      const head = page.locator(`#incident-list tr.incident-group[data-group="${key}"]`);
+      assert.equal(await head.getAttribute('data-count'), String(members.length));
+      assert.match(await head.textContent(), new RegExp(`×${members.length.toLocaleString('en-US')}`));
+      assert.equal(await head.getAttribute('aria-expanded'), 'false');
+      assert.ok(await page.locator(`#incident-list tr[data-incident="${members[0]}"]`).isHidden());
+    }
+    // The biggest group opens on a click; a member chosen seeks the replay to its time.
+    const [key, members] = many.sort((a, b) => b[1].length - a[1].length)[0];
+    const head = page.locator(`#incident-list tr.incident-group[data-group="${key}"]`);
+    await head.click();
+    assert.equal(await head.getAttribute('aria-expanded'), 'true');
+    for (const i of members) assert.ok(await page.locator(`#incident-list tr[data-incident="${i}"]`).isVisible());
+    const pick = members[Math.floor(members.length / 2)];
+    await page.click(`#incident-list tr[data-incident="${pick}"]`);
+    const s = await state(page);
+    assert.equal(s.selected, pick);
+    assert.ok(Math.abs(s.time - result.incidents[pick].time_s) < 1e-6, `${s.time} vs ${result.incidents[pick].time_s}`);
+    await page.waitForTimeout(150);
+    await shot(page, 'results-incidents-grouped');
+    // Closed again, then a member chosen elsewhere (the API, as the map or clock do) opens it.
+    await head.click();
+    assert.ok(await page.locator(`#incident-list tr[data-incident="${members[0]}"]`).isHidden());
+    await page.evaluate((i) => window.__roverplanApp.missionView.incidents.select(i), members[0]);
+    assert.equal(await head.getAttribute('aria-expanded'), 'true');
+    assert.ok(await page.locator(`#incident-list tr[data-incident="${members[0]}"]`).isVisible());
+  });
+
   test('choosing an incident seeks the replay to its time and centres the map on it', async (t) => {
     if (!result) return t.skip('no team mission');
     // The latest incident that is not at the end, so the seek is visible.
     const order = result.incidents.map((inc, i) => [inc.time_s, i]).sort((a, b) => a[0] - b[0]);
     const [time, index] = order[Math.floor(order.length / 2)];
     const inc = result.incidents[index];
-    await page.click(`#incident-list tr[data-incident="${index}"]`);
+    await clickIncident(page, index);
     let s = await state(page);
     assert.equal(s.selected, index);
     assert.ok(Math.abs(s.time - time) < 1e-6, `${s.time} vs ${time}`);
@@ -219,10 +295,10 @@ suiteWithServer('incidents and the mission clock', { timeout: 300000 }, (ctx) =>
     const { page: p2, context: c2, errors: e2 } = await openPage(ctx.browser, `${ctx.server.url}/#mission=${m.id}`);
     await p2.waitForFunction(() => !document.getElementById('replay-slider').disabled, null, { timeout: 30000 });
     assert.equal(Number(await p2.textContent('#incident-count')), res.incidents.length);
-    assert.equal(await p2.locator('#incident-list tr').count(), res.incidents.length);
+    assert.equal(await p2.locator('#incident-list tr[data-incident]').count(), res.incidents.length);
     const k = Math.floor(res.incidents.length / 2);
     await p2.click('#dock-tab-incidents');
-    await p2.click(`#incident-list tr[data-incident="${k}"]`);
+    await clickIncident(p2, k);
     assert.equal(await p2.evaluate(() => window.__roverplan.replayStep), res.incidents[k].step);
     assert.match(await p2.textContent('#replay-label'), new RegExp(`^step ${res.incidents[k].step} / `));
     await p2.waitForTimeout(150);

@@ -20,6 +20,7 @@
 #include "core/team/plan_ahead.hpp"
 #include "core/team/route_generator.hpp"
 #include "core/team/task_builder.hpp"
+#include "core/team/team_incidents.hpp"
 #include "core/terrain/layers.hpp"
 #include "dem_literals.hpp"
 
@@ -434,7 +435,8 @@ TEST_CASE("stages: the coordinator with a fake planner and rover: the policy dec
   const CoordinationResult skipped = coordinateWith(tasks, planner, rover, TimedPolicy(none), none, 1);
   CHECK(skipped.legs[1].status == LegStatus::Skipped);
   CHECK(skipped.legs[1].reason == LegReason::Conflict);
-  CHECK(skipped.legs[1].note.find("of rover 0") != std::string::npos);
+  // Notes count rovers from 1 (rover id 0 is "rover 1") and name the limit (issue 27).
+  CHECK(skipped.legs[1].note.find("of rover 1, under safety_distance") != std::string::npos);
 }
 
 TEST_CASE("stages: the coordinator reports an invalid and an unreachable goal and goes on") {
@@ -757,4 +759,66 @@ TEST_CASE("stages: rovers closer than the safety distance are refused naming the
                        "rovers[1]: start is boxed in: no way out past the other rovers' starts keeping "
                        "the safety distance",
                        Error);
+}
+
+// Issue 27: every incident note states the limit hit (parameter name and value) and the value
+// reached; its cause groups it. An exceedance episode of three samples over a 10° limit, the
+// worst a 14° pitch, closed by a sample back under the limit.
+TEST_CASE("team incidents: notes name the limit and the value reached; causes group them") {
+  const double deg = std::numbers::pi / 180;
+  ExceedanceScan scan(1, 10 * deg);
+  auto sample = [&](double t, double roll, double pitch) {
+    TrajectorySample s;
+    s.time = t;
+    s.x = t;
+    s.y = 2 * t;
+    s.roll = roll * deg;
+    s.pitch = pitch * deg;
+    return s;
+  };
+  CHECK_FALSE(scan.add(sample(0, 3, 4)));
+  CHECK_FALSE(scan.add(sample(0.1, 11, 2)));
+  CHECK_FALSE(scan.add(sample(0.2, 5, -14)));
+  CHECK_FALSE(scan.add(sample(0.3, 12, 1)));
+  const auto e = scan.add(sample(0.4, 1, 1));
+  REQUIRE(e);
+  CHECK(e->kind == IncidentKind::Exceedance);
+  CHECK(e->rover == 1);
+  CHECK(e->time == doctest::Approx(0.1));
+  CHECK(e->position.x() == doctest::Approx(0.1));
+  CHECK(e->value == doctest::Approx(14));
+  CHECK(e->note == "|pitch| reached 14.00° over exceedance_limit 10.0° for 3 samples");
+  CHECK(e->cause == "exceedance_limit");
+  CHECK_FALSE(scan.finish());  // closed already
+  CHECK_FALSE(scan.add(sample(0.5, -10.5, 0)));
+  const auto open = scan.finish();  // still open at the end of the trajectory
+  REQUIRE(open);
+  CHECK(open->note == "|roll| reached 10.50° over exceedance_limit 10.0° for 1 samples");
+
+  Conflict c;
+  c.rover = 2;
+  c.other = 0;
+  c.distance = 0.62;
+  c.duration = 1.5;
+  const Incident col = collisionIncident(c, 1.0);
+  CHECK(col.note == "rovers 1 and 3 came within 0.62 m, under safety_distance 1.00 m, for 1.5 s");
+  CHECK(col.cause == "safety_distance");
+  CHECK(col.other == 0);
+
+  const Incident slot = noSlotIncident(0, 7, {5, 5}, 5.0);
+  CHECK(slot.note == "target 7: no valid ground for the rover's slot within half footprint_m (2.50 m of 5.00 m)");
+  CHECK(slot.cause == "no_ground");
+
+  LegRecord leg;
+  leg.rover = 1;
+  leg.target = 4;
+  leg.status = LegStatus::Short;
+  leg.reason = LegReason::Steep;
+  leg.endTime = 12.5;
+  leg.note = "every try tilts past attitude_check 15.0° (the least tilted try reached 17.3° pitch)";
+  const Incident s = legIncident(leg, {3, 4});
+  CHECK(s.kind == IncidentKind::Short);
+  CHECK(s.cause == "steep");
+  CHECK(s.note == "target 4: " + leg.note);
+  CHECK(s.time == 12.5);
 }

@@ -302,7 +302,7 @@ TEST_CASE("geojson: a mission's route, targets, zones and incidents beside its t
   r.tracks[1].points = {{10, 10}, {10, 20}};
   r.overlays = {{"route", -1, {{5, 5}, {20, 20}, {40, 20}}}, {"path", 0, {{0, 0}, {1, 1}}}};
   r.targets = {{0, {20, 20}, rover::TargetStatus::Reached, 2, 0, 0, 0}, {1, {40, 20}, rover::TargetStatus::Skipped, 0, 0, 2, 0}};
-  r.incidents = {{rover::IncidentKind::Skipped, 1, -1, 30.0, {40, 20}, 1.0, "target 1: given up"}};
+  r.incidents = {{rover::IncidentKind::Skipped, 1, -1, 30.0, {40, 20}, 1.0, "target 1: given up", -1, "no_path"}};
   Zone z;
   z.rings = {{{50, 50}, {60, 50}, {60, 60}, {50, 60}}};
   z.name = "crater rim";

@@ -116,11 +116,17 @@ assert len(dx) == 1 and len(dy) == 1, (dx, dy)
 assert all(r['elevation_m'] != '' and r['heading_deg'] != '' for r in rows)
 PY
 
-  # map.tif: a GeoTIFF of the map's extent in its CRS; map.png: the same map with legends below.
+  # map.tif: the mission's values as Float32 bands of the map's extent in its CRS (issue 27:
+  # elevation, traversability class, visits; a PDM when the mission had one), each with its
+  # description and the nodata value; map.png: the picture with legends below.
   GI=$(gdalinfo "$D/map.tif" 2>&1) || fail "$ID: gdalinfo cannot read map.tif"
   grep -q "\"$CRS_NAME\"" <<<"$GI" || fail "$ID: map.tif CRS is not the map's: $GI"
   grep -q '^Size is 600, 600' <<<"$GI" || fail "$ID: map.tif size: $(grep '^Size' <<<"$GI")"
-  grep -q 'Band 4 .*ColorInterp=Alpha' <<<"$GI" || fail "$ID: map.tif has no alpha band"
+  grep -q 'Band 1 .*Type=Float32' <<<"$GI" || fail "$ID: map.tif band 1 is not Float32: $GI"
+  grep -q 'Description = elevation (m)' <<<"$GI" || fail "$ID: map.tif has no elevation band"
+  grep -q 'Description = traversability class' <<<"$GI" || fail "$ID: map.tif has no traversability band"
+  grep -q 'Description = visits' <<<"$GI" || fail "$ID: map.tif has no visits band"
+  grep -q 'NoData Value=-9999' <<<"$GI" || fail "$ID: map.tif has no nodata value"
   grep -q '^Origin = (' <<<"$GI" || fail "$ID: map.tif has no origin"
   PI=$(gdalinfo "$D/map.png" 2>&1) || fail "$ID: gdalinfo cannot read map.png"
   size=$(sed -n 's/^Size is \([0-9]*\), \([0-9]*\)/\1 \2/p' <<<"$PI")

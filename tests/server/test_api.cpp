@@ -698,3 +698,86 @@ TEST_CASE("api: coverage on an uploaded DEM with non-square pixels, per-map defa
     CHECK(e.json()["error"]["code"] == code);
   }
 }
+
+// Issue 27: incidents reach the live stream as they are found, not only in result.json at the
+// end. A team mission on the default map with tight limits (legs under a 5° attitude check end
+// short; samples pass a 2° exceedance limit), its replay paced to 2 steps a second so it is still
+// running for a long while: the first incident frame must come while the mission runs, before
+// any done frame. A second, unpaced run: the list the stream ends with is result.json's.
+TEST_CASE("api: a team mission streams its incidents while it runs, ending with result.json's list") {
+  namespace beast = rover::test::beast;
+  namespace net = rover::test::net;
+  using rover::test::tcp;
+  using rover::test::kHangDeadline;
+  TempDir tmp;
+  ApiServer s(tmp.str("data"), options());
+  json body{{"map", s.defaultMap()},
+            {"planner", "team-search"},
+            {"rovers", {{{"x", 40}, {"y", 40}, {"heading", 0}}, {{"x", 46}, {"y", 40}, {"heading", 0}}}},
+            {"params", {{"targets", 4}, {"attitude_limit", 5}, {"exceedance_limit", 2}}},
+            {"pace", 2}};
+  auto r = s.postJson("/api/missions", body);
+  REQUIRE(r.status == 202);
+  const std::string id = r.json()["id"];
+  {
+    net::io_context ioc;
+    beast::websocket::stream<beast::tcp_stream> ws(ioc);
+    beast::get_lowest_layer(ws).expires_after(kHangDeadline);
+    beast::get_lowest_layer(ws).connect(tcp::endpoint(net::ip::make_address("127.0.0.1"), s.port()));
+    ws.read_message_max(256ull << 20);
+    ws.handshake("127.0.0.1", "/api/missions/" + id + "/stream");
+    json live;  // the first incident frame, or the snapshot if it already held some
+    for (;;) {
+      beast::flat_buffer b;
+      ws.read(b);  // throws if the stream closes first: the mission ended with no live incident
+      if (ws.got_binary()) continue;
+      json j = json::parse(beast::buffers_to_string(b.data()));
+      REQUIRE(j["type"] != "done");
+      if (j["type"] == "incidents" || (j["type"] == "snapshot" && !j["incidents"].empty())) {
+        live = j;
+        break;
+      }
+    }
+    // The mission is still running (its replay paced for minutes) when the incident arrives.
+    CHECK(s.status(id) == "running");
+    const json& list = live["incidents"];
+    REQUIRE(!list.empty());
+    for (const auto& i : list) {
+      CHECK(i.contains("kind"));
+      CHECK(i["note"].is_string());
+      // Every exceedance note names the limit hit with its value and the angle reached.
+      if (i["kind"] == "exceedance") {
+        CHECK(i["note"].get<std::string>().find("over exceedance_limit 2.0°") != std::string::npos);
+        CHECK(i["max_angle_deg"].get<double>() > 2.0);
+      }
+    }
+    MESSAGE("first live incident: " << list[0].dump());
+  }
+  CHECK(request(s.port(), "DELETE", "/api/missions/" + id).status == 202);
+  s.waitFinished(id);
+
+  body["pace"] = 0;
+  r = s.postJson("/api/missions", body);
+  REQUIRE(r.status == 202);
+  const std::string id2 = r.json()["id"];
+  auto frames = test::readAllFrames(s.port(), "/api/missions/" + id2 + "/stream", std::chrono::duration_cast<std::chrono::seconds>(kHangDeadline));
+  s.waitFinished(id2);
+  json streamed = json::array();
+  bool complete = false, sawDone = false;
+  for (const auto& f : frames) {
+    if (f.binary) continue;
+    json j = json::parse(f.data);
+    if (j["type"] == "snapshot") streamed = j["incidents"], complete = j["incidents_complete"];
+    if (j["type"] == "done") sawDone = true;
+    if (j["type"] != "incidents") continue;
+    CHECK_FALSE(sawDone);
+    json next(streamed.begin(), streamed.begin() + std::min<std::size_t>(j["from"].get<std::size_t>(), streamed.size()));
+    for (const auto& i : j["incidents"]) next.push_back(i);
+    streamed = std::move(next);
+    complete = j["complete"];
+  }
+  CHECK(complete);
+  auto res = s.get("/api/missions/" + id2 + "/result.json").json();
+  CHECK(res["incidents"].size() > 0);
+  CHECK(streamed == res["incidents"]);
+}

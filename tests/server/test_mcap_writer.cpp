@@ -150,7 +150,7 @@ TEST_CASE("mission replay: channels and messages from a literal two-rover result
   result.overlays.push_back({"route", -1, {{0.5, 0.5}, {3.5, 2.5}}});
   result.overlays.push_back({"path", 0, {{0.5, 0.5}, {0.7, 0.5}}});
   result.targets.push_back({0, {3.5, 2.5}, TargetStatus::Reached, 2, 0, 0, 0});
-  result.incidents.push_back({IncidentKind::Collision, 1, 0, 0.15, {0.6, 1.0}, 0.4, "rovers 0 and 1 within 0.40 m"});
+  result.incidents.push_back({IncidentKind::Collision, 1, 0, 0.15, {0.6, 1.0}, 0.4, "rovers 0 and 1 within 0.40 m", -1, "safety_distance"});
   result.series.push_back({"energy_j_rover_0", "time (s)", "energy_j", {0.0, 0.2}, {0.0, 2.0}});
 
   exports::ReplayInput in;

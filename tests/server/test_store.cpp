@@ -114,6 +114,26 @@ const std::regex kIsoRe(R"(^\d{4}-\d{2}-\d{2}T\d{2}:\d{2}:\d{2}\.\d{3}Z$)");
 
 // ---- Database ---------------------------------------------------------------------------------
 
+TEST_CASE("database: a map's name is unique in the catalog: a taken one gets \" (k)\"") {
+  TempDir t;
+  Database db(t.db());
+  std::vector<std::string> names;
+  for (const char* id : {"p1", "p2", "p3"}) {
+    MapRecord m = makeMap(id, "2026-01-01T00:00:00.000Z");
+    m.name = "megt90n000cb.lbl";
+    db.insertMap(m);
+    names.push_back(m.name);
+    CHECK(db.getMap(id)->name == m.name);
+  }
+  CHECK(names == std::vector<std::string>{"megt90n000cb.lbl", "megt90n000cb.lbl (2)", "megt90n000cb.lbl (3)"});
+  // A name at the length limit keeps within it (200 characters) with its suffix.
+  MapRecord a = makeMap("l1", "2026-01-01T00:00:00.000Z"), b = makeMap("l2", "2026-01-01T00:00:00.000Z");
+  a.name = b.name = std::string(200, 'x');
+  db.insertMap(a);
+  db.insertMap(b);
+  CHECK(b.name == std::string(192, 'x') + " (2)");
+}
+
 TEST_CASE("database: maps round trip with JSON meta") {
   TempDir t;
   Database db(t.db());

@@ -46,6 +46,7 @@ export class LiveStream {
         case 'progress': counters.progressFrames++; h.progress && h.progress(msg); break;
         case 'status': h.status && h.status(msg); break;
         case 'overlay': counters.overlayFrames = (counters.overlayFrames || 0) + 1; h.overlay && h.overlay(msg); break;
+        case 'incidents': counters.incidentFrames = (counters.incidentFrames || 0) + 1; h.incidents && h.incidents(msg); break;
         case 'done':
           counters.doneFrames++;
           this.done = true;

@@ -247,9 +247,12 @@ function showView(which) {
 }
 $('view-map').addEventListener('click', () => showView('map'));
 $('view-3d').addEventListener('click', () => showView('3d'));
-$('zoom-in').addEventListener('click', () => view.zoomAt(1.25));
-$('zoom-out').addEventListener('click', () => view.zoomAt(0.8));
-$('zoom-fit').addEventListener('click', () => view.fit());
+// The toolbar's zoom works on the view shown: the 2D map or the 3D terrain (issue 27: in 3D it
+// did nothing).
+const in3d = () => !$('view3d').hidden;
+$('zoom-in').addEventListener('click', () => (in3d() ? view3d.zoom(1.25) : view.zoomAt(1.25)));
+$('zoom-out').addEventListener('click', () => (in3d() ? view3d.zoom(0.8) : view.zoomAt(0.8)));
+$('zoom-fit').addEventListener('click', () => (in3d() ? view3d.fit() : view.fit()));
 $('export-png').addEventListener('click', () => {
   const url = $('view3d').hidden ? view.snapshot().toDataURL('image/png') : view3d.toDataURL();
   if (!url) return;

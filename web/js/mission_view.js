@@ -237,6 +237,7 @@ export class MissionView {
         this.onStatus(m.status);
         if (m.progress) this.onProgress(m.progress);
         if (m.metrics) this.renderMetrics(m.metrics);
+        if (m.incidents?.length && !this.result) this.incidents.live({ from: 0, complete: m.incidents_complete, incidents: m.incidents });
         this.view.invalidate();
       },
       grid: (buffer) => {
@@ -257,6 +258,13 @@ export class MissionView {
         this.plan.apply(m);
         if (first) this.layers.renderLegends();  // the team plan's legend, now it has one
         this.view.invalidate();
+      },
+      incidents: (m) => {
+        // Live until the stored result replaces them (onDone).
+        if (this.result) return;
+        const before = this.incidents.items.length;
+        this.incidents.live(m);
+        if (!before && m.incidents?.length) setTimeout(() => this.layers.renderLegends(), 200);  // the kinds' legend
       },
       progress: (m) => this.onProgress(m),
       status: (m) => this.onStatus(m.status),

@@ -57,6 +57,17 @@ function parseCsv(text) {
   });
 }
 
+// A read-out at a level or distance the run did not reach (p_at_600m when the team drove 424 m;
+// path_length_ratio@99% of a run that stopped at 97 %) is empty in runs.csv: "not reached", not
+// missing data (issue 27).
+const isReadOut = (key) => /^p_at_[\d.]+m$/.test(key) || key.includes('@');
+function cellText(key, v) {
+  return !Number.isFinite(v) && isReadOut(key) ? 'not reached' : fmt(v);
+}
+function notReachedWhy(key) {
+  return key.startsWith('p_at_') ? `the team's mean distance per rover stayed under ${key.slice(5, -1)} m` : 'the run ended below this level';
+}
+
 function meanStd(values) {
   const v = values.filter(Number.isFinite);
   if (!v.length) return null;
@@ -212,6 +223,7 @@ export class StudiesPanel {
     try {
       const s = await sendJson('POST', '/api/studies', this.document());
       status.textContent = `queued: ${s.runs_total} runs`;
+      this.launched = s.id;  // its line follows the study to its end (progress)
       await this.reload();
       await this.show(s.id);
     } catch (err) {
@@ -275,6 +287,20 @@ export class StudiesPanel {
       (s.runs_per_s ? ` · ${fmt(s.runs_per_s)} runs/s` : '') +
       (s.status === RunStatus.Running ? ` · ETA ${duration(s.eta_s)}` : '') + (s.message ? ` · ${s.message}` : '');
     $('st-cancel').hidden = !isActive(s.status);
+    // The launch line and the study's entry in the list follow it to its end (issue 27: they
+    // read "queued" after the study ended).
+    const id = s.id ?? this.current?.id;
+    if (id && id === this.launched && s.status) $('st-launch-status').textContent = `${s.status}: ${done.toLocaleString('en-US')} / ${total.toLocaleString('en-US')} runs`;
+    const entry = this.studies?.find((x) => x.id === id);
+    if (entry && s.status && (entry.status !== s.status || entry.runs_done !== done)) {
+      Object.assign(entry, { status: s.status, runs_done: done });
+      const li = $('st-list').querySelector(`li[data-study="${id}"]`);
+      if (li) {
+        li.querySelector('.badge').className = `badge ${s.status}`;
+        li.querySelector('.badge').textContent = s.status;
+        li.querySelector('.muted').textContent = ` ${done}/${entry.runs_total}`;
+      }
+    }
   }
 
   async cancel() {
@@ -326,7 +352,8 @@ export class StudiesPanel {
       ...metrics.map((m) => el('th', {}, m)), el('th', {}, ''));
     const rows = this.runs.slice(0, 300).map((r) => el('tr', { class: 'run-row', 'data-run': r.run_index, onclick: () => this.openRun(r.run_index) },
       el('td', {}, r.run_index), el('td', {}, r.config), el('td', {}, r.status),
-      ...metrics.map((m) => el('td', {}, fmt(r[m]))), el('td', {}, el('button', { class: 'small' }, 'open'))));
+      ...metrics.map((m) => el('td', !Number.isFinite(r[m]) && isReadOut(m) ? { class: 'not-reached', title: notReachedWhy(m) } : {}, cellText(m, r[m]))),
+      el('td', {}, el('button', { class: 'small' }, 'open'))));
     $('st-runs-table').replaceChildren(head, ...rows);
     $('st-runs-note').textContent = this.runs.length > 300 ? `first 300 of ${this.runs.length} runs (all in runs.csv)` : `${this.runs.length} runs`;
   }
@@ -403,9 +430,9 @@ export class StudiesPanel {
       for (const [variant, runs] of d3.group(rows, (r) => this.variant(r._c)))
         for (const k of pKeys) {
           const s = meanStd(runs.map((r) => r[k]));
-          if (s) data.push({ method: variant, distance_m: Number(k.slice(5, -1)), mean: s.mean, std: s.std, lo: s.mean - s.std, hi: s.mean + s.std, n: s.n });
+          if (s) data.push({ method: variant, distance_m: Number(k.slice(5, -1)), mean: s.mean, std: s.std, lo: s.mean - s.std, hi: s.mean + s.std, n: s.n, not_reached: runs.length - s.n });
         }
-      figures.push(['p-distance', 'Accumulated probability vs distance per route method (mean ± std; paper 001 — it gives no numbers in its text)', data, Plot.plot({
+      figures.push(['p-distance', 'Accumulated probability vs distance per route method (mean ± std over the runs that reached each distance; paper 001 — it gives no numbers in its text)', data, Plot.plot({
         width: 420, height: 300, marginLeft: 50, color: { legend: true }, x: { label: 'distance (m)' }, y: { label: 'accumulated probability', grid: true },
         marks: [
           Plot.areaY(data, { x: 'distance_m', y1: 'lo', y2: 'hi', fill: 'method', fillOpacity: 0.15 }),
@@ -417,10 +444,19 @@ export class StudiesPanel {
     if (metric) {
       const by = { config: (r) => r.config, variant: (r) => this.variant(r._c), world: (r) => r._c.world, rovers: (r) => `${r._c.rovers} rovers` }[group];
       const data = rows.filter((r) => Number.isFinite(r[metric])).map((r) => ({ group: by(r), [metric]: r[metric] }));
-      const groups = new Set(data.map((d) => d.group)).size;
-      figures.push(['box', `${metric} per ${group} (box plots)`, data, Plot.plot({
-        width: groups > 6 ? 860 : 420, height: 300, marginLeft: 80, marginBottom: 70, x: { label: group, tickRotate: -30 }, y: { label: metric, grid: true },
-        marks: [Plot.boxY(data, { x: 'group', y: metric, fill: '#3ad6ff', stroke: '#ccc' })] })]);
+      // Runs that did not reach a read-out's distance or level are counted per group, not dropped
+      // silently: a group whose runs all fell short keeps its place, labelled "not reached".
+      const short = isReadOut(metric) ? rows.filter((r) => !Number.isFinite(r[metric])) : [];
+      const shortBy = d3.rollup(short, (v) => v.length, by);
+      const all = d3.rollup(rows, (v) => v.length, by);
+      const domain = [...all.keys()];
+      const notReached = [...shortBy].map(([g, n]) => ({ group: g, label: `not reached: ${n}/${all.get(g)}` }));
+      const groups = domain.length;
+      const title = `${metric} per ${group} (box plots)` + (short.length ? ` · not reached by ${short.length} of ${rows.length} runs (${notReachedWhy(metric)})` : '');
+      figures.push(['box', title, data, Plot.plot({
+        width: groups > 6 ? 860 : 420, height: 300, marginLeft: 80, marginBottom: 70, x: { label: group, tickRotate: -30, domain }, y: { label: metric, grid: true },
+        marks: [Plot.boxY(data, { x: 'group', y: metric, fill: '#3ad6ff', stroke: '#ccc' }),
+          Plot.text(notReached, { x: 'group', frameAnchor: 'top', dy: 8, text: 'label', fill: '#ffb347', ariaLabel: 'not reached' })] })]);
     }
     const name = this.current ? `study-${this.current.id}` : 'study';
     host.replaceChildren(...figures.map(([id, title, data, node]) => el('figure', { class: 'study-plot', 'data-plot': id },

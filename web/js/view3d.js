@@ -1,7 +1,8 @@
 // The 3D view (three.js, loaded on first use): the elevation raster as a displaced mesh
 // (≤ 256 × 256 vertices), coloured by elevation or traversability, with the mission's trails
-// draped at terrain height plus a small offset. A small orbit control of our own: drag to orbit,
-// right-drag or shift-drag to pan, wheel to zoom.
+// draped at terrain height plus a small offset, and the map's keep-out zones as red walls standing
+// on their outlines. A small orbit control of our own: drag to orbit, right-drag or shift-drag to
+// pan, wheel or the toolbar's +/− to zoom ("fit" frames the whole map again).
 
 import { fetchF32, layerUrl } from './api.js';
 import { counters, state } from './state.js';
@@ -90,6 +91,7 @@ export class View3D {
     new ResizeObserver(() => this.resize()).observe(this.container);
     this.bindOrbit(this.renderer.domElement);
     state.on('map', () => this.visible && this.rebuild());
+    state.on('zones', () => this.updateZones());
     setInterval(() => this.visible && this.updateTrails(), 400);
   }
 
@@ -180,6 +182,7 @@ export class View3D {
     }
     this.trailKey = '';
     this.updateTrails();
+    this.updateZones();
     counters.view3dReady = true;
     this.frame();
   }
@@ -213,6 +216,70 @@ export class View3D {
     const r = Math.max(0.3, 0.008 * Math.max(W, H));
     this.marker.scale.setScalar(r);
     this.marker.position.set(p.x - W / 2, (this.heightAt(p.x, p.y) - zMin) * exag + r, H / 2 - p.y);
+    this.frame();
+  }
+
+  // Zoom by `factor` (> 1: closer), as the toolbar's +/− do on the 2D map.
+  zoom(factor) {
+    this.orbit.dist = Math.max(1, this.orbit.dist / factor);
+    this.frame();
+  }
+
+  // The whole map in view again, from the starting angle.
+  fit() {
+    if (!this.extent) return;
+    const { W, H, zMin, zMax, exag } = this.extent;
+    this.orbit = { yaw: -0.6, pitch: 0.75, dist: 1.75 * Math.max(W, H), target: [0, ((zMax - zMin) * exag) / 2, 0] };
+    this.frame();
+  }
+
+  // The map's saved keep-out zones (state.zones, local frame): each outline draped on the terrain
+  // (points every ~cell along its edges) and a translucent red wall standing on it, so a zone
+  // reads from any angle.
+  updateZones() {
+    if (!this.THREE || !this.z || !this.group) return;
+    const THREE = this.THREE;
+    for (const c of this.group.children.filter((o) => o.name === 'zone')) {
+      this.group.remove(c);
+      c.geometry.dispose();
+      c.material.dispose();
+    }
+    const { W, H, zMin, exag } = this.extent;
+    const wall = Math.max(0.5, 0.03 * Math.max(W, H));
+    const lift = Math.max(0.15, 0.004 * Math.max(W, H));
+    const step = Math.max(this.z.cellW, this.z.cellH, Math.max(W, H) / 400);
+    let n = 0;
+    for (const f of state.zones?.features || []) {
+      const rings = f.geometry?.type === 'Polygon' ? [f.geometry.coordinates[0]]
+        : f.geometry?.type === 'MultiPolygon' ? f.geometry.coordinates.map((p) => p[0]) : [];
+      for (const ring of rings) {
+        const pts = [];
+        for (let i = 0; i + 1 < ring.length; i++) {
+          const [x0, y0] = ring[i], [x1, y1] = ring[i + 1];
+          const k = Math.max(1, Math.ceil(Math.hypot(x1 - x0, y1 - y0) / step));
+          for (let j = 0; j < k; j++) pts.push([x0 + ((x1 - x0) * j) / k, y0 + ((y1 - y0) * j) / k]);
+        }
+        if (pts.length < 2) continue;
+        pts.push(pts[0]);
+        const base = pts.map(([x, y]) => [x - W / 2, (this.heightAt(x, y) - zMin) * exag + lift, H / 2 - y]);
+        const line = new THREE.Line(new THREE.BufferGeometry().setAttribute('position', new THREE.BufferAttribute(new Float32Array(base.flat()), 3)),
+          new THREE.LineBasicMaterial({ color: 0xff4040 }));
+        line.name = 'zone';
+        this.group.add(line);
+        const pos = new Float32Array(base.length * 2 * 3);
+        base.forEach(([x, y, z], i) => pos.set([x, y, z, x, y + wall, z], 6 * i));
+        const index = [];
+        for (let i = 0; i + 1 < base.length; i++) index.push(2 * i, 2 * i + 2, 2 * i + 1, 2 * i + 1, 2 * i + 2, 2 * i + 3);
+        const geo = new THREE.BufferGeometry();
+        geo.setAttribute('position', new THREE.BufferAttribute(pos, 3));
+        geo.setIndex(index);
+        const mesh = new THREE.Mesh(geo, new THREE.MeshBasicMaterial({ color: 0xff3030, transparent: true, opacity: 0.35, side: THREE.DoubleSide, depthWrite: false }));
+        mesh.name = 'zone';
+        this.group.add(mesh);
+        n++;
+      }
+    }
+    counters.view3dZones = n;
     this.frame();
   }
 
