@@ -1,3 +1,4 @@
+#include "core/planning/rover_range.hpp"
 #include "core/coverage/coverage_entry.hpp"
 
 #include <cstdio>
@@ -232,8 +233,14 @@ class CoveragePlanner final : public Planner {
       keepOutCells = addKeepOut(zoned, problem.keepOut);
       world = &zoned;
     }
-    PlanResult out = toPlanResult(runCoverage(*world, cells, p, sink, cancel),
-                                  problem.world.geometry(), problem.metricsOnly);
+    const CoverageResult result = runCoverage(*world, cells, p, sink, cancel);
+    PlanResult out = toPlanResult(result, problem.world.geometry(), problem.metricsOnly);
+    std::vector<double> distances, energies;
+    for (const RoverTrack& t : result.rovers) {
+      distances.push_back(t.distanceM);
+      energies.push_back(t.energyJ);
+    }
+    for (auto& w : planning::rangeWarnings(p.range, distances, energies)) out.warnings.push_back(std::move(w));
     if (sink) sink->incidents(out.incidents, true);
     out.metrics.push_back({"keep_out_cells", static_cast<double>(keepOutCells), "cells"});
     out.metrics.push_back({"gravity_m_s2", p.energy.gravity, "m/s²"});

@@ -146,6 +146,16 @@ ParamTable<P> buildTable() {
             &EnergyModel::efficiency);
   addEnergy(t, realParam("turn_energy", 0.0, 1000.0, "J/rad", "Energy per radian of spot turn."),
             &EnergyModel::turnJoulesPerRad);
+  t.add(realParam("rover_range_m", 0, 1e9, "m",
+                  "The farthest one rover may drive in the mission (0 = not stated); a rover past it makes the "
+                  "run end with a warning."),
+        [](const P& p) -> ParamValue { return p.range.rangeM; },
+        [](P& p, const ParamInfo& i, const ParamValue& v) { p.range.rangeM = paramAsReal(i, v); });
+  t.add(realParam("rover_energy_j", 0, 1e12, "J",
+                  "The energy one rover's battery holds for the mission (0 = not stated); a rover past it makes "
+                  "the run end with a warning."),
+        [](const P& p) -> ParamValue { return p.range.energyJ; },
+        [](P& p, const ParamInfo& i, const ParamValue& v) { p.range.energyJ = paramAsReal(i, v); });
   // Localisation error (issue 15, core/coverage/dead_reckoning.hpp).
   t.group("localisation");
   addLocalisation(t,

@@ -4,6 +4,7 @@
 #include <string>
 #include <vector>
 
+#include "core/planning/rover_range.hpp"
 #include "core/common/params.hpp"
 #include "core/coverage/cost_table.hpp"
 #include "core/terrain/layers.hpp"
@@ -63,6 +64,8 @@ struct CoverageParams {
   // A DEM pixel with a slope of this or more to a neighbour is impassable (SPEC §2).
   double impassableDeg = 15.0;
   EnergyModel energy;
+  // What the operator states one rover can do (core/planning/rover_range.hpp); 0 = not stated.
+  planning::RoverRange range;
   LocalisationModel localisation;
   // Not a user parameter: false for a study's metrics-only runs (PlanningProblem::metricsOnly),
   // whose results keep no per-move cells or pitch, so the recorder stores none.

@@ -6,6 +6,7 @@
 
 #include "core/common/params.hpp"
 #include "core/planning/planner.hpp"
+#include "core/planning/rover_range.hpp"
 #include "core/team/team_mission.hpp"
 
 namespace rover::team {
@@ -17,6 +18,8 @@ struct TeamPlannerParams {
   // s of mission time between two pose events of the replay: one second gives a browser ~2300
   // frames for a paper-scale mission (ours).
   double poseInterval = 1.0;
+  // What the operator states one rover can do (core/planning/rover_range.hpp); 0 = not stated.
+  planning::RoverRange range;
 };
 
 const ParamTable<TeamPlannerParams>& teamParamTable();

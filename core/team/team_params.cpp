@@ -141,6 +141,10 @@ ParamTable<P> buildTable() {
   t.group("rover");
   addReal(t, common(realParam("nominal_speed", 0.01, 0.5, "m/s", "Desired surge speed on flat ground (≈0.3 m/s).")),
           [](auto& p) -> auto& { return p.mission.coordination.controller.nominalSpeed; });
+  addReal(t, realParam("rover_range_m", 0, 1e9, "m", "The farthest one rover may drive in the mission (0 = not stated); a rover past it makes the run end with a warning."),
+          [](auto& p) -> auto& { return p.range.rangeM; });
+  addReal(t, realParam("rover_energy_j", 0, 1e12, "J", "The driving energy one rover's battery holds for the mission (0 = not stated); a rover past it makes the run end with a warning."),
+          [](auto& p) -> auto& { return p.range.energyJ; });
   addReal(t, realParam("lookahead", 0.05, 100, "m", "Line-of-sight guidance lookahead distance."),
           [](auto& p) -> auto& { return p.mission.coordination.controller.lookahead; });
   addReal(t, realParam("acceptance_radius", 0.01, 10, "m", "A waypoint counts as reached inside this radius."),

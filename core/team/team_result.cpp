@@ -118,14 +118,20 @@ PlanResult toPlanResult(const TeamMissionResult& r, const TeamPlannerParams& p, 
       {"rrt_calls", static_cast<double>(m.rrtCalls), "plans"},
       {"plan_wall_s", planWallSeconds, "s"},
   };
+  std::vector<double> distances, energies;
+  for (const Trajectory& t : r.plan.trajectories) {
+    distances.push_back(trajectoryLength(t));
+    energies.push_back(driveEnergyJ(t, p.mission.coordination.model));
+  }
   out.warnings = missionWarnings(r);
+  for (auto& w : planning::rangeWarnings(p.range, distances, energies)) out.warnings.push_back(std::move(w));
   out.metrics.push_back({"warnings", static_cast<double>(out.warnings.size()), "warnings"});
   const double period = p.mission.coordination.controller.samplePeriod;
   const auto every = static_cast<std::size_t>(std::max(1L, std::lround(1.0 / period)));
   double energy = 0;
   for (std::size_t k = 0; k < r.plan.trajectories.size(); ++k) {
     const Trajectory& t = r.plan.trajectories[k];
-    const double roverEnergy = driveEnergyJ(t, p.mission.coordination.model);
+    const double roverEnergy = energies[k];
     energy += roverEnergy;
     const AttitudeExceedance e = attitudeExceedance(t, p.mission.exceedanceLimit);
     int reached = 0, skipped = 0, shortLegs = 0, replans = 0, waits = 0;
@@ -144,7 +150,7 @@ PlanResult toPlanResult(const TeamMissionResult& r, const TeamPlannerParams& p, 
     track.samples.reserve(t.samples.size());  // the exports' CSV: every 10 Hz sample
     for (const TrajectorySample& s : t.samples)
       track.samples.push_back({s.time, {s.x, s.y}, s.heading, s.roll, s.pitch, s.speed, s.z});
-    track.metrics = {{"trajectory_m", trajectoryLength(t), "m"},
+    track.metrics = {{"trajectory_m", distances[k], "m"},
                      {"time_s", t.samples.empty() ? 0.0 : t.samples.back().time, "s"},
                      {"energy_j", roverEnergy, "J"},
                      {"samples", static_cast<double>(e.samples), "samples"},

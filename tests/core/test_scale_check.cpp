@@ -3,6 +3,7 @@
 
 #include <cmath>
 
+#include "core/planning/rover_range.hpp"
 #include "core/terrain/scale_check.hpp"
 
 using namespace rover::terrain;
@@ -54,4 +55,18 @@ TEST_CASE("scale: heights outside the body's relief that are not radii") {
   // Olympus Mons is on Mars, not on the Moon.
   CHECK(scaleWarnings(1, 1, 0, 21'000, Body::Mars).empty());
   CHECK(scaleWarnings(1, 1, 0, 21'000, Body::Moon)[0].code == "heights_out_of_range");
+}
+
+TEST_CASE("rover range: a stated range or battery past which a rover went is one warning each") {
+  using rover::planning::RoverRange;
+  using rover::planning::rangeWarnings;
+  const std::vector<double> distance{24'647'300, 1200}, energy{137e6, 5e3};
+  CHECK(rangeWarnings({}, distance, energy).empty());  // nothing stated, nothing said
+  auto w = rangeWarnings({2000, 0}, distance, energy);
+  REQUIRE(w.size() == 1);
+  CHECK(w[0] == "1 of 2 rovers drove more than the stated rover_range_m 2000 m (rover 1: 24647.3 km, x1.23e+04)");
+  w = rangeWarnings({2000, 360e3}, distance, energy);
+  REQUIRE(w.size() == 2);
+  CHECK(w[1] == "1 of 2 rovers used more than the stated rover_energy_j 360000 J (rover 1: 137.0 MJ, x381)");
+  CHECK(rangeWarnings({30'000'000, 1e9}, distance, energy).empty());
 }
