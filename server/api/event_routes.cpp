@@ -29,7 +29,7 @@ void addEventRoutes(http::Router& router, ApiContext& ctx) {
     }
     const std::string map = queryString(req, "map");
     if (!map.empty()) mapOr404(ctx, map, "map");
-    return ctx.events->subscribe(std::move(c), since, map, req.operatorName);
+    return ctx.events->subscribe(std::move(c), since, map, req.operatorName, req.operatorFromToken);
   }, ws);
 }
 

@@ -48,6 +48,14 @@ double queryNumber(const Request& req, const std::string& key, double fallback) 
 }
 
 long long queryInteger(const Request& req, const std::string& key, long long fallback, long long lo, long long hi) {
+  // Decimal digits only: a number parser would also take 0x10, 1e1 and " 5" for an integer.
+  if (auto it = req.query.find(key); it != req.query.end() && !it->second.empty()) {
+    const std::string& t = it->second;
+    const std::size_t digits = t[0] == '-' || t[0] == '+' ? 1 : 0;
+    if (t.size() == digits || t.find_first_not_of("0123456789", digits) != std::string::npos)
+      throw ApiError(400, "invalid_parameter",
+                     key + " must be an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]", key);
+  }
   const double v = queryNumber(req, key, static_cast<double>(fallback));
   if (v < static_cast<double>(lo) || v > static_cast<double>(hi) || std::trunc(v) != v)
     throw ApiError(400, "invalid_parameter",

@@ -6,6 +6,8 @@
 // against the set's version, or one zone added, changed or deleted, checked against that zone's
 // version only, so two operators editing different zones never conflict.
 
+#include <set>
+
 #include "maps/georef.hpp"
 #include "server/api/preconditions.hpp"
 #include "server/api/route_kit.hpp"
@@ -138,10 +140,16 @@ Response putZones(ApiContext& ctx, const Request& req) {
   json stored = rj::zonesToJson(zones, rj::zoneNames(body));
   // A string id this set holds keeps its zone's identity (and version when unchanged); any other
   // feature (no id, a number id as GeoJSON files may have, an unknown id) is a new zone.
+  // One id names one zone: a repeated id would store a zone no /zones/{zone} route can reach.
+  std::set<std::string> ids;
   for (std::size_t i = 0; i < body["features"].size(); ++i) {
     const json& f = body["features"][i];
-    if (f.contains("id") && f["id"].is_string() && f["id"].get<std::string>().size() <= kMaxZoneIdBytes)
+    if (f.contains("id") && f["id"].is_string() && f["id"].get<std::string>().size() <= kMaxZoneIdBytes) {
+      if (!ids.insert(f["id"].get<std::string>()).second)
+        throw ApiError(400, "invalid_field", "zone id '" + f["id"].get<std::string>() + "' is given twice",
+                       "zones.features[" + std::to_string(i) + "].id");
       stored["features"][i]["id"] = f["id"];
+    }
   }
   return saveZoneSet(ctx, req, id, std::move(stored), named, false);
 }

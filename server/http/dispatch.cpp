@@ -118,6 +118,7 @@ Routing routeHead(const ServerState& state, const bhttp::request_header<>& head,
       auto name = bearerName(req, cfg.namedTokens, wsRoute);
       if (!name) return {unauthorized(), false, nullptr};
       req.operatorName = std::move(*name);
+      req.operatorFromToken = !req.operatorName.empty();
     } else if (!bearerAuthorized(req, cfg.token, wsRoute)) {
       return {unauthorized(), false, nullptr};
     }

@@ -28,6 +28,7 @@ struct Request {
   // Who sends it (issue 26): the name of the bearer token (--token-file "name:token" lines), else
   // the X-Operator header (validated by dispatch), else "". Events and history say `by` with it.
   std::string operatorName;
+  bool operatorFromToken = false;  // operatorName is a named token's: the client cannot rename itself
   std::string header(const std::string& lowerName) const;
 };
 

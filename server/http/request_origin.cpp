@@ -1,3 +1,4 @@
+#include "server/json/json_edge.hpp"
 #include "server/http/request_origin.hpp"
 
 #include <algorithm>
@@ -159,8 +160,11 @@ std::optional<std::string> validOperatorName(const std::string& value) {
     if (len == 1 && (c < 0x20 || c == 0x7f)) return std::nullopt;
     for (std::size_t k = 1; k < len; ++k)
       if ((static_cast<unsigned char>(value[i + k]) & 0xc0) != 0x80) return std::nullopt;
-    // C1 controls (U+0080..U+009F) are not printable either.
-    if (len == 2 && c == 0xc2 && static_cast<unsigned char>(value[i + 1]) < 0xa0) return std::nullopt;
+    // C1 controls, zero-width and text-direction marks are refused as in every other name
+    // (json::isHiddenControl): a name must not show as something it is not.
+    std::uint32_t cp = len == 1 ? c : c & (0x7f >> len);
+    for (std::size_t k = 1; k < len; ++k) cp = (cp << 6) | (static_cast<unsigned char>(value[i + k]) & 0x3f);
+    if (rover::json::isHiddenControl(cp)) return std::nullopt;
     i += len;
     if (++chars > kMaxOperatorChars) return std::nullopt;
   }

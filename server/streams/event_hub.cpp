@@ -86,8 +86,9 @@ class EventHub::Stream : public ChannelStream {
 class EventHub::Source : public http::WsSource {
  public:
   Source(std::shared_ptr<EventHub> hub, std::shared_ptr<Stream> stream, std::shared_ptr<http::WsSource> inner,
-         std::string id, std::string who)
-      : hub_(std::move(hub)), stream_(std::move(stream)), inner_(std::move(inner)), id_(std::move(id)), who_(std::move(who)) {}
+         std::string id, std::string who, bool whoFixed)
+      : hub_(std::move(hub)), stream_(std::move(stream)), inner_(std::move(inner)), id_(std::move(id)), who_(std::move(who)),
+        whoFixed_(whoFixed) {}
   ~Source() override {
     if (announced_) hub_->setPresence(id_, std::nullopt, who_);
   }
@@ -97,7 +98,9 @@ class EventHub::Source : public http::WsSource {
     nlohmann::json j = nlohmann::json::parse(text, nullptr, false);
     if (!j.is_object() || j.value("type", "") != "hello") return;
     Presence p;
-    if (auto name = http::validOperatorName(shortText(j, "name", 4 * http::kMaxOperatorChars)); name && !name->empty())
+    // A named token says who it is, as on every REST route; otherwise the hello may.
+    if (auto name = http::validOperatorName(shortText(j, "name", 4 * http::kMaxOperatorChars));
+        !whoFixed_ && name && !name->empty())
       p.name = *name;
     else
       p.name = who_;
@@ -120,6 +123,7 @@ class EventHub::Source : public http::WsSource {
   std::shared_ptr<Stream> stream_;
   std::shared_ptr<http::WsSource> inner_;
   const std::string id_, who_;
+  const bool whoFixed_;
   bool announced_ = false;
   Presence last_;
   std::chrono::steady_clock::time_point windowStart_{};
@@ -262,7 +266,7 @@ std::shared_ptr<EventHub::Stream> EventHub::streamFor(const std::string& filter)
 
 std::shared_ptr<http::WsSource> EventHub::subscribe(std::shared_ptr<http::WsConnection> connection,
                                                     std::optional<std::uint64_t> since, const std::string& map,
-                                                    const std::string& who) {
+                                                    const std::string& who, bool whoFixed) {
   auto stream = streamFor(map);
   std::string id;
   {
@@ -285,7 +289,7 @@ std::shared_ptr<http::WsSource> EventHub::subscribe(std::shared_ptr<http::WsConn
                            {"presence", self->presenceList(map)}}));
     return b;
   });
-  return std::make_shared<Source>(self, std::move(stream), std::move(inner), id, who);
+  return std::make_shared<Source>(self, std::move(stream), std::move(inner), id, who, whoFixed);
 }
 
 std::size_t EventHub::subscriberCount() const {

@@ -64,7 +64,7 @@ class EventHub : public std::enable_shared_from_this<EventHub> {
   // ("" = all). `who`: the connection's operator, the presence name until a hello says another.
   std::shared_ptr<http::WsSource> subscribe(std::shared_ptr<http::WsConnection> connection,
                                             std::optional<std::uint64_t> since, const std::string& map,
-                                            const std::string& who);
+                                            const std::string& who, bool whoFixed = false);
   std::uint64_t lastSeq() const;
   std::uint64_t oldestSeq() const;  // the oldest event in the ring, lastSeq() + 1 when none
   std::size_t subscriberCount() const;

@@ -122,6 +122,17 @@ TEST_CASE("versions: zones one at a time: add, change, delete, each checked agai
   const std::string z2 = other.json()["id"];
   CHECK(z2 != z1);
   CHECK(s.get(path).json()["features"].size() == 2);
+  // A set that names one zone id twice is refused: the second zone could never be reached.
+  {
+    json twice = s.get(path).json();
+    json dup = twice["features"][0];
+    twice["features"].push_back(dup);
+    twice.erase("version");
+    const auto r = send(s, "PUT", path, twice, ifMatch(2));
+    CHECK(r.status == 400);
+    CHECK(r.json()["error"]["field"] == "zones.features[2].id");
+    CHECK(s.get(path).json()["features"].size() == 2);
+  }
 
   // Changing z1 names z1's version (1), not the set's (2): the other zone's add does not conflict.
   json moved = polygon({{61, 41}, {91, 41}, {91, 111}}, "rim");
@@ -322,6 +333,13 @@ TEST_CASE("operators: token files name their operators; events and history say w
   p["X-Operator"] = "Katherine";
   p["If-Match"] = "\"v2\"";
   REQUIRE(request(s.port(), "PUT", path, collection({}).dump(), "application/json", p).status == 200);
+  // A name that would show as something it is not (a right-to-left override, a zero-width space)
+  // is refused as in every other name.
+  for (const char* hidden : {"\xe2\x80\xae" "evil", "a\xe2\x80\x8b" "b"}) {
+    auto bad = as("plain-token");
+    bad["X-Operator"] = hidden;
+    CHECK(request(s.port(), "GET", path, "", "", bad).status == 400);
+  }
   const json hist = request(s.port(), "GET", path + "/history", "", "", as("plain-token")).json();
   REQUIRE(hist.size() == 3);
   CHECK(hist[0]["by"] == "Katherine");

@@ -101,7 +101,10 @@ TEST_CASE("edge: names and labels refuse C0, C1, bidi override/isolate, zero-wid
                "invalid_field", "name");
   }
   // Plain non-ASCII text is a name like any other.
-  auto ok = request(s.port(), "PATCH", "/api/missions/" + id, json{{"label", "cratère Kepler — 北"}}.dump(), "application/json");
+  // (A label is versioned, issue 26: the write names the version it read.)
+  const auto version = request(s.port(), "GET", "/api/missions/" + id).json()["version"].get<long long>();
+  auto ok = request(s.port(), "PATCH", "/api/missions/" + id,
+                    json{{"label", "cratère Kepler — 北"}, {"version", version}}.dump(), "application/json");
   CHECK(ok.status == 200);
   CHECK(ok.json()["label"] == "cratère Kepler — 北");
   s.waitFinished(id);

@@ -175,6 +175,9 @@ TEST_CASE("events: hostile since values are refused naming since; an old one is 
   checkError(upgrade(s.port(), "/api/events?since=-1"), 400, "since");
   checkError(upgrade(s.port(), "/api/events?since=1e300"), 400, "since");
   checkError(upgrade(s.port(), "/api/events?since=abc"), 400, "since");
+  // Decimal digits only (an attack found 0x10 read as 16 and 1e1 as 10).
+  for (const char* odd : {"0x10", "1e1", "%205", "5.0"})
+    checkError(upgrade(s.port(), cat("/api/events?since=", odd)), 400, "since");
   checkError(upgrade(s.port(), cat("/api/events?since=", std::to_string(last + 5))), 400, "since");
   checkError(upgrade(s.port(), "/api/events?map=nope"), 404, "map");
   // More events than the ring keeps: a subscriber from before them must reload.
