@@ -1,5 +1,7 @@
 #include "server/streams/event_hub.hpp"
 
+#include <algorithm>
+
 #include "server/http/request_origin.hpp"
 #include "server/store/database.hpp"
 #include "server/streams/channel_stream.hpp"
@@ -131,7 +133,7 @@ class EventHub::Source : public http::WsSource {
 };
 
 EventHub::EventHub(std::uint64_t lastSeq, std::function<void(std::uint64_t)> persist)
-    : last_(lastSeq), persist_(std::move(persist)) {}
+    : last_(lastSeq), floor_(lastSeq), persist_(std::move(persist)) {}
 
 EventHub::~EventHub() = default;
 
@@ -142,7 +144,7 @@ std::uint64_t EventHub::lastSeq() const {
 
 std::uint64_t EventHub::oldestSeq() const {
   std::lock_guard lock(mutex_);
-  return ring_.empty() ? last_ + 1 : ring_.front().seq;
+  return floor_ + 1;
 }
 
 std::uint64_t EventHub::publish(Event e) {
@@ -164,8 +166,19 @@ std::uint64_t EventHub::publish(Event e) {
   const bool everyMap = e.map.empty() || e.object == "map";
   {
     std::lock_guard lock(mutex_);
-    ring_.push_back(Stored{seq, e.map, everyMap, std::make_shared<const std::string>(j.dump())});
-    if (ring_.size() > kRingEvents) ring_.pop_front();
+    const bool presence = e.object == "presence";
+    ring_.push_back(Stored{seq, e.map, everyMap, presence, std::make_shared<const std::string>(j.dump())});
+    if (presence && ++presenceInRing_ > kPresenceKept) {
+      // The oldest presence event goes; change events stay where they are.
+      auto oldest = std::find_if(ring_.begin(), ring_.end(), [](const Stored& s) { return s.presence; });
+      ring_.erase(oldest);
+      --presenceInRing_;
+    }
+    while (ring_.size() - presenceInRing_ > kRingEvents) {
+      if (ring_.front().presence) --presenceInRing_;
+      else floor_ = ring_.front().seq;
+      ring_.pop_front();
+    }
     last_ = seq;
   }
   std::vector<std::shared_ptr<Stream>> wake;
@@ -182,8 +195,8 @@ void EventHub::framesFor(std::uint64_t from, std::uint64_t to, const std::string
                          std::vector<http::WsFrame>& out) const {
   if (to <= from) return;
   std::lock_guard lock(mutex_);
-  const std::uint64_t oldest = ring_.empty() ? last_ + 1 : ring_.front().seq;
-  if (from + 1 < oldest) {
+  const std::uint64_t oldest = floor_ + 1;
+  if (from < floor_) {
     out.push_back(textFrame({{"type", "resync_required"},
                              {"since", from},
                              {"oldest", oldest},
@@ -196,9 +209,11 @@ void EventHub::framesFor(std::uint64_t from, std::uint64_t to, const std::string
   }
   std::string body = "{\"type\":\"events\",\"events\":[";
   bool any = false;
-  // The ring holds consecutive seqs: the first wanted is at index from + 1 - oldest.
-  for (std::size_t i = static_cast<std::size_t>(from + 1 - oldest); i < ring_.size() && ring_[i].seq <= to; ++i) {
-    const Stored& s = ring_[i];
+  // The ring is in ascending seq (presence events may have left gaps): the first after `from`.
+  auto first = std::lower_bound(ring_.begin(), ring_.end(), from + 1,
+                                [](const Stored& s, std::uint64_t seq) { return s.seq < seq; });
+  for (auto it = first; it != ring_.end() && it->seq <= to; ++it) {
+    const Stored& s = *it;
     if (!filter.empty() && !s.everyMap && s.map != filter) continue;
     if (any) body.push_back(',');
     body += *s.json;

@@ -49,6 +49,10 @@ struct Event {
 class EventHub : public std::enable_shared_from_this<EventHub> {
  public:
   static constexpr std::size_t kRingEvents = 4096;
+  // Presence events kept besides them (the oldest dropped first): presence is state, sent whole
+  // with "ready", so hellos can never push a change event out of the ring (an attack did: 200
+  // connections saying hello every 0.2 s emptied it of real events in 20 s).
+  static constexpr std::size_t kPresenceKept = 256;
   static constexpr int kHelloPerSecond = 5;
 
   // `lastSeq`: the last sequence number handed out by the previous run; `persist` stores each
@@ -78,6 +82,7 @@ class EventHub : public std::enable_shared_from_this<EventHub> {
     std::uint64_t seq;
     std::string map;
     bool everyMap;  // sent to every map's subscribers (a map's own events, events of no map)
+    bool presence;  // a presence or left event (kPresenceKept of them, apart from kRingEvents)
     std::shared_ptr<const std::string> json;
   };
   struct Presence {
@@ -91,8 +96,12 @@ class EventHub : public std::enable_shared_from_this<EventHub> {
   std::shared_ptr<Stream> streamFor(const std::string& filter);
 
   mutable std::mutex mutex_;  // ring_, last_, presence_
-  std::deque<Stored> ring_;
+  std::deque<Stored> ring_;  // ascending seq; presence events may leave gaps
   std::uint64_t last_;
+  // Every change event after floor_ is in the ring (a `since` below it must resync): the last
+  // evicted change event's seq, or the seq the hub started at.
+  std::uint64_t floor_;
+  std::size_t presenceInRing_ = 0;
   std::map<std::string, Presence> presence_;
   std::function<void(std::uint64_t)> persist_;
   std::mutex publishMutex_;  // one publish at a time: numbered, stored and ringed in order

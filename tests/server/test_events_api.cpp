@@ -193,6 +193,24 @@ TEST_CASE("events: hostile since values are refused naming since; an old one is 
   CHECK(recent.next()["events"].size() == 6);
 }
 
+TEST_CASE("events: presence never pushes a change event out of the ring") {
+  // An attack: 200 connections saying hello every 0.2 s emptied the ring of real events in 20 s.
+  TempDir tmp;
+  ApiServer s(tmp.str("data"), options());
+  const auto before = s.ctx.events->lastSeq();
+  s.ctx.events->publish({"changed", "study", "s-real", "", 1, "", nullptr});
+  for (std::size_t i = 0; i < streams::EventHub::kRingEvents + 100; ++i)
+    s.ctx.events->publish({"presence", "presence", cat("c", std::to_string(i)), "", 0, "", nullptr});
+  CHECK(s.ctx.events->oldestSeq() == before + 1);
+  EventClient c(s.port(), cat("/api/events?since=", std::to_string(before)));
+  const json m = c.next();
+  REQUIRE(m["type"] == "events");
+  CHECK(m["events"][0]["id"] == "s-real");
+  // Then only the newest presence events (presence is state: "ready" carries it whole).
+  CHECK(m["events"].size() == streams::EventHub::kPresenceKept + 1);
+  CHECK(m["events"].back()["seq"] == s.ctx.events->lastSeq());
+}
+
 TEST_CASE("events: presence says who has which map open and goes with the connection") {
   TempDir tmp;
   ApiServer s(tmp.str("data"), options());
