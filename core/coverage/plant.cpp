@@ -96,16 +96,17 @@ void PerfectPlant::sense(const CoverageRover& r) {
   const bool colInGrid = dc != 0 && newCol >= 0 && newCol < g_.cols;
   const int r0 = std::max(0, c.row - R), r1 = std::min(g_.rows - 1, c.row + R);
   const int c0 = std::max(0, c.col - R), c1 = std::min(g_.cols - 1, c.col + R);
-  auto read = [&](int i) {
-    if (m.inRegion(i) && m.sense(i, world_.isObstacle(i))) recorder_.cellChanged(i, m.state(i), 0);
-  };
-  for (int row = r0; row <= r1; ++row) {
-    if (row == newRow) {
-      for (int col = c0; col <= c1; ++col) read(g_.index(row, col));
-    } else if (colInGrid) {
-      read(g_.index(row, newCol));
-    }
+  const std::uint8_t* const truth = world_.obstacles.values.data();
+  auto changed = [&](int i, CellState s) { recorder_.cellChanged(i, s, 0); };
+  const int width = c1 - c0 + 1;
+  if (newRow < r0 || newRow > r1) {  // only the new column (if any) is in the grid
+    if (colInGrid) m.senseLine(g_.index(r0, newCol), g_.cols, r1 - r0 + 1, truth, changed);
+    return;
   }
+  // Row-major as the whole window: the column above the new row, the row, the column below.
+  if (colInGrid) m.senseLine(g_.index(r0, newCol), g_.cols, newRow - r0, truth, changed);
+  m.senseLine(g_.index(newRow, c0), 1, width, truth, changed);
+  if (colInGrid) m.senseLine(g_.index(newRow + 1, newCol), g_.cols, r1 - newRow, truth, changed);
 }
 
 }  // namespace

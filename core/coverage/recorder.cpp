@@ -68,6 +68,9 @@ Recorder::Recorder(const World& world, const CoverageParams& params, EventSink* 
       tracks_(starts.size()) {
   if (p_.recordTracks)
     for (std::size_t k = 0; k < starts.size(); ++k) tracks_[k].cells.push_back(starts[k].cell);
+  // One curve point a step; a run to full coverage takes about as many steps as there are cells
+  // (capped: a big map's run stops earlier or grows the vector as usual).
+  curve_.reserve(static_cast<std::size_t>(std::min(g_.cellCount(), 1 << 20)) + 1);
 }
 
 void Recorder::moved(int rover, int to, int fromHeading, int dir, double horizontal, double dh, bool revisit) {

@@ -142,23 +142,28 @@ std::vector<std::uint8_t> reachableCells(const World& world, const std::vector<i
 
 std::vector<int> freeComponents(const World& world, std::vector<int>& sizes) {
   const GridGeometry& g = world.geometry();
-  std::vector<int> label(g.cellCount(), -1);
+  const int n = g.cellCount();
+  std::vector<int> label(static_cast<std::size_t>(n), -1);
   sizes.clear();
-  std::vector<int> stack;
-  for (int s = 0; s < g.cellCount(); ++s) {
-    if (world.isObstacle(s) || label[s] >= 0) continue;
-    int id = static_cast<int>(sizes.size());
-    sizes.push_back(0);
-    label[s] = id;
-    stack.push_back(s);
-    while (!stack.empty()) {
-      const int i = stack.back();
-      stack.pop_back();
-      ++sizes[id];
+  // The stack holds each cell once at most: sized once, used as a plain array (raw pointers, so
+  // the label writes do not make the compiler reload the world's arrays per neighbour).
+  std::vector<int> stackStore(static_cast<std::size_t>(n));
+  int* const stack = stackStore.data();
+  int* const lab = label.data();
+  const std::uint8_t* const obstacle = world.obstacles.values.data();
+  for (int s = 0; s < n; ++s) {
+    if (obstacle[s] || lab[s] >= 0) continue;
+    const int id = static_cast<int>(sizes.size());
+    int size = 0, top = 0;
+    lab[s] = id;
+    stack[top++] = s;
+    while (top > 0) {
+      const int i = stack[--top];
+      ++size;
       auto reach = [&](int j) {
-        if (label[j] < 0 && !world.isObstacle(j)) {
-          label[j] = id;
-          stack.push_back(j);
+        if (lab[j] < 0 && !obstacle[j]) {
+          lab[j] = id;
+          stack[top++] = j;
         }
       };
       // Every coverage run floods its world once (random starts): a cell off the border takes
@@ -167,9 +172,10 @@ std::vector<int> freeComponents(const World& world, std::vector<int>& sizes) {
       if (row > 0 && row < g.rows - 1 && col > 0 && col < g.cols - 1) {
         for (int dir = 0; dir < kDirections; ++dir) reach(i + kDirRow[dir] * g.cols + kDirCol[dir]);
       } else {
-        for (const Neighbour& n : neighbours8(g, CellIndex{row, col})) reach(n.index);
+        for (const Neighbour& nb : neighbours8(g, CellIndex{row, col})) reach(nb.index);
       }
     }
+    sizes.push_back(size);
   }
   return label;
 }
