@@ -1,5 +1,6 @@
 // /api/maps: list, upload (any raster GDAL reads, imported in the jail), one map, delete.
 #include <filesystem>
+#include <set>
 
 #include "core/common/error.hpp"
 #include "maps/dem_import_options.hpp"
@@ -36,10 +37,18 @@ std::vector<UploadedFile> uploadedFiles(const Request& req, store::DataDir& dir,
   if (!boundary.empty()) {
     const std::string parts = dir.stagingDir();
     made.paths.push_back(parts);
+    std::set<std::string> seen;
     for (const auto& p : splitMultipart(req.bodyFile, boundary, parts)) {
       if (p.filename.empty()) {
-        if (p.name == "name" && name.empty()) name = p.value;
-        if (auto o = options.find(p.name); o != options.end() && o->second.empty()) o->second = p.value;
+        // An option named twice (two fields, or a field and the query) is refused, not guessed.
+        auto once = [&](std::string& slot) {
+          if (!slot.empty() || seen.count(p.name))
+            throw ApiError(400, "invalid_parameter", p.name + " is given more than once (fields and query)", p.name);
+          seen.insert(p.name);
+          slot = p.value;
+        };
+        if (p.name == "name") once(name);
+        if (auto o = options.find(p.name); o != options.end()) once(o->second);
         continue;
       }
       const std::string moved = (fs::path(dir.tmpDir()) / store::DataDir::newId()).string();

@@ -161,7 +161,7 @@ Operation& Operation::ifMatch() {
        {"description", "The version this write was read at, as its ETag: \"v<N>\" (or a \"version\" member in the "
                        "body). A stale one is answered 412 with the current object; a write to an object that "
                        "exists without either is answered 428."},
-       {"schema", {{"type", "string"}, {"pattern", "^(W/)?\"?v[0-9]{1,16}\"?$"}}}});
+       {"schema", {{"type", "string"}, {"pattern", "^\"?v(0|[1-9][0-9]{0,15})\"?$"}}}});
   return *this;
 }
 

@@ -14,9 +14,12 @@ constexpr long long kMaxVersion = (1LL << 53) - 1;
 std::optional<long long> parseTag(std::string tag) {
   while (!tag.empty() && (tag.back() == ' ' || tag.back() == '\t')) tag.pop_back();
   while (!tag.empty() && (tag.front() == ' ' || tag.front() == '\t')) tag.erase(tag.begin());
-  if (tag.rfind("W/", 0) == 0) tag = tag.substr(2);
+  // If-Match compares strongly (RFC 9110 §13.1.1): a weak tag never names a version, and a
+  // version is written one way only ("v3", not "v03"), as the ETag the server sent.
+  if (tag.rfind("W/", 0) == 0) return std::nullopt;
   if (tag.size() >= 2 && tag.front() == '"' && tag.back() == '"') tag = tag.substr(1, tag.size() - 2);
   if (tag.size() < 2 || tag.size() > 17 || tag[0] != 'v') return std::nullopt;
+  if (tag[1] == '0' && tag.size() > 2) return std::nullopt;
   long long v = -1;
   const char* end = tag.data() + tag.size();
   auto [p, ec] = std::from_chars(tag.data() + 1, end, v);
@@ -32,7 +35,7 @@ std::optional<long long> namedVersion(const http::Request& req, const nlohmann::
     fromHeader = parseTag(req.header("if-match"));
     if (!fromHeader)
       throw ApiError(400, "invalid_header",
-                     "If-Match must be one ETag as read, \"v<N>\" (e.g. \"v3\"); a list or * is not taken",
+                     "If-Match must be one strong ETag as read, \"v<N>\" (e.g. \"v3\"); a weak W/ tag, a list or * is not taken",
                      "If-Match");
   }
   if (body && body->is_object()) {

@@ -13,7 +13,7 @@
 
 namespace rover::api {
 
-// The version a request names: If-Match ("v7", W/"v7" or v7; one tag, not "*"), else the body's
+// The version a request names: If-Match ("v7" or v7; one strong tag as sent, not W/"v7", "v07" or "*"), else the body's
 // `version` (a non-negative integer; `body` may be null). 400 naming If-Match / version for a
 // malformed one, or when both are given and differ. nullopt when neither is given.
 std::optional<long long> namedVersion(const http::Request& req, const nlohmann::json* body = nullptr);

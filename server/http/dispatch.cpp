@@ -96,8 +96,12 @@ Routing routeHead(const ServerState& state, const bhttp::request_header<>& head,
     auto [it, inserted] = req.headers.emplace(name, std::string(field.value()));
     if (!inserted) it->second += ", " + std::string(field.value());
   }
-  if (!parseTarget(sv(head.target()), req.path, req.query)) {
+  if (std::string repeated; !parseTarget(sv(head.target()), req.path, req.query, &repeated)) {
     req.path = rawPath(sv(head.target()));
+    if (!repeated.empty())
+      return {Response::error(400, "invalid_parameter", "the query parameter " + repeated + " is given more than once",
+                              repeated),
+              false, nullptr};
     return {Response::error(400, "bad_request", "invalid request target", "path"), false, nullptr};
   }
 

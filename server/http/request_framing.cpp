@@ -71,7 +71,7 @@ void configureHeaderParser(bhttp::request_parser<bhttp::empty_body>& p,
 }
 
 bool parseTarget(std::string_view target, std::string& path,
-                 std::map<std::string, std::string>& query) {
+                 std::map<std::string, std::string>& query, std::string* repeated) {
   if (target.empty() || target.front() != '/') return false;
   const std::size_t hash = target.find('#');
   if (hash != std::string_view::npos) target = target.substr(0, hash);
@@ -99,7 +99,12 @@ bool parseTarget(std::string_view target, std::string& path,
     if (eq != std::string_view::npos && !percentDecode(pair.substr(eq + 1), true, value))
       return false;
     if (key.find('\0') != std::string::npos || value.find('\0') != std::string::npos) return false;
-    query[key] = value;
+    // A parameter given twice has no one meaning (first or last?): refused, not guessed.
+    if (query.count(key)) {
+      if (repeated) *repeated = key.size() <= 64 ? key : "query";
+      return false;
+    }
+    query.emplace(std::move(key), std::move(value));
   }
   return true;
 }

@@ -44,8 +44,9 @@ std::optional<FramingError> checkBodyLength(const boost::optional<std::uint64_t>
                                             std::uint64_t limit);
 
 // Splits an origin-form request target into a percent-decoded path and query ('+' is a space in
-// the query only). False (-> 400) on a malformed target or escape, a NUL byte, or a ".." segment.
+// the query only). False (-> 400) on a malformed target or escape, a NUL byte, a ".." segment, or
+// a query parameter given twice (then named in `repeated`, when given).
 bool parseTarget(std::string_view target, std::string& path,
-                 std::map<std::string, std::string>& query);
+                 std::map<std::string, std::string>& query, std::string* repeated = nullptr);
 
 }  // namespace rover::http

@@ -95,6 +95,9 @@ TEST_CASE("versions: a map's zone set is versioned; stale writes get 412 with th
   checkError(send(s, "PUT", path, merged, {{"If-Match", "*"}}), 400, "invalid_header", "If-Match");
   checkError(send(s, "PUT", path, merged, {{"If-Match", "\"v99999999999999999999\""}}), 400, "invalid_header", "If-Match");
   checkError(send(s, "PUT", path, merged, {{"If-Match", "\"v1\", \"v2\""}}), 400, "invalid_header", "If-Match");
+  // Strong comparison (RFC 9110 §13.1.1): a weak tag and a padded number name no version.
+  checkError(send(s, "PUT", path, merged, {{"If-Match", "W/\"v2\""}}), 400, "invalid_header", "If-Match");
+  checkError(send(s, "PUT", path, merged, {{"If-Match", "\"v02\""}}), 400, "invalid_header", "If-Match");
   json wrongType = merged;
   wrongType["version"] = "2";
   checkError(send(s, "PUT", path, wrongType), 400, "invalid_field", "version");

@@ -341,3 +341,34 @@ TEST_CASE("hostile upload: an ENVI header promising more cells than its .bin hol
   CHECK_MESSAGE(r.status == 201, r.body);
   CHECK(fs::is_empty(s.dir.tmpDir()));
 }
+
+TEST_CASE("hostile upload: an option given twice is refused naming it, whichever way it is given") {
+  TempDir tmp;
+  const std::string data = tmp.str("data");
+  Server s(data);
+  const std::size_t before = s.mapCount();
+  const std::string tif = terrainTiff(tmp, 64);
+  auto checkTwice = [&](const test::HttpResult& r, const std::string& field) {
+    CHECK(r.status == 400);
+    CHECK(r.json()["error"]["code"] == "invalid_parameter");
+    CHECK(r.json()["error"]["field"] == field);
+  };
+  // Twice in the query (the last one used to win), in the query and a field (the query won), and
+  // as two fields (the first won).
+  checkTwice(s.upload("dem.tif", tif, "&cell=0.5&cell=4"), "cell");
+  const std::string b = "TwiceB", type = "multipart/form-data; boundary=" + b;
+  auto field = [&](const std::string& name, const std::string& value) {
+    return "--" + b + "\r\nContent-Disposition: form-data; name=\"" + name + "\"\r\n\r\n" + value + "\r\n";
+  };
+  const std::string filePart = "--" + b + "\r\nContent-Disposition: form-data; name=\"file\"; filename=\"dem.tif\"\r\n\r\n" +
+                               tif + "\r\n--" + b + "--\r\n";
+  checkTwice(request(s.port(), "POST", "/api/maps?vertical_scale=2", field("vertical_scale", "3") + filePart, type),
+             "vertical_scale");
+  checkTwice(request(s.port(), "POST", "/api/maps", field("name", "a") + field("name", "b") + filePart, type), "name");
+  // Once is fine, either way.
+  CHECK(request(s.port(), "POST", "/api/maps", field("name", "once") + field("cell", "2") + filePart, type).status == 201);
+  CHECK(s.mapCount() == before + 1);
+  CHECK(fs::is_empty(s.dir.tmpDir()));
+  // Any route: a repeated query parameter is named, not guessed.
+  checkTwice(s.get("/api/maps?limit=1&limit=2"), "limit");
+}
