@@ -50,6 +50,15 @@ api "/api/maps/$MAP/pdms/$PDM" | grep -q "\"id\":\"$PDM\"" || fail "restart: PDM
 [ "$(api "/api/missions/$DONE" | json 'd["status"]')" = succeeded ] || fail "restart: mission lost"
 pass "after a clean restart every map, PDM and mission is there"
 
+# Versions (issue 26): the PDM at version 2, the zone set at version 2, each with its history; after
+# kill -9 below they must come back as they were, and a stale If-Match still gets 412.
+put() { curl -s -o "$TMP/put.json" -w '%{http_code}' -X PUT "http://127.0.0.1:$PORT$1" -H 'Content-Type: application/json' "${@:2}"; }
+[ "$(put "/api/maps/$MAP/pdms/$PDM" -H 'If-Match: "v1"' -d '{"name":"renamed"}')" = 200 ] || fail "PDM PUT v1 -> v2"
+ZONE='{"type":"FeatureCollection","features":[{"type":"Feature","properties":{"name":"Z"},"geometry":{"type":"Polygon","coordinates":[[[10,10],[30,10],[30,30],[10,10]]]}}]}'
+[ "$(put "/api/maps/$MAP/zones" -d "$ZONE")" = 200 ] || fail "zone set v1"
+[ "$(put "/api/maps/$MAP/zones" -H 'If-Match: "v1"' -d "$ZONE")" = 200 ] || fail "zone set v1 -> v2"
+pass "a PDM and a zone set at version 2"
+
 # A slow mission, then a slow upload, then kill -9 while both are in flight.
 RUN=$(api /api/missions -H 'Content-Type: application/json' \
   -d "{\"map\":\"$MAP\",\"planner\":\"coverage\",\"pace\":5,\"rovers\":[{\"x\":30,\"y\":30,\"heading\":0}],\"params\":{\"coverage\":1.0}}" | json 'd["id"]')
@@ -71,5 +80,14 @@ start
 [ "$(api "/api/missions/$DONE" | json 'd["status"]')" = succeeded ] || fail "after kill -9: finished mission lost"
 api "/api/missions/$DONE/result.geojson" | grep -q FeatureCollection || fail "after kill -9: results lost"
 pass "after kill -9 nothing half-written is visible and the running mission is interrupted"
+
+[ "$(api "/api/maps/$MAP/pdms/$PDM" | json 'd["version"], d["name"]')" = "2 renamed" ] || fail "after kill -9: PDM version lost"
+api "/api/maps/$MAP/pdms/$PDM" -D - -o /dev/null | grep -qi '^etag: "v2"' || fail "after kill -9: PDM ETag"
+[ "$(api "/api/maps/$MAP/pdms/$PDM/history" | json '[h["version"] for h in d]')" = "[2, 1]" ] || fail "after kill -9: PDM history"
+[ "$(api "/api/maps/$MAP/zones" | json 'd["version"], len(d["features"])')" = "2 1" ] || fail "after kill -9: zone set version lost"
+[ "$(put "/api/maps/$MAP/pdms/$PDM" -H 'If-Match: "v1"' -d '{"name":"stale"}')" = 412 ] || fail "after kill -9: a stale If-Match was taken"
+[ "$(put "/api/maps/$MAP/pdms/$PDM" -H 'If-Match: "v2"' -d '{"name":"next"}')" = 200 ] || fail "after kill -9: the current If-Match refused"
+[ "$(json 'd["version"]' < "$TMP/put.json")" = 3 ] || fail "after kill -9: the next version is not 3"
+pass "after kill -9 versions, ETags and history are as they were, and a stale write still gets 412"
 
 echo "$passed passed, 0 failed"
