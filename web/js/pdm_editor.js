@@ -8,8 +8,14 @@
 // editable afterwards like any clicked Gaussian. Painting never pans: the tool takes the drag.
 // A stroke is one step of the undo history. While editing, the mixture density is drawn on a coarse grid as
 // an overlay; once saved, the server's pdm.png for the new id is shown instead.
+// Several operators (issue 26): unsaved components are a draft of the map (drafts.js), kept over
+// map switches and reloads; "random (G=4)" makes a draft, not a saved PDM; "update" saves the
+// components into the PDM they were loaded from, naming its version, and a 412 shows both
+// (conflict_view.js); PDMs saved elsewhere arrive from the event stream (remoteChanged).
 
 import { api } from './api.js';
+import { drawEllipses } from './conflict_view.js';
+import { clearDraft, loadDraft, saveDraft } from './drafts.js';
 import { state } from './state.js';
 import { rampLegend } from './legend.js';
 import { history } from './undo_stack.js';
@@ -29,10 +35,34 @@ function rampColour(t) {
   return RAMP[i].map((a, k) => Math.round(a + (RAMP[i + 1][k] - a) * f));
 }
 
+// G random Gaussians over the map, as the server's `random` draws them (core/pdm randomGaussians:
+// centres uniform, σ 5–20 % of the shorter side, any rotation) from a small seeded generator
+// (mulberry32): the same seed gives the same draft here, not the server's numbers.
+function randomComponents(map, count, seed) {
+  let a = (seed >>> 0) + 0x9e3779b9;
+  const rnd = () => {
+    a = (a + 0x6d2b79f5) >>> 0;
+    let t = a;
+    t = Math.imul(t ^ (t >>> 15), t | 1);
+    t ^= t + Math.imul(t ^ (t >>> 7), t | 61);
+    return ((t ^ (t >>> 14)) >>> 0) / 4294967296;
+  };
+  const side = Math.min(map.width_m, map.height_m);
+  return Array.from({ length: count }, () => ({
+    x: rnd() * map.width_m, y: rnd() * map.height_m,
+    sigma_x: side * (0.05 + 0.15 * rnd()), sigma_y: side * (0.05 + 0.15 * rnd()),
+    rotation_deg: Math.round(rnd() * 1800) / 10, weight: 1,
+  }));
+}
+
+const same = (a, b) => ['x', 'y', 'sigma_x', 'sigma_y', 'rotation_deg', 'weight'].every((k) => Math.abs(a[k] - b[k]) < 1e-9);
+
 export class PdmEditor {
-  constructor({ view, layers }) {
+  constructor({ view, layers, conflicts }) {
     this.view = view;
     this.layers = layers;
+    this.conflicts = conflicts;
+    this.base = null;       // the saved PDM the components were loaded from {id, version, name, comps}
     this.comps = [];
     this.active = -1;
     this.dirty = false;     // edited since the last save/load
@@ -64,14 +94,11 @@ export class PdmEditor {
     $('pdm-random').addEventListener('click', () => this.random());
     $('pdm-clear').addEventListener('click', () => this.clear());
     $('pdm-save').addEventListener('click', () => this.save());
-    state.on('map', () => {
-      this.comps = [];
-      this.active = -1;
-      this.dirty = false;
-      this.changed();
-      this.renderList();
-    });
+    $('pdm-update').addEventListener('click', () => this.update());
+    $('pdm-name').addEventListener('change', () => this.keepDraft());
+    state.on('map', (map) => this.openDraft(map));
     state.on('pdms', () => this.renderList());
+    state.on('presence', () => this.renderList());
     state.on('pdm-selected', () => this.renderList());
     this.renderComponents();
   }
@@ -228,9 +255,33 @@ export class PdmEditor {
     this.changed(true);
   }
 
+  // A map's draft (drafts.js) comes back when the map is shown again or the page reloaded.
+  openDraft(map) {
+    const d = map ? loadDraft(map.id, 'pdm') : null;
+    this.comps = d && Array.isArray(d.comps) ? d.comps : [];
+    this.base = d?.base || null;
+    this.active = this.comps.length ? 0 : -1;
+    this.dirty = Boolean(d);
+    $('pdm-name').value = d?.name || '';
+    $('pdm-save-status').textContent = d ? `unsaved draft restored (${this.comps.length} component${this.comps.length === 1 ? '' : 's'})` : '';
+    showError($('pdm-error'), null);
+    this.changed();
+    this.renderList();
+  }
+
+  keepDraft() {
+    const m = state.map;
+    if (!m) return;
+    if (this.dirty && this.comps.length) saveDraft(m.id, 'pdm', { comps: this.comps, name: $('pdm-name').value, base: this.base });
+    else clearDraft(m.id, 'pdm');
+  }
+
   // `list`: false during a brush stroke (the component list is redrawn once, at its end).
   changed(edited = false, list = true) {
     if (edited) this.dirty = true;
+    if (list) this.keepDraft();
+    $('pdm-update').disabled = !(this.base && this.dirty && this.comps.length);
+    $('pdm-history').disabled = !state.pdmId;
     this.computeOverlay();
     if (list) this.renderComponents();
     this.layers.renderLegends();
@@ -483,38 +534,54 @@ export class PdmEditor {
       return;
     }
     list.replaceChildren(...state.pdms.map((p) => el('li', { class: state.pdmId === p.id ? 'selected' : '', dataset: { pdm: p.id } },
-      el('button', { class: 'name', title: `${p.name} — ${p.id} (${p.kind || 'PDM'})`, onclick: () => this.select(p) }, p.name),
+      el('button', { class: 'name', title: `${p.name} — ${p.id} (${p.kind || 'PDM'}, v${p.version ?? 1})`, onclick: () => this.select(p) }, p.name),
       el('span', { class: 'meta' }, p.kind || ''),
+      this.editingMark(p),
       el('button', { class: 'small', 'aria-label': `delete PDM ${p.name}`, title: 'delete', onclick: () => this.deletePdm(p) }, '✕'))));
   }
 
-  // Shows a saved PDM (the server's layer) and loads its components for further editing.
+  // "✎ name" on a PDM another operator is editing now (presence.js).
+  editingMark(p) {
+    const names = state.presence?.editorsOf(`pdm:${p.id}`) || [];
+    return names.length ? el('span', { class: 'editing-mark', title: `${names.join(', ')} editing it now` }, `✎ ${names.join(', ')}`) : null;
+  }
+
+  // Shows a saved PDM (the server's layer) and loads its components for further editing; unsaved
+  // components are not replaced without asking.
   select(p) {
+    if (this.dirty && this.comps.length && !window.confirm(`Load “${p.name}” and drop your ${this.comps.length} unsaved component${this.comps.length === 1 ? '' : 's'}?`)) return;
     // Loading a saved PDM replaces the components being edited: undoable like an edit.
     history.record(this, `load PDM ${p.name}`, () => {
       this.comps = (p.components || []).map((g) => ({ ...g }));
       this.active = this.comps.length ? 0 : -1;
     });
     this.dirty = false;
+    this.base = { id: p.id, version: p.version ?? 1, name: p.name, comps: (p.components || []).map((g) => ({ ...g })) };
     $('pdm-name').value = p.name;
     state.pdmId = p.id;
     state.emit('pdm-selected', p.id);
     this.changed();
   }
 
-  async random() {
+  // A draft of G=4 random Gaussians (issue 26: it used to save a PDM on the server by itself).
+  random() {
     const m = state.map;
     if (!m) return;
     showError($('pdm-error'), null);
     const seed = Math.max(0, Math.floor(Number($('pdm-seed').value) || 0));
-    try {
-      const p = await api.createPdm(m.id, { name: $('pdm-name').value.trim() || `random G=4 seed ${seed}`, random: 4, seed });
-      await this.refresh();
-      this.select(state.pdms.find((q) => q.id === p.id) || p);
-      $('pdm-save-status').textContent = `saved “${p.name}”`;
-    } catch (err) {
-      showError($('pdm-error'), err);
+    if (this.dirty && this.comps.length && !window.confirm(`Replace your ${this.comps.length} unsaved component${this.comps.length === 1 ? '' : 's'} with random ones? (Ctrl+Z brings them back)`)) return;
+    history.record(this, `random G=4 seed ${seed}`, () => {
+      this.comps = randomComponents(m, 4, seed);
+      this.active = 0;
+    });
+    this.base = null;
+    if (state.pdmId) {
+      state.pdmId = '';
+      state.emit('pdm-selected', '');
     }
+    $('pdm-name').value = `random G=4 seed ${seed}`;
+    this.changed(true);
+    $('pdm-save-status').textContent = 'random draft: not saved';
   }
 
   async save() {
@@ -529,6 +596,7 @@ export class PdmEditor {
       const name = $('pdm-name').value.trim() || `PDM ${new Date().toISOString().slice(0, 16).replace('T', ' ')}`;
       const p = await api.createPdm(m.id, { name, components: this.comps });
       this.dirty = false;
+      this.base = { id: p.id, version: p.version ?? 1, name: p.name, comps: this.comps.map((g) => ({ ...g })) };
       await this.refresh();
       state.pdmId = p.id;
       state.emit('pdm-selected', p.id);
@@ -541,6 +609,82 @@ export class PdmEditor {
         const input = document.querySelector(`[data-key="${f[1]}.${f[2] === 'rotation' ? 'rotation_deg' : f[2]}"]`);
         if (input) input.classList.add('invalid');
       }
+    }
+  }
+
+  // The components into the PDM they were loaded from, naming the version read; on a 412 both
+  // versions are shown and the operator chooses.
+  async update() {
+    const m = state.map, b = this.base;
+    if (!m || !b || !this.comps.length) return;
+    showError($('pdm-error'), null);
+    const name = $('pdm-name').value.trim() || b.name;
+    try {
+      this.updated(await api.changePdm(m.id, b.id, { name, components: this.comps }, b.version));
+    } catch (err) {
+      if (err.code === 'version_conflict' && err.current) await this.conflicted(m, err.current);
+      else showError($('pdm-error'), err);
+    }
+  }
+
+  updated(p) {
+    this.dirty = false;
+    this.comps = (p.components || this.comps).map((g) => ({ ...g }));
+    this.base = { id: p.id, version: p.version, name: p.name, comps: this.comps.map((g) => ({ ...g })) };
+    $('pdm-name').value = p.name;
+    $('pdm-save-status').textContent = `saved “${p.name}” (v${p.version})`;
+    const i = state.pdms.findIndex((q) => q.id === p.id);
+    if (i >= 0) state.pdms[i] = p;
+    state.pdmId = p.id;
+    state.emit('pdms', state.pdms);
+    state.emit('pdm-selected', p.id);
+    this.changed();
+  }
+
+  async conflicted(map, current) {
+    const b = this.base, mine = this.comps.map((g) => ({ ...g }));
+    const theirs = (current.components || []).map((g) => ({ ...g }));
+    const by = await api.history(map.id, `pdms/${b.id}`).then((h) => (h[0]?.version === current.version ? h[0].by : ''), () => '');
+    const line = (g, i) => `${i + 1}: (${g.x.toFixed(1)}, ${g.y.toFixed(1)}) σ ${g.sigma_x.toFixed(1)}×${g.sigma_y.toFixed(1)} m, w ${g.weight}`;
+    const put = async (comps, name) => this.updated(await api.changePdm(map.id, b.id, { name, components: comps }, current.version));
+    this.conflicts.show({
+      title: `PDM “${b.name}” not saved: both versions shown`, what: `the PDM “${current.name}”`, version: current.version, by,
+      mine: { summary: `${mine.length} components`, lines: mine.map(line), draw: (ctx, v, c) => drawEllipses(ctx, v, mine, c, [6, 4]) },
+      theirs: { summary: `${theirs.length} components`, lines: theirs.map(line), draw: (ctx, v, c) => drawEllipses(ctx, v, theirs, c) },
+      keepMine: () => put(mine, $('pdm-name').value.trim() || current.name),
+      takeTheirs: async () => {
+        this.dirty = false;
+        this.updated(current);
+      },
+      // Components are a set: theirs, plus mine that are neither theirs nor unchanged from the base.
+      keepBoth: () => put([...theirs, ...mine.filter((g) => !theirs.some((t) => same(t, g)) && !b.comps.some((o) => same(o, g)))], current.name),
+    });
+  }
+
+  // A PDM of this map changed elsewhere (an event; null after a resync): the list is read again;
+  // the one loaded here follows when it has no unsaved edits, else they are kept (update shows both).
+  async remoteChanged(e) {
+    await this.refresh();
+    const b = this.base;
+    if (!b || (e && e.id !== b.id)) return;
+    const now = state.pdms.find((p) => p.id === b.id);
+    if (!now) {
+      $('pdm-save-status').textContent = `“${b.name}” was deleted${e?.by ? ` by ${e.by}` : ''}; your components are kept as a draft`;
+      this.base = null;
+      this.dirty = this.comps.length > 0;
+      if (state.pdmId === b.id) {
+        state.pdmId = '';
+        state.emit('pdm-selected', '');
+      }
+      this.changed();
+      return;
+    }
+    if ((now.version ?? 1) === b.version) return;
+    if (!this.dirty) {
+      this.updated(now);
+      $('pdm-save-status').textContent = `“${now.name}” changed${e?.by ? ` by ${e.by}` : ''} (v${now.version})`;
+    } else {
+      $('pdm-save-status').textContent = `“${now.name}” changed${e?.by ? ` by ${e.by}` : ''} (v${now.version}); your edits are kept — update shows both`;
     }
   }
 

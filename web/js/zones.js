@@ -10,10 +10,18 @@
 // zone selects it, Delete removes the selected one. Every edit is a step of the page's undo
 // history (undo_stack.js).
 // state.zones holds the zones as last saved/loaded (what missions get); edits are kept here until
-// "save zones".
+// "save zones", and in the map's draft (drafts.js) so they survive switching maps and reloading.
+// Several operators (issue 26): each zone keeps its id and version; a save sends them with the
+// set's version the edits started from (If-Match), and another operator's save meanwhile is shown
+// as a conflict (conflict_view.js) rather than overwritten. Changes saved elsewhere arrive from
+// the event stream (remoteChanged): loaded at once when nothing here is unsaved, else the edits
+// stay and the count of saved zones says what the server has.
 
 import { api } from './api.js';
+import { drawRings } from './conflict_view.js';
+import { clearDraft, loadDraft, saveDraft } from './drafts.js';
 import { state } from './state.js';
+import { mergeZones } from './zone_merge.js';
 import { history } from './undo_stack.js';
 import { $, el, fmt, showError } from './util.js';
 
@@ -59,6 +67,7 @@ export function zonesToGeoJson(zones) {
     type: 'FeatureCollection',
     features: zones.map((z) => ({
       type: 'Feature',
+      ...(z.id ? { id: z.id } : {}),
       properties: z.name ? { name: z.name } : {},
       geometry: { type: 'Polygon', coordinates: [[...z.ring, z.ring[0]].map(([x, y]) => [x, y])] },
     })),
@@ -68,15 +77,20 @@ export function zonesToGeoJson(zones) {
 function zonesFromGeoJson(fc) {
   return (fc?.features || []).map((f) => {
     const ring = f.geometry.coordinates[0].slice(0, -1).map(([x, y]) => [x, y]);
-    return { ring, name: f.properties?.name || '' };
+    return { ring, name: f.properties?.name || '', id: typeof f.id === 'string' ? f.id : '', version: f.properties?.version ?? 0 };
   });
 }
 
+const plural = (n) => `${n} zone${n === 1 ? '' : 's'}`;
+
 export class ZoneEditor {
-  constructor({ view, layers }) {
+  constructor({ view, layers, conflicts }) {
     this.view = view;
     this.layers = layers;
-    this.zones = [];        // [{ring: [[x, y], ...] (open), name}]
+    this.conflicts = conflicts;  // conflict_view.js
+    this.baseVersion = 0;   // the set's version the edits started from (sent in If-Match)
+    this.baseZones = null;  // that set (GeoJSON): what "keep both" merges against
+    this.zones = [];        // [{ring: [[x, y], ...] (open), name, id, version}]
     this.drawing = null;    // the ring in progress
     this.selected = -1;
     this.dirty = false;
@@ -116,6 +130,7 @@ export class ZoneEditor {
       this.view.invalidate();
     });
     state.on('map', (map) => this.load(map));
+    state.on('presence', () => this.renderList());
     this.renderList();
   }
 
@@ -128,20 +143,64 @@ export class ZoneEditor {
     this.drawing = null;
     this.selected = -1;
     this.dirty = false;
-    state.zones = { type: 'FeatureCollection', features: [] };
+    this.baseVersion = 0;
+    state.zones = { type: 'FeatureCollection', features: [], version: 0 };
     showError($('zones-error'), null);
+    $('zones-status').textContent = '';
     if (map) {
       try {
         const fc = await api.zones(map.id);
         if (state.map?.id !== map.id) return;  // another map was chosen meanwhile
         state.zones = fc;
         this.zones = zonesFromGeoJson(fc);
+        this.baseVersion = fc.version ?? 0;
+        this.baseZones = fc;
       } catch (err) {
         showError($('zones-error'), `zones not loaded: ${err.message}`);
+      }
+      // Unsaved edits from before a reload or a map switch come back, on the version they started from.
+      const draft = loadDraft(map.id, 'zones');
+      if (draft && Array.isArray(draft.zones)) {
+        this.zones = draft.zones;
+        this.drawing = draft.drawing || null;
+        this.baseVersion = draft.baseVersion ?? 0;
+        this.baseZones = draft.baseZones || null;
+        this.dirty = true;
+        $('zones-status').textContent = `unsaved edits restored (${plural(this.zones.length)})`;
       }
     }
     this.changed();
     state.emit('zones', state.zones);
+  }
+
+  // The zones saved elsewhere changed (an event, or null after a resync): the saved set is read
+  // again; the editor follows it unless it holds unsaved edits, which are never dropped silently.
+  async remoteChanged(e) {
+    const map = state.map;
+    if (!map) return;
+    const fc = await api.zones(map.id);
+    if (state.map?.id !== map.id || (fc.version ?? 0) === (state.zones?.version ?? 0)) return;
+    state.zones = fc;
+    const who = e?.by ? e.by : 'another operator';
+    if (!this.dirty && !this.drawing) {
+      this.zones = zonesFromGeoJson(fc);
+      this.baseVersion = fc.version ?? 0;
+      this.baseZones = fc;
+      this.selected = Math.min(this.selected, this.zones.length - 1);
+      $('zones-status').textContent = `${who} saved the zones (v${fc.version})`;
+    } else {
+      $('zones-status').textContent = `${who} saved the zones (v${fc.version}); your unsaved edits are kept — saving shows both`;
+    }
+    this.changed();
+    state.emit('zones', state.zones);
+  }
+
+  // Unsaved edits are kept per map in the browser; none once saved or back to what the server has.
+  keepDraft() {
+    const m = state.map;
+    if (!m) return;
+    if (this.dirty || this.drawing) saveDraft(m.id, 'zones', { zones: this.zones, drawing: this.drawing, baseVersion: this.baseVersion, baseZones: this.baseZones });
+    else clearDraft(m.id, 'zones');
   }
 
   // --- editing ---
@@ -182,7 +241,7 @@ export class ZoneEditor {
     this.drawing = s.drawing;
     this.selected = Math.min(s.selected, this.zones.length - 1);
     // Unsaved unless the zones are back to what the server has.
-    this.dirty = JSON.stringify(this.zones) !== JSON.stringify(zonesFromGeoJson(state.zones));
+    this.dirty = JSON.stringify(this.zones) !== JSON.stringify(zonesFromGeoJson(this.baseZones || { features: [] }));
     this.changed();
   }
 
@@ -277,14 +336,11 @@ export class ZoneEditor {
     $('zones-status').textContent = 'saving…';
     showError($('zones-error'), null);
     try {
-      state.zones = await api.saveZones(m.id, zonesToGeoJson(this.zones));
-      this.zones = zonesFromGeoJson(state.zones);
-      this.dirty = false;
-      $('zones-status').textContent = `saved ${this.zones.length} zone${this.zones.length === 1 ? '' : 's'}`;
-      state.emit('zones', state.zones);
+      this.saved(await api.saveZones(m.id, zonesToGeoJson(this.zones), 'local', this.baseVersion));
+      $('zones-status').textContent = `saved ${plural(this.zones.length)}`;
     } catch (err) {
       $('zones-status').textContent = '';
-      if (err.code === 'version_conflict') await this.conflicted(m);
+      if (err.code === 'version_conflict') this.conflicted(m, err.current);
       else showError($('zones-error'), `zones refused: ${err.message}${err.field ? ` (field: ${err.field})` : ''}`);
     } finally {
       button.disabled = false;
@@ -299,6 +355,7 @@ export class ZoneEditor {
     const m = state.map, file = input.files[0];
     input.value = '';
     if (!m || !file) return;
+    if ((this.dirty || this.drawing) && !window.confirm(`Importing replaces the saved zones; your unsaved zone edits (${plural(this.zones.length)}) are dropped. Import?`)) return;
     showError($('zones-error'), null);
     try {
       const fc = JSON.parse(await file.text());
@@ -307,31 +364,73 @@ export class ZoneEditor {
       const crs = fc.crs ? 'map' : 'local';
       const body = { type: 'FeatureCollection', features: polygons };
       if (fc.crs) body.crs = fc.crs;
-      state.zones = await api.saveZones(m.id, body, crs);
-      this.zones = zonesFromGeoJson(state.zones);
-      this.dirty = false;
+      this.saved(await api.saveZones(m.id, body, crs, this.baseVersion));
       this.selected = -1;
       $('zones-status').textContent = `imported ${polygons.length} zone${polygons.length === 1 ? '' : 's'} (${crs === 'map' ? "map's CRS" : 'local metres'})` +
         (all.length > polygons.length ? `, skipped ${all.length - polygons.length} other features` : '');
       state.emit('zones', state.zones);
     } catch (err) {
-      if (err.code === 'version_conflict') await this.conflicted(m);
+      if (err.code === 'version_conflict') this.conflicted(m, err.current, zonesFromGeoJson(body));
       else showError($('zones-error'), `import refused: ${err.message}${err.field ? ` (field: ${err.field})` : ''}`);
     }
     this.changed();
   }
 
-  // A 412 (issue 26): another operator saved this map's zones after they were loaded here. Nothing
-  // was overwritten; their zones are loaded and shown, with why.
-  async conflicted(map) {
-    await this.load(map);
-    showError($('zones-error'), 'zones not saved: another operator saved this map\'s zones since you loaded them; ' +
-      'theirs are shown now — redo your change');
+  // The set as the server stored it: the editor's zones, the saved ones and the base version.
+  saved(fc) {
+    state.zones = fc;
+    this.zones = zonesFromGeoJson(fc);
+    this.baseVersion = fc.version ?? 0;
+    this.baseZones = fc;
+    this.dirty = false;
+    this.changed();
+    state.emit('zones', state.zones);
+  }
+
+  // A 412 (issue 26): another operator saved this map's zones after these edits started. Nothing
+  // was overwritten; both are shown (conflict_view.js) and the operator chooses. `mine`: the zones
+  // this page tried to save (the editor's, or an imported file's).
+  async conflicted(map, current, mine = this.zones) {
+    if (!current) return this.load(map);
+    const theirs = zonesFromGeoJson(current);
+    const base = zonesFromGeoJson(this.baseZones || { features: [] });
+    // Who saved theirs: the newest entry of the set's history.
+    const by = await api.history(map.id, 'zones').then((h) => (h[0]?.version === current.version ? h[0].by : ''), () => '');
+    state.zones = current;
+    state.emit('zones', state.zones);
+    this.changed();
+    const lines = (list) => list.map((z, i) => `${z.name || (z.id ? `zone ${z.id}` : `new zone ${i + 1}`)} · ${z.ring.length} points · ${fmt(area(z.ring))} m²`);
+    const resave = async (zones) => {
+      if (state.map?.id !== map.id) throw new Error('another map is shown now: open this one again to save');
+      this.zones = zones;
+      this.baseVersion = current.version;
+      this.saved(await api.saveZones(map.id, zonesToGeoJson(zones), 'local', current.version));
+      this.keepDraft();
+    };
+    this.conflicts.show({
+      title: 'zones not saved: both versions shown', what: "this map's keep-out zones", version: current.version, by,
+      mine: { summary: plural(mine.length), lines: lines(mine), draw: (ctx, v, c) => drawRings(ctx, v, mine.map((z) => z.ring), c, [7, 4]) },
+      theirs: { summary: plural(theirs.length), lines: lines(theirs), draw: (ctx, v, c) => drawRings(ctx, v, theirs.map((z) => z.ring), c) },
+      keepMine: async () => {
+        await resave(mine.map((z) => ({ ...z })));
+        $('zones-status').textContent = `saved ${plural(this.zones.length)} (yours, over v${current.version})`;
+      },
+      takeTheirs: async () => {
+        this.saved(current);
+        this.keepDraft();
+        $('zones-status').textContent = `theirs loaded (${plural(this.zones.length)})`;
+      },
+      keepBoth: async () => {
+        await resave(mergeZones(base, mine, theirs));
+        $('zones-status').textContent = `saved ${plural(this.zones.length)} (both kept)`;
+      },
+    });
   }
 
   changed(edited = false) {
     if (edited) this.dirty = true;
     if (edited) showError($('zones-error'), null);
+    this.keepDraft();
     this.renderList();
     this.layers.renderLegends();
     this.view.invalidate();
@@ -349,6 +448,8 @@ export class ZoneEditor {
     const saved = state.zones?.features?.length ?? 0;
     const n = this.zones.length;
     $('zones-summary').textContent = this.dirty ? `${n} zone${n === 1 ? '' : 's'}, not saved (missions use the ${saved} saved)` : `${saved} saved`;
+    const editors = state.presence?.editorsOf('zones') || [];
+    $('zones-editors').textContent = editors.length ? `✎ ${editors.join(', ')} editing zones now` : '';
   }
 
   legend() {
