@@ -68,6 +68,27 @@ suiteWithServer('several operators', { timeout: 240000 }, (ctx) => {
     assert.equal(pdms.find((p) => p.name === 'alice spots').created_by ?? 'alice', 'alice');
   });
 
+  test('B\'s stream cut while PDMs are saved resumes with since=: every event once, in order', async () => {
+    const seqs = (o) => o.page.evaluate(() => window.__roverplan.events.seqs.slice());
+    const cut = await B.page.evaluate(() => window.__roverplan.events.lastSeq);
+    await B.page.evaluate(() => window.__roverplanApp.feed.close());  // no reconnect until told
+    const made = [];
+    for (let i = 0; i < 3; i++)
+      made.push(await postJson(`${ctx.server.url}/api/maps/${mapId}/pdms`, { name: `while away ${i}`, random: 2, seed: i }));
+    await B.page.evaluate(() => window.__roverplanApp.feed.connect());
+    await B.page.waitForFunction(() => /while away 2/.test(document.getElementById('pdm-list').textContent), null, DEADLINE);
+    await A.page.waitForFunction(() => /while away 2/.test(document.getElementById('pdm-list').textContent), null, DEADLINE);
+    // Every event A saw after the cut (the 3 PDMs, B's leaving and coming back) reaches B, once, in order.
+    const a = (await seqs(A)).filter((q) => q > cut);
+    assert.ok(a.length >= 3, `A received ${a.length} events after the cut`);
+    await B.page.waitForFunction((last) => window.__roverplan.events.lastSeq >= last, a[a.length - 1], DEADLINE);
+    const b = (await seqs(B)).filter((q) => q > cut);
+    assert.deepEqual([...b].sort((x, y) => x - y), b, 'in order');
+    assert.equal(new Set(b).size, b.length, 'no duplicate');
+    for (const q of a) assert.ok(b.includes(q), `B missed seq ${q} (A: ${a}, B: ${b})`);
+    for (const p of made) await fetch(`${ctx.server.url}/api/maps/${mapId}/pdms/${p.id}`, { method: 'DELETE' });
+  });
+
   test('a mission and a map made elsewhere appear in B\'s Runs tab and maps list', async () => {
     const m = await postJson(`${ctx.server.url}/api/missions`, { map: mapId, planner: 'coverage', rovers: [{ x: 30, y: 30 }], pace: 0 });
     await B.page.waitForFunction((id) => Boolean(document.querySelector(`#run-list [data-mission="${id}"]`)), m.id, DEADLINE);

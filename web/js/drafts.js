@@ -32,3 +32,8 @@ export function clearDraft(mapId, kind) {
   if (!mapId) return;
   try { localStorage.removeItem(key(mapId, kind)); } catch { /* storage disabled */ }
 }
+
+// Every draft of a map (it was deleted).
+export function clearDrafts(mapId) {
+  for (const kind of ['pdm', 'zones', 'mission']) clearDraft(mapId, kind);
+}

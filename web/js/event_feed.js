@@ -25,7 +25,8 @@ export class EventFeed {
     this.failures = 0;
     this.timer = null;
     this.readyOnce = false;
-    counters.events = { received: 0, batches: 0, lastSeq: null, resyncs: 0, connects: 0 };
+    // For the tests: the seqs received, the last 500.
+    counters.events = { received: 0, batches: 0, lastSeq: null, resyncs: 0, connects: 0, seqs: [] };
   }
 
   // Follows `mapId` ('' for none: the events of no map and maps' own).
@@ -69,6 +70,8 @@ export class EventFeed {
       counters.events.received += fresh.length;
       counters.events.batches++;
       counters.events.lastSeq = this.lastSeq;
+      counters.events.seqs.push(...fresh.map((e) => e.seq));
+      if (counters.events.seqs.length > 500) counters.events.seqs.splice(0, counters.events.seqs.length - 500);
       this.h.onEvents?.(fresh);
     } else if (msg.type === 'ready') {
       this.readyOnce = true;

@@ -4,6 +4,7 @@
 // kind arriving together cause one reload (coalesced over a frame), so a burst of 50 changes is
 // one request, not 50.
 
+import { clearDrafts } from './drafts.js';
 import { state } from './state.js';
 import { report } from './util.js';
 
@@ -35,6 +36,7 @@ export class LiveSync {
       case 'presence': this.presence.event(e); break;
       case 'map':
         this.later('maps', () => this.mapsPanel.reload());
+        if (e.kind === 'deleted') clearDrafts(e.id);
         if (e.kind === 'deleted' && e.id === here) {
           report(`the map you were viewing was deleted${e.by ? ` by ${e.by}` : ''}`);
           this.later('map-gone', () => this.mapsPanel.reload().then(() => this.chooseMap(this.mapsPanel.initialMapId())));

@@ -59,9 +59,12 @@ const mapsPanel = new MapsPanel({ selectMap: chooseMap });
 const zoneEditor = new ZoneEditor({ view, layers, conflicts });
 const historyView = new HistoryView({ view, zoneEditor, pdmEditor });
 // The mission form's "respect keep-out zones": on by default when the map has saved zones.
+// A change saved by another operator keeps the operator's choice once the map has zones.
+let keepOutShown = { map: '', n: 0 };
 state.on('zones', (fc) => {
   const n = fc?.features?.length || 0;
-  $('m-keep-out').checked = n > 0;
+  if (keepOutShown.map !== state.map?.id || keepOutShown.n === 0 || n === 0) $('m-keep-out').checked = n > 0;
+  keepOutShown = { map: state.map?.id || '', n };
   $('m-keep-out').disabled = n === 0;
   $('m-keep-out-count').textContent = n ? `${n} saved on this map` : 'none on this map';
 });
