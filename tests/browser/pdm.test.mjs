@@ -85,7 +85,7 @@ suiteWithServer('PDM editor', { timeout: 180000 }, (ctx) => {
     await page.click('#pdm-random');  // the same seed, the same draft
     assert.deepEqual(await comps(page), again);
     await page.click('#pdm-save');
-    await page.waitForFunction(() => /saved/.test(document.getElementById('pdm-save-status').textContent) && document.querySelector('#pdm-list li.selected'));
+    await page.waitForFunction(() => /^saved “random G=4 seed 7”/.test(document.getElementById('pdm-save-status').textContent));
     assert.equal(await count(), before + 1);
     assert.match(await page.textContent('#pdm-list li.selected'), /seed 7/);
     await page.click('#pdm-clear');

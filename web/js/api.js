@@ -54,8 +54,9 @@ export function setOperator(name) {
 function authHeaders(extra = {}) {
   const h = { ...extra };
   if (sessionToken) h.Authorization = `Bearer ${sessionToken}`;
-  // Header bytes are not UTF-8 in fetch(): a name beyond ASCII is sent in the hello only.
-  if (operatorName && /^[\u0020-\u007e]*$/.test(operatorName)) h['X-Operator'] = operatorName;
+  // fetch() sends a header's characters as bytes (U+0000–U+00FF only): a name is sent as its
+  // UTF-8 bytes, which the server reads as UTF-8 ("Zoë" stays "Zoë").
+  if (operatorName) h['X-Operator'] = String.fromCharCode(...new TextEncoder().encode(operatorName));
   return h;
 }
 

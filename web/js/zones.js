@@ -370,7 +370,12 @@ export class ZoneEditor {
         (all.length > polygons.length ? `, skipped ${all.length - polygons.length} other features` : '');
       state.emit('zones', state.zones);
     } catch (err) {
-      if (err.code === 'version_conflict') this.conflicted(m, err.current, zonesFromGeoJson(body));
+      // An import replaces the set (its coordinates may be in the map's CRS, so it is not merged
+      // here): theirs are loaded and shown, and importing again replaces them knowingly.
+      if (err.code === 'version_conflict') {
+        if (err.current) this.saved(err.current);
+        showError($('zones-error'), `import not applied: ${err.message}; their zones (v${err.current?.version ?? '?'}) are shown now — import again to replace them`);
+      }
       else showError($('zones-error'), `import refused: ${err.message}${err.field ? ` (field: ${err.field})` : ''}`);
     }
     this.changed();
