@@ -3,8 +3,9 @@
 // WebSocket per page; a new map reconnects with ?map=, and every reconnect resumes with
 // ?since= the last seq received, so no event is missed and none is seen twice (the seq filter
 // below drops a repeat, e.g. a batch already applied when the socket closed). When the server no
-// longer keeps the events after our seq it says resync_required: the page reloads its lists
-// ('resync') and joins from now.
+// longer keeps the events after our seq it says resync_required: the page joins from now and,
+// once joined ("ready"), reloads its lists ('resync'), so a change made in between is in the lists
+// read or in the events that follow.
 //
 // Handlers: onEvents([event]) per batch, onReady({seq, connection, presence}), onResync(),
 // onStatus('live' | 'reconnecting').
@@ -25,6 +26,7 @@ export class EventFeed {
     this.failures = 0;
     this.timer = null;
     this.readyOnce = false;
+    this.mustReload = false;  // a resync: reload the lists once joined again
     // For the tests: the seqs received, the last 500.
     counters.events = { received: 0, batches: 0, lastSeq: null, resyncs: 0, connects: 0, seqs: [] };
   }
@@ -82,17 +84,21 @@ export class EventFeed {
       this.connection = msg.connection || '';
       this.h.onStatus?.('live');
       this.h.onReady?.(msg);
+      if (this.mustReload) {
+        this.mustReload = false;
+        this.h.onResync?.();
+      }
     } else if (msg.type === 'resync_required') {
       this.resync();
     }
   }
 
-  // Our seq is older than what the server keeps: join from now, after the lists are reloaded.
+  // Our seq is older than what the server keeps: join from now, then reload the lists.
   resync() {
     counters.events.resyncs++;
     this.lastSeq = null;
     this.failures = 0;
-    this.h.onResync?.();
+    this.mustReload = true;
   }
 
   // Presence: the operator's name, the map shown and what is being edited ('' for nothing).
