@@ -3,7 +3,8 @@
 // form, a mission and a map made elsewhere in B's Runs tab and maps list; the zone scenario of the
 // issue (A saves a zone while B edits from the set it loaded) ends with both zones kept after an
 // explicit conflict, never a silent loss; a PDM updated on both sides shows both and merges;
-// drafts (random PDM, zones, mission form) survive a reload; a zone set's old version is restored.
+// drafts (random PDM, zones, mission form) survive a reload; a zone set's old version is restored;
+// "duplicate and edit" reopens the versions a run used.
 // Waits are on conditions with hang-only deadlines; the latencies printed are for reading only.
 import assert from 'node:assert/strict';
 import { mkdtempSync, readFileSync, rmSync } from 'node:fs';
@@ -210,6 +211,31 @@ suiteWithServer('several operators', { timeout: 240000 }, (ctx) => {
     const fc = await getJson(`${ctx.server.url}/api/maps/${mapId}/zones`);
     assert.equal(fc.version, 3);
     assert.equal(fc.features.length, 1);
+  });
+
+  test('duplicate and edit reopens the PDM and zone versions the run used, as unsaved edits', async () => {
+    const pdm = (await getJson(`${ctx.server.url}/api/maps/${mapId}/pdms`)).find((p) => p.name === 'alice spots');
+    const zones = await getJson(`${ctx.server.url}/api/maps/${mapId}/zones`);
+    const m = await postJson(`${ctx.server.url}/api/missions`, { map: mapId, pdm: pdm.id, planner: 'coverage', rovers: [{ x: 30, y: 30 }],
+      pace: 0, params: { coverage: 0.05 }, keep_out: zones });
+    assert.deepEqual(m.spec.used, { pdm_version: pdm.version, zones_version: zones.version });
+    // Both are saved again after the run.
+    const put = async (path, body, version) => {
+      const r = await fetch(`${ctx.server.url}/api/maps/${mapId}/${path}`, { method: 'PUT', headers: { 'Content-Type': 'application/json', 'If-Match': `"v${version}"` }, body: JSON.stringify(body) });
+      assert.equal(r.status, 200, await r.text());
+    };
+    await put(`pdms/${pdm.id}`, { components: [{ x: 75, y: 75, sigma_x: 20 }] }, pdm.version);
+    await put('zones', { type: 'FeatureCollection', features: [] }, zones.version);
+    await A.page.waitForFunction((v) => window.__roverplanApp.pdmEditor.base?.version === v && document.getElementById('zones-summary').textContent === '0 saved', pdm.version + 1, DEADLINE);
+    await A.page.click('#tab-runs');
+    await A.page.click(`[aria-label="duplicate run ${m.id}"]`);
+    await A.page.waitForFunction(() => /this run used/.test(document.getElementById('m-file-status').textContent), null, DEADLINE);
+    const said = await A.page.textContent('#m-file-status');
+    assert.match(said, new RegExp(`PDM “alice spots” v${pdm.version} \\(now v${pdm.version + 1}\\)`));
+    assert.match(said, new RegExp(`zones v${zones.version} \\(now v${zones.version + 1}\\)`));
+    const editors = await A.page.evaluate(() => ({ pdm: window.__roverplanApp.pdmEditor.comps.length, pdmDirty: window.__roverplanApp.pdmEditor.dirty,
+      zones: window.__roverplanApp.zoneEditor.zones.length, zonesDirty: window.__roverplanApp.zoneEditor.dirty }));
+    assert.deepEqual(editors, { pdm: pdm.components.length, pdmDirty: true, zones: zones.features.length, zonesDirty: true });
     assert.deepEqual(A.errors, []);
     assert.deepEqual(B.errors, []);
     await A.context.close();

@@ -22,6 +22,7 @@ import { HistoryView } from './history_view.js';
 import { LiveSync } from './live_sync.js';
 import { Presence } from './presence.js';
 import { FormDraft } from './form_draft.js';
+import { reopenUsed } from './used_versions.js';
 
 // --- status line: a message part and a live-mission part ---
 const statusParts = { msg: '', live: '' };
@@ -72,7 +73,10 @@ const runs = new RunsPanel({
   missionView,
   onDuplicate: async (file) => {
     await missionForm.load(file, chooseMap);
+    await zoneEditor.loading;
+    const reopened = await reopenUsed(file, { pdmEditor, zoneEditor });
     showTab('mission');
+    if (reopened) $('m-file-status').textContent = reopened;
   },
 });
 const studies = new StudiesPanel({

@@ -563,6 +563,19 @@ export class PdmEditor {
     this.changed();
   }
 
+  // An older version's components (a run's, used_versions.js) as unsaved edits of PDM `p`: the
+  // base stays its current version, so "update" makes them the newest.
+  loadVersion(p, comps, version) {
+    history.record(this, `load v${version} of PDM ${p.name}`, () => {
+      this.comps = comps.map((g) => ({ ...g }));
+      this.active = this.comps.length ? 0 : -1;
+    });
+    this.base = { id: p.id, version: p.version ?? 1, name: p.name, comps: (p.components || []).map((g) => ({ ...g })) };
+    $('pdm-name').value = p.name;
+    $('pdm-save-status').textContent = `v${version} of “${p.name}” loaded (now v${p.version}): update makes it the newest`;
+    this.changed(true);
+  }
+
   // A draft of G=4 random Gaussians (issue 26: it used to save a PDM on the server by itself).
   random() {
     const m = state.map;

@@ -129,7 +129,7 @@ export class ZoneEditor {
       if (tool !== 'zones') this.cancel();
       this.view.invalidate();
     });
-    state.on('map', (map) => this.load(map));
+    state.on('map', (map) => { this.loading = this.load(map); });  // awaited by used_versions.js
     state.on('presence', () => this.renderList());
     this.renderList();
   }
@@ -193,6 +193,17 @@ export class ZoneEditor {
     }
     this.changed();
     state.emit('zones', state.zones);
+  }
+
+  // An older saved set (a run's, used_versions.js) as unsaved edits on the current version.
+  loadVersion(fc, version) {
+    history.record(this, `load zones v${version}`, () => {
+      this.zones = zonesFromGeoJson(fc);
+      this.drawing = null;
+      this.selected = -1;
+    });
+    $('zones-status').textContent = `zones v${version} loaded (now v${state.zones?.version ?? 0}): save zones makes them the newest`;
+    this.changed(true);
   }
 
   // Unsaved edits are kept per map in the browser; none once saved or back to what the server has.
