@@ -3,8 +3,10 @@
 // and both are drawn on the map (yours in orange, theirs in cyan), and the operator chooses: keep
 // mine (saved again over theirs, naming their version), take theirs (my edits dropped), or keep
 // both (merged: zones and PDM components are sets, so both sides' additions and changes stay).
-// Nothing is saved until one is chosen; the edits stay in the draft meanwhile.
+// Nothing is saved until one is chosen; the edits stay in the draft meanwhile ("decide later"
+// closes the panel and keeps them; saving again shows the conflict again).
 
+import { state } from './state.js';
 import { $, el, showError } from './util.js';
 
 export const MINE = '#ffb347';
@@ -15,6 +17,7 @@ export class ConflictView {
     this.view = view;
     this.current = null;
     view.addLayer({ id: 'conflict', order: 60, draw: (ctx, v) => this.draw(ctx, v) });
+    state.on('map', () => this.close());  // the edits stay in their map's draft
   }
 
   // c: {title, what, mine: {summary, lines[], draw(ctx, v, colour)}, theirs: {...}, by, version,
@@ -34,7 +37,8 @@ export class ConflictView {
       el('div', { class: 'form-row' },
         act('keep mine', c.keepMine, 'save yours over theirs'),
         act('take theirs', c.takeTheirs, 'drop your edits and load theirs'),
-        act('keep both', c.keepBoth, 'merge: theirs plus your additions and changes, then save')),
+        act('keep both', c.keepBoth, 'merge: theirs plus your additions and changes, then save'),
+        el('button', { class: 'later', title: 'close: your edits stay unsaved (a draft); saving again shows this again', onclick: () => this.close() }, 'decide later')),
       el('div', { id: 'conflict-error', class: 'error', role: 'alert', hidden: true }));
     node.hidden = false;
     // Both versions in sight: the map is fitted below the panel.
