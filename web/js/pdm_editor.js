@@ -10,14 +10,14 @@
 // an overlay; once saved, the server's pdm.png for the new id is shown instead.
 // Several operators (issue 26): unsaved components are a draft of the map (drafts.js), kept over
 // map switches and reloads; "random (G=4)" makes a draft, not a saved PDM; "update" saves the
-// components into the PDM they were loaded from, naming its version, and a 412 shows both
-// (conflict_view.js); PDMs saved elsewhere arrive from the event stream (remoteChanged).
+// components into the PDM they were loaded from, naming its version, and a 412 shows both; PDMs
+// saved elsewhere arrive from the event stream (remoteChanged); both in pdm_versions.js.
 
 import { api } from './api.js';
-import { drawEllipses } from './conflict_view.js';
 import { clearDraft, loadDraft, saveDraft } from './drafts.js';
 import { state } from './state.js';
 import { rampLegend } from './legend.js';
+import { followRemotePdm, randomComponents, showPdmConflict } from './pdm_versions.js';
 import { history } from './undo_stack.js';
 import { $, el, report, showError } from './util.js';
 
@@ -34,28 +34,6 @@ function rampColour(t) {
   const i = Math.min(RAMP.length - 2, Math.floor(u)), f = u - i;
   return RAMP[i].map((a, k) => Math.round(a + (RAMP[i + 1][k] - a) * f));
 }
-
-// G random Gaussians over the map, as the server's `random` draws them (core/pdm randomGaussians:
-// centres uniform, σ 5–20 % of the shorter side, any rotation) from a small seeded generator
-// (mulberry32): the same seed gives the same draft here, not the server's numbers.
-function randomComponents(map, count, seed) {
-  let a = (seed >>> 0) + 0x9e3779b9;
-  const rnd = () => {
-    a = (a + 0x6d2b79f5) >>> 0;
-    let t = a;
-    t = Math.imul(t ^ (t >>> 15), t | 1);
-    t ^= t + Math.imul(t ^ (t >>> 7), t | 61);
-    return ((t ^ (t >>> 14)) >>> 0) / 4294967296;
-  };
-  const side = Math.min(map.width_m, map.height_m);
-  return Array.from({ length: count }, () => ({
-    x: rnd() * map.width_m, y: rnd() * map.height_m,
-    sigma_x: side * (0.05 + 0.15 * rnd()), sigma_y: side * (0.05 + 0.15 * rnd()),
-    rotation_deg: Math.round(rnd() * 1800) / 10, weight: 1,
-  }));
-}
-
-const same = (a, b) => ['x', 'y', 'sigma_x', 'sigma_y', 'rotation_deg', 'weight'].every((k) => Math.abs(a[k] - b[k]) < 1e-9);
 
 export class PdmEditor {
   constructor({ view, layers, conflicts }) {
@@ -654,51 +632,14 @@ export class PdmEditor {
     this.changed();
   }
 
-  async conflicted(map, current) {
-    const b = this.base, mine = this.comps.map((g) => ({ ...g }));
-    const theirs = (current.components || []).map((g) => ({ ...g }));
-    const by = await api.history(map.id, `pdms/${b.id}`).then((h) => (h[0]?.version === current.version ? h[0].by : ''), () => '');
-    const line = (g, i) => `${i + 1}: (${g.x.toFixed(1)}, ${g.y.toFixed(1)}) σ ${g.sigma_x.toFixed(1)}×${g.sigma_y.toFixed(1)} m, w ${g.weight}`;
-    const put = async (comps, name) => this.updated(await api.changePdm(map.id, b.id, { name, components: comps }, current.version));
-    this.conflicts.show({
-      title: `PDM “${b.name}” not saved: both versions shown`, what: `the PDM “${current.name}”`, version: current.version, by,
-      mine: { summary: `${mine.length} components`, lines: mine.map(line), draw: (ctx, v, c) => drawEllipses(ctx, v, mine, c, [6, 4]) },
-      theirs: { summary: `${theirs.length} components`, lines: theirs.map(line), draw: (ctx, v, c) => drawEllipses(ctx, v, theirs, c) },
-      keepMine: () => put(mine, $('pdm-name').value.trim() || current.name),
-      takeTheirs: async () => {
-        this.dirty = false;
-        this.updated(current);
-      },
-      // Components are a set: theirs, plus mine that are neither theirs nor unchanged from the base.
-      keepBoth: () => put([...theirs, ...mine.filter((g) => !theirs.some((t) => same(t, g)) && !b.comps.some((o) => same(o, g)))], current.name),
-    });
+  // A 412 on update: both shown, the operator chooses (pdm_versions.js).
+  conflicted(map, current) {
+    return showPdmConflict(this, map, current);
   }
 
-  // A PDM of this map changed elsewhere (an event; null after a resync): the list is read again;
-  // the one loaded here follows when it has no unsaved edits, else they are kept (update shows both).
-  async remoteChanged(e) {
-    await this.refresh();
-    const b = this.base;
-    if (!b || (e && e.id !== b.id)) return;
-    const now = state.pdms.find((p) => p.id === b.id);
-    if (!now) {
-      $('pdm-save-status').textContent = `“${b.name}” was deleted${e?.by ? ` by ${e.by}` : ''}; your components are kept as a draft`;
-      this.base = null;
-      this.dirty = this.comps.length > 0;
-      if (state.pdmId === b.id) {
-        state.pdmId = '';
-        state.emit('pdm-selected', '');
-      }
-      this.changed();
-      return;
-    }
-    if ((now.version ?? 1) === b.version) return;
-    if (!this.dirty) {
-      this.updated(now);
-      $('pdm-save-status').textContent = `“${now.name}” changed${e?.by ? ` by ${e.by}` : ''} (v${now.version})`;
-    } else {
-      $('pdm-save-status').textContent = `“${now.name}” changed${e?.by ? ` by ${e.by}` : ''} (v${now.version}); your edits are kept — update shows both`;
-    }
+  // A PDM of this map changed elsewhere (pdm_versions.js).
+  remoteChanged(e) {
+    return followRemotePdm(this, e);
   }
 
   async deletePdm(p) {
