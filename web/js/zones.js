@@ -18,10 +18,10 @@
 // stay and the count of saved zones says what the server has.
 
 import { api } from './api.js';
-import { drawRings } from './conflict_view.js';
 import { clearDraft, loadDraft, saveDraft } from './drafts.js';
 import { state } from './state.js';
-import { mergeZones } from './zone_merge.js';
+import { showZoneConflict } from './zone_conflict.js';
+import { area, inside, zonesFromGeoJson, zonesToGeoJson } from './zone_geometry.js';
 import { history } from './undo_stack.js';
 import { $, el, fmt, showError } from './util.js';
 
@@ -44,41 +44,6 @@ function hatchCanvas(size = 8) {
   g.lineTo(size * 1.5, size / 2);
   g.stroke();
   return c;
-}
-
-function area(ring) {
-  let a = 0;
-  for (let i = 0, j = ring.length - 1; i < ring.length; j = i++) a += ring[j][0] * ring[i][1] - ring[i][0] * ring[j][1];
-  return Math.abs(a) / 2;
-}
-
-function inside(ring, x, y) {
-  let c = false;
-  for (let i = 0, j = ring.length - 1; i < ring.length; j = i++) {
-    const [xi, yi] = ring[i], [xj, yj] = ring[j];
-    if ((yi > y) !== (yj > y) && x < ((xj - xi) * (y - yi)) / (yj - yi) + xi) c = !c;
-  }
-  return c;
-}
-
-// GeoJSON rings are closed (first position repeated); the editor keeps them open.
-export function zonesToGeoJson(zones) {
-  return {
-    type: 'FeatureCollection',
-    features: zones.map((z) => ({
-      type: 'Feature',
-      ...(z.id ? { id: z.id } : {}),
-      properties: z.name ? { name: z.name } : {},
-      geometry: { type: 'Polygon', coordinates: [[...z.ring, z.ring[0]].map(([x, y]) => [x, y])] },
-    })),
-  };
-}
-
-function zonesFromGeoJson(fc) {
-  return (fc?.features || []).map((f) => {
-    const ring = f.geometry.coordinates[0].slice(0, -1).map(([x, y]) => [x, y]);
-    return { ring, name: f.properties?.name || '', id: typeof f.id === 'string' ? f.id : '', version: f.properties?.version ?? 0 };
-  });
 }
 
 const plural = (n) => `${n} zone${n === 1 ? '' : 's'}`;
@@ -403,44 +368,11 @@ export class ZoneEditor {
     state.emit('zones', state.zones);
   }
 
-  // A 412 (issue 26): another operator saved this map's zones after these edits started. Nothing
-  // was overwritten; both are shown (conflict_view.js) and the operator chooses. `mine`: the zones
-  // this page tried to save (the editor's, or an imported file's).
-  async conflicted(map, current, mine = this.zones) {
+  // A 412 (issue 26): another operator saved this map's zones after these edits started; both
+  // are shown and the operator chooses (zone_merge.js). `mine`: the zones this page tried to save.
+  conflicted(map, current, mine = this.zones) {
     if (!current) return this.load(map);
-    const theirs = zonesFromGeoJson(current);
-    const base = zonesFromGeoJson(this.baseZones || { features: [] });
-    // Who saved theirs: the newest entry of the set's history.
-    const by = await api.history(map.id, 'zones').then((h) => (h[0]?.version === current.version ? h[0].by : ''), () => '');
-    state.zones = current;
-    state.emit('zones', state.zones);
-    this.changed();
-    const lines = (list) => list.map((z, i) => `${z.name || (z.id ? `zone ${z.id}` : `new zone ${i + 1}`)} · ${z.ring.length} points · ${fmt(area(z.ring))} m²`);
-    const resave = async (zones) => {
-      if (state.map?.id !== map.id) throw new Error('another map is shown now: open this one again to save');
-      this.zones = zones;
-      this.baseVersion = current.version;
-      this.saved(await api.saveZones(map.id, zonesToGeoJson(zones), 'local', current.version));
-      this.keepDraft();
-    };
-    this.conflicts.show({
-      title: 'zones not saved: both versions shown', what: "this map's keep-out zones", version: current.version, by,
-      mine: { summary: plural(mine.length), lines: lines(mine), draw: (ctx, v, c) => drawRings(ctx, v, mine.map((z) => z.ring), c, [7, 4]) },
-      theirs: { summary: plural(theirs.length), lines: lines(theirs), draw: (ctx, v, c) => drawRings(ctx, v, theirs.map((z) => z.ring), c) },
-      keepMine: async () => {
-        await resave(mine.map((z) => ({ ...z })));
-        $('zones-status').textContent = `saved ${plural(this.zones.length)} (yours, over v${current.version})`;
-      },
-      takeTheirs: async () => {
-        this.saved(current);
-        this.keepDraft();
-        $('zones-status').textContent = `theirs loaded (${plural(this.zones.length)})`;
-      },
-      keepBoth: async () => {
-        await resave(mergeZones(base, mine, theirs));
-        $('zones-status').textContent = `saved ${plural(this.zones.length)} (both kept)`;
-      },
-    });
+    return showZoneConflict(this, map, current, mine);
   }
 
   changed(edited = false) {
