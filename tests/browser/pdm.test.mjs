@@ -66,14 +66,27 @@ suiteWithServer('PDM editor', { timeout: 180000 }, (ctx) => {
     await context.close();
   });
 
-  test('random (G=4) creates a PDM on the server and loads its components', async () => {
+  test('random (G=4) makes a draft of 4 components, saved only on "save"', async () => {
     const { page, errors, context } = await openPage(ctx.browser, `${ctx.server.url}/`);
+    page.on('dialog', (d) => d.accept());  // the draft of the test above is replaced
     await waitForMap(page);
+    const mapId = await page.evaluate(() => window.__roverplanApp.state.map.id);
+    const count = async () => (await (await fetch(`${ctx.server.url}/api/maps/${mapId}/pdms`)).json()).length;
+    const before = await count();
     await page.click('#tab-pdm');
     await page.fill('#pdm-seed', '7');
     await page.click('#pdm-random');
     await page.waitForFunction(() => window.__roverplanApp.pdmEditor.comps.length === 4);
-    await page.waitForFunction(() => window.__roverplan.layersLoaded.includes('pdm'));
+    // Issue 26: a draft, not a saved PDM (it used to be saved by itself).
+    assert.equal(await count(), before);
+    assert.equal(await page.inputValue('#pdm-name'), 'random G=4 seed 7');
+    assert.match(await page.textContent('#pdm-save-status'), /random draft: not saved/);
+    const again = await comps(page);
+    await page.click('#pdm-random');  // the same seed, the same draft
+    assert.deepEqual(await comps(page), again);
+    await page.click('#pdm-save');
+    await page.waitForFunction(() => /^saved “random G=4 seed 7”/.test(document.getElementById('pdm-save-status').textContent));
+    assert.equal(await count(), before + 1);
     assert.match(await page.textContent('#pdm-list li.selected'), /seed 7/);
     await page.click('#pdm-clear');
     assert.equal((await comps(page)).length, 0);

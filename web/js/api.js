@@ -30,9 +30,33 @@ export function setToken(token) {
 
 let sessionToken = getToken();
 
+// The operator's name (issue 26): typed once, kept in this browser, sent as X-Operator so the
+// server's events and history say who did what (a named token's name wins on the server).
+const OPERATOR_KEY = 'roverplan.operator';
+let operatorName = (() => {
+  try { return localStorage.getItem(OPERATOR_KEY) || ''; } catch { return ''; }
+})();
+
+export function getOperator() {
+  return operatorName;
+}
+
+// Trimmed, at most 40 characters (the server's limit), printable only.
+export function setOperator(name) {
+  operatorName = String(name || '').replace(/[\u0000-\u001f\u007f\u200b-\u200f\u202a-\u202e\u2066-\u2069]/g, '').trim().slice(0, 40);
+  try {
+    if (operatorName) localStorage.setItem(OPERATOR_KEY, operatorName);
+    else localStorage.removeItem(OPERATOR_KEY);
+  } catch { /* storage disabled: the name lives for this page only */ }
+  return operatorName;
+}
+
 function authHeaders(extra = {}) {
   const h = { ...extra };
   if (sessionToken) h.Authorization = `Bearer ${sessionToken}`;
+  // fetch() sends a header's characters as bytes (U+0000–U+00FF only): a name is sent as its
+  // UTF-8 bytes, which the server reads as UTF-8 ("Zoë" stays "Zoë").
+  if (operatorName) h['X-Operator'] = String.fromCharCode(...new TextEncoder().encode(operatorName));
   return h;
 }
 
@@ -88,24 +112,15 @@ export async function getAllPages(path, maxPages = 100) {
 }
 
 // Versions (issue 26): a write names the version it was read at (If-Match), so a change saved
-// meanwhile by another operator is answered 412 version_conflict instead of being overwritten.
-// The zone set's version per map, as last read or saved here.
-const zoneVersions = new Map();
+// meanwhile by another operator is answered 412 version_conflict (err.current: theirs) instead of
+// being overwritten. The caller keeps the version its edits started from.
 const ifMatch = (version) => (Number.isInteger(version) ? { 'If-Match': `"v${version}"` } : {});
 
-async function readZones(mapId) {
-  const fc = await getJson(`/api/maps/${mapId}/zones`);
-  zoneVersions.set(mapId, fc.version);
-  return fc;
-}
-
-async function writeZones(mapId, fc, crs) {
+// `version`: the set's version the edits started from (omitted: none, a first save).
+function writeZones(mapId, fc, crs, version) {
   const body = { ...fc };
   delete body.version;  // the version read goes in If-Match
-  const out = await sendJson('PUT', `/api/maps/${mapId}/zones${crs === 'map' ? '?crs=map' : ''}`, body,
-    ifMatch(zoneVersions.get(mapId)));
-  zoneVersions.set(mapId, out.version);
-  return out;
+  return sendJson('PUT', `/api/maps/${mapId}/zones${crs === 'map' ? '?crs=map' : ''}`, body, ifMatch(version));
 }
 
 export const api = {
@@ -119,9 +134,16 @@ export const api = {
   pdms: (mapId) => getAllPages(`/api/maps/${mapId}/pdms`),
   createPdm: (mapId, body) => sendJson('POST', `/api/maps/${mapId}/pdms`, body),
   deletePdm: (mapId, pdmId) => sendJson('DELETE', `/api/maps/${mapId}/pdms/${pdmId}`),
-  zones: (mapId) => readZones(mapId),
-  // 412 (err.code 'version_conflict') when another operator saved zones since they were read here.
-  saveZones: (mapId, fc, crs = 'local') => writeZones(mapId, fc, crs),
+  // A PDM's new name and/or components; 412 with theirs when `version` is not the stored one.
+  changePdm: (mapId, pdmId, body, version) => sendJson('PUT', `/api/maps/${mapId}/pdms/${pdmId}`, body, ifMatch(version)),
+  pdm: (mapId, pdmId) => getJson(`/api/maps/${mapId}/pdms/${pdmId}`),
+  zones: (mapId) => getJson(`/api/maps/${mapId}/zones`),
+  // 412 (err.code 'version_conflict') when another operator saved zones since `version`.
+  saveZones: (mapId, fc, crs = 'local', version) => writeZones(mapId, fc, crs, version),
+  // History (the last 50 versions): `what` is `zones` or `pdms/{id}`.
+  history: (mapId, what) => getJson(`/api/maps/${mapId}/${what}/history`),
+  historyVersion: (mapId, what, n) => getJson(`/api/maps/${mapId}/${what}/history/${n}`),
+  restore: (mapId, what, n, version) => sendJson('POST', `/api/maps/${mapId}/${what}/restore`, { restore: n }, ifMatch(version)),
   missions: () => getAllPages('/api/missions'),
   mission: (id) => getJson(`/api/missions/${id}`),
   launch: (body) => sendJson('POST', '/api/missions', body),
@@ -133,10 +155,12 @@ export const api = {
   result: (id) => getJson(`/api/missions/${id}/result.json`),
 };
 
-export function layerUrl(mapId, name, format, { max = 0, pdm = '' } = {}) {
+// `version`: an edited PDM's (issue 26), so a file cached for an older version is not used.
+export function layerUrl(mapId, name, format, { max = 0, pdm = '', version = 0 } = {}) {
   const q = new URLSearchParams();
   if (max > 0) q.set('max', String(max));
   if (pdm) q.set('pdm', pdm);
+  if (pdm && version > 1) q.set('v', String(version));
   const qs = q.toString();
   return `/api/maps/${mapId}/layers/${name}.${format}${qs ? `?${qs}` : ''}`;
 }
@@ -218,4 +242,15 @@ export function streamUrl(missionId) {
   const proto = location.protocol === 'https:' ? 'wss:' : 'ws:';
   const q = sessionToken ? `?token=${encodeURIComponent(sessionToken)}` : '';
   return `${proto}//${location.host}/api/missions/${missionId}/stream${q}`;
+}
+
+// WS /api/events for one map (issue 26), resuming after `since` when given.
+export function eventsUrl(mapId, since) {
+  const proto = location.protocol === 'https:' ? 'wss:' : 'ws:';
+  const q = new URLSearchParams();
+  if (mapId) q.set('map', mapId);
+  if (Number.isInteger(since)) q.set('since', String(since));
+  if (sessionToken) q.set('token', sessionToken);
+  const qs = q.toString();
+  return `${proto}//${location.host}/api/events${qs ? `?${qs}` : ''}`;
 }

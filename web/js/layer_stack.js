@@ -174,7 +174,7 @@ export class LayerStack {
     const source = layer.source;
     try {
       const max = Math.max(map.rows, map.cols) > LEGEND_SIZE ? LEGEND_SIZE : 0;
-      const image = await fetchImage(layerUrl(map.id, layer.id, 'png', { max, pdm }), this.aborter.signal);
+      const image = await fetchImage(layerUrl(map.id, layer.id, 'png', { max, pdm, version: state.pdms.find((p) => p.id === pdm)?.version }), this.aborter.signal);
       if (gen !== this.generation || layer.source !== source) {
         image.close();
         return;
@@ -209,7 +209,7 @@ export class LayerStack {
     if (map.rows * map.cols > MAX_F32_CELLS) return;
     const gen = this.generation;
     try {
-      const r = await fetchF32(layerUrl(map.id, name, 'f32', { pdm }), this.aborter.signal);
+      const r = await fetchF32(layerUrl(map.id, name, 'f32', { pdm, version: state.pdms.find((p) => p.id === pdm)?.version }), this.aborter.signal);
       if (gen !== this.generation || (name === 'pdm' && pdm !== state.pdmId)) return;
       this.rasters[name] = r;
       if (name === 'elevation') state.emit('elevation', r);

@@ -16,6 +16,13 @@ import { ZoneEditor } from './zones.js';
 import { AreaTool } from './area_tool.js';
 import { RouteProfile } from './route_profile.js';
 import { bindUndoControls, history as undoHistory } from './undo_stack.js';
+import { ConflictView } from './conflict_view.js';
+import { EventFeed } from './event_feed.js';
+import { HistoryView } from './history_view.js';
+import { LiveSync } from './live_sync.js';
+import { Presence } from './presence.js';
+import { FormDraft } from './form_draft.js';
+import { reopenUsed } from './used_versions.js';
 
 // --- status line: a message part and a live-mission part ---
 const statusParts = { msg: '', live: '' };
@@ -42,15 +49,23 @@ view.padLeft = 256;   // the floating layers panel
 view.padRight = 256;  // the floating legend panel
 const layers = new LayerStack(view);
 const missionView = new MissionView({ view, layers, statusLine, selectMap, onFinished: () => runs.reload(), onShown: (m) => setAddress(m ? { mission: m.id } : state.map ? { map: state.map.id } : {}) });
-const pdmEditor = new PdmEditor({ view, layers });
+const conflicts = new ConflictView({ view });
+const feed = new EventFeed({});
+const presence = new Presence(feed);
+state.presence = presence;
+const pdmEditor = new PdmEditor({ view, layers, conflicts });
 const missionForm = new MissionForm({ view, onLaunched: (m) => launched(m) });
 const areaTool = new AreaTool({ view, missionView, form: missionForm });
 const mapsPanel = new MapsPanel({ selectMap: chooseMap });
-const zoneEditor = new ZoneEditor({ view, layers });
+const zoneEditor = new ZoneEditor({ view, layers, conflicts });
+const historyView = new HistoryView({ view, zoneEditor, pdmEditor });
 // The mission form's "respect keep-out zones": on by default when the map has saved zones.
+// A change saved by another operator keeps the operator's choice once the map has zones.
+let keepOutShown = { map: '', n: 0 };
 state.on('zones', (fc) => {
   const n = fc?.features?.length || 0;
-  $('m-keep-out').checked = n > 0;
+  if (keepOutShown.map !== state.map?.id || keepOutShown.n === 0 || n === 0) $('m-keep-out').checked = n > 0;
+  keepOutShown = { map: state.map?.id || '', n };
   $('m-keep-out').disabled = n === 0;
   $('m-keep-out-count').textContent = n ? `${n} saved on this map` : 'none on this map';
 });
@@ -58,7 +73,10 @@ const runs = new RunsPanel({
   missionView,
   onDuplicate: async (file) => {
     await missionForm.load(file, chooseMap);
+    await zoneEditor.loading;
+    const reopened = await reopenUsed(file, { pdmEditor, zoneEditor });
     showTab('mission');
+    if (reopened) $('m-file-status').textContent = reopened;
   },
 });
 const studies = new StudiesPanel({
@@ -69,10 +87,13 @@ const studies = new StudiesPanel({
 });
 const view3d = new View3D({ container: $('view3d'), message: $('view3d-message'), layers, missionView });
 const routeProfile = new RouteProfile({ view, layers, missionView });
+const liveSync = new LiveSync({ feed, presence, mapsPanel, pdmEditor, zoneEditor, runs, studies, chooseMap });
+const formDraft = new FormDraft(missionForm);
 state.on('result', () => routeProfile.update());
 bindUndoControls();
 routeProfile.onHover = (p) => view3d.setMarker(p);
-window.__roverplanApp = { view, layers, missionView, pdmEditor, missionForm, areaTool, mapsPanel, zoneEditor, runs, studies, view3d, state, undoHistory, routeProfile };
+window.__roverplanApp = { view, layers, missionView, pdmEditor, missionForm, areaTool, mapsPanel, zoneEditor, runs, studies, view3d, state, undoHistory, routeProfile, feed, presence, conflicts, historyView, liveSync, formDraft };
+
 
 async function selectMap(id) {
   if (!id) {
@@ -189,6 +210,17 @@ state.on('pdm-mode', toolHelp);
 state.on('pdm-selected', (id) => layers.setPdm(id));
 
 const TABS = ['maps', 'pdm', 'mission', 'runs', 'studies'];
+// What this page edits, told to the others on the map (presence.js): the zones while drawing
+// them, the PDM loaded (or a new one) in the PDM tab, the mission in the Mission tab.
+function sayEditing() {
+  const tab = TABS.find((t) => !$(`panel-${t}`).hidden);
+  presence.setEditing(state.tool === 'zones' ? 'zones'
+    : tab === 'pdm' ? (pdmEditor.base ? `pdm:${pdmEditor.base.id}` : 'pdm:new')
+      : tab === 'mission' ? 'mission' : '');
+}
+state.on('tool', () => sayEditing());
+state.on('pdm-selected', () => sayEditing());
+
 function showTab(name) {
   for (const t of TABS) {
     const active = t === name;
@@ -203,6 +235,7 @@ function showTab(name) {
   else state.setTool('pan');
   if (name === 'mission' && !missionForm.placing) state.setTool('pan');
   if (name === 'runs') runs.reload();
+  sayEditing();
   // The study view covers the map and the dock while the Studies tab is open.
   $('studies-view').hidden = name !== 'studies';
   if (name === 'studies') studies.activate(state.planners).catch(report);

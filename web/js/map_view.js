@@ -30,6 +30,7 @@ export class MapView {
     this.scale = 1;          // CSS pixels per metre
     this.padLeft = 0;        // CSS pixels covered by floating panels on the left
     this.padRight = 0;       // and on the right (the legend)
+    this.padTop = 0;         // and on top (a conflict's panel, conflict_view.js)
     this.dpr = 1;
     this.cssW = 1;
     this.cssH = 1;
@@ -103,10 +104,11 @@ export class MapView {
     // The legend's side is kept free whenever 300 px are left for the map: a smaller map beats
     // one whose east part lies under the legend (clicks there would land on the panel).
     const right = this.cssW - left - this.padRight >= 300 ? this.padRight : 0;
-    const w = this.cssW - 2 * pad - left - right, h = this.cssH - 2 * pad;
+    const top = this.cssH - this.padTop > 200 ? this.padTop : 0;
+    const w = this.cssW - 2 * pad - left - right, h = this.cssH - 2 * pad - top;
     this.scale = Math.max(1e-6, Math.min(w / this.widthM, h / this.heightM));
     this.cx = this.widthM / 2 - (left - right) / 2 / this.scale;
-    this.cy = this.heightM / 2;
+    this.cy = this.heightM / 2 + top / 2 / this.scale;
     this.viewChanged();
   }
 

@@ -8,10 +8,16 @@
 // editable afterwards like any clicked Gaussian. Painting never pans: the tool takes the drag.
 // A stroke is one step of the undo history. While editing, the mixture density is drawn on a coarse grid as
 // an overlay; once saved, the server's pdm.png for the new id is shown instead.
+// Several operators (issue 26): unsaved components are a draft of the map (drafts.js), kept over
+// map switches and reloads; "random (G=4)" makes a draft, not a saved PDM; "update" saves the
+// components into the PDM they were loaded from, naming its version, and a 412 shows both; PDMs
+// saved elsewhere arrive from the event stream (remoteChanged); both in pdm_versions.js.
 
 import { api } from './api.js';
+import { clearDraft, loadDraft, saveDraft } from './drafts.js';
 import { state } from './state.js';
 import { rampLegend } from './legend.js';
+import { followRemotePdm, randomComponents, showPdmConflict } from './pdm_versions.js';
 import { history } from './undo_stack.js';
 import { $, el, report, showError } from './util.js';
 
@@ -30,9 +36,11 @@ function rampColour(t) {
 }
 
 export class PdmEditor {
-  constructor({ view, layers }) {
+  constructor({ view, layers, conflicts }) {
     this.view = view;
     this.layers = layers;
+    this.conflicts = conflicts;
+    this.base = null;       // the saved PDM the components were loaded from {id, version, name, comps}
     this.comps = [];
     this.active = -1;
     this.dirty = false;     // edited since the last save/load
@@ -64,14 +72,11 @@ export class PdmEditor {
     $('pdm-random').addEventListener('click', () => this.random());
     $('pdm-clear').addEventListener('click', () => this.clear());
     $('pdm-save').addEventListener('click', () => this.save());
-    state.on('map', () => {
-      this.comps = [];
-      this.active = -1;
-      this.dirty = false;
-      this.changed();
-      this.renderList();
-    });
+    $('pdm-update').addEventListener('click', () => this.update());
+    $('pdm-name').addEventListener('change', () => this.keepDraft());
+    state.on('map', (map) => this.openDraft(map));
     state.on('pdms', () => this.renderList());
+    state.on('presence', () => this.renderList());
     state.on('pdm-selected', () => this.renderList());
     this.renderComponents();
   }
@@ -228,9 +233,33 @@ export class PdmEditor {
     this.changed(true);
   }
 
+  // A map's draft (drafts.js) comes back when the map is shown again or the page reloaded.
+  openDraft(map) {
+    const d = map ? loadDraft(map.id, 'pdm') : null;
+    this.comps = d && Array.isArray(d.comps) ? d.comps : [];
+    this.base = d?.base || null;
+    this.active = this.comps.length ? 0 : -1;
+    this.dirty = Boolean(d);
+    $('pdm-name').value = d?.name || '';
+    $('pdm-save-status').textContent = d ? `unsaved draft restored (${this.comps.length} component${this.comps.length === 1 ? '' : 's'})` : '';
+    showError($('pdm-error'), null);
+    this.changed();
+    this.renderList();
+  }
+
+  keepDraft() {
+    const m = state.map;
+    if (!m) return;
+    if (this.dirty && this.comps.length) saveDraft(m.id, 'pdm', { comps: this.comps, name: $('pdm-name').value, base: this.base });
+    else clearDraft(m.id, 'pdm');
+  }
+
   // `list`: false during a brush stroke (the component list is redrawn once, at its end).
   changed(edited = false, list = true) {
     if (edited) this.dirty = true;
+    if (list) this.keepDraft();
+    $('pdm-update').disabled = !(this.base && this.dirty && this.comps.length);
+    $('pdm-history').disabled = !state.pdmId;
     this.computeOverlay();
     if (list) this.renderComponents();
     this.layers.renderLegends();
@@ -483,38 +512,67 @@ export class PdmEditor {
       return;
     }
     list.replaceChildren(...state.pdms.map((p) => el('li', { class: state.pdmId === p.id ? 'selected' : '', dataset: { pdm: p.id } },
-      el('button', { class: 'name', title: `${p.name} — ${p.id} (${p.kind || 'PDM'})`, onclick: () => this.select(p) }, p.name),
+      el('button', { class: 'name', title: `${p.name} — ${p.id} (${p.kind || 'PDM'}, v${p.version ?? 1})`, onclick: () => this.select(p) }, p.name),
       el('span', { class: 'meta' }, p.kind || ''),
+      this.editingMark(p),
       el('button', { class: 'small', 'aria-label': `delete PDM ${p.name}`, title: 'delete', onclick: () => this.deletePdm(p) }, '✕'))));
   }
 
-  // Shows a saved PDM (the server's layer) and loads its components for further editing.
+  // "✎ name" on a PDM another operator is editing now (presence.js).
+  editingMark(p) {
+    const names = state.presence?.editorsOf(`pdm:${p.id}`) || [];
+    return names.length ? el('span', { class: 'editing-mark', title: `${names.join(', ')} editing it now` }, `✎ ${names.join(', ')}`) : null;
+  }
+
+  // Shows a saved PDM (the server's layer) and loads its components for further editing; unsaved
+  // components are not replaced without asking.
   select(p) {
+    if (this.dirty && this.comps.length && !window.confirm(`Load “${p.name}” and drop your ${this.comps.length} unsaved component${this.comps.length === 1 ? '' : 's'}?`)) return;
     // Loading a saved PDM replaces the components being edited: undoable like an edit.
     history.record(this, `load PDM ${p.name}`, () => {
       this.comps = (p.components || []).map((g) => ({ ...g }));
       this.active = this.comps.length ? 0 : -1;
     });
     this.dirty = false;
+    this.base = { id: p.id, version: p.version ?? 1, name: p.name, comps: (p.components || []).map((g) => ({ ...g })) };
     $('pdm-name').value = p.name;
     state.pdmId = p.id;
     state.emit('pdm-selected', p.id);
     this.changed();
   }
 
-  async random() {
+  // An older version's components (a run's, used_versions.js) as unsaved edits of PDM `p`: the
+  // base stays its current version, so "update" makes them the newest.
+  loadVersion(p, comps, version) {
+    history.record(this, `load v${version} of PDM ${p.name}`, () => {
+      this.comps = comps.map((g) => ({ ...g }));
+      this.active = this.comps.length ? 0 : -1;
+    });
+    this.base = { id: p.id, version: p.version ?? 1, name: p.name, comps: (p.components || []).map((g) => ({ ...g })) };
+    $('pdm-name').value = p.name;
+    $('pdm-save-status').textContent = `v${version} of “${p.name}” loaded (now v${p.version}): update makes it the newest`;
+    this.changed(true);
+  }
+
+  // A draft of G=4 random Gaussians (issue 26: it used to save a PDM on the server by itself).
+  random() {
     const m = state.map;
     if (!m) return;
     showError($('pdm-error'), null);
     const seed = Math.max(0, Math.floor(Number($('pdm-seed').value) || 0));
-    try {
-      const p = await api.createPdm(m.id, { name: $('pdm-name').value.trim() || `random G=4 seed ${seed}`, random: 4, seed });
-      await this.refresh();
-      this.select(state.pdms.find((q) => q.id === p.id) || p);
-      $('pdm-save-status').textContent = `saved “${p.name}”`;
-    } catch (err) {
-      showError($('pdm-error'), err);
+    if (this.dirty && this.comps.length && !window.confirm(`Replace your ${this.comps.length} unsaved component${this.comps.length === 1 ? '' : 's'} with random ones? (Ctrl+Z brings them back)`)) return;
+    history.record(this, `random G=4 seed ${seed}`, () => {
+      this.comps = randomComponents(m, 4, seed);
+      this.active = 0;
+    });
+    this.base = null;
+    if (state.pdmId) {
+      state.pdmId = '';
+      state.emit('pdm-selected', '');
     }
+    $('pdm-name').value = `random G=4 seed ${seed}`;
+    this.changed(true);
+    $('pdm-save-status').textContent = 'random draft: not saved';
   }
 
   async save() {
@@ -529,6 +587,7 @@ export class PdmEditor {
       const name = $('pdm-name').value.trim() || `PDM ${new Date().toISOString().slice(0, 16).replace('T', ' ')}`;
       const p = await api.createPdm(m.id, { name, components: this.comps });
       this.dirty = false;
+      this.base = { id: p.id, version: p.version ?? 1, name: p.name, comps: this.comps.map((g) => ({ ...g })) };
       await this.refresh();
       state.pdmId = p.id;
       state.emit('pdm-selected', p.id);
@@ -542,6 +601,45 @@ export class PdmEditor {
         if (input) input.classList.add('invalid');
       }
     }
+  }
+
+  // The components into the PDM they were loaded from, naming the version read; on a 412 both
+  // versions are shown and the operator chooses.
+  async update() {
+    const m = state.map, b = this.base;
+    if (!m || !b || !this.comps.length) return;
+    showError($('pdm-error'), null);
+    const name = $('pdm-name').value.trim() || b.name;
+    try {
+      this.updated(await api.changePdm(m.id, b.id, { name, components: this.comps }, b.version));
+    } catch (err) {
+      if (err.code === 'version_conflict' && err.current) await this.conflicted(m, err.current);
+      else showError($('pdm-error'), err);
+    }
+  }
+
+  updated(p) {
+    this.dirty = false;
+    this.comps = (p.components || this.comps).map((g) => ({ ...g }));
+    this.base = { id: p.id, version: p.version, name: p.name, comps: this.comps.map((g) => ({ ...g })) };
+    $('pdm-name').value = p.name;
+    $('pdm-save-status').textContent = `saved “${p.name}” (v${p.version})`;
+    const i = state.pdms.findIndex((q) => q.id === p.id);
+    if (i >= 0) state.pdms[i] = p;
+    state.pdmId = p.id;
+    state.emit('pdms', state.pdms);
+    state.emit('pdm-selected', p.id);
+    this.changed();
+  }
+
+  // A 412 on update: both shown, the operator chooses (pdm_versions.js).
+  conflicted(map, current) {
+    return showPdmConflict(this, map, current);
+  }
+
+  // A PDM of this map changed elsewhere (pdm_versions.js).
+  remoteChanged(e) {
+    return followRemotePdm(this, e);
   }
 
   async deletePdm(p) {

@@ -10,10 +10,18 @@
 // zone selects it, Delete removes the selected one. Every edit is a step of the page's undo
 // history (undo_stack.js).
 // state.zones holds the zones as last saved/loaded (what missions get); edits are kept here until
-// "save zones".
+// "save zones", and in the map's draft (drafts.js) so they survive switching maps and reloading.
+// Several operators (issue 26): each zone keeps its id and version; a save sends them with the
+// set's version the edits started from (If-Match), and another operator's save meanwhile is shown
+// as a conflict (conflict_view.js) rather than overwritten. Changes saved elsewhere arrive from
+// the event stream (remoteChanged): loaded at once when nothing here is unsaved, else the edits
+// stay and the count of saved zones says what the server has.
 
 import { api } from './api.js';
+import { clearDraft, loadDraft, saveDraft } from './drafts.js';
 import { state } from './state.js';
+import { showZoneConflict } from './zone_conflict.js';
+import { area, inside, zonesFromGeoJson, zonesToGeoJson } from './zone_geometry.js';
 import { history } from './undo_stack.js';
 import { $, el, fmt, showError } from './util.js';
 
@@ -38,45 +46,16 @@ function hatchCanvas(size = 8) {
   return c;
 }
 
-function area(ring) {
-  let a = 0;
-  for (let i = 0, j = ring.length - 1; i < ring.length; j = i++) a += ring[j][0] * ring[i][1] - ring[i][0] * ring[j][1];
-  return Math.abs(a) / 2;
-}
-
-function inside(ring, x, y) {
-  let c = false;
-  for (let i = 0, j = ring.length - 1; i < ring.length; j = i++) {
-    const [xi, yi] = ring[i], [xj, yj] = ring[j];
-    if ((yi > y) !== (yj > y) && x < ((xj - xi) * (y - yi)) / (yj - yi) + xi) c = !c;
-  }
-  return c;
-}
-
-// GeoJSON rings are closed (first position repeated); the editor keeps them open.
-export function zonesToGeoJson(zones) {
-  return {
-    type: 'FeatureCollection',
-    features: zones.map((z) => ({
-      type: 'Feature',
-      properties: z.name ? { name: z.name } : {},
-      geometry: { type: 'Polygon', coordinates: [[...z.ring, z.ring[0]].map(([x, y]) => [x, y])] },
-    })),
-  };
-}
-
-function zonesFromGeoJson(fc) {
-  return (fc?.features || []).map((f) => {
-    const ring = f.geometry.coordinates[0].slice(0, -1).map(([x, y]) => [x, y]);
-    return { ring, name: f.properties?.name || '' };
-  });
-}
+const plural = (n) => `${n} zone${n === 1 ? '' : 's'}`;
 
 export class ZoneEditor {
-  constructor({ view, layers }) {
+  constructor({ view, layers, conflicts }) {
     this.view = view;
     this.layers = layers;
-    this.zones = [];        // [{ring: [[x, y], ...] (open), name}]
+    this.conflicts = conflicts;  // conflict_view.js
+    this.baseVersion = 0;   // the set's version the edits started from (sent in If-Match)
+    this.baseZones = null;  // that set (GeoJSON): what "keep both" merges against
+    this.zones = [];        // [{ring: [[x, y], ...] (open), name, id, version}]
     this.drawing = null;    // the ring in progress
     this.selected = -1;
     this.dirty = false;
@@ -115,7 +94,8 @@ export class ZoneEditor {
       if (tool !== 'zones') this.cancel();
       this.view.invalidate();
     });
-    state.on('map', (map) => this.load(map));
+    state.on('map', (map) => { this.loading = this.load(map); });  // awaited by used_versions.js
+    state.on('presence', () => this.renderList());
     this.renderList();
   }
 
@@ -128,20 +108,75 @@ export class ZoneEditor {
     this.drawing = null;
     this.selected = -1;
     this.dirty = false;
-    state.zones = { type: 'FeatureCollection', features: [] };
+    this.baseVersion = 0;
+    state.zones = { type: 'FeatureCollection', features: [], version: 0 };
     showError($('zones-error'), null);
+    $('zones-status').textContent = '';
     if (map) {
       try {
         const fc = await api.zones(map.id);
         if (state.map?.id !== map.id) return;  // another map was chosen meanwhile
         state.zones = fc;
         this.zones = zonesFromGeoJson(fc);
+        this.baseVersion = fc.version ?? 0;
+        this.baseZones = fc;
       } catch (err) {
         showError($('zones-error'), `zones not loaded: ${err.message}`);
+      }
+      // Unsaved edits from before a reload or a map switch come back, on the version they started from.
+      const draft = loadDraft(map.id, 'zones');
+      if (draft && Array.isArray(draft.zones)) {
+        this.zones = draft.zones;
+        this.drawing = draft.drawing || null;
+        this.baseVersion = draft.baseVersion ?? 0;
+        this.baseZones = draft.baseZones || null;
+        this.dirty = true;
+        $('zones-status').textContent = `unsaved edits restored (${plural(this.zones.length)})`;
       }
     }
     this.changed();
     state.emit('zones', state.zones);
+  }
+
+  // The zones saved elsewhere changed (an event, or null after a resync): the saved set is read
+  // again; the editor follows it unless it holds unsaved edits, which are never dropped silently.
+  async remoteChanged(e) {
+    const map = state.map;
+    if (!map) return;
+    const fc = await api.zones(map.id);
+    if (state.map?.id !== map.id || (fc.version ?? 0) === (state.zones?.version ?? 0)) return;
+    state.zones = fc;
+    const who = e?.by ? e.by : 'another operator';
+    if (!this.dirty && !this.drawing) {
+      this.zones = zonesFromGeoJson(fc);
+      this.baseVersion = fc.version ?? 0;
+      this.baseZones = fc;
+      this.selected = Math.min(this.selected, this.zones.length - 1);
+      $('zones-status').textContent = `${who} saved the zones (v${fc.version})`;
+    } else {
+      $('zones-status').textContent = `${who} saved the zones (v${fc.version}); your unsaved edits are kept — saving shows both`;
+    }
+    this.changed();
+    state.emit('zones', state.zones);
+  }
+
+  // An older saved set (a run's, used_versions.js) as unsaved edits on the current version.
+  loadVersion(fc, version) {
+    history.record(this, `load zones v${version}`, () => {
+      this.zones = zonesFromGeoJson(fc);
+      this.drawing = null;
+      this.selected = -1;
+    });
+    $('zones-status').textContent = `zones v${version} loaded (now v${state.zones?.version ?? 0}): save zones makes them the newest`;
+    this.changed(true);
+  }
+
+  // Unsaved edits are kept per map in the browser; none once saved or back to what the server has.
+  keepDraft() {
+    const m = state.map;
+    if (!m) return;
+    if (this.dirty || this.drawing) saveDraft(m.id, 'zones', { zones: this.zones, drawing: this.drawing, baseVersion: this.baseVersion, baseZones: this.baseZones });
+    else clearDraft(m.id, 'zones');
   }
 
   // --- editing ---
@@ -182,7 +217,7 @@ export class ZoneEditor {
     this.drawing = s.drawing;
     this.selected = Math.min(s.selected, this.zones.length - 1);
     // Unsaved unless the zones are back to what the server has.
-    this.dirty = JSON.stringify(this.zones) !== JSON.stringify(zonesFromGeoJson(state.zones));
+    this.dirty = JSON.stringify(this.zones) !== JSON.stringify(zonesFromGeoJson(this.baseZones || { features: [] }));
     this.changed();
   }
 
@@ -277,14 +312,11 @@ export class ZoneEditor {
     $('zones-status').textContent = 'saving…';
     showError($('zones-error'), null);
     try {
-      state.zones = await api.saveZones(m.id, zonesToGeoJson(this.zones));
-      this.zones = zonesFromGeoJson(state.zones);
-      this.dirty = false;
-      $('zones-status').textContent = `saved ${this.zones.length} zone${this.zones.length === 1 ? '' : 's'}`;
-      state.emit('zones', state.zones);
+      this.saved(await api.saveZones(m.id, zonesToGeoJson(this.zones), 'local', this.baseVersion));
+      $('zones-status').textContent = `saved ${plural(this.zones.length)}`;
     } catch (err) {
       $('zones-status').textContent = '';
-      if (err.code === 'version_conflict') await this.conflicted(m);
+      if (err.code === 'version_conflict') this.conflicted(m, err.current);
       else showError($('zones-error'), `zones refused: ${err.message}${err.field ? ` (field: ${err.field})` : ''}`);
     } finally {
       button.disabled = false;
@@ -299,6 +331,7 @@ export class ZoneEditor {
     const m = state.map, file = input.files[0];
     input.value = '';
     if (!m || !file) return;
+    if ((this.dirty || this.drawing) && !window.confirm(`Importing replaces the saved zones; your unsaved zone edits (${plural(this.zones.length)}) are dropped. Import?`)) return;
     showError($('zones-error'), null);
     try {
       const fc = JSON.parse(await file.text());
@@ -307,31 +340,45 @@ export class ZoneEditor {
       const crs = fc.crs ? 'map' : 'local';
       const body = { type: 'FeatureCollection', features: polygons };
       if (fc.crs) body.crs = fc.crs;
-      state.zones = await api.saveZones(m.id, body, crs);
-      this.zones = zonesFromGeoJson(state.zones);
-      this.dirty = false;
+      this.saved(await api.saveZones(m.id, body, crs, this.baseVersion));
       this.selected = -1;
       $('zones-status').textContent = `imported ${polygons.length} zone${polygons.length === 1 ? '' : 's'} (${crs === 'map' ? "map's CRS" : 'local metres'})` +
         (all.length > polygons.length ? `, skipped ${all.length - polygons.length} other features` : '');
       state.emit('zones', state.zones);
     } catch (err) {
-      if (err.code === 'version_conflict') await this.conflicted(m);
+      // An import replaces the set (its coordinates may be in the map's CRS, so it is not merged
+      // here): theirs are loaded and shown, and importing again replaces them knowingly.
+      if (err.code === 'version_conflict') {
+        if (err.current) this.saved(err.current);
+        showError($('zones-error'), `import not applied: ${err.message}; their zones (v${err.current?.version ?? '?'}) are shown now — import again to replace them`);
+      }
       else showError($('zones-error'), `import refused: ${err.message}${err.field ? ` (field: ${err.field})` : ''}`);
     }
     this.changed();
   }
 
-  // A 412 (issue 26): another operator saved this map's zones after they were loaded here. Nothing
-  // was overwritten; their zones are loaded and shown, with why.
-  async conflicted(map) {
-    await this.load(map);
-    showError($('zones-error'), 'zones not saved: another operator saved this map\'s zones since you loaded them; ' +
-      'theirs are shown now — redo your change');
+  // The set as the server stored it: the editor's zones, the saved ones and the base version.
+  saved(fc) {
+    state.zones = fc;
+    this.zones = zonesFromGeoJson(fc);
+    this.baseVersion = fc.version ?? 0;
+    this.baseZones = fc;
+    this.dirty = false;
+    this.changed();
+    state.emit('zones', state.zones);
+  }
+
+  // A 412 (issue 26): another operator saved this map's zones after these edits started; both
+  // are shown and the operator chooses (zone_merge.js). `mine`: the zones this page tried to save.
+  conflicted(map, current, mine = this.zones) {
+    if (!current) return this.load(map);
+    return showZoneConflict(this, map, current, mine);
   }
 
   changed(edited = false) {
     if (edited) this.dirty = true;
     if (edited) showError($('zones-error'), null);
+    this.keepDraft();
     this.renderList();
     this.layers.renderLegends();
     this.view.invalidate();
@@ -349,6 +396,8 @@ export class ZoneEditor {
     const saved = state.zones?.features?.length ?? 0;
     const n = this.zones.length;
     $('zones-summary').textContent = this.dirty ? `${n} zone${n === 1 ? '' : 's'}, not saved (missions use the ${saved} saved)` : `${saved} saved`;
+    const editors = state.presence?.editorsOf('zones') || [];
+    $('zones-editors').textContent = editors.length ? `✎ ${editors.join(', ')} editing zones now` : '';
   }
 
   legend() {
