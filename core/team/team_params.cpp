@@ -191,7 +191,7 @@ ParamTable<P> buildTable() {
             {"footprint_m", 5.0}, {"sensing_diameter_m", 1.0},
             {"high_risk_deg", 10.0}, {"impassable_deg", 15.0},
             {"range", 1.0}, {"max_vertices", std::int64_t{1250}}, {"clearance", 2.0},
-            {"attitude_limit", 15.0}, {"w_r", 0.1}, {"w_phi", 0.4}, {"w_theta", 0.4}, {"w_psi", 0.1},
+            {"attitude_limit", 15.0}, {"edge_evaluation", std::string("sampled")}, {"w_r", 0.1}, {"w_phi", 0.4}, {"w_theta", 0.4}, {"w_psi", 0.1},
             {"n_r", 1.0}, {"n_phi", 15.0}, {"n_theta", 15.0}, {"n_psi", 60.0},
             {"coordination", std::string("paper")}, {"safety_distance", 1.0},
             {"max_replans", std::int64_t{20}}, {"nominal_speed", 0.3}, {"slip", true},
