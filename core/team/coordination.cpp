@@ -51,12 +51,20 @@ TraversalLattice makeLattice(const terrain::Dem& dem, const Raster<std::uint8_t>
                           params.weights, params.rrt.range, params.threads);
 }
 
-CoordinationResult coordinate(const terrain::Dem& dem, const Raster<std::uint8_t>& classes,
-                              const std::vector<RoverTask>& tasks,
-                              const CoordinationParams& params, std::uint64_t seed,
-                              CoordinationObserver* observer, const CancelToken* cancel,
-                              const TraversalLattice* lattice) {
-  params.validate();
+CoordinationParams resolveEvaluation(CoordinationParams params) {
+  if (params.rrt.evaluation == EdgeEvaluation::Auto)
+    params.rrt.evaluation = params.mode == CoordinationMode::Paper ? EdgeEvaluation::Sampled : EdgeEvaluation::Patch;
+  return params;
+}
+
+namespace {
+
+// coordinate() once the edge evaluation is resolved.
+CoordinationResult coordinateResolved(const terrain::Dem& dem, const Raster<std::uint8_t>& classes,
+                                      const std::vector<RoverTask>& tasks,
+                                      const CoordinationParams& params, std::uint64_t seed,
+                                      CoordinationObserver* observer, const CancelToken* cancel,
+                                      const TraversalLattice* lattice) {
   const RoverSimulator simulator(dem, params.model, params.controller, params.slip);
   if (params.mode == CoordinationMode::Paper) {
     const BoxedRrtPlanner planner(dem, classes, params.rrt, params.weights);
@@ -69,6 +77,18 @@ CoordinationResult coordinate(const terrain::Dem& dem, const Raster<std::uint8_t
                                  params.corridorRadius);
   return coordinateWith(tasks, planner, simulator, TimedPolicy(params), params, seed, observer,
                         cancel);
+}
+
+}  // namespace
+
+CoordinationResult coordinate(const terrain::Dem& dem, const Raster<std::uint8_t>& classes,
+                              const std::vector<RoverTask>& tasks,
+                              const CoordinationParams& params, std::uint64_t seed,
+                              CoordinationObserver* observer, const CancelToken* cancel,
+                              const TraversalLattice* lattice) {
+  params.validate();
+  return coordinateResolved(dem, classes, tasks, resolveEvaluation(params), seed, observer, cancel,
+                            lattice);
 }
 
 }  // namespace rover::team

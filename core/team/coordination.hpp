@@ -201,6 +201,10 @@ CoordinationResult coordinate(const terrain::Dem& dem, const Raster<std::uint8_t
                               const CancelToken* cancel = nullptr,
                               const TraversalLattice* lattice = nullptr);
 
+// `params` with EdgeEvaluation::Auto made what coordinate() uses: Sampled (paper 001's) in the
+// paper mode, Patch (the exact maxima, issue 25) in the timed mode.
+CoordinationParams resolveEvaluation(CoordinationParams params);
+
 // The lattice coordinate() uses for these parameters (attitude limit, edge resolution, eq. 9).
 TraversalLattice makeLattice(const terrain::Dem& dem, const Raster<std::uint8_t>& classes,
                              const CoordinationParams& params);

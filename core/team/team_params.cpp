@@ -88,6 +88,16 @@ ParamTable<P> buildTable() {
           [](auto& p) -> auto& { return p.mission.coordination.rrt.goalBias; });
   addInt(t, intParam("max_iterations", 1, 10000000, "", "Safety cap on RRT* iterations per tree."),
          [](auto& p) -> auto& { return p.mission.coordination.rrt.maxIterations; });
+  t.add(choiceParam("edge_evaluation", enumNames<EdgeEvaluation>(),
+                    "How eq. 9 reads an edge's roll and pitch: sampled (paper 001: the largest over samples "
+                    "a quarter cell apart), patch (ours: the exact largest over the edge on the bilinear "
+                    "surface, from the two ends of its piece in each patch; about half the cost), or auto "
+                    "(patch in the timed coordination, sampled in the paper's)."),
+        [](const P& p) -> ParamValue { return std::string(enumName(p.mission.coordination.rrt.evaluation)); },
+        [](P& p, const ParamInfo& i, const ParamValue& v) {
+          p.mission.coordination.rrt.evaluation =
+              parseEnum<EdgeEvaluation>(paramAsChoice(i, v)).value_or(EdgeEvaluation::Auto);
+        });
   addReal(t, realParam("w_r", 0, 1000, "", "Eq. 9 weight of the edge length (0.1)."),
           [](auto& p) -> auto& { return p.mission.coordination.weights.wR; });
   addReal(t, realParam("w_phi", 0, 1000, "", "Eq. 9 weight of roll (0.4)."),
@@ -181,7 +191,7 @@ ParamTable<P> buildTable() {
             {"footprint_m", 5.0}, {"sensing_diameter_m", 1.0},
             {"high_risk_deg", 10.0}, {"impassable_deg", 15.0},
             {"range", 1.0}, {"max_vertices", std::int64_t{1250}}, {"clearance", 2.0},
-            {"attitude_limit", 15.0}, {"w_r", 0.1}, {"w_phi", 0.4}, {"w_theta", 0.4}, {"w_psi", 0.1},
+            {"attitude_limit", 15.0}, {"edge_evaluation", std::string("sampled")}, {"w_r", 0.1}, {"w_phi", 0.4}, {"w_theta", 0.4}, {"w_psi", 0.1},
             {"n_r", 1.0}, {"n_phi", 15.0}, {"n_theta", 15.0}, {"n_psi", 60.0},
             {"coordination", std::string("paper")}, {"safety_distance", 1.0},
             {"max_replans", std::int64_t{20}}, {"nominal_speed", 0.3}, {"slip", true},

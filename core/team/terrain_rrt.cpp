@@ -220,19 +220,112 @@ EdgeTerms TerrainEdgeModel::edgeTerms(const Eigen::Vector2d& a, const Eigen::Vec
   t.length = d.norm();
   if (!(t.length > 0)) return t;
   const double c = d.x() / t.length, s = d.y() / t.length;
-  const int n = segmentsFor(t.length, resolution_);
   double tanPitch = 0, tanRoll = 0;  // largest |∇h·(cosψ, sinψ)|, |∇h·(−sinψ, cosψ)|
-  terrain::SurfacePoint sp;
-  for (int i = 0; i <= n; ++i) {
-    const Eigen::Vector2d p = sampleAt(a, b, i, n);
-    if (terrain::bilinearSurfaceAt<false>(dem_, p.x(), p.y(), sp)) {
-      tanPitch = std::max(tanPitch, std::abs(sp.dzdx * c + sp.dzdy * s));
-      tanRoll = std::max(tanRoll, std::abs(-sp.dzdx * s + sp.dzdy * c));
+  if (!patch_ || !patchTangents(a, b, c, s, tanPitch, tanRoll)) {
+    const int n = segmentsFor(t.length, resolution_);
+    terrain::SurfacePoint sp;
+    for (int i = 0; i <= n; ++i) {
+      const Eigen::Vector2d p = sampleAt(a, b, i, n);
+      if (terrain::bilinearSurfaceAt<false>(dem_, p.x(), p.y(), sp)) {
+        tanPitch = std::max(tanPitch, std::abs(sp.dzdx * c + sp.dzdy * s));
+        tanRoll = std::max(tanRoll, std::abs(-sp.dzdx * s + sp.dzdy * c));
+      }
     }
   }
   t.pitch = std::atan(tanPitch);
   t.roll = std::atan(tanRoll);
   return t;
+}
+
+namespace {
+
+// The crossings of one pixel coordinate (u or v of terrain::bilinearSurfaceAt) with the lines
+// 0 … hi (rows or columns of cell centres) as an edge is driven: the coordinate is x0 + t·d for t
+// in [0, 1], so the crossings are evenly spaced in t. Outside [0, hi] the surface clamps the
+// coordinate (the border's half cells), so 0 and hi are crossings too and nothing beyond them is.
+class CentreCrossings {
+ public:
+  CentreCrossings(double x0, double d, double hi) {
+    double first = 0, last = -1;  // the lines crossed strictly inside (0, 1), in driving order
+    if (d > 0) {
+      first = std::max(std::floor(x0) + 1, 0.0);
+      last = std::min(std::ceil(x0 + d) - 1, hi);
+    } else if (d < 0) {
+      first = std::min(std::ceil(x0) - 1, hi);
+      last = std::max(std::floor(x0 + d) + 1, 0.0);
+    }
+    const double count = d > 0 ? last - first + 1 : d < 0 ? first - last + 1 : 0;
+    if (count > 0) {
+      left_ = static_cast<long>(count);
+      t_ = (first - x0) / d;
+      step_ = 1.0 / std::abs(d);
+    }
+  }
+  // The t of the next crossing; 2 when there is none before the edge's end.
+  double next() const { return left_ > 0 ? t_ : 2.0; }
+  void advance() {
+    --left_;
+    t_ += step_;
+  }
+
+ private:
+  double t_ = 2.0, step_ = 0;
+  long left_ = 0;
+};
+
+}  // namespace
+
+bool TerrainEdgeModel::patchTangents(const Eigen::Vector2d& a, const Eigen::Vector2d& b, double c,
+                                     double s, double& tanPitch, double& tanRoll) const {
+  const GridGeometry& g = dem_.geometry();
+  if (g.rows < 2 || g.cols < 2) return false;
+  const bool perRow = !dem_.rowCellWidth.empty();
+  const auto onMap = [&](const Eigen::Vector2d& p) {
+    return p.x() >= 0 && p.y() >= 0 && p.x() <= g.widthMetres() && p.y() <= g.heightMetres();
+  };
+  if (!a.allFinite() || !b.allFinite() || !onMap(a) || !onMap(b)) return false;
+  // Pixel coordinates as bilinearSurfaceAt computes them, affine in t.
+  const double uHi = g.cols - 1.0, vHi = g.rows - 1.0;
+  const double u0 = a.x() / g.cellWidth - 0.5, du = (b.x() - a.x()) / g.cellWidth;
+  const double v0 = (g.rows - a.y() / g.cellHeight) - 0.5, dv = -(b.y() - a.y()) / g.cellHeight;
+  const auto uAt = [&](double t) { return std::clamp(u0 + t * du, 0.0, uHi); };
+  const auto vAt = [&](double t) { return std::clamp(v0 + t * dv, 0.0, vHi); };
+  // With per-row cell widths (geographic grids) the width bilinearSurfaceAt divides by is the
+  // nearest row's: it changes halfway between rows of centres, so those lines cut pieces too.
+  CentreCrossings cu(u0, du, uHi), cv(v0, dv, vHi), cw(v0 - 0.5, perRow ? dv : 0.0, g.rows - 2.0);
+  double maxPitch = tanPitch, maxRoll = tanRoll;
+  const double invDy = 1.0 / dem_.dy();
+  for (double t0 = 0; t0 < 1;) {
+    const double nu = cu.next(), nv = cv.next(), nw = cw.next();
+    const double t1 = std::min(std::min(nu, nv), std::min(nw, 1.0));
+    if (nu == t1) cu.advance();
+    if (nv == t1) cv.advance();
+    if (nw == t1) cw.advance();
+    // The piece [t0, t1] lies in one patch: the one its middle is in (as bilinearSurfaceAt picks
+    // it). Its gradient, on the patch's own formula, at both ends: ∂z/∂x = ex + fv·fx and
+    // ∂z/∂y = ey + fu·fy with fu, fv the position in the patch.
+    const double tm = 0.5 * (t0 + t1), um = uAt(tm), vm = vAt(tm);
+    const int c0 = std::min(static_cast<int>(um), g.cols - 2);
+    const int r0 = std::min(static_cast<int>(vm), g.rows - 2);
+    const double z00 = dem_.z(r0, c0), z01 = dem_.z(r0, c0 + 1), z10 = dem_.z(r0 + 1, c0),
+                 z11 = dem_.z(r0 + 1, c0 + 1);
+    if (!std::isnan(z00 + z01 + z10 + z11)) {  // no surface: skipped, as a sample would be
+      // vm >= 0: rounding half up is std::lround's rounding.
+      const double invW = 1.0 / (perRow ? dem_.dx(std::min(static_cast<int>(vm + 0.5), g.rows - 1)) : g.cellWidth);
+      const double ex = (z01 - z00) * invW, fx = (z11 - z10 - z01 + z00) * invW;
+      const double ey = -(z10 - z00) * invDy, fy = -(z11 - z01 - z10 + z00) * invDy;
+      for (const double t : {t0, t1}) {
+        const double fu = std::clamp(uAt(t) - c0, 0.0, 1.0), fv = std::clamp(vAt(t) - r0, 0.0, 1.0);
+        const double dzdx = ex + fv * fx, dzdy = ey + fu * fy;
+        maxPitch = std::max(maxPitch, std::abs(dzdx * c + dzdy * s));
+        maxRoll = std::max(maxRoll, std::abs(-dzdx * s + dzdy * c));
+      }
+    }
+    t0 = t1;
+  }
+  tanPitch = maxPitch;
+  tanRoll = maxRoll;
+  return true;
 }
 
 std::optional<EdgeTerms> TerrainEdgeModel::validEdgeTerms(const Eigen::Vector2d& a,
@@ -468,6 +561,7 @@ PathResult planPath(const terrain::Dem& dem, const Raster<std::uint8_t>& classes
     if (!z.centre.allFinite() || !std::isfinite(z.radius) || z.radius < 0)
       throwInvalidParameter("keep_out", "zones need a finite centre and a radius >= 0");
   model.setKeepOut(keepOut);
+  model.setEvaluation(params.evaluation);
 
   PathResult r;
   if (!model.pointValid(start)) {

@@ -41,6 +41,23 @@ struct TerrainCostWeights {
   void validate() const;
 };
 
+// How eq. 9's φ and θ of an edge are evaluated (issue 25).
+enum class EdgeEvaluation {
+  // The paper mode's and planPath's own default: `sampled`, except `patch` in the team's timed
+  // mode (coordinate() resolves it).
+  Auto,
+  // Paper 001: the largest |roll| and |pitch| over samples edge_resolution apart.
+  Sampled,
+  // Ours: the exact largest |roll| and |pitch| over the whole edge on the bilinear surface. Inside
+  // one bilinear patch (the square between four cell centres) ∂z/∂x is linear in y alone and
+  // ∂z/∂y in x alone, so along a straight edge both — and with them tan pitch = ∇z·(cosψ, sinψ)
+  // and tan roll = ∇z·(−sinψ, cosψ) — are affine in the distance driven: their largest magnitude
+  // on a piece of the edge is at one of its two ends. The edge is cut where it crosses a row or
+  // column of cell centres and each piece is evaluated at its ends with its own patch: 2 × (pieces)
+  // cheap evaluations instead of 4 bilinear samples per cell, and never below the sampled value.
+  Patch,
+};
+
 struct RrtParams {
   double range = 1.0;      // m, the longest edge of the tree (paper 001: 1 m)      key: range
   int maxVertices = 1250;  // the tree is grown to this many vertices (paper 001) key: max_vertices
@@ -54,6 +71,7 @@ struct RrtParams {
   // Safety cap on RRT* iterations (deterministic, like the vertex count): a start boxed in by
   // impassable cells could never grow the tree to maxVertices.           key: max_iterations
   int maxIterations = 100000;
+  EdgeEvaluation evaluation = EdgeEvaluation::Auto;  //                          key: edge_evaluation
 
   // Throws rover::Error(InvalidParameter) with the key as field.
   void validate() const;
@@ -145,6 +163,9 @@ class TerrainEdgeModel {
   void setKeepOut(std::vector<KeepOutZone> zones) { keepOut_ = std::move(zones); }
   // Points must also lie in the corridor (null: no corridor). Not owned.
   void setCorridor(const Corridor* corridor) { corridor_ = corridor; }
+  // edgeTerms' φ and θ: Patch, the exact maxima over the edge; otherwise (the default) the
+  // samples'. Validity (edgeValid, validEdgeTerms) always reads the samples.
+  void setEvaluation(EdgeEvaluation e) { patch_ = e == EdgeEvaluation::Patch; }
 
   // Inside the bounds and the map, outside every keep-out zone, on a cell with data that is not
   // Impassable, with a defined surface (bilinear interpolation needs the four surrounding cell
@@ -159,7 +180,8 @@ class TerrainEdgeModel {
   // has |roll| and |pitch| strictly below the attitude limit for the edge's heading.
   bool edgeValid(const Eigen::Vector2d& a, const Eigen::Vector2d& b) const;
   // R, φ, θ of the edge a→b (φ, θ over the same samples as edgeValid, samples without a surface
-  // skipped); Δψ is the turn from `previousHeading` to the edge's heading (0 for a zero-length
+  // skipped; with EdgeEvaluation::Patch their exact maxima over the edge, patches without a
+  // surface skipped); Δψ is the turn from `previousHeading` to the edge's heading (0 for a zero-length
   // edge).
   EdgeTerms edgeTerms(const Eigen::Vector2d& a, const Eigen::Vector2d& b,
                       double previousHeading) const;
@@ -183,9 +205,14 @@ class TerrainEdgeModel {
   double resolution_;
   std::vector<KeepOutZone> keepOut_;
   const Corridor* corridor_ = nullptr;
+  bool patch_ = false;
   Eigen::Vector2d escapeCentre_{0, 0};
   double escapeRadius_ = 0;
   bool outsideKeepOut(const Eigen::Vector2d& p) const;
+  // The largest |tan pitch| and |tan roll| over the edge, exactly (EdgeEvaluation::Patch); false
+  // where that form does not apply (an end off the map): then the samples.
+  bool patchTangents(const Eigen::Vector2d& a, const Eigen::Vector2d& b, double c, double s,
+                     double& tanPitch, double& tanRoll) const;
   bool outsideDiscs(const Eigen::Vector2d& p) const;
   bool allowed(const Eigen::Vector2d& p) const;
   bool inEscape(const Eigen::Vector2d& p) const {
@@ -243,6 +270,14 @@ PathResult planPath(const terrain::Dem& dem, const Raster<std::uint8_t>& classes
 
 // The names of the values above (enum_names.hpp).
 namespace rover {
+template <>
+struct EnumNames<team::EdgeEvaluation> {
+  static constexpr std::array<EnumName<team::EdgeEvaluation>, 3> table{{
+      {team::EdgeEvaluation::Auto, "auto"},
+      {team::EdgeEvaluation::Sampled, "sampled"},
+      {team::EdgeEvaluation::Patch, "patch"},
+  }};
+};
 template <>
 struct EnumNames<team::PathStatus> {
   static constexpr std::array<EnumName<team::PathStatus>, 6> table{{

@@ -523,3 +523,28 @@ TEST_CASE("rrt: a vertex must be safe at every heading (turnValid), an edge only
   // Driving straight east: pitch 11°, roll 11° — a valid edge.
   CHECK(m.edgeValid({3, 5}, {7, 5}));
 }
+
+TEST_CASE("team: edge_evaluation auto is paper 001's sampling in the paper mode, the exact patch form in the timed mode") {
+  CoordinationParams p;
+  CHECK(p.rrt.evaluation == EdgeEvaluation::Auto);
+  p.mode = CoordinationMode::Paper;
+  CHECK(resolveEvaluation(p).rrt.evaluation == EdgeEvaluation::Sampled);
+  p.mode = CoordinationMode::Timed;
+  CHECK(resolveEvaluation(p).rrt.evaluation == EdgeEvaluation::Patch);
+  // A stated choice is kept in either mode.
+  p.rrt.evaluation = EdgeEvaluation::Sampled;
+  CHECK(resolveEvaluation(p).rrt.evaluation == EdgeEvaluation::Sampled);
+  p.mode = CoordinationMode::Paper;
+  p.rrt.evaluation = EdgeEvaluation::Patch;
+  CHECK(resolveEvaluation(p).rrt.evaluation == EdgeEvaluation::Patch);
+  // Through the parameter table: the key, its values, and a refusal naming it.
+  CHECK(parseTeamParams({{"edge_evaluation", std::string("patch")}}).mission.coordination.rrt.evaluation ==
+        EdgeEvaluation::Patch);
+  CHECK(parseTeamParams({}).mission.coordination.rrt.evaluation == EdgeEvaluation::Auto);
+  try {
+    (void)parseTeamParams({{"edge_evaluation", std::string("exact")}});
+    FAIL("no error");
+  } catch (const Error& e) {
+    CHECK(e.field() == "edge_evaluation");
+  }
+}

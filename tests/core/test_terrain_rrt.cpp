@@ -439,6 +439,72 @@ TEST_CASE("rrt: edge roll and pitch are terrain::attitudeAt's, maximised over th
   CHECK(valid < static_cast<int>(edges.size()));
 }
 
+TEST_CASE("rrt: the patch evaluation is the exact maximum over the edge, never below the samples") {
+  for (const bool perRow : {false, true}) {
+    CAPTURE(perRow);
+    // A rough literal surface: the gradient jumps at every row and column of cell centres.
+    Dem d = demFrom(24, 24, 0.25, [](double x, double y) {
+      return 0.2 * std::sin(1.3 * x) + 0.15 * std::cos(0.9 * y + 0.4 * x) + 0.03 * std::sin(7.0 * x * y);
+    });
+    // Per-row cell widths (a geographic grid): the width changes halfway between rows of centres.
+    if (perRow)
+      for (int r = 0; r < 24; ++r) d.rowCellWidth.push_back(0.25 * (0.8 + 0.02 * r));
+    const auto cls = allClass(d, TerrainClass::Traversable);
+    TerrainEdgeModel sampled(d, cls, wholeMap(d), 15 * kDeg, 0.0625);
+    TerrainEdgeModel dense(d, cls, wholeMap(d), 15 * kDeg, 1e-5);
+    TerrainEdgeModel patch(d, cls, wholeMap(d), 15 * kDeg, 0.0625);
+    patch.setEvaluation(EdgeEvaluation::Patch);
+    const std::vector<std::pair<Eigen::Vector2d, Eigen::Vector2d>> edges{
+        {{2, 2}, {2.9, 2.3}},     {{5, 5}, {4.2, 5.5}},   {{3, 4}, {3.1, 3.1}},
+        {{1.375, 1.2}, {2.125, 1.2}},  // along a row, from a column of centres to one
+        {{0.0, 0.0}, {0.6, 0.1}},      // from the map's corner, through the clamped border half cell
+        {{4, 3}, {4, 3.9}},            // due north: no column crossed
+        {{2.2, 2.2}, {2.2, 2.2}}};     // zero length
+    for (const auto& [a, b] : edges) {
+      CAPTURE(a.transpose());
+      CAPTURE(b.transpose());
+      const EdgeTerms p = patch.edgeTerms(a, b), s = sampled.edgeTerms(a, b), e = dense.edgeTerms(a, b);
+      CHECK(p.length == s.length);
+      CHECK(p.roll >= s.roll - 1e-12);  // the same point in another order of operations
+      CHECK(p.pitch >= s.pitch - 1e-12);
+      // The dense samples approach the exact maximum from below (10 µm apart: within 1e-4 rad).
+      CHECK(p.roll == doctest::Approx(e.roll).epsilon(1e-4));
+      CHECK(p.pitch == doctest::Approx(e.pitch).epsilon(1e-4));
+      CHECK(p.roll >= e.roll - 1e-12);
+      CHECK(p.pitch >= e.pitch - 1e-12);
+    }
+  }
+  // On a plane the gradient is the same everywhere: both evaluations agree exactly.
+  const double g = std::tan(10 * kDeg);
+  Dem plane = demFrom(16, 16, 0.25, [g](double x, double y) { return g * x - 0.5 * g * y; });
+  const auto planeClasses = allClass(plane, TerrainClass::Traversable);
+  TerrainEdgeModel planeSampled(plane, planeClasses, wholeMap(plane), 15 * kDeg, 0.0625);
+  TerrainEdgeModel planePatch(plane, planeClasses, wholeMap(plane), 15 * kDeg, 0.0625);
+  planePatch.setEvaluation(EdgeEvaluation::Patch);
+  const EdgeTerms ps = planeSampled.edgeTerms({1, 1}, {1.7, 1.6}), pp = planePatch.edgeTerms({1, 1}, {1.7, 1.6});
+  CHECK(pp.roll == doctest::Approx(ps.roll).epsilon(1e-6));  // heights are floats
+  CHECK(pp.pitch == doctest::Approx(ps.pitch).epsilon(1e-6));
+}
+
+TEST_CASE("rrt: the patch evaluation plans on the same terms, deterministically") {
+  Dem d = demFrom(40, 40, 0.25, [](double x, double y) { return 0.2 * std::sin(1.3 * x) + 0.15 * std::cos(0.9 * y); });
+  const auto cls = allClass(d, TerrainClass::Traversable);
+  RrtParams p;
+  p.maxVertices = 300;
+  p.seed = 7;
+  p.evaluation = EdgeEvaluation::Patch;
+  const PathResult a = planPath(d, cls, {2, 2}, 0.0, {7, 6}, p);
+  const PathResult b = planPath(d, cls, {2, 2}, 0.0, {7, 6}, p);
+  REQUIRE(a.status == PathStatus::Exact);
+  CHECK(a.waypoints == b.waypoints);
+  // The reported cost is eq. 9 with the patch terms, which are never below the samples'.
+  TerrainEdgeModel patch(d, cls, wholeMap(d), p.attitudeLimit, edgeResolutionOn(d.geometry(), p));
+  patch.setEvaluation(EdgeEvaluation::Patch);
+  TerrainEdgeModel sampled(d, cls, wholeMap(d), p.attitudeLimit, edgeResolutionOn(d.geometry(), p));
+  CHECK(a.cost == doctest::Approx(pathCost(patch, a.waypoints, 0.0, {}, false)));
+  CHECK(a.cost >= pathCost(sampled, a.waypoints, 0.0, {}, false) - 1e-12);
+}
+
 TEST_CASE("rrt: the grid neighbours answer what a linear scan answers, in the same order") {
   // Points in a 7 × 4 m box (some on its edges), queries inside it: nearestR over radii up to the
   // range and beyond a bucket, nearestK and nearest, against OMPL's brute-force structure.
