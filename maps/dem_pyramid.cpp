@@ -132,10 +132,13 @@ void writeDemCog(const std::string& path, const Raster<float>& dem) {
     throw std::runtime_error("cannot wrap the grid for " + path);
   georeference(src.get(), g, dem.geo);
   GDALSetRasterNoDataValue(GDALGetRasterBand(src.get(), 1), std::numeric_limits<double>::quiet_NaN());
-  // DEFLATE with the floating-point predictor: lossless, and what every GeoTIFF reader decodes.
-  // Level 1: the import's time budget (upload to first tile) prefers speed to the last few percent.
+  // ZSTD level 1 with the floating-point predictor: lossless, and read by every GDAL since 2.3.
+  // Against DEFLATE level 1 (both measured with gdal_translate -of COG on a 3000² generated DEM,
+  // one thread): 0.62 s against 0.83 s of CPU to write, 0.22 against 0.26 s to read back, the
+  // same size (30.9 MB); LERC (lossless) read faster but took 56 % more disk, LZW 30 % more and
+  // slower both ways. A tile decompresses up to 9 blocks (its halo crosses block edges).
   const std::string count = "OVERVIEW_COUNT=" + std::to_string(overviewLevels(g));
-  const char* options[] = {"BLOCKSIZE=256",        "COMPRESS=DEFLATE",  "LEVEL=1",
+  const char* options[] = {"BLOCKSIZE=256",        "COMPRESS=ZSTD",     "LEVEL=1",
                            "PREDICTOR=YES",        "OVERVIEW_RESAMPLING=AVERAGE",
                            count.c_str(),          "NUM_THREADS=ALL_CPUS", "BIGTIFF=IF_SAFER",
                            overviewLevels(g) == 0 ? "OVERVIEWS=NONE" : "OVERVIEWS=AUTO", nullptr};
@@ -156,7 +159,7 @@ void writeClassPyramid(const std::string& path, const Raster<std::uint8_t>& clas
   ensureGdal();
   GdalErrorLog errors;
   const GridGeometry& g = classes.geometry;
-  const char* options[] = {"TILED=YES", "BLOCKXSIZE=256", "BLOCKYSIZE=256", "COMPRESS=DEFLATE", "ZLEVEL=1",
+  const char* options[] = {"TILED=YES", "BLOCKXSIZE=256", "BLOCKYSIZE=256", "COMPRESS=ZSTD", "ZSTD_LEVEL=1",
                            "BIGTIFF=IF_SAFER", nullptr};
   const std::string tmp = path + ".tmp";
   CPLErrorReset();

@@ -19,9 +19,11 @@
 #include "maps/georef.hpp"
 #include "maps/tile_grid.hpp"
 #include "maps/synthetic_terrain.hpp"
+#include "server/api/import_stages.hpp"
 #include "server/api/map_files.hpp"
 #include "server/http/http_types.hpp"
 #include "server/json/json_edge.hpp"
+#include "server/missions/bulk_heap.hpp"
 
 namespace rover::api {
 
@@ -87,7 +89,8 @@ jail::JailConfig MapCatalog::importJail() const {
   return jail_;
 }
 
-maps::LoadedDem MapCatalog::importJailed(const std::string& inDir, jail::ImportRequest req, std::string& rasterName) {
+maps::LoadedDem MapCatalog::importJailed(const std::string& inDir, jail::ImportRequest req, std::string& rasterName,
+                                         ImportStages* stages) {
   const jail::JailConfig config = importJail();
   const bool pdm = req.kind == "pdm";
   const std::string invalid = pdm ? "invalid_pdm" : "invalid_dem";
@@ -100,6 +103,7 @@ maps::LoadedDem MapCatalog::importJailed(const std::string& inDir, jail::ImportR
   } removeOut{out};
   jail::writeImportRequest(out, req);
   const jail::JailRun run = jail::runJailed(config, inDir, out);
+  if (stages) stages->done("worker");
   auto logWorker = [&](const std::string& why) {
     // What the worker said on stderr stays in the server's log; the client gets our words.
     std::ifstream log(fs::path(out) / "worker.log");
@@ -184,14 +188,22 @@ store::MapRecord MapCatalog::importDem(const std::vector<UploadedFile>& files, c
     req.load = options.load;
     req.load.maxCells = maxCells_;
     std::string raster;
-    maps::LoadedDem d = importJailed(staging, req, raster);
+    ImportStages stages;
+    // GDAL's writers allocate and free buffers of several MiB per strip: kept in the heap for the
+    // import (server/missions/bulk_heap.hpp), returned when it ends.
+    const missions::BulkHeap bulkHeap;
+    maps::LoadedDem d = importJailed(staging, req, raster, &stages);
+    stages.done("grid");
     // The heights (one float copy, the worker's grid) and their classes (a byte a cell) are the
     // import's whole memory; the map is stored as its tile pyramid (maps/dem_pyramid.hpp), so no
     // tile ever needs the whole raster again.
     terrain::Traversability t = terrain::traversability(d.dem);
+    stages.done("classes");
     storingGeoTiff([&] {
       maps::writeDemCog((fs::path(staging) / kDemFile).string(), d.dem.z);
+      stages.done("dem.tif");
       maps::writeClassPyramid((fs::path(staging) / kClassFile).string(), t.classes);
+      stages.done("classes.tif");
     });
     store::MapRecord rec;
     rec.id = store::DataDir::newId();
@@ -205,11 +217,12 @@ store::MapRecord MapCatalog::importDem(const std::vector<UploadedFile>& files, c
     }
     rec.createdAt = store::nowIso();
     rec.meta = metaFor(d, t, sources);
+    stages.done("digest");
     // Every tile's ramp, fixed at import (the full-size picture's: maps::colourRange).
     const maps::ColourRange ramp = maps::colourRange(maps::RenderLayer::Elevation, d.dem.z);
     rec.meta["colour_range"] = {ramp.lo, ramp.hi};
     rec.meta["storage"] = {{"elevation", "cog"},
-                           {"codec", "deflate"},
+                           {"codec", "zstd"},
                            {"overviews", maps::tileGridOf(d.dem.geometry().rows, d.dem.geometry().cols).nativeZoom}};
     // The body the planners assume: declared with the upload, else read from the CRS.
     const terrain::Body body = options.body ? *options.body : maps::bodyOfCrs(d.dem.z.geo.crsWkt);
@@ -222,6 +235,8 @@ store::MapRecord MapCatalog::importDem(const std::vector<UploadedFile>& files, c
     // Files first, then the row: a crash in between leaves an orphan folder nobody lists.
     dir_.commitDir(staging, dir_.mapDir(rec.id), store::DiskCharge{store::DiskUse::Map, rec.id, "file"});
     db_.insertMap(rec);
+    stages.done("commit");
+    std::cerr << "import " << d.dem.geometry().cols << "x" << d.dem.geometry().rows << ": " << stages.line() << std::endl;
     return rec;
   } catch (...) {
     store::DataDir::removeTree(staging);
