@@ -2,7 +2,7 @@
 // A stored map as tiled, overviewed rasters (issue 24), so a tile at any zoom reads about 256²
 // cells (plus its halo) whatever the map's size:
 // - dem.tif, the elevation as a Cloud-Optimised GeoTIFF (GDAL's COG driver): 256² internal tiles,
-//   ZSTD with the floating-point predictor (lossless), NaN as nodata, and one overview per
+//   ZSTD with horizontal differencing (lossless), NaN as nodata, and one overview per
 //   zoom below the tile grid's native zoom, each GDAL's AVERAGE over 2^k × 2^k cells: the blocks
 //   of zoom native − k (maps/tile_grid.hpp), except that the driver rounds a level's size down
 //   (floor(size / 2^k) where the grid has ceil), so a level's pixels drift by up to one cell

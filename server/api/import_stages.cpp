@@ -41,6 +41,8 @@ void ImportStages::done(const char* stage) {
   lastCpu_ = cpu;
 }
 
+void ImportStages::note(std::string text) { notes_ += (notes_.empty() ? "" : "; ") + std::move(text); }
+
 std::string ImportStages::line() const {
   std::string out;
   char buf[160];
@@ -49,7 +51,7 @@ std::string ImportStages::line() const {
     out += buf;
   }
   std::snprintf(buf, sizeof buf, "total %.2f s", std::chrono::duration<double>(last_ - start_).count());
-  return out + buf;
+  return out + buf + (notes_.empty() ? "" : " (" + notes_ + ")");
 }
 
 }  // namespace rover::api

@@ -15,6 +15,7 @@ class ImportStages {
  public:
   ImportStages();
   void done(const char* stage);  // closes the stage begun at the previous done() (or construction)
+  void note(std::string text);    // said after the stages (what ran alongside them)
   std::string line() const;      // "worker 4.1 s (cpu 0.0 s, peak 220 MiB), ..., total 9.8 s"
 
  private:
@@ -25,6 +26,7 @@ class ImportStages {
   std::chrono::steady_clock::time_point start_, last_;
   double lastCpu_ = 0;
   std::vector<Stage> stages_;
+  std::string notes_;
 };
 
 }  // namespace rover::api
