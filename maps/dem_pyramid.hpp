@@ -45,6 +45,11 @@ terrain::Dem readDemBlocks(const std::string& path, const DemHeader& header, int
 // The worst class of `span`'s blocks of the stored class pyramid at `path`.
 Raster<std::uint8_t> readClassBlocks(const std::string& path, int step, const BlockSpan& span);
 
+// readDemBlocks and readClassBlocks keep a few open handles per stored file (a file rewritten at
+// the same path is opened afresh). Closes those of the files under `dir` (a deleted map's folder),
+// so their disk space is freed now.
+void forgetStoredRasters(const std::string& dir);
+
 // A stored map's tiles (elevation, hillshade, slope, traversability) drawn from its pyramid:
 // `demPath` (the COG, or an older tiled GeoTIFF), `classPath` (the class pyramid), the DEM's
 // header (readDemHeader, once per map) and the map's ramp (fixed at import). No PDM: pdm() throws
