@@ -257,3 +257,23 @@ TEST_CASE("pyramid: a geographic map's block rows keep their own widths") {
   CHECK(blocks.rowCellWidth == blockRowWidths(whole.dem.rowCellWidth, 600, 2, span));
   CHECK(blocks.rowCellWidth.front() < blocks.rowCellWidth.back());  // north is narrower
 }
+
+TEST_CASE("pyramid: a stored raster rewritten at the same path is read afresh, not through a kept-open handle") {
+  // readDemBlocks keeps open handles between tiles; a file replaced in place (new inode) must be
+  // read as it is now, and forgetStoredRasters closes the handles of a deleted map's folder.
+  TempDir dir;
+  terrain::Dem first = wavyDem(300, 280, 1.0), second = wavyDem(300, 280, 1.0);
+  for (int k = 0; k < second.geometry().cellCount(); ++k) second.z.at(k) += 100.0f;
+  const BlockSpan span{10, 20, 40, 30};
+  writeDemCog(dir.file("dem.tif"), first.z);
+  const DemHeader header = readDemHeader(dir.file("dem.tif"));
+  const terrain::Dem a = readDemBlocks(dir.file("dem.tif"), header, 1, span);
+  CHECK(sameFloat(a.z(0, 0), first.z(10, 20)));
+  CHECK(sameFloat(readDemBlocks(dir.file("dem.tif"), header, 1, span).z(5, 5), first.z(15, 25)));  // kept handle
+  writeDemCog(dir.file("dem.tif"), second.z);
+  const terrain::Dem b = readDemBlocks(dir.file("dem.tif"), header, 1, span);
+  for (int r = 0; r < span.rows; ++r)
+    for (int c = 0; c < span.cols; ++c) REQUIRE(sameFloat(b.z(r, c), second.z(span.r0 + r, span.c0 + c)));
+  forgetStoredRasters(dir.path.string());
+  CHECK(sameFloat(readDemBlocks(dir.file("dem.tif"), header, 1, span).z(0, 0), second.z(10, 20)));
+}
