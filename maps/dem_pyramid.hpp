@@ -2,12 +2,12 @@
 // A stored map as tiled, overviewed rasters (issue 24), so a tile at any zoom reads about 256²
 // cells (plus its halo) whatever the map's size:
 // - dem.tif, the elevation as a Cloud-Optimised GeoTIFF (GDAL's COG driver): 256² internal tiles,
-//   DEFLATE with the floating-point predictor (lossless), NaN as nodata, and one overview per
+//   ZSTD with horizontal differencing (lossless), NaN as nodata, and one overview per
 //   zoom below the tile grid's native zoom, each GDAL's AVERAGE over 2^k × 2^k cells: the blocks
 //   of zoom native − k (maps/tile_grid.hpp), except that the driver rounds a level's size down
 //   (floor(size / 2^k) where the grid has ceil), so a level's pixels drift by up to one cell
 //   of the full grid across the map and a cut last block reads its neighbour.
-// - classes.tif, the traversability classes (uint8, tiled) with internal overviews of exactly the
+// - classes.tif, the traversability classes (uint8, tiled, ZSTD) with internal overviews of exactly the
 //   grid's blocks (ceil sizes) filled with the worst class of each block, computed exactly (the
 //   worst of the worst is the worst, level by level).
 // The readers answer a tile's blocks (maps/map_tiles.hpp BlockSpan) from the level of its zoom; a
@@ -44,6 +44,11 @@ terrain::Dem readDemBlocks(const std::string& path, const DemHeader& header, int
 
 // The worst class of `span`'s blocks of the stored class pyramid at `path`.
 Raster<std::uint8_t> readClassBlocks(const std::string& path, int step, const BlockSpan& span);
+
+// readDemBlocks and readClassBlocks keep a few open handles per stored file (a file rewritten at
+// the same path is opened afresh). Closes those of the files under `dir` (a deleted map's folder),
+// so their disk space is freed now.
+void forgetStoredRasters(const std::string& dir);
 
 // A stored map's tiles (elevation, hillshade, slope, traversability) drawn from its pyramid:
 // `demPath` (the COG, or an older tiled GeoTIFF), `classPath` (the class pyramid), the DEM's

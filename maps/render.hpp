@@ -54,7 +54,7 @@ struct Image {
 // Throws rover::Error (InvalidInput, field "layer") when the raster the layer needs is missing or
 // empty, (InvalidInput, field "hillshade") when the shading raster does not match the DEM.
 Image renderLayer(RenderLayer layer, const RenderInput& input, const RenderOptions& options = {});
-// PNG bytes (8-bit RGBA) through GDAL's PNG driver in memory; throws rover::Error (InvalidInput,
+// PNG bytes (8-bit RGBA, every row filtered "Up", zlib level 1: maps/png_encode.cpp); throws rover::Error (InvalidInput,
 // field "image") for an image whose buffer does not match its size.
 std::vector<std::uint8_t> encodePng(const Image& image);
 

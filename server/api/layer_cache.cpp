@@ -23,7 +23,9 @@ LayerCache::LayerCache(const std::string& mapsRoot, std::uint64_t capBytes,
     for (const auto& f : fs::directory_iterator(map.path() / "layers", ec2)) {
       std::error_code ec3;
       if (!f.is_regular_file(ec3)) continue;
-      if (stale && stale(f.path().filename().string())) {
+      // Tiles are written without fsync (DataDir::writeFileAtomic, durable = false): a crash can
+      // leave one empty, and an empty file is no tile.
+      if ((stale && stale(f.path().filename().string())) || f.file_size(ec3) == 0) {
         fs::remove(f.path(), ec3);
         continue;
       }

@@ -9,6 +9,7 @@
 
 #include "core/common/error.hpp"
 #include "maps/dem_io.hpp"
+#include "maps/dem_pyramid.hpp"
 #include "maps/georef.hpp"
 #include "maps/gdal_env.hpp"
 #include "server/api/map_files.hpp"
@@ -96,6 +97,7 @@ void MapCatalog::remove(const std::string& id) {
   }
   for (const auto& p : pdms) dir_.remove(dir_.pdmDir(p.id));
   layers_.forgetUnder(dir_.mapDir(id));
+  maps::forgetStoredRasters(dir_.mapDir(id));  // open tile readers (maps/dem_pyramid.hpp)
   dir_.remove(dir_.mapDir(id));
 }
 

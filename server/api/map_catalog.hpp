@@ -48,6 +48,8 @@ struct UploadedFile {
   std::string filename;  // the client's name for it ("" when unknown)
 };
 
+class ImportStages;  // server/api/import_stages.hpp
+
 class MapCatalog {
  public:
   // Layer files (PNG/GeoTIFF/f32 renderings) are a cache of at most layerCacheBytes per data dir.
@@ -144,7 +146,8 @@ class MapCatalog {
  private:
   // Runs the import worker on the client's files in `inDir`; answers ApiError 400/413 for the
   // file's faults (its own message, a crash with the signal, a deadline), 500 when it cannot start.
-  maps::LoadedDem importJailed(const std::string& inDir, jail::ImportRequest req, std::string& rasterName);
+  maps::LoadedDem importJailed(const std::string& inDir, jail::ImportRequest req, std::string& rasterName,
+                               ImportStages* stages = nullptr);
   std::shared_ptr<const MapData> loadFromDisk(const store::MapRecord& r);
   // The stored DEM's header (grid, per-row widths), read once per map for its tiles
   // (map_tile_files.cpp); a few maps are kept.

@@ -114,7 +114,7 @@ std::string MapCatalog::tileFile(const std::string& id, const std::string& layer
       const auto& ramp = rec->meta["colour_range"];
       const maps::PyramidBlocks blocks((mapDir / kDemFile).string(), (mapDir / kClassFile).string(), storedHeader(id),
                                        {ramp[0].get<double>(), ramp[1].get<double>()});
-      store::DataDir::writeFileAtomic(path, tileBytes(blocks, l, format, *window));
+      store::DataDir::writeFileAtomic(path, tileBytes(blocks, l, format, *window), false);  // a cache file
       return;
     }
     auto map = get(id);  // a PDM, or a map stored before the pyramid: the whole map in memory
@@ -129,7 +129,7 @@ std::string MapCatalog::tileFile(const std::string& id, const std::string& layer
       src.range = maps::colourRange(maps::RenderLayer::Pdm, *mass);  // one pass over the mass
     }
     const std::string bytes = tileBytes(src, l, format, *window);
-    store::DataDir::writeFileAtomic(path, bytes);
+    store::DataDir::writeFileAtomic(path, bytes, false);
   });
 }
 

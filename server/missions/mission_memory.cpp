@@ -1,5 +1,7 @@
 #include "server/missions/mission_memory.hpp"
 
+#include "server/missions/bulk_heap.hpp"
+
 #include <malloc.h>
 #include <unistd.h>
 
@@ -25,13 +27,40 @@ std::uint64_t defaultMissionMemoryBudget() {
 // freed), and an arena's top beyond 4 MiB is given back on the free that grows it. Below 4 MiB
 // (a 600 × 600 float grid is 1.4 MiB) blocks stay in the arenas, so the many short runs of a
 // study do not fault fresh pages for every grid.
+namespace {
+constexpr int kThreshold = 4 << 20;
+std::mutex heapMutex;
+bool promptly = false;  // returnFreedMemoryPromptly has set the thresholds
+int bulk = 0;           // live BulkHeaps
+}  // namespace
+
 void returnFreedMemoryPromptly() {
   static std::once_flag once;
   std::call_once(once, [] {
-    constexpr int kThreshold = 4 << 20;
+    std::lock_guard lock(heapMutex);
+    promptly = true;
+    if (bulk > 0) return;  // the last BulkHeap sets them
     ::mallopt(M_MMAP_THRESHOLD, kThreshold);
     ::mallopt(M_TRIM_THRESHOLD, kThreshold);
   });
+}
+
+BulkHeap::BulkHeap() {
+  std::lock_guard lock(heapMutex);
+  if (!promptly) return;
+  active_ = true;
+  if (bulk++ > 0) return;
+  constexpr int kBulk = 256 << 20;
+  ::mallopt(M_MMAP_THRESHOLD, kBulk);
+  ::mallopt(M_TRIM_THRESHOLD, kBulk);
+}
+
+BulkHeap::~BulkHeap() {
+  std::lock_guard lock(heapMutex);
+  if (!active_ || --bulk > 0) return;
+  ::mallopt(M_MMAP_THRESHOLD, kThreshold);
+  ::mallopt(M_TRIM_THRESHOLD, kThreshold);
+  ::malloc_trim(0);
 }
 
 std::string formatBytes(std::uint64_t bytes) {

@@ -178,7 +178,7 @@ void DataDir::commitDir(const std::string& staged, const std::string& finalDir,
   fsyncDirBestEffort(fs::path(staged).parent_path());
 }
 
-void DataDir::writeFileAtomic(const std::string& path, const std::string& bytes) {
+void DataDir::writeFileAtomic(const std::string& path, const std::string& bytes, bool durable) {
   const fs::path target(path);
   const fs::path dir = target.has_parent_path() ? target.parent_path() : fs::path(".");
   std::string tmpName = ".";  // hidden, and unique per call
@@ -209,14 +209,14 @@ void DataDir::writeFileAtomic(const std::string& path, const std::string& bytes)
     p += n;
     left -= static_cast<std::size_t>(n);
   }
-  if (::fsync(fd) != 0) {
+  if (durable && ::fsync(fd) != 0) {
     const int err = errno;
     ::close(fd);
     failWith("fsync", err);
   }
   if (::close(fd) != 0) failWith("close", errno);
   if (::rename(tmp.c_str(), target.c_str()) != 0) failWith("rename", errno);
-  fsyncDirBestEffort(dir);
+  if (durable) fsyncDirBestEffort(dir);
 }
 
 void DataDir::remove(const std::string& path) const {

@@ -1,7 +1,10 @@
 #!/usr/bin/env python3
 """Full-size DEMs through the server (issue 24), printed, never asserted.
 
-  tests/bench/big_map.py [ROVERPLAN] [--sizes 7000x7000,20000x15000] [--clients 16] [--tiles 128]
+  tests/bench/big_map.py [ROVERPLAN ...] [--sizes 7000x7000,20000x15000] [--clients 16] [--tiles 128]
+
+With several binaries (e.g. main's and a branch's), each size's DEM is made once and put through
+each binary in turn, on its own fresh server: a side-by-side from one sitting on the same input.
 
 For each size, a deterministic DEM (seed 24) is made with GDAL's command-line tools alone: three
 octaves of seeded random heights on small grids (Python's random, written as raw float32 with an
@@ -23,11 +26,12 @@ import threading, time, urllib.request
 root = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 args = sys.argv[1:]
 opts = {"--sizes": "7000x7000,20000x15000", "--clients": "16", "--tiles": "128"}
-binary = os.path.join(root, "build/bin/roverplan")
+binaries = []
 while args:
     a = args.pop(0)
     if a in opts: opts[a] = args.pop(0)
-    else: binary = a
+    else: binaries.append(a)
+binaries = binaries or [os.path.join(root, "build/bin/roverplan")]
 clients, ntiles = int(opts["--clients"]), int(opts["--tiles"])
 
 
@@ -74,6 +78,16 @@ def make_dem(work, cols, rows):
     return out
 
 
+def cpu_of(pid):
+    """User and system CPU seconds of `pid` and its reaped children (the import worker)."""
+    try:
+        with open(f"/proc/{pid}/stat") as f:
+            fields = f.read().rsplit(")", 1)[1].split()
+        return sum(int(v) for v in fields[11:15]) / os.sysconf("SC_CLK_TCK")
+    except OSError:
+        return 0.0
+
+
 def status_of(pid):
     try:
         with open(f"/proc/{pid}/status") as f:
@@ -117,6 +131,13 @@ def bench(work, cols, rows):
     t = time.perf_counter()
     dem = make_dem(work, cols, rows)
     print(f"generated with gdal in {time.perf_counter() - t:.0f} s: {os.path.getsize(dem) / 1e6:.0f} MB upload")
+    for binary in binaries:
+        if len(binaries) > 1:
+            print(f"-- {binary}")
+        serve(work, dem, binary)
+
+
+def serve(work, dem, binary):
     port = free_port()
     data = os.path.join(work, "data")
     server = subprocess.Popen([binary, "serve", "--port", str(port), "--data", data, "--quiet"],
@@ -130,6 +151,14 @@ def bench(work, cols, rows):
             except Exception:
                 time.sleep(0.1)
         rss_before = kib(status_of(server.pid), "VmRSS")
+        log = []  # the server's stderr: its one line per import names the stages
+
+        def drain():
+            for line in server.stderr:
+                log.append(line.decode(errors="replace").rstrip())
+
+        threading.Thread(target=drain, daemon=True).start()
+        cpu0 = cpu_of(server.pid)
         worker_peak = [0]
         done = threading.Event()
 
@@ -162,11 +191,15 @@ def bench(work, cols, rows):
         with cf.ThreadPoolExecutor(4) as ex:
             firsts = list(ex.map(lambda a: get(url + a), first))
         t_first = time.perf_counter() - t0
+        cpu_first = cpu_of(server.pid) - cpu0
         done.set()
         sampler.join()
         st = status_of(server.pid)
         print(f"upload + import: {t_import:.1f} s; upload -> first tiles (z=0 and native, elevation and hillshade): "
-              f"{t_first:.1f} s; statuses {[x[1] for x in firsts]}")
+              f"{t_first:.1f} s (cpu {cpu_first:.1f} s, server and worker); statuses {[x[1] for x in firsts]}")
+        for line in log:
+            if line.startswith("import "):
+                print("  stages: " + line)
         print(f"server peak RSS {kib(st, 'VmHWM') / 1024:.0f} MiB (before the upload {rss_before / 1024:.0f} MiB); "
               f"import worker peak RSS (sampled) {worker_peak[0] / 1024:.0f} MiB")
         stored = os.path.join(data, "maps", m["id"], "dem.tif")
@@ -205,10 +238,12 @@ def bench(work, cols, rows):
         print(f"cold, one client, {len(solo_addrs)} tiles over zooms 0..{n}: p50 {pct(ms, .5):.1f} ms, "
               f"p99 {pct(ms, .99):.1f} ms")
 
+        cpu0 = cpu_of(server.pid)
         cold, secs = run()
+        cpu_cold = cpu_of(server.pid) - cpu0
         ms = [x[0] for x in cold]
         print(f"cold, {len(addrs)} tiles over zooms 0..{n}, {clients} clients: p50 {pct(ms, .5):.1f} ms, "
-              f"p99 {pct(ms, .99):.1f} ms, max {max(ms):.1f} ms, {len(addrs) / secs:.0f} tiles/s; "
+              f"p99 {pct(ms, .99):.1f} ms, max {max(ms):.1f} ms, {len(addrs) / secs:.0f} tiles/s, cpu {1000 * cpu_cold / len(addrs):.1f} ms a tile; "
               f"statuses {sorted(set(x[1] for x in cold))}")
         warm, secs = run()
         ms = [x[0] for x in warm]
