@@ -26,6 +26,8 @@ void TeamMissionParams::validate() const {
     throwInvalidParameter("hybrid_coverage", "must be in (0, 1]");
   if (!std::isfinite(keepOutMargin) || keepOutMargin < 0 || keepOutMargin > 10)
     throwInvalidParameter("keep_out_margin", "must be a number of metres in [0, 10]");
+  if (subTeamSize < 0 || subTeamSize > 64)
+    throwInvalidParameter("sub_team_size", "must be a whole number of rovers in [0, 64] (0 = one team)");
   for (std::size_t z = 0; z < keepOut.zones.size(); ++z)
     for (const Ring& ring : keepOut.zones[z])
       for (const auto& v : ring)

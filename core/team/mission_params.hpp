@@ -32,6 +32,10 @@ struct TeamMissionParams {
   // cuts corners by up to ~0.3 m, and a try with a sample in a zone's cells is refused).
   KeepOut keepOut;
   double keepOutMargin = 0.5;  // m                                          [keep_out_margin]
+  // Timed coordination only (issue 25, sub_teams.hpp): teams larger than this split into
+  // ⌈N / subTeamSize⌉ sub-teams, each flying paper 001's formation over its own segment of the
+  // route; 0 = one team whatever N. The paper mode always keeps paper 001's single team.
+  int subTeamSize = 5;  //                                                        [sub_team_size]
 
   void validate() const;
 };

@@ -19,28 +19,38 @@ void requireStarts(const std::vector<Pose>& starts) {
 
 namespace {
 
-// Per target, per rover: the slot goal (nullopt when there is none).
+// Per target, per rover: the slot goal (nullopt when there is none, or when the rover's sub-team
+// does not visit the target).
 std::vector<std::vector<std::optional<Eigen::Vector2d>>> slotGoals(
     const terrain::Dem& dem, const Raster<std::uint8_t>& classes, int rovers, const Route& route,
-    const TeamMissionParams& params, const Raster<std::uint8_t>* reachable, const CancelToken* cancel) {
+    const TeamMissionParams& params, const Raster<std::uint8_t>* reachable, const CancelToken* cancel,
+    const SubTeams* teams) {
   const TerrainEdgeModel model = wholeMapModel(dem, classes, params.coordination.rrt);
   const double spacing = goalSpacing(params.coordination);
-  const auto slots = goalSlots(rovers, params.footprint, spacing);
+  std::vector<int> everyone(static_cast<std::size_t>(rovers));
+  for (int k = 0; k < rovers; ++k) everyone[static_cast<std::size_t>(k)] = k;
+  // The formation of each sub-team size (at most two sizes: they differ by at most one).
+  std::vector<std::vector<Eigen::Vector2d>> slotsOfSize(static_cast<std::size_t>(rovers) + 1);
   // Timed (ours): the goal's whole stop circle is ground to turn on; paper: the goal alone.
   const double stopCircle = params.coordination.mode == CoordinationMode::Timed
                                 ? stopCircleRadius(params.coordination.controller)
                                 : 0.0;
   std::vector<std::vector<std::optional<Eigen::Vector2d>>> out;
-  for (const auto& centre : route.centres) {
+  for (std::size_t t = 0; t < route.centres.size(); ++t) {
     // Cancelled: the targets left get no goals (64 rovers × 10 000 targets are 640 000 searches).
     if (cancel && cancel->cancelled()) break;
-    std::vector<std::optional<Eigen::Vector2d>> goals;
+    const Eigen::Vector2d& centre = route.centres[t];
+    const std::vector<int>& members =
+        teams ? teams->rovers[static_cast<std::size_t>(teams->ofTarget[t])] : everyone;
+    auto& slots = slotsOfSize[members.size()];
+    if (slots.empty()) slots = goalSlots(static_cast<int>(members.size()), params.footprint, spacing);
+    std::vector<std::optional<Eigen::Vector2d>> goals(static_cast<std::size_t>(rovers));
     std::vector<Eigen::Vector2d> taken;
-    for (int k = 0; k < rovers; ++k) {
-      auto g = nearestValid(model, centre + slots[k], params.footprint / 2, spacing, taken,
+    for (std::size_t j = 0; j < members.size(); ++j) {
+      auto g = nearestValid(model, centre + slots[j], params.footprint / 2, spacing, taken,
                             reachable, stopCircle);
       if (g) taken.push_back(*g);
-      goals.push_back(g);
+      goals[static_cast<std::size_t>(members[j])] = g;
     }
     out.push_back(std::move(goals));
   }
@@ -53,10 +63,10 @@ std::vector<RoverTask> teamSearchTasks(const terrain::Dem& dem, const Raster<std
                                        const std::vector<Pose>& starts, const Route& route,
                                        const TeamMissionParams& params,
                                        const Raster<std::uint8_t>* reachable,
-                                       const CancelToken* cancel) {
+                                       const CancelToken* cancel, const SubTeams* teams) {
   requireStarts(starts);
   const int n = static_cast<int>(starts.size());
-  const auto goals = slotGoals(dem, classes, n, route, params, reachable, cancel);
+  const auto goals = slotGoals(dem, classes, n, route, params, reachable, cancel, teams);
   std::vector<RoverTask> tasks(starts.size());
   for (int k = 0; k < n; ++k) {
     tasks[k].start = starts[k];
@@ -118,10 +128,10 @@ coverage::World footprintWorld(const terrain::Dem& dem, const Raster<std::uint8_
 std::vector<RoverTask> hybridTasks(const terrain::Dem& dem, const Raster<std::uint8_t>& classes,
                                    const std::vector<Pose>& starts, const Route& route,
                                    const TeamMissionParams& params, const CancelToken* cancel,
-                                   const Raster<std::uint8_t>* reachable) {
+                                   const Raster<std::uint8_t>* reachable, const SubTeams* teams) {
   requireStarts(starts);
   const int n = static_cast<int>(starts.size());
-  const auto goals = slotGoals(dem, classes, n, route, params, reachable, cancel);
+  const auto goals = slotGoals(dem, classes, n, route, params, reachable, cancel, teams);
   const TerrainEdgeModel model = wholeMapModel(dem, classes, params.coordination.rrt);
   const int cells = std::max(1, static_cast<int>(std::lround(params.footprint / params.hybridCell)));
   const double cell = params.footprint / cells;
@@ -190,12 +200,12 @@ std::vector<RoverTask> hybridTasks(const terrain::Dem& dem, const Raster<std::ui
 
 std::vector<RoverTask> SlotTasks::build(const std::vector<Pose>& starts, const Route& route,
                                         const CancelToken* cancel) const {
-  return teamSearchTasks(dem_, classes_, starts, route, params_, reachable_, cancel);
+  return teamSearchTasks(dem_, classes_, starts, route, params_, reachable_, cancel, teams_);
 }
 
 std::vector<RoverTask> HybridTasks::build(const std::vector<Pose>& starts, const Route& route,
                                           const CancelToken* cancel) const {
-  return hybridTasks(dem_, classes_, starts, route, params_, cancel, reachable_);
+  return hybridTasks(dem_, classes_, starts, route, params_, cancel, reachable_, teams_);
 }
 
 }  // namespace rover::team

@@ -8,6 +8,9 @@
 //   (Laîné & Yoshida / Santra et al., SPEC §1, frontier mode, heights for β) over the footprint
 //   from the slots, as fixed points.
 // `reachable` (non-null): goals only on cells marked 1 (TraversalLattice::reachable).
+// `teams` (non-null, sub_teams.hpp): each target gets the formation of its own sub-team only (the
+// slots of that sub-team's size, in its rovers' order); the other rovers get no leg there. Null:
+// one team, every rover at every target (paper 001).
 #include <cstdint>
 #include <vector>
 
@@ -16,6 +19,7 @@
 #include "core/team/coordination.hpp"
 #include "core/team/mission_params.hpp"
 #include "core/team/route_search.hpp"
+#include "core/team/sub_teams.hpp"
 #include "core/terrain/dem.hpp"
 
 namespace rover::team {
@@ -32,14 +36,16 @@ class TaskBuilder {
 class GroundTaskBuilder : public TaskBuilder {
  public:
   GroundTaskBuilder(const terrain::Dem& dem, const Raster<std::uint8_t>& classes,
-                    const TeamMissionParams& params, const Raster<std::uint8_t>* reachable)
-      : dem_(dem), classes_(classes), params_(params), reachable_(reachable) {}
+                    const TeamMissionParams& params, const Raster<std::uint8_t>* reachable,
+                  const SubTeams* teams = nullptr)
+      : dem_(dem), classes_(classes), params_(params), reachable_(reachable), teams_(teams) {}
 
  protected:
   const terrain::Dem& dem_;
   const Raster<std::uint8_t>& classes_;
   const TeamMissionParams& params_;
   const Raster<std::uint8_t>* reachable_;
+  const SubTeams* teams_;
 };
 
 class SlotTasks final : public GroundTaskBuilder {
@@ -61,11 +67,13 @@ std::vector<RoverTask> teamSearchTasks(const terrain::Dem& dem, const Raster<std
                                        const std::vector<Pose>& starts, const Route& route,
                                        const TeamMissionParams& params,
                                        const Raster<std::uint8_t>* reachable = nullptr,
-                                       const CancelToken* cancel = nullptr);
+                                       const CancelToken* cancel = nullptr,
+                                       const SubTeams* teams = nullptr);
 std::vector<RoverTask> hybridTasks(const terrain::Dem& dem, const Raster<std::uint8_t>& classes,
                                    const std::vector<Pose>& starts, const Route& route,
                                    const TeamMissionParams& params, const CancelToken* cancel,
-                                   const Raster<std::uint8_t>* reachable = nullptr);
+                                   const Raster<std::uint8_t>* reachable = nullptr,
+                                   const SubTeams* teams = nullptr);
 
 // Throws InvalidInput "rovers" unless there are 1 to 64 starts.
 void requireStarts(const std::vector<Pose>& starts);

@@ -119,13 +119,18 @@ TeamMissionResult runTeamMission(const terrain::Dem& dem, const Raster<std::uint
   const std::unique_ptr<RouteGenerator> routes = makeRouteGenerator(params.routeMethod, params.route);
   out.route = routes->generate(out.grid, teamStartCell(out.grid, starts));
   out.routeCurve = accumulatedAlongRoute(out.grid, out.route);
-  out.slots = goalSlots(static_cast<int>(starts.size()), params.footprint, goalSpacing(params.coordination));
+  // Sub-teams (issue 25, sub_teams.hpp): timed coordination only; the paper mode keeps paper 001's
+  // single team of every rover at every target.
+  out.subTeams = splitTeam(starts, out.route.centres, timed ? params.subTeamSize : 0);
+  out.slots = goalSlots(static_cast<int>(out.subTeams.rovers.front().size()), params.footprint,
+                        goalSpacing(params.coordination));
   if (observer) observer->routeChosen(out.grid, out.route);
 
   const Raster<std::uint8_t>* goalsOn = timed ? &reach : nullptr;
+  const SubTeams* teams = out.subTeams.count() > 1 ? &out.subTeams : nullptr;
   std::unique_ptr<TaskBuilder> builder;
-  if (hybrid) builder = std::make_unique<HybridTasks>(dem, zoned, params, goalsOn);
-  else builder = std::make_unique<SlotTasks>(dem, zoned, params, goalsOn);
+  if (hybrid) builder = std::make_unique<HybridTasks>(dem, zoned, params, goalsOn, teams);
+  else builder = std::make_unique<SlotTasks>(dem, zoned, params, goalsOn, teams);
   const std::vector<RoverTask> tasks = builder->build(starts, out.route, cancel);
   // The (rover, target) pairs without a leg: one pass over each rover's legs (a search of its
   // legs per target was rovers × targets² — 6.4·10⁹ steps, tens of seconds nothing could cancel,
@@ -137,7 +142,9 @@ TeamMissionResult runTeamMission(const terrain::Dem& dem, const Raster<std::uint
     for (const Leg& l : tasks[k].legs)
       if (l.target >= 0 && l.target < targetCount) served[static_cast<std::size_t>(l.target)] = 1;
     for (int t = 0; t < targetCount; ++t)
-      if (!served[static_cast<std::size_t>(t)]) out.noSlot.emplace_back(static_cast<int>(k), t);
+      if (!served[static_cast<std::size_t>(t)] &&
+          out.subTeams.ofTarget[static_cast<std::size_t>(t)] == out.subTeams.ofRover[k])
+        out.noSlot.emplace_back(static_cast<int>(k), t);
   }
   TeamMissionParams p = params;
   p.coordination.slip.seed = deriveSeed(params.seed, 0x511b);

@@ -17,6 +17,7 @@
 #include "core/team/mission_params.hpp"
 #include "core/team/route_generator.hpp"
 #include "core/team/route_search.hpp"
+#include "core/team/sub_teams.hpp"
 #include "core/team/task_builder.hpp"
 #include "core/team/team_metrics.hpp"
 #include "core/terrain/layers.hpp"
@@ -47,7 +48,8 @@ struct TeamMissionResult {
   ReachabilityReport reachability;
   std::vector<std::pair<int, int>> noSlot;  // (rover, target) given no leg: no valid slot
   Route route;
-  std::vector<Eigen::Vector2d> slots;
+  std::vector<Eigen::Vector2d> slots;  // the formation of the largest sub-team
+  SubTeams subTeams;  // who visits which target (one team: every rover, every target)
   CoordinationResult plan;
   ProbabilityCurves curves;
   std::vector<std::pair<double, double>> routeCurve;  // accumulatedAlongRoute

@@ -145,6 +145,8 @@ ParamTable<P> buildTable() {
           [](auto& p) -> auto& { return p.mission.coordination.dwellCheck; });
   addReal(t, realParam("attitude_check", 0, 90, "deg", "A simulated try tilting past this is planned again, like a conflict (0 = off)."),
           [](auto& p) -> auto& { return p.mission.coordination.attitudeCheck; }, kDeg);
+  addInt(t, intParam("sub_team_size", 0, 64, "rovers", "timed: a team of more rovers splits into ⌈rovers / sub_team_size⌉ sub-teams (sizes as equal as possible, neighbouring starts together), each flying paper 001's formation over its own contiguous segment of the route, all in one traffic table; 0 = one team. The paper coordination always flies one team."),
+         [](auto& p) -> auto& { return p.mission.subTeamSize; });
   addInt(t, intParam("max_pieces", 1, 100, "", "RRT* calls chained in one leg when a tree ends short of its goal."),
          [](auto& p) -> auto& { return p.mission.coordination.maxPieces; });
   // The rover and its controller (SPEC §3.3).

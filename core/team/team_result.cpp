@@ -118,6 +118,8 @@ PlanResult toPlanResult(const TeamMissionResult& r, const TeamPlannerParams& p, 
       {"rrt_calls", static_cast<double>(m.rrtCalls), "plans"},
       {"plan_wall_s", planWallSeconds, "s"},
   };
+  if (r.subTeams.count() > 1)
+    out.metrics.push_back({"sub_teams", static_cast<double>(r.subTeams.count()), "teams"});
   std::vector<double> distances, energies;
   for (const Trajectory& t : r.plan.trajectories) {
     distances.push_back(trajectoryLength(t));
@@ -160,6 +162,10 @@ PlanResult toPlanResult(const TeamMissionResult& r, const TeamPlannerParams& p, 
                      {"targets_short", static_cast<double>(shortLegs), "legs"},
                      {"replans", static_cast<double>(replans), "plans"},
                      {"waits", static_cast<double>(waits), "waits"}};
+    // Which sub-team the rover flies in (sub_teams.hpp), only when the team was split: a one-team
+    // result stays as it was.
+    if (r.subTeams.count() > 1)
+      track.metrics.push_back({"sub_team", static_cast<double>(r.subTeams.ofRover[k]), ""});
     out.tracks.push_back(std::move(track));
     out.overlays.push_back({"path", static_cast<int>(k), r.plan.paths[k]});
     attitudeSeries(t, every, static_cast<int>(k), out.series);
