@@ -561,12 +561,49 @@ class Coordinator {
       const std::size_t n = stops[keep].samples;
       if (n >= traffic_.end() || !traffic_.standing(k, xyOf(samples[n - 1]), n, traffic_.end())) break;
     }
-    samples.resize(stops[keep].samples);
-    out_.paths[k].resize(stops[keep].path);
-    stops.resize(keep + 1);
+    // Fewer legs are lost if the rover moves aside from a later stop to a spot clear for good:
+    // the last kAsideStops stops after `keep`, latest first, one search each (a search that only
+    // finds a spot clear for a while is undone).
+    constexpr std::size_t kAsideStops = 3;
+    const int legs = static_cast<int>(tasks_[k].legs.size());
+    const std::vector<TrajectorySample> allSamples = samples;
+    const std::vector<Eigen::Vector2d> allPath = out_.paths[k];
+    const std::vector<Stop> allStops = stops;
+    for (std::size_t j = allStops.size() - 1, tried = 0; j > keep && tried < kAsideStops && !cancelled(); --j, ++tried) {
+      cutAt(k, j, *conflict);
+      const std::optional<double> start = moveAside(k, policy_.aside().parkingMoves + policy_.aside().recoveriesPerLeg + 1 + static_cast<int>(tried));
+      if (start && !firstConflict(k, {}, 0, kForGood)) {
+        LegRecord rec;
+        rec.rover = k;
+        rec.leg = legs;
+        rec.startTime = *start;
+        rec.endTime = last(k).time;
+        rec.pieces = 1;
+        rec.note = "parked out of the way";
+        out_.legs.push_back(rec);
+        return;
+      }
+      samples = allSamples;
+      out_.paths[k] = allPath;
+      stops = allStops;
+      out_.legs = legsBefore_;
+    }
+    cutAt(k, keep, *conflict);
+  }
+
+  // Cuts rover k back to its stop `stop` (stopWhereSafe): the legs after it end there, short or
+  // skipped for `conflict`; the moves aside after it are dropped. Keeps the leg records as they
+  // were in legsBefore_, to undo a cut.
+  void cutAt(int k, std::size_t stop, const Conflict& conflict) {
+    legsBefore_ = out_.legs;
+    auto& samples = out_.trajectories[k].samples;
+    std::vector<Stop>& stops = stops_[static_cast<std::size_t>(k)];
+    samples.resize(stops[stop].samples);
+    out_.paths[k].resize(stops[stop].path);
+    stops.resize(stop + 1);
     const double cut = samples.back().time;
     const std::string note = "undone: standing at its end for the rest of the mission, the rover would be " +
-                             conflictNote(*conflict) + "; it stops at (" + oneDecimal(samples.back().x) +
+                             conflictNote(conflict) + "; it stops at (" + oneDecimal(samples.back().x) +
                              ", " + oneDecimal(samples.back().y) + ") at t = " + oneDecimal(cut) + " s";
     const int legs = static_cast<int>(tasks_[k].legs.size());
     std::erase_if(out_.legs, [&](const LegRecord& r) { return r.rover == k && r.leg == legs && r.startTime >= cut; });
@@ -583,6 +620,7 @@ class Coordinator {
       r.note = note;
     }
   }
+
 
   // Drives rover k to a spot it can reach and stand at without a conflict, clear of later rovers'
   // goals, and commits the move; returns when it started (nullopt: no spot works). Candidates:
@@ -821,6 +859,7 @@ class Coordinator {
     std::size_t samples = 0, path = 0;
   };
   std::vector<std::vector<Stop>> stops_;
+  std::vector<LegRecord> legsBefore_;  // cutAt: the leg records before the last cut
   CoordinationResult out_;
   TrafficTable traffic_;  // the rovers done so far; the others standing at their starts
   int legsDone_ = 0;
