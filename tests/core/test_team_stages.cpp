@@ -594,6 +594,32 @@ TEST_CASE("stages: a rover with no spot to park aside stops where it may stand f
   CHECK((endOf(paper.trajectories[1]) - Eigen::Vector2d(10, -0.5)).norm() < 1e-9);
 }
 
+TEST_CASE("stages: a rover with no spot to park aside moves aside from an earlier stop when it can (issue 25)") {
+  // As above, with three legs: (10, -0.5), (10, 4.5), (10, 5), and one more spot it may stop at,
+  // (10, 2): 2.5 m south of the second goal (on the ring park() searches round it) but on no ring
+  // or spot back along the trajectory round the last goal. park() finds nothing at (10, 5); from
+  // the second goal the rover reaches (10, 2), clear for good: only the last leg is undone.
+  std::vector<RoverTask> tasks(2);
+  tasks[0].start = {-60, 5, 0};
+  tasks[0].legs = {{{27, 5}, {}, 0}};
+  tasks[1].start = {10, -5.5, M_PI / 2};
+  tasks[1].legs = {{{10, -0.5}, {}, 0}, {{10, 4.5}, {}, 1}, {{10, 5}, {}, 2}};
+  const StopsOnlyAt planner({{10, -0.5}, {10, 4.5}, {10, 5}, {10, 2}, {27, 5}});
+  const StraightLineRover rover;
+  CoordinationParams p;
+  const CoordinationResult timed = coordinateWith(tasks, planner, rover, TimedPolicy(p), p, 1);
+  CHECK(timed.conflicts.empty());
+  CHECK(checkSeparation(timed.trajectories, p.safetyDistance).minimumDistance >= p.safetyDistance);
+  CHECK((endOf(timed.trajectories[1]) - Eigen::Vector2d(10, 2)).norm() < 1e-6);
+  REQUIRE(timed.legs.size() == 5);  // rover 0's leg, rover 1's three legs and its move aside
+  CHECK(timed.legs[1].status == LegStatus::Reached);
+  CHECK(timed.legs[2].status == LegStatus::Reached);
+  CHECK(timed.legs[3].status == LegStatus::Skipped);
+  CHECK(timed.legs[3].reason == LegReason::Conflict);
+  CHECK(timed.legs[4].note == "parked out of the way");
+  CHECK(timed.legs[4].startTime == doctest::Approx(timed.legs[2].endTime + 0.1));  // from the second goal
+}
+
 TEST_CASE("stages: timed re-plans end after three tries that meet a rover standing by the goal") {
   // Rover 1 drives north from (10, 0) to (10, 5): there after 10 s, then dwells. Rover 0 comes
   // west along y = 5.8 and paces between x = 9.5 and 10.5 from 18.8 s for 80 s, within 1 m of
