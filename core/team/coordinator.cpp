@@ -580,6 +580,10 @@ class Coordinator {
         rec.endTime = last(k).time;
         rec.pieces = 1;
         rec.note = "parked out of the way";
+        // The undone legs' notes name where it left from, not where it stays.
+        for (LegRecord& r : out_.legs)
+          if (r.rover == k && r.note.starts_with("undone: "))
+            r.note.replace(r.note.find("; it stops at "), 14, "; it moves aside from ");
         out_.legs.push_back(rec);
         return;
       }

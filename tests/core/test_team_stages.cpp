@@ -616,6 +616,7 @@ TEST_CASE("stages: a rover with no spot to park aside moves aside from an earlie
   CHECK(timed.legs[2].status == LegStatus::Reached);
   CHECK(timed.legs[3].status == LegStatus::Skipped);
   CHECK(timed.legs[3].reason == LegReason::Conflict);
+  CHECK(timed.legs[3].note.find("; it moves aside from (10.0, 4.5) at t = 20.0 s") != std::string::npos);
   CHECK(timed.legs[4].note == "parked out of the way");
   CHECK(timed.legs[4].startTime == doctest::Approx(timed.legs[2].endTime + 0.1));  // from the second goal
 }
