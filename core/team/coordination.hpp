@@ -17,6 +17,11 @@
 // - A rover is present before it starts and after it ends (parked where it stopped): later rovers
 //   are checked against parked ones, and a rover's own parking spot is checked against every
 //   higher-priority rover still moving after it has finished.
+// - A finished rover that cannot park out of a higher-priority rover's way (no spot at a map edge,
+//   or out of moves) moves aside from an earlier stop, else stops at the latest end of a move
+//   where it may stand for good, its start at worst; the moves after it are undone (issue 25).
+//   Every committed sample is checked against the traffic table, so no two rovers come closer
+//   than the safety distance, by construction.
 // - A retry keeps out of a disc around where the higher-priority rover was at each earlier
 //   conflict (KeepOutZone): with only a new seed, RRT* converges to the same straight line on
 //   open ground and a head-on pair could never separate.

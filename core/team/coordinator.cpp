@@ -98,7 +98,10 @@ class Coordinator {
         runLeg(k, i);
         if (out_.cancelled) break;
       }
-      if (!out_.cancelled) park(k);
+      if (!out_.cancelled) {
+        park(k);
+        stopWhereSafe(k);
+      }
       traffic_.replace(k, out_.trajectories[k]);  // rover k is done: the next ones plan round it
     }
     // Rover-major whatever the order the rovers left in.
@@ -145,6 +148,7 @@ class Coordinator {
     t.status = SimStatus::Reached;
     out_.trajectories[k] = std::move(t);
     out_.paths[k].push_back({s.x, s.y});
+    stops_.push_back({{1, 1}});
   }
 
   // Every planned leg from its nominal start, planned ahead on the threads the caller granted
@@ -337,6 +341,7 @@ class Coordinator {
     t.insert(t.end(), c.samples.begin(), c.samples.end());
     auto& path = out_.paths[k];
     path.insert(path.end(), c.path.begin() + 1, c.path.end());
+    stops_[static_cast<std::size_t>(k)].push_back({t.size(), path.size()});
     if (observer_) observer_->pieceAccepted(k, c.path, c.samples);
   }
 
@@ -535,6 +540,91 @@ class Coordinator {
       out_.legs.push_back(rec);
     }
   }
+
+  // Every committed sample of rover k was checked against the traffic table, but the rest of the
+  // mission after its last one only as far as the policy checks it: a leg for the dwell, then
+  // park() — which finds no spot near a map edge or a wall, or runs out of moves (issue 25: a
+  // rover parked at the east edge of the Gale patch, run over four times by two higher-priority
+  // rovers that came by later). The rover then stops at the latest end of a committed move where
+  // it may stand for the rest of the mission — its start at worst, where every rover planned
+  // earlier kept clear of it — and the moves after it are undone: their legs end there, short or
+  // skipped for the conflict. So a finished rover never stands in a planned rover's way, by
+  // construction. (The observer was told of the undone pieces as they came; the result is
+  // final.)
+  void stopWhereSafe(int k) {
+    const std::optional<Conflict> conflict = firstConflict(k, {}, 0, kForGood);
+    if (!conflict) return;
+    auto& samples = out_.trajectories[k].samples;
+    std::vector<Stop>& stops = stops_[static_cast<std::size_t>(k)];
+    std::size_t keep = stops.size() - 1;
+    for (; keep > 0; --keep) {
+      const std::size_t n = stops[keep].samples;
+      if (n >= traffic_.end() || !traffic_.standing(k, xyOf(samples[n - 1]), n, traffic_.end())) break;
+    }
+    // Fewer legs are lost if the rover moves aside from a later stop to a spot clear for good:
+    // the last kAsideStops stops after `keep`, latest first, one search each (a search that only
+    // finds a spot clear for a while is undone).
+    constexpr std::size_t kAsideStops = 3;
+    const int legs = static_cast<int>(tasks_[k].legs.size());
+    const std::vector<TrajectorySample> allSamples = samples;
+    const std::vector<Eigen::Vector2d> allPath = out_.paths[k];
+    const std::vector<Stop> allStops = stops;
+    for (std::size_t j = allStops.size() - 1, tried = 0; j > keep && tried < kAsideStops && !cancelled(); --j, ++tried) {
+      cutAt(k, j, *conflict);
+      const std::optional<double> start = moveAside(k, policy_.aside().parkingMoves + policy_.aside().recoveriesPerLeg + 1 + static_cast<int>(tried));
+      if (start && !firstConflict(k, {}, 0, kForGood)) {
+        LegRecord rec;
+        rec.rover = k;
+        rec.leg = legs;
+        rec.startTime = *start;
+        rec.endTime = last(k).time;
+        rec.pieces = 1;
+        rec.note = "parked out of the way";
+        // The undone legs' notes name where it left from, not where it stays.
+        for (LegRecord& r : out_.legs)
+          if (r.rover == k && r.note.starts_with("undone: "))
+            r.note.replace(r.note.find("; it stops at "), 14, "; it moves aside from ");
+        out_.legs.push_back(rec);
+        return;
+      }
+      samples = allSamples;
+      out_.paths[k] = allPath;
+      stops = allStops;
+      out_.legs = legsBefore_;
+    }
+    cutAt(k, keep, *conflict);
+  }
+
+  // Cuts rover k back to its stop `stop` (stopWhereSafe): the legs after it end there, short or
+  // skipped for `conflict`; the moves aside after it are dropped. Keeps the leg records as they
+  // were in legsBefore_, to undo a cut.
+  void cutAt(int k, std::size_t stop, const Conflict& conflict) {
+    legsBefore_ = out_.legs;
+    auto& samples = out_.trajectories[k].samples;
+    std::vector<Stop>& stops = stops_[static_cast<std::size_t>(k)];
+    samples.resize(stops[stop].samples);
+    out_.paths[k].resize(stops[stop].path);
+    stops.resize(stop + 1);
+    const double cut = samples.back().time;
+    const std::string note = "undone: standing at its end for the rest of the mission, the rover would be " +
+                             conflictNote(conflict) + "; it stops at (" + oneDecimal(samples.back().x) +
+                             ", " + oneDecimal(samples.back().y) + ") at t = " + oneDecimal(cut) + " s";
+    const int legs = static_cast<int>(tasks_[k].legs.size());
+    std::erase_if(out_.legs, [&](const LegRecord& r) { return r.rover == k && r.leg == legs && r.startTime >= cut; });
+    for (LegRecord& r : out_.legs) {
+      if (r.rover != k || r.endTime <= cut) continue;
+      if (r.leg == legs) {  // a move aside under way at the cut (parking): it ends there
+        r.endTime = cut;
+        continue;
+      }
+      r.status = r.startTime < cut ? LegStatus::Short : LegStatus::Skipped;
+      r.reason = LegReason::Conflict;
+      r.startTime = std::min(r.startTime, cut);
+      r.endTime = cut;
+      r.note = note;
+    }
+  }
+
 
   // Drives rover k to a spot it can reach and stand at without a conflict, clear of later rovers'
   // goals, and commits the move; returns when it started (nullopt: no spot works). Candidates:
@@ -767,6 +857,13 @@ class Coordinator {
   const double period_;
   std::unique_ptr<PlanAhead> ahead_;
   std::vector<std::size_t> firstJob_;  // per rover, the index of its first leg's job
+  // Per rover, the samples and waypoints it had after each committed move (its start first):
+  // where stopWhereSafe may cut it.
+  struct Stop {
+    std::size_t samples = 0, path = 0;
+  };
+  std::vector<std::vector<Stop>> stops_;
+  std::vector<LegRecord> legsBefore_;  // cutAt: the leg records before the last cut
   CoordinationResult out_;
   TrafficTable traffic_;  // the rovers done so far; the others standing at their starts
   int legsDone_ = 0;

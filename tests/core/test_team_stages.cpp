@@ -541,6 +541,86 @@ TEST_CASE("stages: a last leg whose goal is passed long after the dwell is reach
   CHECK(paper.conflicts.empty());
 }
 
+// The straight-line planner, but the rover may stop and turn only at the given points.
+class StopsOnlyAt final : public LegPlanner {
+ public:
+  explicit StopsOnlyAt(std::vector<Eigen::Vector2d> at) : at_(std::move(at)) {}
+  PathResult plan(const Eigen::Vector2d& from, double heading, const Eigen::Vector2d& goal, std::uint64_t seed,
+                  const std::vector<KeepOutZone>& keepOut, const CancelToken* cancel) const override {
+    return line_.plan(from, heading, goal, seed, keepOut, cancel);
+  }
+  bool edgeValid(const Eigen::Vector2d&, const Eigen::Vector2d&) const override { return true; }
+  bool canStop(const Eigen::Vector2d& p) const override {
+    return std::any_of(at_.begin(), at_.end(), [&](const auto& q) { return (p - q).norm() < 1e-9; });
+  }
+
+ private:
+  StraightLinePlanner line_;
+  std::vector<Eigen::Vector2d> at_;
+};
+
+TEST_CASE("stages: a rover with no spot to park aside stops where it may stand for good (issue 25)") {
+  // Rover 0 drives east along y = 5 from x = -60 and passes (10, 5) after 140 s. Rover 1 drives
+  // north from (10, -5.5) to (10, -0.5), then to (10, 5), there after 21 s: each leg is checked
+  // for the dwell and reached. Standing at (10, 5) it would be run over at 140 s, and it can stop
+  // nowhere but at its two goals (the first off park()'s rings and its spots back along the
+  // trajectory), so park() finds no spot (as at a map edge, issue 25's
+  // Gale run: rovers 2 and 3 ran over a finished rover 4 four times). It stops at the end of its
+  // first leg instead, which no planned rover comes near; the second leg is undone.
+  std::vector<RoverTask> tasks(2);
+  tasks[0].start = {-60, 5, 0};
+  tasks[0].legs = {{{20, 5}, {}, 0}};
+  tasks[1].start = {10, -5.5, M_PI / 2};
+  tasks[1].legs = {{{10, -0.5}, {}, 0}, {{10, 5}, {}, 1}};
+  const StopsOnlyAt planner({{10, -0.5}, {10, 5}, {20, 5}});
+  const StraightLineRover rover;
+  CoordinationParams p;
+  const CoordinationResult timed = coordinateWith(tasks, planner, rover, TimedPolicy(p), p, 1);
+  CHECK(timed.conflicts.empty());
+  CHECK(checkSeparation(timed.trajectories, p.safetyDistance).minimumDistance >= p.safetyDistance);
+  CHECK((endOf(timed.trajectories[1]) - Eigen::Vector2d(10, -0.5)).norm() < 1e-9);
+  CHECK(timed.trajectories[1].samples.back().time == doctest::Approx(10.0));
+  REQUIRE(timed.legs.size() == 3);  // no move aside is left
+  CHECK(timed.legs[1].status == LegStatus::Reached);
+  CHECK(timed.legs[2].status == LegStatus::Skipped);
+  CHECK(timed.legs[2].reason == LegReason::Conflict);
+  CHECK(timed.legs[2].endTime == doctest::Approx(10.0));
+  CHECK(timed.legs[2].note.find("undone: standing at its end") == 0);
+  CHECK(timed.legs[2].note.find("of rover 1, under safety_distance") != std::string::npos);
+  CHECK(timed.paths[1].size() == 2);  // its start and the first goal
+  // Paper checks a last leg standing at its goal for good: skipped there already.
+  const CoordinationResult paper = coordinateWith(tasks, planner, rover, PaperPolicy(p), p, 1);
+  CHECK(paper.conflicts.empty());
+  CHECK((endOf(paper.trajectories[1]) - Eigen::Vector2d(10, -0.5)).norm() < 1e-9);
+}
+
+TEST_CASE("stages: a rover with no spot to park aside moves aside from an earlier stop when it can (issue 25)") {
+  // As above, with three legs: (10, -0.5), (10, 4.5), (10, 5), and one more spot it may stop at,
+  // (10, 2): 2.5 m south of the second goal (on the ring park() searches round it) but on no ring
+  // or spot back along the trajectory round the last goal. park() finds nothing at (10, 5); from
+  // the second goal the rover reaches (10, 2), clear for good: only the last leg is undone.
+  std::vector<RoverTask> tasks(2);
+  tasks[0].start = {-60, 5, 0};
+  tasks[0].legs = {{{27, 5}, {}, 0}};
+  tasks[1].start = {10, -5.5, M_PI / 2};
+  tasks[1].legs = {{{10, -0.5}, {}, 0}, {{10, 4.5}, {}, 1}, {{10, 5}, {}, 2}};
+  const StopsOnlyAt planner({{10, -0.5}, {10, 4.5}, {10, 5}, {10, 2}, {27, 5}});
+  const StraightLineRover rover;
+  CoordinationParams p;
+  const CoordinationResult timed = coordinateWith(tasks, planner, rover, TimedPolicy(p), p, 1);
+  CHECK(timed.conflicts.empty());
+  CHECK(checkSeparation(timed.trajectories, p.safetyDistance).minimumDistance >= p.safetyDistance);
+  CHECK((endOf(timed.trajectories[1]) - Eigen::Vector2d(10, 2)).norm() < 1e-6);
+  REQUIRE(timed.legs.size() == 5);  // rover 0's leg, rover 1's three legs and its move aside
+  CHECK(timed.legs[1].status == LegStatus::Reached);
+  CHECK(timed.legs[2].status == LegStatus::Reached);
+  CHECK(timed.legs[3].status == LegStatus::Skipped);
+  CHECK(timed.legs[3].reason == LegReason::Conflict);
+  CHECK(timed.legs[3].note.find("; it moves aside from (10.0, 4.5) at t = 20.0 s") != std::string::npos);
+  CHECK(timed.legs[4].note == "parked out of the way");
+  CHECK(timed.legs[4].startTime == doctest::Approx(timed.legs[2].endTime + 0.1));  // from the second goal
+}
+
 TEST_CASE("stages: timed re-plans end after three tries that meet a rover standing by the goal") {
   // Rover 1 drives north from (10, 0) to (10, 5): there after 10 s, then dwells. Rover 0 comes
   // west along y = 5.8 and paces between x = 9.5 and 10.5 from 18.8 s for 80 s, within 1 m of
