@@ -397,7 +397,7 @@ TEST_CASE("versions: hostile map and rename bodies are refused naming the field"
   checkError(send(s, "PATCH", target, json::array({1}), ifMatch(1)), 400, "bad_json", "body");
   checkError(send(s, "PATCH", target, json{{"name", "ok"}}, {{"If-Match", "W/\"v1\""}}), 400, "invalid_header", "If-Match");
   checkError(send(s, "PATCH", target, json{{"name", "ok"}, {"version", -1}}), 400, "invalid_field", "version");
-  checkError(request(s.port(), "PATCH", target, "name=ok", "text/plain", ifMatch(1)), 415, "body");
+  checkError(request(s.port(), "PATCH", target, "name=ok", "text/plain", ifMatch(1)), 415, "content-type");
   // 200 characters is the limit, and it is taken.
   CHECK(send(s, "PATCH", target, json{{"name", std::string(200, 'b')}}, ifMatch(1)).status == 200);
   CHECK(s.get(target).json()["version"] == 2);
