@@ -5,6 +5,7 @@
 #include "core/common/error.hpp"
 #include "maps/dem_import_options.hpp"
 #include "server/api/multipart.hpp"
+#include "server/api/preconditions.hpp"
 #include "server/api/route_kit.hpp"
 #include "server/json/json_edge.hpp"
 
@@ -103,8 +104,8 @@ Response getMap(ApiContext& ctx, const Request& req) {
   {
     std::lock_guard lock(ctx.mapCacheMutex);
     if (auto it = ctx.mapBodyCache.find(id); it != ctx.mapBodyCache.end()) {
-      r.body = it->second;
-      return r;
+      r.body = it->second.body;
+      return withETag(std::move(r), it->second.version);
     }
   }
   const std::uint64_t ticket = ctx.mapCacheTicket();  // before the reads
@@ -115,8 +116,38 @@ Response getMap(ApiContext& ctx, const Request& req) {
   for (const auto& p : ctx.db.listPdms(m.id, kMaxPage, 0)) j["pdms"].push_back(pdmJson(p));
   j["pdms_total"] = ctx.db.countPdms(m.id);
   r = Response::json(200, j);
-  ctx.cacheMapBody(id, r.body, ticket);
-  return r;
+  ctx.cacheMapBody(id, r.body, m.version, ticket);
+  return withETag(std::move(r), m.version);
+}
+
+// PATCH /api/maps/{id} {"name", "version"?}: a versioned rename, as PATCH /api/missions/{id}.
+Response renameMap(ApiContext& ctx, const Request& req) {
+  const std::string id = req.params.at("id");
+  json body = jsonBody(req, rj::kMissionJsonLimits);
+  const std::string name = newNameOf(body);
+  const std::string what = "map " + rj::shown(id);
+  mapOr404(ctx, id, "id");
+  const long long expected = requiredVersion(req, &body, what);
+  std::lock_guard lock(ctx.versionedWrites);
+  InvalidateMapAfter after{ctx, id};
+  const store::MapRename done = ctx.db.renameMap(id, name, expected);
+  switch (done.cas) {
+    case store::Cas::Done: break;
+    case store::Cas::Missing: throw mapNotFound(id, "id");
+    case store::Cas::Stale: {
+      const store::MapRecord now = mapOr404(ctx, id, "id");
+      throw versionConflict(what, expected, now.version, mapJson(now));
+    }
+  }
+  if (!done.takenBy.empty())
+    throw ApiError(409, "name_taken",
+                   "map '" + rj::shown(done.takenBy) + "' is already named '" + rj::shown(name) +
+                       "': map names are unique, choose another",
+                   "name");
+  // A DELETE may land between the update and the read back: then it is gone (404).
+  const store::MapRecord m = mapOr404(ctx, id, "id");
+  publishEvent(ctx, "changed", "map", id, id, m.version, req.operatorName);
+  return withETag(Response::json(200, mapJson(m)), m.version);
 }
 
 Response deleteMap(ApiContext& ctx, const Request& req) {
@@ -156,7 +187,17 @@ void addMapRoutes(http::Router& router, ApiContext& ctx) {
   router.add("GET", "/api/maps/{id}", handler(ctx, getMap),
              routeDoc("One map: size, cell size, CRS, elevation range, class percentages, its first 500 PDMs "
                       "(pdms_total counts them all).",
-                      Operation().returns(200, "The map.", ref("Map")).errors({404})));
+                      Operation().returns(200, "The map.", ref("Map")).etag().errors({404})));
+  router.add("PATCH", "/api/maps/{id}", handler(ctx, renameMap),
+             routeDoc("Rename a map: {\"name\": \"...\"} (at most 200 characters, no control characters, no other "
+                      "map's name: 409 name_taken), naming the version read (If-Match \"v<N>\" or \"version\"): "
+                      "412 with the current map when stale, 428 without one.",
+                      Operation()
+                          .ifMatch()
+                          .body(ref("MapName"))
+                          .returns(200, "Renamed.", ref("Map"))
+                          .etag()
+                          .errors({400, 404, 409, 412, 415, 428})));
   router.add("DELETE", "/api/maps/{id}", handler(ctx, deleteMap),
              routeDoc("Delete a map and its PDMs (missions keep their records and results).",
                       Operation().returns(200, "Deleted.", ref("Deleted")).errors({404, 503}), onPool));

@@ -48,4 +48,10 @@ inline json name(const std::string& description) {
   return s;
 }
 
+// `s` (a string schema) with minLength 1: a name that may not be empty.
+inline json withMinLength(json s) {
+  s["minLength"] = 1;
+  return s;
+}
+
 }  // namespace rover::api::openapi::kit

@@ -269,6 +269,7 @@ json componentSchemas(const PlannerRegistry& planners) {
   s["Map"] = object({{"id", str()},
                      {"name", str()},
                      {"created_at", str()},
+                     {"version", {{"type", "integer"}, {"description", "+1 per rename; send it back (If-Match) to rename."}}},
                      {"rows", {{"type", "integer"}}},
                      {"cols", {{"type", "integer"}}},
                      {"cell_size_m", num()},
@@ -317,7 +318,10 @@ json componentSchemas(const PlannerRegistry& planners) {
                                       {"tile_size", "zmax", "resolutions", "extent", "origin", "url"}))},
                      {"pdms", {{"type", "array"}, {"items", openapi::ref("Pdm")}}},
                      {"pdms_total", {{"type", "integer"}}}},
-                    {"id", "name", "created_at", "rows", "cols", "cell_size_m", "layers"});
+                    {"id", "name", "created_at", "version", "rows", "cols", "cell_size_m", "layers"});
+  s["MapName"] = object({{"name", withMinLength(name("The map's new name, unique among the maps, not blank."))},
+                         {"version", {{"type", "integer"}, {"description", "The version read (or If-Match)."}}}},
+                        {"name"}, true);
   json upload = json::object();
   upload["file"] = {{"type", "array"}, {"items", {{"type", "string"}, {"format", "binary"}}},
                     {"description", "The DEM's files (one or more parts named file: .IMG + .LBL, a zip, ...)."}};

@@ -20,6 +20,7 @@ json study() {
   for (RunStatus st : kStudyStatuses) statuses.push_back(enumName(st));
   return object({{"id", str()},
                  {"name", str()},
+                 {"version", {{"type", "integer"}, {"description", "+1 per rename; send it back (If-Match) to rename."}}},
                  {"status", {{"type", "string"}, {"enum", statuses}}},
                  {"message", str("Why it failed or was queued again.")},
                  {"created_at", str()},
@@ -30,7 +31,7 @@ json study() {
                  {"eta_s", nullable(num("Seconds left; null until known."))},
                  {"runs_per_s", num()},
                  {"links", {{"type", "object"}, {"additionalProperties", str()}}}},
-                {"id", "name", "status", "runs_done", "runs_total"});
+                {"id", "name", "version", "status", "runs_done", "runs_total"});
 }
 
 }  // namespace
@@ -38,6 +39,9 @@ json study() {
 json studySchemas() {
   json s = json::object();
   s["Study"] = study();
+  s["StudyName"] = object({{"name", withMinLength(name("The study's new name, not blank."))},
+                           {"version", {{"type", "integer"}, {"description", "The version read (or If-Match)."}}}},
+                          {"name"}, true);
   json row = object({{"config", str()},
                      {"metric", str()},
                      {"runs", {{"type", "integer"}, {"description", "Runs of the configuration stored."}}},

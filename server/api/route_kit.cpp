@@ -98,6 +98,21 @@ Response withAttachment(Response r, const std::string& filename) {
   return r;
 }
 
+std::string newNameOf(const json& body) {
+  if (!body.is_object()) throw ApiError(400, "bad_json", "the request body must be a JSON object", "body");
+  for (const auto& item : body.items())
+    if (item.key() != "name" && item.key() != "version")
+      throw ApiError(400, "unknown_field", "only 'name' can be changed, not '" + rj::shown(item.key()) + "'",
+                     rj::shown(item.key()));
+  auto name = body.find("name");
+  if (name == body.end() || !name->is_string()) throw ApiError(400, "invalid_field", "name must be a string", "name");
+  const std::string text = name->get<std::string>();
+  rj::checkName(text, "name");
+  if (text.find_first_not_of(" \t") == std::string::npos)
+    throw ApiError(400, "invalid_field", "name must not be empty or blank", "name");
+  return text;
+}
+
 ApiError mapNotFound(const std::string& id, const std::string& field) {
   return ApiError(404, "not_found", "no map '" + rj::shown(id) + "'", field);
 }
@@ -176,6 +191,7 @@ json mapJson(const store::MapRecord& m) {
   j["id"] = m.id;
   j["name"] = m.name;
   j["created_at"] = m.createdAt;
+  j["version"] = m.version;
   j["layers"] = json::object();
   for (const char* l : {"elevation", "hillshade", "slope", "traversability", "pdm"})
     j["layers"][l] = "/api/maps/" + m.id + "/layers/" + l + ".png";

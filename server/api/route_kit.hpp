@@ -73,6 +73,11 @@ struct InvalidateMapAfter {
   ~InvalidateMapAfter() { ctx.invalidateMap(id); }
 };
 
+// The new name a rename's body {"name", "version"?} holds (PATCH /api/maps/{id}, /api/studies/{id}):
+// 400 bad_json (not an object), unknown_field (any other member), invalid_field naming `name` (not
+// a string, breaks the name rule rj::checkName, or blank: a map or study is always named).
+std::string newNameOf(const nlohmann::json& body);
+
 // The 404s of the stored resources, one wording each; `field` names the input that held the id.
 http::ApiError mapNotFound(const std::string& id, const std::string& field);
 http::ApiError missionNotFound(const std::string& id);

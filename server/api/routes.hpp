@@ -41,8 +41,13 @@ struct ApiContext {
   // Writers call invalidateMap *after* their write. A reader takes a ticket before it reads the
   // database and caches its body only if no invalidation happened since, so a GET racing a
   // delete cannot put the deleted map back into the cache.
+  // The version goes with the body: the ETag of a cached answer (issue 26).
+  struct CachedMapBody {
+    std::string body;
+    long long version = 1;
+  };
   std::mutex mapCacheMutex;
-  std::unordered_map<std::string, std::string> mapBodyCache;
+  std::unordered_map<std::string, CachedMapBody> mapBodyCache;
   std::uint64_t mapCacheGeneration = 0;
   void invalidateMap(const std::string& id) {
     std::lock_guard lock(mapCacheMutex);
@@ -54,10 +59,10 @@ struct ApiContext {
     return mapCacheGeneration;
   }
   // Stores `body` unless an invalidation came after `ticket`; returns whether it did.
-  bool cacheMapBody(const std::string& id, std::string body, std::uint64_t ticket) {
+  bool cacheMapBody(const std::string& id, std::string body, long long version, std::uint64_t ticket) {
     std::lock_guard lock(mapCacheMutex);
     if (ticket != mapCacheGeneration) return false;
-    mapBodyCache[id] = std::move(body);
+    mapBodyCache[id] = CachedMapBody{std::move(body), version};
     return true;
   }
 };

@@ -5,6 +5,7 @@
 
 #include "core/common/error.hpp"
 #include "server/api/mission_service.hpp"
+#include "server/api/preconditions.hpp"
 #include "server/api/route_kit.hpp"
 #include "server/errors/domain_error.hpp"
 #include "server/json/json_edge.hpp"
@@ -144,6 +145,25 @@ json configurationsJson(const studies::StudySpec& spec) {
   return out;
 }
 
+// PATCH /api/studies/{id} {"name", "version"?}: a versioned rename, as PATCH /api/missions/{id}.
+Response renameStudy(ApiContext& ctx, const Request& req) {
+  const std::string id = req.params.at("id");
+  json body = jsonBody(req, rj::kMissionJsonLimits);
+  const std::string name = newNameOf(body);
+  const std::string what = "study " + rj::shown(id);
+  studyOr404(ctx, id);
+  const long long expected = requiredVersion(req, &body, what);
+  std::lock_guard lock(ctx.versionedWrites);
+  studies::StudyState s;
+  switch (ctx.studies->rename(id, name, expected, s)) {
+    case store::Cas::Done: break;
+    case store::Cas::Missing: throw ApiError(404, "not_found", "no study '" + rj::shown(id) + "'", "id");
+    case store::Cas::Stale: throw versionConflict(what, expected, s.version, studies::toJson(s));
+  }
+  publishEvent(ctx, "changed", "study", id, "", s.version, req.operatorName);
+  return withETag(Response::json(200, studies::toJson(s)), s.version);
+}
+
 }  // namespace
 
 void addStudyRoutes(http::Router& router, ApiContext& ctx) {
@@ -182,9 +202,20 @@ void addStudyRoutes(http::Router& router, ApiContext& ctx) {
     j["spec"] = spec;
     j["configurations"] = configurationsJson(studies::parseStudySpec(spec));
     j["summary"] = ctx.studies->summary(s.id);
-    return Response::json(200, j);
+    return withETag(Response::json(200, j), s.version);
   }, routeDoc("One study: its document, configurations, status and summary table (mean, std, quartiles "
-               "per configuration and metric; partial while it runs).", Operation().returns(200, "The study.", ref("StudyDetail")).errors({404}), true));
+               "per configuration and metric; partial while it runs).", Operation().returns(200, "The study.", ref("StudyDetail")).etag().errors({404}), true));
+
+  router.add("PATCH", "/api/studies/{id}", handler(ctx, renameStudy),
+             routeDoc("Rename a study: {\"name\": \"...\"} (at most 200 characters, no control characters, not "
+                      "blank), naming the version read (If-Match \"v<N>\" or \"version\"): 412 with the current "
+                      "study when stale, 428 without one. The study document (spec) keeps the name it was launched with.",
+                      Operation()
+                          .ifMatch()
+                          .body(ref("StudyName"))
+                          .returns(200, "Renamed.", ref("Study"))
+                          .etag()
+                          .errors({400, 404, 412, 415, 428, 507})));
 
   router.add("DELETE", "/api/studies/{id}", [&ctx](const Request& req) {
     const std::string id = req.params.at("id");

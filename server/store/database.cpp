@@ -38,7 +38,7 @@ nlohmann::json parseJson(const Stmt& s, int col, const char* what) {
 }
 
 MapRecord readMap(const Stmt& s) {
-  return MapRecord{s.text(0), s.text(1), s.text(2), parseJson(s, 3, "map meta")};
+  return MapRecord{s.text(0), s.text(1), s.text(2), parseJson(s, 3, "map meta"), s.integer(4)};
 }
 
 PdmRecord readPdm(const Stmt& s) {
@@ -207,7 +207,7 @@ void Database::insertMap(MapRecord& m) {
 
 std::optional<MapRecord> Database::getMap(const std::string& id) {
   std::lock_guard lock(mutex_);
-  Stmt s(db_, "SELECT id, name, created_at, meta FROM maps WHERE id = ?1");
+  Stmt s(db_, "SELECT id, name, created_at, meta, version FROM maps WHERE id = ?1");
   s.bind(1, id);
   if (!s.step()) return std::nullopt;
   return readMap(s);
@@ -215,7 +215,7 @@ std::optional<MapRecord> Database::getMap(const std::string& id) {
 
 std::vector<MapRecord> Database::listMaps(long long limit, long long offset) {
   std::lock_guard lock(mutex_);
-  Stmt s(db_, "SELECT id, name, created_at, meta FROM maps ORDER BY created_at ASC, id ASC LIMIT ?1 OFFSET ?2");
+  Stmt s(db_, "SELECT id, name, created_at, meta, version FROM maps ORDER BY created_at ASC, id ASC LIMIT ?1 OFFSET ?2");
   s.bindInt(1, limit).bindInt(2, offset);
   std::vector<MapRecord> out;
   while (s.step()) out.push_back(readMap(s));
@@ -237,6 +237,35 @@ bool Database::deleteMap(const std::string& id) {
     s.bind(1, id).run();
     return sqlite3_changes(db_) > 0;
   });
+}
+
+MapRename Database::renameMap(const std::string& id, const std::string& name, long long expected) {
+  std::lock_guard lock(mutex_);
+  ensureReserves();
+  MapRename out;
+  {
+    Stmt v(db_, "SELECT version FROM maps WHERE id = ?1");
+    v.bind(1, id);
+    if (!v.step()) return out;  // Missing
+    if (v.integer(0) != expected) {
+      out.cas = Cas::Stale;
+      return out;
+    }
+  }
+  {
+    Stmt t(db_, "SELECT id FROM maps WHERE name = ?1 AND id <> ?2 LIMIT 1");
+    t.bind(1, name).bind(2, id);
+    if (t.step()) {
+      out.cas = Cas::Done;
+      out.takenBy = t.text(0);
+      return out;
+    }
+  }
+  // One connection behind mutex_: nothing else writes between the checks and this update.
+  Stmt s(db_, "UPDATE maps SET name = ?2, version = version + 1 WHERE id = ?1 AND version = ?3");
+  s.bind(1, id).bind(2, name).bindInt(3, expected).run();
+  out.cas = sqlite3_changes(db_) > 0 ? Cas::Done : Cas::Stale;
+  return out;
 }
 
 bool Database::setZones(const std::string& mapId, const nlohmann::json& zones) {

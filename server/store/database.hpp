@@ -22,6 +22,7 @@ struct MapRecord {
   std::string name;
   std::string createdAt;  // ISO 8601 UTC
   nlohmann::json meta;    // size, cell size, CRS, elevation range, class percentages, files
+  long long version = 1;  // 1 when imported, +1 per rename (issue 26)
 };
 
 struct PdmRecord {
@@ -44,6 +45,13 @@ struct ZoneSet {
 // A compare-and-set write: done, refused because the stored version is not the one named (the
 // caller answers 412 with the current object), or the object is gone.
 enum class Cas { Done, Stale, Missing };
+
+// A map rename (Database::renameMap): its compare-and-set outcome; when the version matched but
+// another map already has the name, `takenBy` is that map's id and nothing was written.
+struct MapRename {
+  Cas cas = Cas::Missing;
+  std::string takenBy;
+};
 
 // One saved version of a PDM ("pdm", its id) or of a map's zone set ("zones", the map id).
 struct HistoryEntry {
@@ -100,6 +108,10 @@ class Database {
   std::vector<MapRecord> listMaps(long long limit = -1, long long offset = 0);  // oldest first
   long long countMaps();
   bool deleteMap(const std::string& id);  // also deletes its PDMs' rows; returns false if absent
+  // The rename of a client that read version `expected` (issue 26): the name stays unique in the
+  // catalog (as insertMap keeps it), so a name another map has is refused, not suffixed: the
+  // operator chose it.
+  MapRename renameMap(const std::string& id, const std::string& name, long long expected);
   // A map's keep-out zones (a GeoJSON FeatureCollection, local frame), replacing any before; false
   // when the map does not exist. Deleted with the map.
   bool setZones(const std::string& mapId, const nlohmann::json& zones);

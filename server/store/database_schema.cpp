@@ -8,7 +8,7 @@ namespace rover::store {
 
 namespace {
 
-constexpr int kSchemaVersion = 4;
+constexpr int kSchemaVersion = 5;
 
 // Version 1 of the schema. Later versions add a migrate step from N-1 below.
 constexpr const char* kSchemaV1 = R"sql(
@@ -91,6 +91,12 @@ CREATE TABLE IF NOT EXISTS counters(
 );
 )sql";
 
+// Version 5 (issue 26): a map's name is editable, so maps carry a version like every other
+// mutable row; a map stored before counts as version 1.
+constexpr const char* kMigrateV4toV5 = R"sql(
+ALTER TABLE maps ADD COLUMN version INTEGER NOT NULL DEFAULT 1;
+)sql";
+
 }  // namespace
 
 void migrateSchema(sqlite3* db, const std::string& path) {
@@ -130,6 +136,12 @@ void migrateSchema(sqlite3* db, const std::string& path) {
       Stmt s(db, "INSERT INTO schema_version(version) VALUES (4)");
       s.run();
       version = 4;
+    }
+    if (version == 4) {
+      exec(db, kMigrateV4toV5);
+      Stmt s(db, "INSERT INTO schema_version(version) VALUES (5)");
+      s.run();
+      version = 5;
     }
     exec(db, "COMMIT");
   } catch (...) {

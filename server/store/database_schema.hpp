@@ -1,5 +1,5 @@
 #pragma once
-// The server database's schema (maps, PDMs, missions, zones) and its migrations, one version a
+// The server database's schema (maps, PDMs, missions, zones, history, counters) and its migrations, one version a
 // step; the database's connection and rows are database.cpp's.
 #include <string>
 

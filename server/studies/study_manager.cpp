@@ -152,6 +152,26 @@ std::shared_ptr<StudyStream> StudyManager::stream(const std::string& id) const {
   return it == studies_.end() ? nullptr : it->second.stream;
 }
 
+store::Cas StudyManager::rename(const std::string& id, const std::string& name, long long expected, StudyState& out) {
+  std::shared_ptr<StudyStream> stream;
+  {
+    // Under the lock with the file write, as every other state.json write: a status change cannot
+    // write an older name over this one.
+    std::lock_guard lock(mutex_);
+    auto it = studies_.find(id);
+    if (it == studies_.end()) return store::Cas::Missing;
+    out = it->second.state;
+    if (out.version != expected) return store::Cas::Stale;
+    out.name = name;
+    ++out.version;
+    store_.writeState(out);
+    it->second.state = out;
+    stream = it->second.stream;
+  }
+  stream->update(out);
+  return store::Cas::Done;
+}
+
 StudyManager::Removal StudyManager::remove(const std::string& id) {
   std::unique_lock lock(mutex_);
   auto it = studies_.find(id);
@@ -204,9 +224,9 @@ void StudyManager::finish(const std::string& id, RunStatus status, const std::st
     it->second.state.etaSeconds = status == RunStatus::Succeeded ? 0 : -1;
     s = it->second.state;
     stream = it->second.stream;
+    store_.saveState(s);  // under the lock: a rename cannot land between the copy and the write
   }
   stream->setSummary(final);
-  store_.saveState(s);
   store_.recordDisk(id);
   stream->update(s);
 }

@@ -27,6 +27,7 @@
 #include "core/common/cancel.hpp"
 #include "server/http/http_types.hpp"
 #include "server/store/data_dir.hpp"
+#include "server/store/database.hpp"
 #include "server/studies/command_line.hpp"
 #include "server/studies/study_executor.hpp"
 #include "server/studies/study_scheduler.hpp"
@@ -69,6 +70,11 @@ class StudyManager : private StudyReporter {
   std::string benchmarkDbFile(const std::string& id) const;  // empty when there is no database yet
   std::string databasePath(const std::string& id) const;  // empty when there is none yet
   std::shared_ptr<StudyStream> stream(const std::string& id) const;
+
+  // The rename of a client that read version `expected` (issue 26): its state.json written first
+  // (a full disk throws and changes nothing), then the state it answers with. Cas::Stale and
+  // Missing change nothing; `out` is the state after (the current one when stale).
+  store::Cas rename(const std::string& id, const std::string& name, long long expected, StudyState& out);
 
   enum class Removal { NotFound, Cancelling, Deleted };
   // An active study is cancelled (the runs done stay); an ended one is deleted with its files.

@@ -9,6 +9,7 @@ using nlohmann::json;
 json toJson(const StudyState& s) {
   return {{"id", s.id},
           {"name", s.name},
+          {"version", s.version},
           {"status", enumName(s.status)},
           {"message", s.message},
           {"created_at", s.createdAt},

@@ -12,6 +12,7 @@ namespace rover::studies {
 
 struct StudyState {
   std::string id, name;
+  long long version = 1;  // 1 when submitted, +1 per rename (issue 26)
   RunStatus status = RunStatus::Queued;  // one of kStudyStatuses
   std::string message;
   std::string createdAt, startedAt, finishedAt;

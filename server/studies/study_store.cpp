@@ -53,6 +53,7 @@ std::vector<StudyState> StudyStore::load() const {
       s.id = j.at("id").get<std::string>();
       if (s.id != e.path().filename().string()) continue;
       s.name = j.value("name", "");
+      s.version = j.value("version", 1LL);  // a state written before renames: version 1
       // A name this server does not know counts as unfinished: queued again, as before.
       s.status = parseEnum<RunStatus>(j.value("status", "")).value_or(RunStatus::Queued);
       s.message = j.value("message", "");
@@ -81,6 +82,10 @@ void StudyStore::create(const StudyState& s, const json& spec) const {
     store::DataDir::removeTree(dirPath);
     throw;
   }
+}
+
+void StudyStore::writeState(const StudyState& s) const {
+  store::DataDir::writeFileAtomic(file(s.id, "state.json"), stateText(s));
 }
 
 void StudyStore::saveState(const StudyState& s) const {

@@ -26,6 +26,7 @@ class StudyStore {
   // A new study's folder with its spec and first state; nothing is left behind when it fails.
   void create(const StudyState& s, const nlohmann::json& spec) const;
   void saveState(const StudyState& s) const;  // best effort on a full disk (logged)
+  void writeState(const StudyState& s) const;  // the same, throwing (StorageFull) when it cannot
   nlohmann::json specJson(const std::string& id) const;
   std::string databasePath(const std::string& id) const;  // empty when there is none yet
   // summary.json, else the database's summary; null when it holds no run yet.

@@ -213,6 +213,32 @@ suiteWithServer('several operators', { timeout: 240000 }, (ctx) => {
     assert.equal(fc.features.length, 1);
   });
 
+  test('a map renamed in A: B\'s title and list follow; B\'s stale rename says who and keeps mine on request', async () => {
+    const row = (o) => o.page.locator(`#map-list li[data-map="${mapId}"]`);
+    await A.page.click('#tab-maps');
+    await B.page.click('#tab-maps');
+    // B starts a rename from the version it read; A renames first.
+    await row(B).locator('button.rename').click();
+    await row(A).locator('button.rename').click();
+    await row(A).locator('input.rename').fill('Gale by alice');
+    await row(A).locator('input.rename').press('Enter');
+    await A.page.waitForFunction(() => /^Gale by alice — /.test(document.getElementById('map-title').textContent), null, DEADLINE);
+    // B's title follows from the event stream, while B's own rename stays open.
+    await B.page.waitForFunction(() => /^Gale by alice — /.test(document.getElementById('map-title').textContent), null, DEADLINE);
+    await row(B).locator('input.rename').fill('Gale by bob');
+    await row(B).locator('input.rename').press('Enter');
+    const box = row(B).locator('.name-conflict');
+    await box.waitFor(DEADLINE);
+    assert.match(await box.textContent(), /alice renamed this map to “Gale by alice”.*yours: “Gale by bob”/);
+    await box.locator('button.keep-mine').click();
+    await B.page.waitForFunction(() => /^Gale by bob — /.test(document.getElementById('map-title').textContent), null, DEADLINE);
+    await A.page.waitForFunction((id) => /^Gale by bob — /.test(document.getElementById('map-title').textContent) &&
+      document.querySelector(`#map-list li[data-map="${id}"] button.name`)?.textContent === 'Gale by bob', mapId, DEADLINE);
+    const stored = await getJson(`${ctx.server.url}/api/maps/${mapId}`);
+    assert.equal(stored.name, 'Gale by bob');
+    assert.equal(stored.version, 3);
+  });
+
   test('duplicate and edit reopens the PDM and zone versions the run used, as unsaved edits', async () => {
     const pdm = (await getJson(`${ctx.server.url}/api/maps/${mapId}/pdms`)).find((p) => p.name === 'alice spots');
     const zones = await getJson(`${ctx.server.url}/api/maps/${mapId}/zones`);

@@ -97,4 +97,34 @@ describe('studies', { skip: missing || false, timeout: 240000 }, () => {
     await shot(page, 'studies-mission');
     assert.deepEqual(errors, []);
   });
+
+  test('a study renamed on the page; a rename from a stale version offers keep mine / take theirs', async () => {
+    // The 412 below is answered on purpose (Chromium logs it as a failed load).
+    const { page, errors } = await openPage(browser, `${server.url}/`, { ignore: [/status of 412/] });
+    await waitForMap(page);
+    await page.click('#tab-studies');
+    const [study] = await (await fetch(`${server.url}/api/studies`)).json();
+    const row = page.locator(`#st-list li[data-study="${study.id}"]`);
+    await row.locator('button.rename').click();
+    await row.locator('input.rename').fill('mars patterns');
+    await row.locator('input.rename').press('Enter');
+    await page.waitForFunction(() => document.querySelector('#study-title')?.textContent.startsWith('mars patterns ·'), null, { timeout: 20000 });
+    // Another operator renames it while this page's rename is open: the title follows the event
+    // stream, and this page's save is refused with theirs shown.
+    await row.locator('button.rename').click();
+    const r = await fetch(`${server.url}/api/studies/${study.id}`, { method: 'PATCH', headers: { 'Content-Type': 'application/json', 'If-Match': `"v${study.version + 1}"` }, body: JSON.stringify({ name: 'theirs' }) });
+    assert.equal(r.status, 200);
+    await page.waitForFunction(() => document.querySelector('#study-title')?.textContent.startsWith('theirs ·'), null, { timeout: 20000 });
+    await row.locator('input.rename').fill('mine');
+    await row.locator('input.rename').press('Enter');
+    const box = row.locator('.name-conflict');
+    await box.waitFor({ timeout: 20000 });
+    assert.match(await box.textContent(), /renamed this study to “theirs”.*yours: “mine”/);
+    await box.locator('button.take-theirs').click();
+    await page.waitForFunction((id) => document.querySelector(`#st-list li[data-study="${id}"] button.name`)?.textContent.startsWith('theirs ·'), study.id, { timeout: 20000 });
+    const stored = await (await fetch(`${server.url}/api/studies/${study.id}`)).json();
+    assert.equal(stored.name, 'theirs');
+    assert.equal(stored.version, study.version + 2);
+    assert.deepEqual(errors, []);
+  });
 });

@@ -350,6 +350,17 @@ TEST_CASE("openapi: every route answers what the document says, errors included"
   c.expect(s.get("/api/maps?limit=0"), "/api/maps", "get", 400);
   c.expect(s.get("/api/maps/" + map), "/api/maps/{id}", "get", 200);
   c.expect(s.get("/api/maps/nope"), "/api/maps/{id}", "get", 404);
+  // A map's rename (issue 26): 428 without a version, 200, 412 stale, 400 bad name, 404, 409 taken.
+  {
+    const std::string small = "/api/maps/" + up["id"].get<std::string>();
+    c.expect(send("PATCH", small, {{"name", "small east"}}), "/api/maps/{id}", "patch", 428);
+    c.expect(send("PATCH", small, {{"name", "small east"}, {"version", 1}}), "/api/maps/{id}", "patch", 200);
+    c.expect(send("PATCH", small, {{"name", "small west"}, {"version", 1}}), "/api/maps/{id}", "patch", 412);
+    c.expect(send("PATCH", small, {{"name", ""}, {"version", 2}}), "/api/maps/{id}", "patch", 400);
+    c.expect(send("PATCH", "/api/maps/nope", {{"name", "x"}, {"version", 1}}), "/api/maps/{id}", "patch", 404);
+    c.expect(send("PATCH", small, {{"name", s.get("/api/maps/" + map).json()["name"]}, {"version", 2}}), "/api/maps/{id}",
+             "patch", 409);
+  }
   c.expectFile(s.get("/api/maps/" + map + "/layers/slope.png?max=256"), "/api/maps/{id}/layers/{file}", "get", 200, "image/png");
   c.expectFile(s.get("/api/maps/" + map + "/layers/elevation.tif"), "/api/maps/{id}/layers/{file}", "get", 200, "image/tiff");
   c.expect(s.get("/api/maps/" + map + "/layers/nope.png"), "/api/maps/{id}/layers/{file}", "get", 404);
@@ -479,6 +490,11 @@ TEST_CASE("openapi: every route answers what the document says, errors included"
   c.expect(s.get("/api/studies"), "/api/studies", "get", 200);
   c.expect(s.get("/api/studies/" + study), "/api/studies/{id}", "get", 200);
   c.expect(s.get("/api/studies/nope"), "/api/studies/{id}", "get", 404);
+  c.expect(send("PATCH", "/api/studies/" + study, {{"name", "tiny east"}}), "/api/studies/{id}", "patch", 428);
+  c.expect(send("PATCH", "/api/studies/" + study, {{"name", "tiny east"}, {"version", 1}}), "/api/studies/{id}", "patch", 200);
+  c.expect(send("PATCH", "/api/studies/" + study, {{"name", "tiny west"}, {"version", 1}}), "/api/studies/{id}", "patch", 412);
+  c.expect(send("PATCH", "/api/studies/" + study, {{"name", 3}, {"version", 2}}), "/api/studies/{id}", "patch", 400);
+  c.expect(send("PATCH", "/api/studies/nope", {{"name", "x"}, {"version", 1}}), "/api/studies/{id}", "patch", 404);
   c.expectFile(s.get("/api/studies/" + study + "/runs.csv"), "/api/studies/{id}/runs.csv", "get", 200, "text/csv");
   c.expect(s.get("/api/studies/nope/runs.csv"), "/api/studies/{id}/runs.csv", "get", 404);
   c.expectFile(s.get("/api/studies/" + study + "/study.sqlite"), "/api/studies/{id}/study.sqlite", "get", 200,

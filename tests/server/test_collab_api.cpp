@@ -349,3 +349,71 @@ TEST_CASE("operators: token files name their operators; events and history say w
   CHECK(hist[1]["by"] == "ada");
   CHECK(hist[2]["by"] == "Grace Hopper");
 }
+
+TEST_CASE("versions: a map's name is versioned: rename with the version read, stale 412, none 428") {
+  TempDir tmp;
+  ApiServer s(tmp.str("data"), options());
+  const std::string map = s.defaultMap();
+  const std::string target = "/api/maps/" + map;
+  auto read = s.get(target);
+  REQUIRE(read.status == 200);
+  CHECK(read.json()["version"] == 1);
+  CHECK(read.headers["ETag"] == "\"v1\"");
+  CHECK(s.get(target).headers["ETag"] == "\"v1\"");  // the cached body answers with its ETag too
+
+  checkError(send(s, "PATCH", target, json{{"name", "Gale east"}}), 428, "precondition_required", "If-Match");
+  auto ok = send(s, "PATCH", target, json{{"name", "Gale east"}}, ifMatch(1));
+  REQUIRE(ok.status == 200);
+  CHECK(ok.json()["name"] == "Gale east");
+  CHECK(ok.json()["version"] == 2);
+  CHECK(ok.headers["ETag"] == "\"v2\"");
+  // GET answers the new name at once (its cached body was dropped), and so do the lists.
+  auto again = s.get(target);
+  CHECK(again.json()["name"] == "Gale east");
+  CHECK(again.headers["ETag"] == "\"v2\"");
+  CHECK(s.get("/api/maps").json()[0]["name"] == "Gale east");
+
+  // A second operator who read version 1: refused, told the current map; nothing written.
+  auto stale = send(s, "PATCH", target, json{{"name", "Jezero"}, {"version", 1}});
+  checkError(stale, 412, "version_conflict", "If-Match");
+  CHECK(stale.json()["error"]["current"]["name"] == "Gale east");
+  CHECK(stale.json()["error"]["current"]["version"] == 2);
+  CHECK(stale.headers["ETag"] == "\"v2\"");
+  CHECK(s.get(target).json()["name"] == "Gale east");
+  // The body's version may go with an If-Match naming the same one, never another.
+  checkError(send(s, "PATCH", target, json{{"name", "x"}, {"version", 1}}, ifMatch(2)), 400, "invalid_field", "version");
+  checkError(send(s, "PATCH", "/api/maps/nope", json{{"name", "x"}}, ifMatch(1)), 404, "not_found", "id");
+}
+
+TEST_CASE("versions: hostile map and rename bodies are refused naming the field") {
+  TempDir tmp;
+  ApiServer s(tmp.str("data"), options());
+  const std::string target = "/api/maps/" + s.defaultMap();
+  const std::string tooLong(201, 'a'), nul = std::string("a\0b", 3);
+  for (const json& bad : {json{{"name", ""}}, json{{"name", "   "}}, json{{"name", tooLong}}, json{{"name", nul}},
+                          json{{"name", "a\x01"}}, json{{"name", "a\u202eb"}}, json{{"name", 7}}, json::object()})
+    checkError(send(s, "PATCH", target, bad, ifMatch(1)), 400, "invalid_field", "name");
+  checkError(send(s, "PATCH", target, json{{"name", "ok"}, {"meta", 1}}, ifMatch(1)), 400, "unknown_field", "meta");
+  checkError(send(s, "PATCH", target, json::array({1}), ifMatch(1)), 400, "bad_json", "body");
+  checkError(send(s, "PATCH", target, json{{"name", "ok"}}, {{"If-Match", "W/\"v1\""}}), 400, "invalid_header", "If-Match");
+  checkError(send(s, "PATCH", target, json{{"name", "ok"}, {"version", -1}}), 400, "invalid_field", "version");
+  checkError(request(s.port(), "PATCH", target, "name=ok", "text/plain", ifMatch(1)), 415, "content-type");
+  // 200 characters is the limit, and it is taken.
+  CHECK(send(s, "PATCH", target, json{{"name", std::string(200, 'b')}}, ifMatch(1)).status == 200);
+  CHECK(s.get(target).json()["version"] == 2);
+}
+
+TEST_CASE("versions: a map cannot take another map's name; a map stored before versions is version 1") {
+  TempDir tmp;
+  ApiServer s(tmp.str("data"), options());
+  const std::string target = "/api/maps/" + s.defaultMap();
+  store::MapRecord other{"other-map", "Jezero", "2026-01-01T00:00:00.000Z", json::object()};
+  s.db.insertMap(other);
+  CHECK(s.get("/api/maps/other-map").json()["version"] == 1);
+  auto taken = send(s, "PATCH", target, json{{"name", "Jezero"}}, ifMatch(1));
+  checkError(taken, 409, "name_taken", "name");
+  CHECK(s.get(target).json()["version"] == 1);  // nothing written
+  // Its own name again is no clash: a new version.
+  const std::string own = s.get(target).json()["name"];
+  CHECK(send(s, "PATCH", target, json{{"name", own}}, ifMatch(1)).status == 200);
+}

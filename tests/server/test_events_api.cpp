@@ -9,10 +9,12 @@
 #include <thread>
 
 #include "api_server.hpp"
+#include "event_client.hpp"
 
 using namespace rover;
 using rover::test::ApiServer;
 using rover::test::checkError;
+using rover::test::EventClient;
 using rover::test::request;
 using rover::test::TempDir;
 using nlohmann::json;
@@ -24,39 +26,6 @@ std::string cat(std::string a, const std::string& b) {
   a += b;
   return a;
 }
-
-namespace beast = boost::beast;
-namespace net = boost::asio;
-
-// One subscriber: a blocking WebSocket client reading the stream's JSON messages.
-struct EventClient {
-  net::io_context ioc;
-  beast::websocket::stream<beast::tcp_stream> ws{ioc};
-  explicit EventClient(unsigned short port, const std::string& target) {
-    beast::get_lowest_layer(ws).connect(net::ip::tcp::endpoint(net::ip::make_address("127.0.0.1"), port));
-    ws.handshake("127.0.0.1", target);
-  }
-  // The next message, null once the server closed.
-  json next() {
-    beast::flat_buffer b;
-    beast::error_code ec;
-    ws.read(b, ec);
-    if (ec) return nullptr;
-    return json::parse(beast::buffers_to_string(b.data()), nullptr, false);
-  }
-  // The next message of `type` (events of other types skipped), null on close.
-  json nextOf(const std::string& type) {
-    for (int i = 0; i < 100000; ++i) {
-      json m = next();
-      if (m.is_null() || m.value("type", "") == type) return m;
-    }
-    return nullptr;
-  }
-  void send(const json& j) {
-    ws.text(true);
-    ws.write(net::buffer(j.dump()));
-  }
-};
 
 test::HttpResult upgrade(unsigned short port, const std::string& target) {
   return request(port, "GET", target, "", "",
@@ -262,4 +231,26 @@ TEST_CASE("events: the numbering continues after a restart") {
   REQUIRE(c.nextOf("ready")["seq"] == last);
   newPdm(again, again.defaultMap(), "three");
   CHECK(c.nextOf("events")["events"][0]["seq"] == last + 1);
+}
+
+TEST_CASE("events: a map rename is a changed map event with its new version, by its operator") {
+  TempDir tmp;
+  ApiServer s(tmp.str("data"), options());
+  const std::string map = s.defaultMap();
+  EventClient watcher(s.port(), "/api/events?map=" + map);
+  REQUIRE(!watcher.nextOf("ready").is_null());
+  auto r = request(s.port(), "PATCH", "/api/maps/" + map, json{{"name", "Gale east"}}.dump(), "application/json",
+                   {{"If-Match", "\"v1\""}});
+  REQUIRE(r.status == 200);
+  const json e = watcher.nextOf("events")["events"][0];
+  CHECK(e["kind"] == "changed");
+  CHECK(e["object"] == "map");
+  CHECK(e["id"] == map);
+  CHECK(e["map"] == map);
+  CHECK(e["version"] == 2);
+  // A refused rename sends nothing: the next event is the next change.
+  REQUIRE(request(s.port(), "PATCH", "/api/maps/" + map, json{{"name", "x"}}.dump(), "application/json",
+                  {{"If-Match", "\"v1\""}}).status == 412);
+  newPdm(s, map, "after");
+  CHECK(watcher.nextOf("events")["events"][0]["object"] == "pdm");
 }

@@ -388,8 +388,8 @@ TEST_CASE("hostile: the map-body cache never keeps a map a write has changed or 
   // The mechanism: a body read before an invalidation is not cached after it.
   const std::uint64_t ticket = s.ctx.mapCacheTicket();
   s.ctx.invalidateMap(map);
-  CHECK_FALSE(s.ctx.cacheMapBody(map, "stale", ticket));
-  CHECK(s.ctx.cacheMapBody(map, "fresh", s.ctx.mapCacheTicket()));
+  CHECK_FALSE(s.ctx.cacheMapBody(map, "stale", 1, ticket));
+  CHECK(s.ctx.cacheMapBody(map, "fresh", 1, s.ctx.mapCacheTicket()));
   s.ctx.invalidateMap(map);
 
   // A PDM created while GETs run is in every later GET.

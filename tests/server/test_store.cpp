@@ -371,26 +371,26 @@ TEST_CASE("database: WAL mode and schema version") {
     db.insertMap(makeMap("m", "2026-01-01T00:00:00.000Z"));
     CHECK(fs::exists(t.db() + "-wal"));
     CHECK(rawQuery(t.db(), "PRAGMA journal_mode") == "wal");
-    CHECK(rawQuery(t.db(), "SELECT MAX(version) FROM schema_version") == "4");
-    CHECK(rawQuery(t.db(), "SELECT COUNT(*) FROM schema_version") == "4");  // 1, 1 -> 2, 2 -> 3, 3 -> 4
+    CHECK(rawQuery(t.db(), "SELECT MAX(version) FROM schema_version") == "5");
+    CHECK(rawQuery(t.db(), "SELECT COUNT(*) FROM schema_version") == "5");  // 1, 1 -> 2, 2 -> 3, 3 -> 4, 4 -> 5
   }
   {
     Database again(t.db());  // reopening an existing schema is a no-op
     CHECK(again.getMap("m").has_value());
   }
-  CHECK(rawQuery(t.db(), "SELECT COUNT(*) FROM schema_version") == "4");
+  CHECK(rawQuery(t.db(), "SELECT COUNT(*) FROM schema_version") == "5");
 
   // A database written by a newer server is refused rather than misread.
-  rawQuery(t.db(), "INSERT INTO schema_version(version) VALUES (5)");
+  rawQuery(t.db(), "INSERT INTO schema_version(version) VALUES (6)");
   try {
     Database newer(t.db());
     FAIL("expected an exception");
   } catch (const std::runtime_error& e) {
-    CHECK(std::string(e.what()).find("schema version 5") != std::string::npos);
+    CHECK(std::string(e.what()).find("schema version 6") != std::string::npos);
   }
 }
 
-TEST_CASE("database: a version 1 file migrates to 4, its runs labelled with their request's name") {
+TEST_CASE("database: a version 1 file migrates to 5, its runs labelled with their request's name, its maps at version 1") {
   TempDir t;
   {  // The version 1 schema as servers before the migration wrote it.
     sqlite3* db = nullptr;
@@ -413,11 +413,22 @@ TEST_CASE("database: a version 1 file migrates to 4, its runs labelled with thei
     sqlite3_close(db);
   }
   Database db(t.db());
-  CHECK(rawQuery(t.db(), "SELECT MAX(version) FROM schema_version") == "4");
+  CHECK(rawQuery(t.db(), "SELECT MAX(version) FROM schema_version") == "5");
+  // The map kept its row and is version 1; a rename names it.
+  auto gale = db.getMap("m1");
+  REQUIRE(gale);
+  CHECK(gale->name == "gale");
+  CHECK(gale->version == 1);
+  CHECK(db.renameMap("m1", "gale crater", 2).cas == Cas::Stale);
+  CHECK(db.renameMap("nope", "x", 1).cas == Cas::Missing);
+  const rover::store::MapRename renamed = db.renameMap("m1", "gale crater", 1);
+  CHECK(renamed.cas == Cas::Done);
+  CHECK(renamed.takenBy.empty());
+  CHECK(db.getMap("m1")->version == 2);
   auto a = db.getMission("a");
   REQUIRE(a);
   CHECK(a->label == "old run");
-  CHECK(a->mapName == "gale");
+  CHECK(a->mapName == "gale crater");
   CHECK(a->metrics["coverage"] == 0.9);
   auto b = db.getMission("b");
   REQUIRE(b);

@@ -12,6 +12,7 @@
 #include "server/studies/studies.hpp"
 #include "server/studies/study_manager.hpp"
 #include "api_server.hpp"
+#include "event_client.hpp"
 
 namespace rover::test {
 
@@ -380,6 +381,67 @@ TEST_CASE("studies API: names follow the one name rule, runs are addressed by ca
   CHECK(s.api.get("/api/studies/" + id + "/runs/1").status == 200);
   for (const char* run : {"1e0", "1.0", "+1", "01", "%201", "0x1", "-0", "18446744073709551617"})
     checkError(s.api.get("/api/studies/" + id + "/runs/" + std::string(run)), 404, "run");
+}
+
+}  // namespace rover::test
+
+namespace rover::test {
+
+TEST_CASE("studies API: a study's name is versioned: rename, stale 412, none 428, hostile names, its event") {
+  TempDir tmp;
+  std::string id;
+  {
+    StudyServer s(tmp.str("data"));
+    const HttpResult launched = s.api.postJson("/api/studies", tinySpec(2));
+    REQUIRE(launched.status == 202);
+    id = launched.json()["id"];
+    CHECK(launched.json()["version"] == 1);
+    const std::string target = "/api/studies/" + id;
+    CHECK(s.api.get(target).headers["ETag"] == "\"v1\"");
+    EventClient watcher(s.api.port(), "/api/events");
+    REQUIRE(!watcher.nextOf("ready").is_null());
+
+    const auto patch = [&](const json& body, const std::map<std::string, std::string>& headers) {
+      return request(s.api.port(), "PATCH", target, body.dump(), "application/json", headers);
+    };
+    const std::map<std::string, std::string> v1{{"If-Match", "\"v1\""}};
+    checkError(patch({{"name", "slopes"}}, {}), 428, "precondition_required", "If-Match");
+    for (const json& bad : {json{{"name", ""}}, json{{"name", " "}}, json{{"name", std::string(201, 'a')}},
+                            json{{"name", std::string("a\0b", 3)}}, json{{"name", "a\x1b[2J"}}, json{{"name", nullptr}}})
+      checkError(patch(bad, v1), 400, "invalid_field", "name");
+    checkError(patch({{"name", "x"}, {"spec", json::object()}}, v1), 400, "unknown_field", "spec");
+
+    const HttpResult ok = patch({{"name", "slopes"}}, v1);
+    REQUIRE(ok.status == 200);
+    CHECK(ok.json()["name"] == "slopes");
+    CHECK(ok.json()["version"] == 2);
+    CHECK(ok.headers.at("ETag") == "\"v2\"");
+    // Its event: changed study, the new version (no map).
+    json e;
+    for (json m = watcher.nextOf("events"); !m.is_null(); m = watcher.nextOf("events")) {
+      for (const json& ev : m["events"])
+        if (ev["object"] == "study" && ev["kind"] == "changed" && ev["version"] == 2) e = ev;
+      if (!e.is_null()) break;
+    }
+    REQUIRE(!e.is_null());
+    CHECK(e["id"] == id);
+    CHECK(e["map"] == "");
+
+    const HttpResult stale = patch({{"name", "mine"}, {"version", 1}}, {});
+    checkError(stale, 412, "version_conflict", "If-Match");
+    CHECK(stale.json()["error"]["current"]["name"] == "slopes");
+    CHECK(stale.json()["error"]["current"]["version"] == 2);
+    CHECK(s.api.get("/api/studies").json()[0]["name"] == "slopes");
+    checkError(request(s.api.port(), "PATCH", "/api/studies/nope", json{{"name", "x"}}.dump(), "application/json", v1),
+               404, "not_found", "id");
+    // The study ends with its new name (its end writes its state after the rename, not over it).
+    CHECK(s.waitEnded(id)["name"] == "slopes");
+  }
+  // Kept across a restart, with its version.
+  StudyServer again(tmp.str("data"));
+  const json back = again.study(id);
+  CHECK(back["name"] == "slopes");
+  CHECK(back["version"] == 2);
 }
 
 }  // namespace rover::test

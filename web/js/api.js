@@ -131,6 +131,9 @@ export const api = {
   maps: () => getAllPages('/api/maps'),
   map: (id) => getJson(`/api/maps/${id}`),
   deleteMap: (id) => sendJson('DELETE', `/api/maps/${id}`),
+  // `version`: the map's as read (412 with theirs when someone renamed it since).
+  renameMap: (id, name, version) => sendJson('PATCH', `/api/maps/${id}`, { name }, ifMatch(version)),
+  renameStudy: (id, name, version) => sendJson('PATCH', `/api/studies/${id}`, { name }, ifMatch(version)),
   pdms: (mapId) => getAllPages(`/api/maps/${mapId}/pdms`),
   createPdm: (mapId, body) => sendJson('POST', `/api/maps/${mapId}/pdms`, body),
   deletePdm: (mapId, pdmId) => sendJson('DELETE', `/api/maps/${mapId}/pdms/${pdmId}`),

@@ -5,6 +5,7 @@
 // one request, not 50.
 
 import { clearDrafts } from './drafts.js';
+import { noteChange } from './name_edit.js';
 import { state } from './state.js';
 import { report } from './util.js';
 
@@ -32,9 +33,11 @@ export class LiveSync {
 
   apply(e) {
     const here = state.map?.id;
+    noteChange(e);  // who renamed what, for a rename's conflict (name_edit.js)
     switch (e.object) {
       case 'presence': this.presence.event(e); break;
       case 'map':
+        // The list, and the shown map's title when it was renamed (MapsPanel.reload).
         this.later('maps', () => this.mapsPanel.reload());
         if (e.kind === 'deleted') clearDrafts(e.id);
         if (e.kind === 'deleted' && e.id === here) {

@@ -3,7 +3,7 @@
 import { api, setToken, getToken } from './api.js';
 import { LayerStack } from './layer_stack.js';
 import { MapView } from './map_view.js';
-import { MapsPanel } from './maps_panel.js';
+import { MapsPanel, showMapTitle } from './maps_panel.js';
 import { MissionForm } from './mission_form.js';
 import { MissionView } from './mission_view.js';
 import { PdmEditor } from './pdm_editor.js';
@@ -100,7 +100,7 @@ async function selectMap(id) {
     state.map = null;
     state.pdms = [];
     state.pdmId = '';
-    $('map-title').textContent = 'no map';
+    showMapTitle(null);
     await layers.setMap(null);
     state.emit('map', null);
     view.invalidate(true);
@@ -112,8 +112,7 @@ async function selectMap(id) {
   // The map's body holds its first PDMs only; pdms_total says when the listing has more.
   if ((map.pdms_total || 0) > state.pdms.length) state.pdms = await api.pdms(id);
   state.pdmId = '';
-  $('map-title').textContent = `${map.name} — ${map.cols}×${map.rows} × ${Number(map.cell_size_m.toPrecision(4))} m`;
-  $('map-title').title = `map ${map.id}`;
+  showMapTitle(map);
   mapsPanel.remember(id);
   view.setExtent(map.width_m, map.height_m, true);
   const loading = layers.setMap(map);

@@ -4,6 +4,7 @@
 
 import { api, uploadDem } from './api.js';
 import { state } from './state.js';
+import { editName } from './name_edit.js';
 import { $, el, fmt, report, showError } from './util.js';
 
 const LAST_MAP_KEY = 'roverplan.map';
@@ -13,6 +14,12 @@ const LAST_MAP_KEY = 'roverplan.map';
 function scaleWarnings(m) {
   return (m?.warnings || []).map((w) => el('div', { class: 'scale-warning', dataset: { code: w.code } },
     '⚠ ', w.message, w.field ? el('span', { class: 'muted' }, ` (${w.field})`) : ''));
+}
+
+// The title over the map: its name, size and cell size.
+export function showMapTitle(map) {
+  $('map-title').textContent = map ? `${map.name} — ${map.cols}×${map.rows} × ${Number(map.cell_size_m.toPrecision(4))} m` : 'no map';
+  $('map-title').title = map ? `map ${map.id}` : 'The selected map';
 }
 
 export class MapsPanel {
@@ -143,6 +150,12 @@ export class MapsPanel {
 
   async reload() {
     state.maps = await api.maps();
+    // The shown map renamed (here or by another operator): its name, version and title follow.
+    const shown = state.map && state.maps.find((m) => m.id === state.map.id);
+    if (shown && (shown.name !== state.map.name || shown.version !== state.map.version)) {
+      Object.assign(state.map, { name: shown.name, version: shown.version });
+      showMapTitle(state.map);
+    }
     this.renderList();
     state.emit('maps', state.maps);
     return state.maps;
@@ -161,10 +174,17 @@ export class MapsPanel {
   }
 
   renderList() {
+    // A rename being typed (or its conflict) is not swept away by a list refresh: it comes after.
+    if (this.renaming) {
+      this.listStale = true;
+      this.renderInfo();
+      return;
+    }
     const list = $('map-list');
     list.replaceChildren(...state.maps.map((m) => el('li', { class: state.map?.id === m.id ? 'selected' : '', dataset: { map: m.id } },
       el('button', { class: 'name', title: `${m.name} — ${m.id}`, onclick: () => this.selectMap(m.id) }, m.name),
       el('span', { class: 'meta' }, `${m.cols}×${m.rows} · ${fmt(m.cell_size_m)} m`),
+      el('button', { class: 'small rename', title: `rename ${m.name}`, 'aria-label': `rename map ${m.name}`, onclick: (e) => this.rename(m, e.currentTarget.closest('li')) }, '✎'),
       el('button', { class: 'small', title: `delete ${m.name}`, 'aria-label': `delete map ${m.name}`, onclick: () => this.remove(m) }, '✕'))));
     this.renderInfo();
   }
@@ -192,6 +212,27 @@ export class MapsPanel {
           m.vertical_offset ? `heights + ${fmt(m.vertical_offset)} m` : ''].filter(Boolean).join(' · '))] : []),
       line('source', `${(m.source_files || []).join(', ')} (${m.driver || '?'})`),
       ...scaleWarnings(m));
+  }
+
+  // The map's name becomes an input (name_edit.js); saved with the version read.
+  rename(m, row) {
+    this.renaming = true;
+    editName({
+      row, object: 'map', what: 'map', id: m.id, name: m.name, version: m.version,
+      save: (name, version) => api.renameMap(m.id, name, version),
+      done: (saved) => {
+        this.renaming = false;
+        if (saved) {
+          Object.assign(m, { name: saved.name, version: saved.version });
+          if (state.map?.id === m.id) {
+            Object.assign(state.map, { name: saved.name, version: saved.version });
+            showMapTitle(state.map);
+          }
+        }
+        this.listStale = false;
+        this.reload().catch(report);
+      },
+    });
   }
 
   async remove(m) {

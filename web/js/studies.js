@@ -8,7 +8,8 @@
 //   any metric × any grouping: box plots, from two selects
 // Reference values (SPEC.md §1, paper 002) are drawn on the same axes where the paper gives them.
 
-import { ApiError, downloadWithToken, getJson, request, sendJson } from './api.js';
+import { ApiError, api, downloadWithToken, getJson, request, sendJson } from './api.js';
+import { editName } from './name_edit.js';
 import { RunStatus, isActive } from './outcomes.js';
 import { $, el, fmt, report } from './util.js';
 
@@ -238,18 +239,47 @@ export class StudiesPanel {
       report(err);
       return;
     }
+    // The shown study renamed (by another operator too): its title follows.
+    const shown = this.current && this.studies.find((s) => s.id === this.current.id);
+    if (shown && shown.name !== this.current.name) {
+      Object.assign(this.current, { name: shown.name, version: shown.version });
+      $('study-title').textContent = `${shown.name} · ${shown.id}`;
+    }
     this.renderList();
     if (!this.current && this.studies.length) await this.show(this.studies[0].id);
   }
 
   renderList() {
+    // A rename being typed (or its conflict) is not swept away by a refresh: it comes after.
+    if (this.renaming) return;
     $('st-list').replaceChildren(...this.studies.map((s) => el('li', { class: this.current?.id === s.id ? 'selected' : '', 'data-study': s.id },
       el('button', { class: 'name', title: `show study ${s.id}`, onclick: () => this.show(s.id) }, `${s.name} · ${s.id.slice(0, 6)}`),
+      el('button', { class: 'small rename', title: `rename ${s.name}`, 'aria-label': `rename study ${s.name}`, onclick: (e) => this.rename(s, e.currentTarget.closest('li')) }, '✎'),
       el('span', { class: `badge ${s.status}` }, s.status),
       el('span', { class: 'muted small' }, ` ${s.runs_done}/${s.runs_total}`),
       el('button', { title: isActive(s.status) ? 'cancel' : 'delete the study and its database',
         onclick: async () => { try { await sendJson('DELETE', `/api/studies/${s.id}`); } catch (err) { report(err); } this.reload(); } },
       isActive(s.status) ? 'cancel' : 'delete'))));
+  }
+
+  // The study's name becomes an input (name_edit.js); saved with the version read.
+  rename(s, row) {
+    this.renaming = true;
+    editName({
+      row, object: 'study', what: 'study', id: s.id, name: s.name, version: s.version,
+      save: (name, version) => api.renameStudy(s.id, name, version),
+      done: (saved) => {
+        this.renaming = false;
+        if (saved) {
+          Object.assign(s, { name: saved.name, version: saved.version });
+          if (this.current?.id === s.id) {
+            Object.assign(this.current, { name: saved.name, version: saved.version });
+            $('study-title').textContent = `${saved.name} · ${s.id}`;
+          }
+        }
+        this.reload();
+      },
+    });
   }
 
   async show(id) {
