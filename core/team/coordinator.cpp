@@ -512,6 +512,7 @@ class Coordinator {
       }
     }
     rec.note = conflict ? conflictNote(*conflict) : "no clear try";
+    boxedIn_ = conflict && conflict->time - last(k).time < 1.0;
     return Outcome::Skipped;
   }
 
@@ -786,8 +787,14 @@ class Coordinator {
         out_.cancelled = true;
         return;
       }
+      // Or it is boxed in: every try, at every delay, came too close in its first second, while
+      // standing is clear (issue 25: with 10 rovers on the default map a leg ended 1.06 m from
+      // a rover not planned yet, which the traffic table holds standing at its start; the first
+      // samples of any move, turning in place, came within 0.99 m of it, and the rover skipped
+      // its 23 remaining legs from there). Driving off is the only way out.
       if (o == Outcome::Skipped && policy_.recovers() && recoveries < policy_.aside().recoveriesPerLeg &&
-          firstConflict(k, {}, 0, kForGood) && moveAside(k, policy_.aside().parkingMoves + recoveries)) {
+          (boxedIn_ || firstConflict(k, {}, 0, kForGood)) &&
+          moveAside(k, policy_.aside().parkingMoves + recoveries)) {
         // Standing here it would be run over later: it stepped aside; the leg goes on from there.
         ++recoveries;
         rec.note.clear();
@@ -865,7 +872,10 @@ class Coordinator {
   std::vector<std::vector<Stop>> stops_;
   std::vector<LegRecord> legsBefore_;  // cutAt: the leg records before the last cut
   CoordinationResult out_;
-  TrafficTable traffic_;  // the rovers done so far; the others standing at their starts
+  TrafficTable traffic_;
+  // The last piece was skipped for a conflict in its first second: no try nor delay got the
+  // rover away from where it stands (runPiece sets it, runLeg reads it).
+  bool boxedIn_ = false;  // the rovers done so far; the others standing at their starts
   int legsDone_ = 0;
   int legsTotal_ = 0;
 };

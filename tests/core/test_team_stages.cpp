@@ -511,6 +511,40 @@ TEST_CASE("stages: a rover whose spot will be run over steps aside, then goes on
   CHECK(paper.conflicts.empty());
 }
 
+TEST_CASE("stages: a rover boxed in beside a rover not planned yet steps aside and goes on (timed, issue 25)") {
+  // Rover 0 drives east from (0, 0) to (5, 0), stopping 1.05 m from rover 1's start (6.05, 0):
+  // rover 1 is planned after it, so the traffic table holds it standing there all along. Standing
+  // is clear, but rover 0's next leg, to (8, 2.5), heads past rover 1 within 0.7 m and comes
+  // closer than the safety distance in its first second, at every delay (rover 1 never moves in
+  // the table) and every re-plan (the fake planner draws the same line). Before issue 25's fix
+  // the leg was skipped, and so was every later leg from the same spot; now the rover steps
+  // aside (2 m back along its track, from where the line to (8, 2.5) clears rover 1) and goes on.
+  std::vector<RoverTask> tasks(2);
+  tasks[0].start = {0, 0, 0};
+  tasks[0].legs = {{{5, 0}, {}, 0}, {{8, 2.5}, {}, 1}};
+  tasks[1].start = {6.05, 0, -M_PI / 2};
+  tasks[1].legs = {{{6.05, -4}, {}, 2}};
+  const StraightLinePlanner planner;
+  const StraightLineRover rover;
+  CoordinationParams p;
+  const CoordinationResult timed = coordinateWith(tasks, planner, rover, TimedPolicy(p), p, 1);
+  std::vector<const LegRecord*> legs0;
+  for (const LegRecord& l : timed.legs)
+    if (l.rover == 0 && l.leg < 2) legs0.push_back(&l);
+  REQUIRE(legs0.size() == 2);
+  CHECK(legs0[0]->status == LegStatus::Reached);
+  CHECK(legs0[1]->status == LegStatus::Reached);
+  CHECK(legs0[1]->note.empty());
+  CHECK((endOf(timed.trajectories[0]) - Eigen::Vector2d(8, 2.5)).norm() < 0.5);
+  CHECK(timed.conflicts.empty());
+  CHECK(checkSeparation(timed.trajectories, p.safetyDistance).minimumDistance >= p.safetyDistance);
+  // Paper (no recoveries) still skips it, for rover 1 within the safety distance.
+  const CoordinationResult paper = coordinateWith(tasks, planner, rover, PaperPolicy(p), p, 1);
+  for (const LegRecord& l : paper.legs)
+    if (l.rover == 0 && l.leg == 1) CHECK(l.status == LegStatus::Skipped);
+  CHECK(paper.conflicts.empty());
+}
+
 TEST_CASE("stages: a last leg whose goal is passed long after the dwell is reached, then parks aside (timed)") {
   // Rover 1 drives north from (10, 0) to (10, 5), its only leg: there after 10 s. Rover 0 drives
   // east along y = 5 from x = -60 and passes (10, 5) after 140 s. Paper: the last leg is checked
