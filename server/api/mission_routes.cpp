@@ -76,19 +76,12 @@ Response cancelOrDeleteMission(ApiContext& ctx, const Request& req) {
 Response renameMission(ApiContext& ctx, const Request& req) {
   const std::string id = req.params.at("id");
   json body = jsonBody(req, rj::kMissionJsonLimits);
-  if (!body.is_object()) throw ApiError(400, "bad_json", "the request body must be a JSON object", "body");
-  for (const auto& item : body.items())
-    if (item.key() != "label" && item.key() != "version")
-      throw ApiError(400, "unknown_field", "only 'label' can be changed, not '" + rj::shown(item.key()) + "'",
-                     rj::shown(item.key()));
-  auto label = body.find("label");
-  if (label == body.end() || !label->is_string()) throw ApiError(400, "invalid_field", "label must be a string", "label");
-  rj::checkName(label->get<std::string>(), "label");
+  const std::string label = renamedTo(body, "label", true);
   const std::string what = "mission " + rj::shown(id);
   missionOr404(ctx, id);
   const long long expected = requiredVersion(req, &body, what);
   std::lock_guard lock(ctx.versionedWrites);
-  switch (ctx.db.relabelMission(id, label->get<std::string>(), expected)) {
+  switch (ctx.db.relabelMission(id, label, expected)) {
     case store::Cas::Done: break;
     case store::Cas::Missing: throw missionNotFound(id);
     case store::Cas::Stale: {

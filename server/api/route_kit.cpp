@@ -98,20 +98,22 @@ Response withAttachment(Response r, const std::string& filename) {
   return r;
 }
 
-std::string newNameOf(const json& body) {
+std::string renamedTo(const json& body, const std::string& key, bool blankAllowed) {
   if (!body.is_object()) throw ApiError(400, "bad_json", "the request body must be a JSON object", "body");
   for (const auto& item : body.items())
-    if (item.key() != "name" && item.key() != "version")
-      throw ApiError(400, "unknown_field", "only 'name' can be changed, not '" + rj::shown(item.key()) + "'",
+    if (item.key() != key && item.key() != "version")
+      throw ApiError(400, "unknown_field", "only '" + key + "' can be changed, not '" + rj::shown(item.key()) + "'",
                      rj::shown(item.key()));
-  auto name = body.find("name");
-  if (name == body.end() || !name->is_string()) throw ApiError(400, "invalid_field", "name must be a string", "name");
-  const std::string text = name->get<std::string>();
-  rj::checkName(text, "name");
-  if (text.find_first_not_of(" \t") == std::string::npos)
-    throw ApiError(400, "invalid_field", "name must not be empty or blank", "name");
+  auto value = body.find(key);
+  if (value == body.end() || !value->is_string()) throw ApiError(400, "invalid_field", key + " must be a string", key);
+  const std::string text = value->get<std::string>();
+  rj::checkName(text, key);
+  if (!blankAllowed && text.find_first_not_of(" \t") == std::string::npos)
+    throw ApiError(400, "invalid_field", key + " must not be empty or blank", key);
   return text;
 }
+
+std::string newNameOf(const json& body) { return renamedTo(body, "name", false); }
 
 ApiError mapNotFound(const std::string& id, const std::string& field) {
   return ApiError(404, "not_found", "no map '" + rj::shown(id) + "'", field);

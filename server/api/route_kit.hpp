@@ -76,6 +76,8 @@ struct InvalidateMapAfter {
 // The new name a rename's body {"name", "version"?} holds (PATCH /api/maps/{id}, /api/studies/{id}):
 // 400 bad_json (not an object), unknown_field (any other member), invalid_field naming `name` (not
 // a string, breaks the name rule rj::checkName, or blank: a map or study is always named).
+// The one member a rename may change (`key`, plus "version"), checked as a name; 400 naming it.
+std::string renamedTo(const nlohmann::json& body, const std::string& key, bool blankAllowed);
 std::string newNameOf(const nlohmann::json& body);
 
 // The 404s of the stored resources, one wording each; `field` names the input that held the id.
