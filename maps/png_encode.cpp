@@ -10,6 +10,11 @@
 // choice at the same level (elevation 104.7 vs 102.6 kB, hillshade 35.2 vs 37.1 kB), where no
 // filter is 10-50 % larger and "Sub" no smaller; level 6 would be 15-35 % smaller for 4-10× the
 // time. Whole-map renderings (up to 4096² and full size) take the same path.
+// The deflate itself is GDAL's CPLZLibDeflate, which Debian's GDAL builds on libdeflate: at level 1
+// it takes 2.1-2.3× less time than zlib's and its streams are 6-12 % smaller (elevation 77.9 vs
+// 87.2 kB, slope 96.3 vs 102.4 kB, hillshade 38.0 vs 43.3 kB on 256² tiles); zlib still makes the
+// chunks' CRC-32.
+#include <cpl_conv.h>
 #include <zlib.h>
 
 #include <cstring>
@@ -60,10 +65,11 @@ std::vector<std::uint8_t> encodePng(const Image& image) {
       for (std::size_t i = 0; i < stride; ++i) out[1 + i] = static_cast<std::uint8_t>(row[i] - up[i]);
     }
   }
-  uLongf packed = compressBound(static_cast<uLong>(rows.size()));
-  std::vector<std::uint8_t> idat(packed);
-  if (compress2(idat.data(), &packed, rows.data(), static_cast<uLong>(rows.size()), 1) != Z_OK)
-    throw std::runtime_error("PNG export: zlib failed");
+  // Room for the worst case, stored blocks (5 bytes per block of at least 10 000 bytes), with margin.
+  std::vector<std::uint8_t> idat(rows.size() + rows.size() / 64 + 1024);
+  std::size_t packed = 0;
+  if (CPLZLibDeflate(rows.data(), rows.size(), 1, idat.data(), idat.size(), &packed) == nullptr)
+    throw std::runtime_error("PNG export: deflate failed");
   std::vector<std::uint8_t> png = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
   png.reserve(packed + 64);
   std::vector<std::uint8_t> ihdr;

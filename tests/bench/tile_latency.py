@@ -41,6 +41,14 @@ def get(url, headers=None):
     return (time.perf_counter() - t) * 1000, status, len(body), etag
 
 
+def server_cpu_s(pid):
+    # utime + stime of the server process (all its threads), from /proc: the cost of a phase on a
+    # shared machine, where its latency also measures the neighbours.
+    with open(f"/proc/{pid}/stat") as f:
+        fields = f.read().rsplit(")", 1)[1].split()
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+
+
 def pct(xs, q):
     xs = sorted(xs)
     return xs[min(len(xs) - 1, int(round(q * (len(xs) - 1))))]
@@ -87,11 +95,14 @@ try:
             res = list(ex.map(lambda a: get(url + a, headers and headers(a)), addrs))
         return res, time.perf_counter() - t
 
+    cpu0 = server_cpu_s(server.pid)
     cold, secs = run()
+    cold_cpu = server_cpu_s(server.pid) - cpu0
     ms = [r[0] for r in cold]
     sizes = [r[2] for r in cold if r[1] == 200]
     print(f"cold, {len(addrs)} tiles, {clients} clients: p50 {pct(ms, .5):.1f} ms, p99 {pct(ms, .99):.1f} ms, "
           f"max {max(ms):.1f} ms, {len(addrs) / secs:.0f} tiles/s; statuses {sorted(set(r[1] for r in cold))}")
+    print(f"server CPU per cold tile: {1000 * cold_cpu / len(addrs):.1f} ms")
     print(f"tile size: mean {statistics.mean(sizes) / 1024:.1f} KiB, max {max(sizes) / 1024:.1f} KiB")
     warm, secs = run()
     ms = [r[0] for r in warm]
