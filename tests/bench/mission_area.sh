@@ -78,7 +78,8 @@ fi
 python3 - "$work" "$size" "${names[@]}" <<'EOF'
 import json, re, sys
 work, size, names = sys.argv[1], sys.argv[2], sys.argv[3:]
-label = {"cut": "600² cut-out map", "area": f"--area in the {size}² map", "whole": f"{size}² map, no area"}
+big = size.replace("x", " × ") if "x" in size else f"{size}²"
+label = {"cut": "600² cut-out map", "area": f"--area in the {big} map", "whole": f"{big} map, no area"}
 def timing(name):
     t = open(f"{work}/{name}.time").read()
     wall = re.search(r"Elapsed \(wall clock\) time.*: (.*)", t).group(1).strip()
