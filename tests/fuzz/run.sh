@@ -13,7 +13,7 @@ seed=${ROVER_FUZZ_SEED:-1}
 shift || true
 export CCACHE_BASEDIR="$root" CCACHE_NOHASHDIR=1
 cmake -S . -B build-fuzz -G Ninja -DCMAKE_BUILD_TYPE=Debug -DCMAKE_CXX_COMPILER=clang++ -DROVER_FUZZ=ON \
-  -DROVER_WERROR=OFF -DCMAKE_CXX_FLAGS_DEBUG="-O1 -g" >/dev/null
+  -DROVER_WERROR=OFF -DCMAKE_CXX_FLAGS_DEBUG="-O1 -gline-tables-only" >/dev/null
 targets=("$@")
 if [ ${#targets[@]} -eq 0 ]; then
   shopt -s nullglob
