@@ -25,6 +25,11 @@ export function ramp(t) {
   return HYPSO[i].map((a, k) => linear((a + (HYPSO[i + 1][k] - a) * f) / 255));
 }
 
+// The ramp in 1024 steps (linear RGB triplets), for meshes of 66 k vertices a tile.
+const RAMP_STEPS = 1024;
+const RAMP = new Float32Array(RAMP_STEPS * 3);
+for (let k = 0; k < RAMP_STEPS; k++) RAMP.set(ramp(k / (RAMP_STEPS - 1)), 3 * k);
+
 // A window of tiles {z, x0, y0, nx, ny} of the map's grid (map.tiles), their values `tiles`
 // (Float32Array of 256², row-major over the window, NaN: no data or beyond the map).
 export class TerrainLevel {
@@ -52,23 +57,36 @@ export class TerrainLevel {
     this.rect = [this.ox, Math.max(0, this.oy - this.rows * this.resY), Math.min(this.W, this.ox + this.cols * this.res), this.oy];
   }
 
-  // Heights at the (cols + 1) × (rows + 1) pixel corners: the mean of the finite pixels around each.
+  // Heights at the (cols + 1) × (rows + 1) pixel corners: the mean of the finite pixels around
+  // each (sums of pixel pairs along a row, then of two rows' pairs: one pass over the window).
   cornerHeights() {
     const { cols, rows, data } = this;
-    const out = new Float32Array((cols + 1) * (rows + 1));
+    const w = cols + 1;
+    const out = new Float32Array(w * (rows + 1));
+    let prevSum = new Float32Array(w), prevCnt = new Uint8Array(w);  // the pixel row above: 0s
+    let sum = new Float32Array(w), cnt = new Uint8Array(w);
     for (let cj = 0; cj <= rows; cj++) {
-      for (let ci = 0; ci <= cols; ci++) {
-        let s = 0, n = 0;
-        for (let r = cj - 1; r <= cj; r++) {
-          if (r < 0 || r >= rows) continue;
-          for (let c = ci - 1; c <= ci; c++) {
-            if (c < 0 || c >= cols) continue;
-            const v = data[r * cols + c];
-            if (v === v) { s += v; n++; }  // not NaN
-          }
+      if (cj < rows) {
+        const row = cj * cols;
+        for (let ci = 0; ci < w; ci++) {
+          const l = ci > 0 ? data[row + ci - 1] : NaN, r = ci < cols ? data[row + ci] : NaN;
+          let s = 0, n = 0;
+          if (l === l) { s += l; n++; }  // not NaN
+          if (r === r) { s += r; n++; }
+          sum[ci] = s;
+          cnt[ci] = n;
         }
-        out[cj * (cols + 1) + ci] = n ? s / n : NaN;
+      } else {
+        sum.fill(0);
+        cnt.fill(0);
       }
+      const o = cj * w;
+      for (let ci = 0; ci < w; ci++) {
+        const n = cnt[ci] + prevCnt[ci];
+        out[o + ci] = n ? (sum[ci] + prevSum[ci]) / n : NaN;
+      }
+      [prevSum, sum] = [sum, prevSum];
+      [prevCnt, cnt] = [cnt, prevCnt];
     }
     return out;
   }
@@ -125,10 +143,20 @@ export function tileMesh(THREE, level, a, b, style) {
       // alike on their shared edge.
       const dx = slope(at(ci - 1, cj), h, at(ci + 1, cj), level.res) * exag;
       const dz = slope(at(ci, cj - 1), h, at(ci, cj + 1), level.resY) * exag;  // a row down is +z
-      const len = Math.hypot(dx, 1, dz);
-      nor.set([-dx / len, 1 / len, -dz / len], 3 * k);
-      if (col) col.set(Number.isNaN(h) ? [0.2, 0.2, 0.2] : ramp((h - zMin) / span), 3 * k);
-      if (uv) uv.set([i / TILE, j / TILE], 2 * k);
+      const len = Math.sqrt(dx * dx + 1 + dz * dz);
+      nor[3 * k] = -dx / len;
+      nor[3 * k + 1] = 1 / len;
+      nor[3 * k + 2] = -dz / len;
+      if (col) {
+        const q = Number.isNaN(h) ? -1 : 3 * Math.round(Math.max(0, Math.min(1, (h - zMin) / span)) * (RAMP_STEPS - 1));
+        col[3 * k] = q < 0 ? 0.2 : RAMP[q];
+        col[3 * k + 1] = q < 0 ? 0.2 : RAMP[q + 1];
+        col[3 * k + 2] = q < 0 ? 0.2 : RAMP[q + 2];
+      }
+      if (uv) {
+        uv[2 * k] = i / TILE;
+        uv[2 * k + 1] = j / TILE;
+      }
     }
   }
   const index = new Uint32Array(TILE * TILE * 6);
@@ -214,9 +242,14 @@ export function borderWall(THREE, fine, coarse, style) {
 }
 
 // Four planes whose intersection of negative sides is the level's window (local rect → scene):
-// with clipIntersection, a coarser mesh is cut away exactly where the finer one lies.
+// with clipIntersection, a coarser mesh is cut away where the finer one lies. The cut stops half a
+// fine pixel inside the window: the coarse surface clipped per fragment and the wall's edge
+// rasterised per triangle otherwise leave pixel-wide cracks along the seam where neither is
+// drawn (the background showed through as a dotted line); the overlap hides under the finer
+// surface, or shows the same ground a few centimetres higher over half a pixel.
 export function clipPlanes(THREE, level) {
-  const [x0, y0, x1, y1] = level.rect;
+  const inset = 0.5 * Math.min(level.res, level.resY);
+  const [x0, y0, x1, y1] = [level.rect[0] + inset, level.rect[1] + inset, level.rect[2] - inset, level.rect[3] - inset];
   const sx0 = x0 - level.W / 2, sx1 = x1 - level.W / 2, sz0 = level.H / 2 - y1, sz1 = level.H / 2 - y0;
   return [
     new THREE.Plane(new THREE.Vector3(-1, 0, 0), sx0),

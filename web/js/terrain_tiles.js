@@ -125,6 +125,7 @@ export class TerrainTiles {
   // colourBy}; false when superseded.
   async setStyle(style) {
     if (!this.base) return false;
+    if (this.style && this.entries.length && !this.styling && styleKey(style) === styleKey(this.style)) return true;  // shown already
     this.abort('style', 'refine');
     this.pendingKey = '';
     const signal = this.aborters.style.signal;
@@ -258,14 +259,23 @@ export class TerrainTiles {
       for (let b = 0; b < win.ny; b++) for (let a = 0; a < win.nx; a++) jobs.push(this.tileTexture(win.z, win.x0 + a, win.y0 + b, signal));
       textures = await Promise.all(jobs);
     }
-    const meshes = [];
-    for (let b = 0; b < win.ny; b++) {
-      for (let a = 0; a < win.nx; a++) {
-        const m = tileMesh(this.THREE, level, a, b, { ...this.style, texture: textures[b * win.nx + a] || null });
-        if (m) meshes.push(m);
+    const entry = { key: winKey(win), level, meshes: [], wall: null, textures: textures.filter(Boolean) };
+    try {
+      for (let b = 0; b < win.ny; b++) {
+        for (let a = 0; a < win.nx; a++) {
+          // A tile's mesh at a time, the page answering in between; a build the view has left
+          // behind stops here.
+          if (a + b) await new Promise((r) => setTimeout(r, 0));
+          if (signal.aborted) throw Object.assign(new Error('superseded'), { code: 'aborted' });
+          const m = tileMesh(this.THREE, level, a, b, { ...this.style, texture: textures[b * win.nx + a] || null });
+          if (m) entry.meshes.push(m);
+        }
       }
+    } catch (err) {
+      this.dispose(entry);
+      throw err;
     }
-    return { key: winKey(win), level, meshes, wall: null, textures: textures.filter(Boolean) };
+    return entry;
   }
 
   // Shows `entries` (coarse to fine): each cut out under the next, a wall on each finer border.
