@@ -80,6 +80,8 @@ suiteWithServer('3D view', { timeout: 180000 }, (ctx) => {
     const { page, errors, context } = await openPage(ctx.browser, `${ctx.server.url}/#map=${map.id}`);
     await waitForMap(page);
     await page.waitForFunction(() => document.getElementById('map-title').textContent.includes('tiled3d'));
+    // The 2D map's cursor readout loads the whole-map layers; the 3D view must not.
+    await page.waitForFunction(() => window.__roverplanApp.layers.rasters.elevation);
     const urls = [];
     page.on('request', (r) => urls.push(new URL(r.url()).pathname));
     await page.click('#view-3d');
