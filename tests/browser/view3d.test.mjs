@@ -94,6 +94,22 @@ suiteWithServer('3D view', { timeout: 180000 }, (ctx) => {
     assert.deepEqual(await page.evaluate(() => window.__roverplan.view3dLevels), [1]);
     assert.deepEqual(tiles().map(([z, x, y]) => `${z}/${x}/${y}`).sort(), ['1/0/0', '1/0/1', '1/1/0', '1/1/1']);
     assert.ok(!urls.some((u) => u.includes('/layers/elevation')), `no whole-map layer: ${urls.filter((u) => u.includes('/layers/'))}`);
+    // No cracks: neighbouring tiles' meshes share their edge vertices exactly (257 a side, at the
+    // pixel corners, heights from both tiles' pixels).
+    const seam = await page.evaluate(() => {
+      const meshes = window.__roverplanApp.view3d.group.children.filter((o) => o.name === 'terrain');
+      const pos = (x, y) => meshes.find((m) => m.userData.tile.join('/') === `1/${x}/${y}`).geometry.attributes.position.array;
+      const a = pos(0, 0), right = pos(1, 0), below = pos(0, 1);
+      let worst = 0;
+      for (let k = 0; k <= 256; k++) {
+        for (let c = 0; c < 3; c++) {
+          worst = Math.max(worst, Math.abs(a[3 * (k * 257 + 256) + c] - right[3 * (k * 257) + c]));
+          worst = Math.max(worst, Math.abs(a[3 * (256 * 257 + k) + c] - below[3 * k + c]));
+        }
+      }
+      return worst;
+    });
+    assert.equal(seam, 0, 'shared tile edges');
     const coarse = await canvasStats(page);
     assert.ok(coarse.lit > 0.1 && coarse.colours > 20, `the terrain is drawn: ${JSON.stringify(coarse)}`);
     await screenshot(page, 'view3d-tiles-base');
@@ -107,6 +123,8 @@ suiteWithServer('3D view', { timeout: 180000 }, (ctx) => {
     assert.ok(tiles().every(([z]) => z <= map.tiles.native_zoom));
     const terrain = await page.evaluate(() => window.__roverplanApp.view3d.group.children.filter((o) => o.name === 'terrain').length);
     assert.equal(terrain, 4 + 9, 'the base tiles and the 3 × 3 finer ones');
+    assert.equal(await page.evaluate(() => window.__roverplanApp.view3d.group.children.filter((o) => o.name === 'terrain-wall').length), 1,
+      'a wall closes the seam between the finer window and the base');
     const near = await canvasStats(page);
     assert.ok(near.lit > 0.5 && near.colours > 20, `the refined terrain is drawn: ${JSON.stringify(near)}`);
     await screenshot(page, 'view3d-tiles-refined');
