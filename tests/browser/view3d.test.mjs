@@ -117,13 +117,15 @@ suiteWithServer('3D view', { timeout: 180000 }, (ctx) => {
     // Zoom in on the map's centre (150, 150 m: zoom 3's tile 2, 2) until the native zoom's tiles
     // are asked for: the 3 × 3 of them around the target, nothing deeper. Their answers are held
     // back here, so the view moves on while they are in flight.
-    let hold = true;
-    const held = [], failed = [];
-    await page.route(/\/tiles\/elevation\/3\/\d+\/\d+\.f32$/, (route) => (hold ? held.push(route) : route.continue()));
+    let hold = true, allHeld;
+    const held = [], failed = [], nineHeld = new Promise((resolve) => (allHeld = resolve));
+    await page.route(/\/tiles\/elevation\/3\/\d+\/\d+\.f32$/, (route) => {
+      if (!hold) return route.continue();
+      if (held.push(route) === 9) allHeld();
+    });
     page.on('requestfailed', (r) => failed.push(new URL(r.url()).pathname));
     for (let i = 0; i < 6; i++) await page.click('#zoom-in');
-    await page.waitForFunction(() => window.__roverplanApp.view3d.terrain.pendingKey.startsWith('3/'), null, { timeout: 30000 });
-    while (held.length < 9) await page.waitForTimeout(50);
+    await nineHeld;
     const asked = () => tiles().filter(([z]) => z === 3).map(([, x, y]) => `${x}/${y}`).sort();
     assert.deepEqual(asked(), ['1/1', '1/2', '1/3', '2/1', '2/2', '2/3', '3/1', '3/2', '3/3']);
     assert.ok(tiles().every(([z]) => z <= map.tiles.native_zoom));
