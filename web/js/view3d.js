@@ -1,25 +1,14 @@
-// The 3D view (three.js, loaded on first use): the elevation raster as a displaced mesh
-// (≤ 256 × 256 vertices), coloured by elevation or traversability, with the mission's trails
-// draped at terrain height plus a small offset, and the map's keep-out zones as red walls standing
-// on their outlines. A small orbit control of our own: drag to orbit, right-drag or shift-drag to
-// pan, wheel or the toolbar's +/− to zoom ("fit" frames the whole map again).
+// The 3D view (three.js, loaded on first use): the map's elevation tiles as displaced meshes
+// (terrain_tiles.js: the whole map at a zoom within the vertex budget, finer tiles around the
+// orbit target when the camera comes close), coloured by elevation or traversability, with the
+// mission's trails draped at terrain height plus a small offset, and the map's keep-out zones as
+// red walls standing on their outlines. A small orbit control of our own: drag to orbit,
+// right-drag or shift-drag to pan, wheel or the toolbar's +/− to zoom ("fit" frames the whole map
+// again).
 
-import { fetchF32, layerUrl } from './api.js';
 import { counters, state } from './state.js';
+import { TerrainTiles } from './terrain_tiles.js';
 import { roverColour } from './util.js';
-
-const MAX_VERTS = 256;
-const HYPSO = [[40, 80, 160], [60, 150, 110], [200, 190, 110], [170, 110, 70], [240, 240, 240]];
-const CLASS_RGB = [[70, 170, 80], [235, 190, 50], [200, 50, 50], [90, 90, 90]];
-
-// Colours are given in sRGB; three.js shades in linear light.
-const linear = (c) => Math.pow(c, 2.2);
-
-function ramp(t) {
-  const u = Math.max(0, Math.min(1, t)) * (HYPSO.length - 1);
-  const i = Math.min(HYPSO.length - 2, Math.floor(u)), f = u - i;
-  return HYPSO[i].map((a, k) => linear((a + (HYPSO[i + 1][k] - a) * f) / 255));
-}
 
 function webglAvailable() {
   try {
@@ -31,10 +20,9 @@ function webglAvailable() {
 }
 
 export class View3D {
-  constructor({ container, message, layers, missionView }) {
+  constructor({ container, message, missionView }) {
     this.container = container;
     this.message = message;
-    this.layers = layers;
     this.missionView = missionView;
     this.THREE = null;
     this.renderer = null;
@@ -72,6 +60,18 @@ export class View3D {
     this.message.hidden = !text;
   }
 
+  // "loading terrain…" while the base tiles come, apart from the message (which says the view is
+  // unavailable, and which the page's tests read so).
+  loading(on) {
+    if (!this.status) {
+      this.status = Object.assign(document.createElement('div'), { className: 'view3d-message', textContent: 'loading terrain…' });
+      this.status.setAttribute('role', 'status');
+      this.status.style.pointerEvents = 'none';
+      this.container.append(this.status);
+    }
+    this.status.hidden = !on;
+  }
+
   setup() {
     const THREE = this.THREE;
     this.renderer = new THREE.WebGLRenderer({ antialias: true, preserveDrawingBuffer: true });
@@ -88,6 +88,8 @@ export class View3D {
     this.scene.add(sun);
     this.group = new THREE.Group();
     this.scene.add(this.group);
+    this.renderer.localClippingEnabled = true;  // finer tiles cut their area out of coarser ones
+    this.terrain = new TerrainTiles(THREE, this.group, () => this.terrainChanged());
     new ResizeObserver(() => this.resize()).observe(this.container);
     this.bindOrbit(this.renderer.domElement);
     state.on('map', () => this.visible && this.rebuild());
@@ -105,101 +107,72 @@ export class View3D {
     this.frame();
   }
 
-  async raster(kind) {
+  // The terrain of the selected map with the colour and relief chosen: the base level's tiles
+  // are fetched when the map changed, the meshes made again for a new colour or relief.
+  async rebuild() {
     const map = state.map;
-    if (kind === 'elevation' && this.layers.rasters.elevation) return this.layers.rasters.elevation;
-    if (kind === 'traversability' && this.layers.rasters.traversability) return this.layers.rasters.traversability;
-    return fetchF32(layerUrl(map.id, kind, 'f32'));
+    if (!this.THREE || !this.renderer || !map) return;
+    if (!map.tiles) {
+      this.say('The server gives no tiles for this map: no 3D view.');
+      return;
+    }
+    try {
+      const newMap = this.terrain.map?.id !== map.id;
+      if (newMap) {
+        this.say('');
+        this.loading(true);
+        this.mapId = null;
+        const loaded = await this.terrain.setMap(map).finally(() => this.loading(false));
+        if (!loaded) return;  // another map chosen meanwhile
+      }
+      let zMin = map.elevation?.min, zMax = map.elevation?.max;
+      if (!Number.isFinite(zMin) || !Number.isFinite(zMax)) [zMin, zMax] = finiteRange(this.terrain.base.data);
+      if (this.mapId !== map.id) {
+        // Relief exaggeration so that the relief is about a tenth of the map's width.
+        const auto = zMax > zMin ? (0.1 * Math.max(map.width_m, map.height_m)) / (zMax - zMin) : 1;
+        $exag(this).value = String(Math.max(1, Math.min(50, Number(auto.toPrecision(2)))));
+      }
+      const exag = Math.max(0.1, Number($exag(this).value) || 1);
+      const W = map.width_m, H = map.height_m;
+      this.extent = { W, H, zMin, zMax, exag };
+      if (!(await this.terrain.setStyle({ zMin, zMax, exag, colourBy: $colour(this).value }))) return;
+      this.say('');
+      if (this.mapId !== map.id) {
+        this.mapId = map.id;
+        this.orbit = { yaw: -0.6, pitch: 0.75, dist: 1.75 * Math.max(W, H), target: [0, ((zMax - zMin) * exag) / 2, 0] };
+      }
+      counters.view3dReady = true;
+      this.frame();
+    } catch (err) {
+      if (err.code !== 'aborted') this.say(`3D view unavailable: ${err.message}`);
+    }
   }
 
-  async rebuild() {
-    const THREE = this.THREE;
-    const map = state.map;
-    if (!THREE || !this.renderer || !map) return;
-    this.say('loading terrain…');
-    const z = await this.raster('elevation');
-    const colourBy = $colour(this).value;
-    const classes = colourBy === 'traversability' ? await this.raster('traversability') : null;
-    if (this.mapId !== map.id) {
-      // Relief exaggeration so that the relief is about a tenth of the map's width.
-      let lo = Infinity, hi = -Infinity;
-      for (const v of z.data) if (Number.isFinite(v)) { if (v < lo) lo = v; if (v > hi) hi = v; }
-      const auto = hi > lo ? (0.1 * Math.max(map.width_m, map.height_m)) / (hi - lo) : 1;
-      $exag(this).value = String(Math.max(1, Math.min(50, Number(auto.toPrecision(2)))));
-    }
-    const exag = Math.max(0.1, Number($exag(this).value) || 1);
-    this.say('');
-    for (const c of [...this.group.children]) {
-      this.group.remove(c);
-      c.geometry?.dispose();
-      c.material?.dispose();
-    }
-    const nx = Math.min(z.cols, MAX_VERTS), ny = Math.min(z.rows, MAX_VERTS);
-    let zMin = Infinity, zMax = -Infinity;
-    for (const v of z.data) if (Number.isFinite(v)) { if (v < zMin) zMin = v; if (v > zMax) zMax = v; }
-    if (!Number.isFinite(zMin)) zMin = zMax = 0;
-    const W = map.width_m, H = map.height_m;
-    this.extent = { W, H, zMin, zMax, exag };
-    const pos = new Float32Array(nx * ny * 3), col = new Float32Array(nx * ny * 3);
-    const valid = new Uint8Array(nx * ny);
-    for (let j = 0; j < ny; j++) {
-      const r = Math.min(z.rows - 1, Math.round((j / Math.max(1, ny - 1)) * (z.rows - 1)));
-      for (let i = 0; i < nx; i++) {
-        const c = Math.min(z.cols - 1, Math.round((i / Math.max(1, nx - 1)) * (z.cols - 1)));
-        const v = z.data[r * z.cols + c];
-        const k = j * nx + i;
-        const ok = Number.isFinite(v);
-        valid[k] = ok ? 1 : 0;
-        pos[3 * k] = (i / Math.max(1, nx - 1)) * W - W / 2;
-        pos[3 * k + 1] = ((ok ? v : zMin) - zMin) * exag;
-        pos[3 * k + 2] = (j / Math.max(1, ny - 1)) * H - H / 2;  // row 0 north → −z is north
-        let rgb;
-        if (!ok) rgb = [0.2, 0.2, 0.2];
-        else if (classes) rgb = (CLASS_RGB[Math.round(classes.data[r * classes.cols + c])] || [80, 80, 80]).map((x) => linear(x / 255));
-        else rgb = ramp((v - zMin) / Math.max(1e-9, zMax - zMin));
-        col.set(rgb, 3 * k);
-      }
-    }
-    const index = [];
-    for (let j = 0; j < ny - 1; j++) {
-      for (let i = 0; i < nx - 1; i++) {
-        const a = j * nx + i, b = a + 1, c = a + nx, d = c + 1;
-        if (valid[a] && valid[b] && valid[c] && valid[d]) index.push(a, c, b, b, c, d);
-      }
-    }
-    const geo = new THREE.BufferGeometry();
-    geo.setAttribute('position', new THREE.BufferAttribute(pos, 3));
-    geo.setAttribute('color', new THREE.BufferAttribute(col, 3));
-    geo.setIndex(index);
-    geo.computeVertexNormals();
-    const mesh = new THREE.Mesh(geo, new THREE.MeshLambertMaterial({ vertexColors: true, side: THREE.DoubleSide }));
-    mesh.name = 'terrain';
-    this.group.add(mesh);
-    this.z = z;
-    if (this.mapId !== map.id) {
-      this.mapId = map.id;
-      this.orbit = { yaw: -0.6, pitch: 0.75, dist: 1.75 * Math.max(W, H), target: [0, ((zMax - zMin) * exag) / 2, 0] };
-    }
+  // The levels shown changed (a map, a colour, finer tiles): trails, zones and the marker are
+  // draped on the new surface.
+  terrainChanged() {
     this.trailKey = '';
     this.updateTrails();
     this.updateZones();
-    counters.view3dReady = true;
+    this.setMarker(this.markerAt || null);
     this.frame();
   }
 
+  // Terrain is shown (so trails, zones and the marker have a surface to stand on).
+  get shown() {
+    return Boolean(this.THREE && this.terrain && this.terrain.entries.length && this.extent);
+  }
+
   heightAt(x, y) {
-    const z = this.z;
-    const c = Math.floor(x / z.cellW), r = z.rows - 1 - Math.floor(y / z.cellH);
-    if (c < 0 || r < 0 || c >= z.cols || r >= z.rows) return this.extent.zMin;
-    const v = z.data[r * z.cols + c];
-    return Number.isFinite(v) ? v : this.extent.zMin;
+    const h = this.terrain.heightAt(x, y);
+    return Number.isNaN(h) ? this.extent.zMin : h;
   }
 
   // The route profile's hovered sample (x, y in local metres), or null: a white ball on the
   // terrain. Made anew when a rebuild of the terrain removed (and disposed) the last one.
   setMarker(p) {
     this.markerAt = p;
-    if (!this.THREE || !this.z || !this.group) return;
+    if (!this.shown) return;
     if (this.marker && this.marker.parent !== this.group) this.marker = null;
     if (!p) {
       if (this.marker) this.group.remove(this.marker);
@@ -237,7 +210,7 @@ export class View3D {
   // (points every ~cell along its edges) and a translucent red wall standing on it, so a zone
   // reads from any angle.
   updateZones() {
-    if (!this.THREE || !this.z || !this.group) return;
+    if (!this.shown) return;
     const THREE = this.THREE;
     for (const c of this.group.children.filter((o) => o.name === 'zone')) {
       this.group.remove(c);
@@ -247,7 +220,7 @@ export class View3D {
     const { W, H, zMin, exag } = this.extent;
     const wall = Math.max(0.5, 0.03 * Math.max(W, H));
     const lift = Math.max(0.15, 0.004 * Math.max(W, H));
-    const step = Math.max(this.z.cellW, this.z.cellH, Math.max(W, H) / 400);
+    const step = Math.max(state.map.cell_size_m, state.map.cell_height_m || 0, Math.max(W, H) / 400);
     let n = 0;
     for (const f of state.zones?.features || []) {
       const rings = f.geometry?.type === 'Polygon' ? [f.geometry.coordinates[0]]
@@ -285,10 +258,10 @@ export class View3D {
 
   // The shown mission's trails (and compared runs) as lines on the terrain.
   updateTrails() {
-    if (!this.THREE || !this.z) return;
+    if (!this.shown) return;
     const THREE = this.THREE;
     const sets = this.missionView.compareSets.length ? this.missionView.compareSets : [this.missionView.trails];
-    const key = sets.map((s) => `${s.version}:${s.paths.map((p) => p.length).join('/')}:${s.limit}`).join('|') + this.extent.exag;
+    const key = sets.map((s) => `${s.version}:${s.paths.map((p) => p.length).join('/')}:${s.limit}`).join('|') + `#${this.terrain.version}`;
     if (key === this.trailKey) return;
     this.trailKey = key;
     for (const c of this.group.children.filter((o) => o.name === 'trail')) {
@@ -379,6 +352,10 @@ export class View3D {
       this.camera.updateProjectionMatrix();
       this.camera.lookAt(tx, ty, tz);
       this.renderer.render(this.scene, this.camera);
+      if (this.extent) {
+        const { W, H } = this.extent;
+        this.terrain.viewChanged(Math.max(0, Math.min(W, tx + W / 2)), Math.max(0, Math.min(H, H / 2 - tz)), o.dist);
+      }
     });
   }
 
@@ -394,4 +371,11 @@ function $colour() {
 }
 function $exag() {
   return document.getElementById('view3d-exag');
+}
+
+// [min, max] of the finite values (both 0 when none).
+function finiteRange(data) {
+  let lo = Infinity, hi = -Infinity;
+  for (const v of data) if (Number.isFinite(v)) { if (v < lo) lo = v; if (v > hi) hi = v; }
+  return Number.isFinite(lo) ? [lo, hi] : [0, 0];
 }
