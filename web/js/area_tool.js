@@ -209,7 +209,8 @@ export class AreaTool {
   }
 }
 
-// An outline: a dark halo under a dashed line in `colour`, and `label` above its top-left corner.
+// An outline: a dark halo under a dashed line in `colour`, and `label` at its top-left corner —
+// above it for the form's area, below it (inside) for the mission's, so both read when they meet.
 const styles = new Map();
 function outlineStyle(colour, dash, label) {
   const key = `${colour} ${dash} ${label}`;
@@ -225,7 +226,8 @@ function outlineStyle(colour, dash, label) {
         return new Point([x0, y1]);
       },
       text: new Text({
-        text: label, font: '11px system-ui, sans-serif', textAlign: 'left', textBaseline: 'bottom', offsetX: 2, offsetY: -3,
+        text: label, font: '11px system-ui, sans-serif', textAlign: 'left',
+        textBaseline: label === 'area' ? 'bottom' : 'top', offsetX: 3, offsetY: label === 'area' ? -3 : 4,
         fill: new Fill({ color: colour }), stroke: new Stroke({ color: 'rgba(0, 0, 0, 0.6)', width: 2 }),
       }),
     }));

@@ -4,7 +4,12 @@
 // `origin` in the map's local frame ([0, 0]: the map's own corner; a mission in an area plans on
 // its planning window, whose origin the stream's snapshot gives); row 0 is the north row. Fed by the stream's binary frames (live_stream.js),
 // or rebuilt from the rovers' paths for replay.
+// On the map it is an OpenLayers image layer (issue 24): an ImageCanvas source whose canvas is the
+// grid scaled onto the view's extent (no smoothing: one cell a block), drawn again by OL when the
+// grid changed (sync, once a frame) or the view moved.
 
+import ImageLayer from 'ol/layer/Image.js';
+import ImageCanvas from 'ol/source/ImageCanvas.js';
 import { el } from './util.js';
 
 // RGBA per state / visit count.
@@ -30,7 +35,13 @@ function colour(state, visits) {
 }
 
 export class CoverageLayer {
-  constructor() {
+  // view: the MapView whose OL map shows the grid, at zIndex among its layers.
+  constructor(view, zIndex) {
+    this.view = view;
+    this.out = document.createElement('canvas');  // what OL shows: the grid over the view's extent
+    this.source = new ImageCanvas({ canvasFunction: (...a) => this.paint(...a), ratio: 1 });
+    this.olLayer = new ImageLayer({ source: this.source, zIndex, className: 'ol-layer coverage-grid' });
+    view.olMap.addLayer(this.olLayer);
     this.rows = 0;
     this.cols = 0;
     this.cell = 1;
@@ -156,17 +167,31 @@ export class CoverageLayer {
     return n;
   }
 
-  draw(ctx, view, opacity) {
-    if (!this.ready) return;
-    if (this.dirty) {
+  // Per frame: the layer list's opacity and visibility; a changed grid is painted again.
+  sync(opacity, visible) {
+    this.olLayer.setOpacity(opacity);
+    this.olLayer.setVisible(visible && this.ready);
+    if (this.ready && this.dirty) {
       this.ctx.putImageData(this.image, 0, 0);
       this.dirty = false;
+      this.source.changed();
     }
+  }
+
+  // OL's canvasFunction: the grid over `extent` (OL units: y stretched by the view's yStretch) at
+  // `resolution` units a CSS pixel; `size` is in device pixels.
+  paint(extent, resolution, pixelRatio, size) {
+    const out = this.out;
+    out.width = Math.max(1, Math.round(size[0]));
+    out.height = Math.max(1, Math.round(size[1]));
+    if (!this.ready) return out;
+    const g = out.getContext('2d');
+    const k = this.view.yStretch, px = pixelRatio / resolution;
     const [ox, oy] = this.origin;
-    const [sx, sy, sw, sh] = view.rectToScreen(ox, oy, this.cols * this.cell, this.rows * this.cell);
-    ctx.globalAlpha = opacity;
-    ctx.imageSmoothingEnabled = false;
-    ctx.drawImage(this.canvas, sx, sy, sw, sh);
+    const w = this.cols * this.cell, h = this.rows * this.cell;
+    g.imageSmoothingEnabled = false;
+    g.drawImage(this.canvas, (ox - extent[0]) * px, (extent[3] - (oy + h) * k) * px, w * px, h * k * px);
+    return out;
   }
 
   static legend() {

@@ -2,8 +2,10 @@
 // pan by dragging, zoom with the wheel or +/- keys. Two stacked surfaces:
 // - an OpenLayers map underneath (issue 24): the raster layers as tiles of the server's tile API
 //   (layer_stack.js adds them) in a custom projection of the map's local metres, and a ScaleLine.
-//   It takes no input: this view owns pan and zoom and sets the OL view's centre and resolution.
-// - a <canvas> on top for the overlay layers not yet OL layers (PDM editing, conflicts),
+//   This view owns pan and zoom and sets the OL view's centre and resolution; OL's interactions
+//   get the pointer only for the tools that ask for it (below).
+// - a <canvas> on top for the overlays not (yet) OL layers (team plan, incidents, PDM editing,
+//   conflicts, the mission form's rover marks),
 //   drawn every frame; "base" overlay layers are composed into a cached canvas only when the view
 //   changes. Frames are drawn on requestAnimationFrame only when something asked for it.
 // Maps whose cells are not square (geographic grids: metres along y differ from x) get a tile
