@@ -109,6 +109,10 @@ suiteWithServer('legend and route labels', { timeout: 240000 }, (ctx) => {
     });
     const s = await state();
     console.log(`# ${s.n} targets, ${s.labelled.length} numbers drawn at the fitted zoom`);
+    // The numbers on the map are the OL text features of the plan's number layer (issue 24).
+    const shownNumbers = () => page.evaluate(() => window.__roverplanApp.missionView.plan.ol.numbers.getSource().getFeatures()
+      .map((f) => Number(f.getStyle().getText().getText())).sort((a, b) => a - b));
+    assert.deepEqual(await shownNumbers(), s.labelled.slice().sort((a, b) => a - b));
     assert.ok(s.labelled.length > 0 && s.labelled.length <= s.n);
     // No two drawn numbers' boxes overlap (10 px tall, ~6 px a digit).
     const boxes = s.labelled.map((i) => [s.screen[i][0] + 4, s.screen[i][1] - 13, 6 * String(i).length, 10]);
@@ -123,6 +127,7 @@ suiteWithServer('legend and route labels', { timeout: 240000 }, (ctx) => {
       const p = await mapPoint(page, s.route[hidden][0], s.route[hidden][1]);
       await page.mouse.move(p.x, p.y);
       await page.waitForFunction((i) => window.__roverplanApp.missionView.plan.labelled.includes(i), hidden);
+      assert.ok((await shownNumbers()).includes(hidden), 'the hovered number is on the map');
     }
     assert.deepEqual(errors, []);
     await context.close();
