@@ -4,12 +4,10 @@
 // `origin` in the map's local frame ([0, 0]: the map's own corner; a mission in an area plans on
 // its planning window, whose origin the stream's snapshot gives); row 0 is the north row. Fed by the stream's binary frames (live_stream.js),
 // or rebuilt from the rovers' paths for replay.
-// On the map it is an OpenLayers image layer (issue 24): an ImageCanvas source whose canvas is the
-// grid scaled onto the view's extent (no smoothing: one cell a block), drawn again by OL when the
-// grid changed (sync, once a frame) or the view moved.
+// On the map it is an OpenLayers image layer (issue 24, raster_overlay.js: one cell a block),
+// drawn again by OL when the grid changed (sync, once a frame) or the view moved.
 
-import ImageLayer from 'ol/layer/Image.js';
-import ImageCanvas from 'ol/source/ImageCanvas.js';
+import { RasterOverlay } from './raster_overlay.js';
 import { el } from './util.js';
 
 // RGBA per state / visit count.
@@ -37,11 +35,9 @@ function colour(state, visits) {
 export class CoverageLayer {
   // view: the MapView whose OL map shows the grid, at zIndex among its layers.
   constructor(view, zIndex) {
-    this.view = view;
-    this.out = document.createElement('canvas');  // what OL shows: the grid over the view's extent
-    this.source = new ImageCanvas({ canvasFunction: (...a) => this.paint(...a), ratio: 1 });
-    this.olLayer = new ImageLayer({ source: this.source, zIndex, className: 'ol-layer coverage-grid' });
-    view.olMap.addLayer(this.olLayer);
+    this.raster = new RasterOverlay(view, zIndex, 'coverage-grid',
+      () => (this.ready ? { canvas: this.canvas, rect: [...this.origin, this.cols * this.cell, this.rows * this.cell] } : null));
+    this.olLayer = this.raster.layer;
     this.rows = 0;
     this.cols = 0;
     this.cell = 1;
@@ -174,24 +170,8 @@ export class CoverageLayer {
     if (this.ready && this.dirty) {
       this.ctx.putImageData(this.image, 0, 0);
       this.dirty = false;
-      this.source.changed();
+      this.raster.changed();
     }
-  }
-
-  // OL's canvasFunction: the grid over `extent` (OL units: y stretched by the view's yStretch) at
-  // `resolution` units a CSS pixel; `size` is in device pixels.
-  paint(extent, resolution, pixelRatio, size) {
-    const out = this.out;
-    out.width = Math.max(1, Math.round(size[0]));
-    out.height = Math.max(1, Math.round(size[1]));
-    if (!this.ready) return out;
-    const g = out.getContext('2d');
-    const k = this.view.yStretch, px = pixelRatio / resolution;
-    const [ox, oy] = this.origin;
-    const w = this.cols * this.cell, h = this.rows * this.cell;
-    g.imageSmoothingEnabled = false;
-    g.drawImage(this.canvas, (ox - extent[0]) * px, (extent[3] - (oy + h) * k) * px, w * px, h * k * px);
-    return out;
   }
 
   static legend() {

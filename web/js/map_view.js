@@ -4,8 +4,8 @@
 //   (layer_stack.js adds them) in a custom projection of the map's local metres, and a ScaleLine.
 //   This view owns pan and zoom and sets the OL view's centre and resolution; OL's interactions
 //   get the pointer only for the tools that ask for it (below).
-// - a <canvas> on top for the overlays not (yet) OL layers (team plan, incidents, PDM editing,
-//   conflicts, the mission form's rover marks),
+// - a <canvas> on top for the overlays that are not OL layers: the PDM editor's handles and
+//   brush, a conflict's two versions, a zone set's history, the route profile's marker;
 //   drawn every frame; "base" overlay layers are composed into a cached canvas only when the view
 //   changes. Frames are drawn on requestAnimationFrame only when something asked for it.
 // Maps whose cells are not square (geographic grids: metres along y differ from x) get a tile

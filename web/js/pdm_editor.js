@@ -7,13 +7,14 @@
 // the server's PDM is a mixture (components, at most 256), so what is painted is what is saved,
 // editable afterwards like any clicked Gaussian. Painting never pans: the tool takes the drag.
 // A stroke is one step of the undo history. While editing, the mixture density is drawn on a coarse grid as
-// an overlay; once saved, the server's pdm.png for the new id is shown instead.
+// an overlay (an OL image layer); once saved, the server's pdm.png for the new id is shown instead.
 // Several operators (issue 26): unsaved components are a draft of the map (drafts.js), kept over
 // map switches and reloads; "random (G=4)" makes a draft, not a saved PDM; "update" saves the
 // components into the PDM they were loaded from, naming its version, and a 412 shows both; PDMs
 // saved elsewhere arrive from the event stream (remoteChanged); both in pdm_versions.js.
 
 import { api } from './api.js';
+import { RasterOverlay } from './raster_overlay.js';
 import { clearDraft, loadDraft, saveDraft } from './drafts.js';
 import { state } from './state.js';
 import { rampLegend } from './legend.js';
@@ -52,6 +53,14 @@ export class PdmEditor {
     this.stroke = null;     // the brush stroke in progress
     this.brushHover = null;
     this.editLayer = layers.addOverlay({ id: 'pdm-edit', label: 'PDM (editing)', legendTitle: 'PDM being edited (mixture density)', visible: true, opacity: 0.6, legend: () => this.legend() });
+    // The density: an OL image layer under the other overlays (raster_overlay.js); the handles
+    // and the brush stay on the overlay canvas.
+    this.density = new RasterOverlay(view, 20, 'pdm-density',
+      () => (state.map && this.overlayMax > 0 ? { canvas: this.overlay, rect: [0, 0, state.map.width_m, state.map.height_m] } : null), { smooth: true });
+    view.onRender(() => {
+      this.density.layer.setOpacity(this.editLayer.opacity);
+      this.density.layer.setVisible(this.showOverlay() && this.overlayMax > 0);
+    });
     view.addLayer({ id: 'pdm-edit', order: 20, draw: (ctx, v) => this.draw(ctx, v) });
     view.registerTool('pdm', {
       down: (p, e) => (this.mode === 'paint' ? this.strokeStart(p, e) : this.pointerDown(p)),
@@ -334,6 +343,7 @@ export class PdmEditor {
 
   // --- overlay ---
   computeOverlay() {
+    this.density.changed();
     const m = state.map;
     if (!m || this.comps.length === 0) {
       this.overlayMax = 0;
@@ -383,13 +393,6 @@ export class PdmEditor {
   draw(ctx, view) {
     const m = state.map;
     if (!m) return;
-    if (this.showOverlay() && this.overlayMax > 0) {
-      const [sx, sy, sw, sh] = view.rectToScreen(0, 0, m.width_m, m.height_m);
-      ctx.globalAlpha = this.editLayer.opacity;
-      ctx.imageSmoothingEnabled = true;
-      ctx.drawImage(this.overlay, sx, sy, sw, sh);
-      ctx.globalAlpha = 1;
-    }
     if (state.tool !== 'pdm') return;
     if (this.mode === 'paint') return this.drawBrush(ctx, view);
     if (this.comps.length === 0) return;
