@@ -62,21 +62,33 @@ suiteWithServer('legend and route labels', { timeout: 240000 }, (ctx) => {
     assert.ok(dist > 150, `distinct colours: ${dist}`);
     mkdirSync(shotsDir, { recursive: true });
     await page.screenshot({ path: join(shotsDir, 'tools-legend.png') });
-    // The coverage opacity slider: the painted grid fades with it.
-    const alphaAt = () => page.evaluate(() => {
-      const v = window.__roverplanApp.view;
-      const cov = window.__roverplanApp.missionView.coverage;
-      const calls = [];
-      const ctx = { ...v.ctx };
-      const fake = new Proxy(v.ctx, { get: (t, k) => (k === 'drawImage' ? (...args) => calls.push(t.globalAlpha) : typeof t[k] === 'function' ? t[k].bind(t) : t[k]),
-        set: (t, k, val) => { t[k] = val; return true; } });
-      cov.draw(fake, v, window.__roverplanApp.layers.get('coverage').opacity);
-      return calls[0];
+    // The coverage opacity slider: the painted grid (an OpenLayers image layer, issue 24) fades
+    // with it: OL paints the layer's canvas at the layer's opacity, so the alpha summed over its
+    // cells follows the slider (the finished run's grid does not change meanwhile).
+    const alphaSum = () => page.evaluate(() => {
+      const c = document.querySelector('.map-ol .coverage-grid canvas');
+      if (!c || !c.width) return 0;
+      const d = c.getContext('2d').getImageData(0, 0, c.width, c.height).data;
+      let sum = 0;
+      for (let i = 3; i < d.length; i += 4) sum += d[i];
+      return sum;
     });
-    assert.equal(await alphaAt(), 0.6, 'coverage paints at 60 % by default');
+    await page.waitForFunction(() => document.querySelector('.map-ol .coverage-grid canvas'), null, { timeout: 10000 });
+    const full = await alphaSum();
+    assert.equal(await page.evaluate(() => window.__roverplanApp.missionView.coverage.olLayer.getOpacity()), 0.6, 'coverage paints at 60 % by default');
+    assert.ok(full > 255 * 1000, `grid cells painted: alpha sum ${full}`);
     await page.fill('#layer-coverage-opacity', '0.25');
     await page.dispatchEvent('#layer-coverage-opacity', 'input');
-    assert.equal(await alphaAt(), 0.25);
+    await page.waitForFunction((f) => {
+      const c = document.querySelector('.map-ol .coverage-grid canvas');
+      const d = c.getContext('2d').getImageData(0, 0, c.width, c.height).data;
+      let sum = 0;
+      for (let i = 3; i < d.length; i += 4) sum += d[i];
+      return sum < f * 0.6;
+    }, full, { timeout: 10000 });
+    const faded = await alphaSum();
+    console.log(`# coverage grid alpha at 0.6: ${full}, at 0.25: ${faded} (ratio ${(faded / full).toFixed(3)}, 0.417 expected)`);
+    assert.ok(Math.abs(faded / full - 0.25 / 0.6) < 0.05, `faded to ${(faded / full).toFixed(3)} of 0.6`);
     assert.deepEqual(errors, []);
     await context.close();
   });
@@ -97,6 +109,10 @@ suiteWithServer('legend and route labels', { timeout: 240000 }, (ctx) => {
     });
     const s = await state();
     console.log(`# ${s.n} targets, ${s.labelled.length} numbers drawn at the fitted zoom`);
+    // The numbers on the map are the OL text features of the plan's number layer (issue 24).
+    const shownNumbers = () => page.evaluate(() => window.__roverplanApp.missionView.plan.ol.numbers.getSource().getFeatures()
+      .map((f) => Number(f.getStyle().getText().getText())).sort((a, b) => a - b));
+    assert.deepEqual(await shownNumbers(), s.labelled.slice().sort((a, b) => a - b));
     assert.ok(s.labelled.length > 0 && s.labelled.length <= s.n);
     // No two drawn numbers' boxes overlap (10 px tall, ~6 px a digit).
     const boxes = s.labelled.map((i) => [s.screen[i][0] + 4, s.screen[i][1] - 13, 6 * String(i).length, 10]);
@@ -111,6 +127,7 @@ suiteWithServer('legend and route labels', { timeout: 240000 }, (ctx) => {
       const p = await mapPoint(page, s.route[hidden][0], s.route[hidden][1]);
       await page.mouse.move(p.x, p.y);
       await page.waitForFunction((i) => window.__roverplanApp.missionView.plan.labelled.includes(i), hidden);
+      assert.ok((await shownNumbers()).includes(hidden), 'the hovered number is on the map');
     }
     assert.deepEqual(errors, []);
     await context.close();

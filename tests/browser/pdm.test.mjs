@@ -35,6 +35,15 @@ suiteWithServer('PDM editor', { timeout: 180000 }, (ctx) => {
     await page.mouse.up();
     g = await comps(page);
     assert.ok(Math.abs(g[1].sigma_x - 20) < 0.5, `σx pulled to 20 m: ${g[1].sigma_x}`);
+    // On the map the components are OpenLayers features (issue 24): each centre handle where its
+    // Gaussian is, the σx handle on its axis at the new σx.
+    await page.waitForFunction(() => window.__roverplanApp.pdmEditor.olHandles.parts.length === 2);
+    const handles = await page.evaluate(() => window.__roverplanApp.pdmEditor.olHandles.parts.map((q) => ({
+      centre: q.centre.getGeometry().getCoordinates(), sx: q.sx.getGeometry().getCoordinates() })));
+    g.forEach((c, i) => {
+      assert.ok(Math.hypot(handles[i].centre[0] - c.x, handles[i].centre[1] - c.y) < 1e-6, `centre handle ${i}: ${handles[i].centre}`);
+    });
+    assert.ok(Math.abs(handles[1].sx[0] - (g[1].x + g[1].sigma_x)) < 1e-6 && Math.abs(handles[1].sx[1] - g[1].y) < 1e-6, `σx handle on its axis: ${handles[1].sx}`);
     // A weight typed in the panel.
     await page.fill('[data-key="1.weight"]', '2');
     await page.dispatchEvent('[data-key="1.weight"]', 'change');

@@ -169,4 +169,72 @@ describe('keep-out zones', { skip: missing || false, timeout: 300000 }, () => {
     assert.deepEqual(errors, []);
     await context.close();
   });
+
+  // Issue 24: zones are OpenLayers features drawn with Draw/Modify/Snap. A corner clicked a few
+  // pixels from another zone's corner lands on it exactly (Snap); an edge dragged gets a new
+  // corner (Modify); the hatching is on the map's picture inside the zone and not outside it.
+  test('a corner near another zone\'s corner snaps onto it, an edge dragged adds a corner, the zone is drawn hatched', async () => {
+    const { page, errors, context } = await openPage(browser, `${server.url}/`);
+    await waitForMap(page);
+    const mapId = await page.evaluate(() => window.__roverplanApp.state.map.id);
+    const zones = () => page.evaluate(() => window.__roverplanApp.zoneEditor.zones.map((z) => z.ring));
+    const click = async (x, y, dx = 0, dy = 0) => {
+      const p = await mapPoint(page, x, y);
+      await page.mouse.click(p.x + dx, p.y + dy);
+    };
+    // The map may hold the zone the test above saved (x 60–105 m): these are drawn west of it.
+    const n0 = (await zones()).length;
+    await page.click('#zones-draw');
+    const a = [[5, 5], [30, 5], [30, 30], [5, 30]];
+    for (const [x, y] of a) await click(x, y);
+    await click(a[0][0], a[0][1]);
+    const first = (await zones())[n0];
+    // The second zone shares the first one's corner (30, 30), clicked 4 px off it. (A press on a
+    // corner while no zone is being drawn takes that corner to move it: the shared one comes second.)
+    await click(50, 20);
+    await click(30, 30, 4, -3);
+    await click(50, 40);
+    await click(50, 20);  // its first corner: closes it
+    const rings = await zones();
+    assert.equal(rings.length, n0 + 2, JSON.stringify(rings));
+    assert.deepEqual(rings[n0 + 1][1], first[2], `snapped onto the first zone's corner: ${rings[n0 + 1][1]} vs ${first[2]}`);
+    assert.equal(rings[n0 + 1].length, 3);
+    // Drag the middle of the first zone's south edge 6 m north: a fifth corner there.
+    const e0 = await mapPoint(page, 17.5, first[0][1]), e1 = await mapPoint(page, 17.5, first[0][1] + 6);
+    await page.mouse.move(e0.x, e0.y);
+    await page.mouse.down();
+    await page.mouse.move(e1.x, e1.y, { steps: 5 });
+    await page.mouse.up();
+    const edged = (await zones())[n0];
+    assert.equal(edged.length, 5, JSON.stringify(edged));
+    const added = edged.find((c) => !first.some((f) => f[0] === c[0] && f[1] === c[1]));
+    const px = await page.evaluate(() => 1 / window.__roverplanApp.view.scale);
+    assert.ok(Math.abs(added[0] - 17.5) < 3 * px && Math.abs(added[1] - (first[0][1] + 6)) < 3 * px, `added corner ${added}`);
+    assert.match(await page.getAttribute('#undo', 'title'), new RegExp(`add a corner to zone ${n0 + 1}`));
+    await page.click('#zones-draw');
+    // The map's picture (the PNG export's, OL's layers composed): orange hatching inside the first
+    // zone, none on the empty ground north of it.
+    const colours = await page.evaluate(() => {
+      const v = window.__roverplanApp.view;
+      const shot = v.snapshot().getContext('2d');
+      const orange = (x0, y0) => {
+        const [sx, sy] = v.worldToScreen(x0, y0);
+        const d = shot.getImageData(Math.round(sx * v.dpr) - 6, Math.round(sy * v.dpr) - 6, 12, 12).data;
+        let n = 0;
+        for (let i = 0; i < d.length; i += 4) if (d[i] > 200 && d[i + 1] > 90 && d[i + 1] < 160 && d[i + 2] < 110) n++;
+        return n;
+      };
+      return { inside: orange(17.5, 20), outside: orange(17.5, 50) };
+    });
+    assert.ok(colours.inside >= 8, `hatch pixels inside the zone: ${colours.inside}`);
+    assert.equal(colours.outside, 0, 'no hatching outside');
+    await page.click('#zones-save');
+    await page.waitForFunction((n) => document.getElementById('zones-status').textContent === `saved ${n} zones`, n0 + 2, { timeout: 10000 });
+    const saved = (await (await fetch(`${server.url}/api/maps/${mapId}/zones`)).json()).features;
+    assert.deepEqual(saved[n0 + 1].geometry.coordinates[0][1], first[2], 'the shared corner is saved as one point');
+    assert.ok(saved[n0].geometry.coordinates[0].some((c) => c[0] === first[2][0] && c[1] === first[2][1]));
+    await shot(page, 'snapped');
+    assert.deepEqual(errors, []);
+    await context.close();
+  });
 });

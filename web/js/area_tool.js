@@ -2,12 +2,18 @@
 // The mission form's area field (x0, y0, x1, y1 in the map's local metres, sent as area.bbox) and
 // the map's outline of it stay in step: "draw area" arms tool 'area', a drag on the map draws the
 // rectangle and fills the field (rounded to the map's cells), typing in the field moves the
-// outline, "clear" empties both, Escape drops a drawing in progress. A tool on the overlay canvas
-// like the zone editor (zones.js): the canvas above the OpenLayers tiles takes the pointer.
+// outline, "clear" empties both, Escape drops a drawing in progress. The drag is OpenLayers' Draw
+// (a freehand box whose corners snap to the map's cells), the outlines are features of an OL vector
+// layer over the tiles (issue 24), updated when what they show changes.
 // The area of the mission shown (GET /api/missions/{id} `area`, bbox or polygon) is outlined too.
 // The note under the field says when the map is too big to plan whole (the server's 400
 // missing_field area).
 
+import Draw from 'ol/interaction/Draw.js';
+import Feature from 'ol/Feature.js';
+import Polygon from 'ol/geom/Polygon.js';
+import Point from 'ol/geom/Point.js';
+import { Fill, Stroke, Style, Text } from 'ol/style.js';
 import { state } from './state.js';
 import { history } from './undo_stack.js';
 import { $ } from './util.js';
@@ -30,13 +36,13 @@ export class AreaTool {
     this.missionView = missionView;
     this.form = form;         // the MissionForm: its showStarts says the Mission tab is open
     this.outline = null;      // the field's rectangle [x0, y0, x1, y1], or null
-    this.drag = null;         // {x, y, x1, y1}: the rectangle being drawn
-    view.addLayer({ id: 'mission-area', order: 48, draw: (ctx, v) => this.draw(ctx, v) });
-    view.registerTool('area', {
-      down: (p) => this.down(p),
-      move: (p) => this.move(p),
-      up: (p) => this.up(p),
-    });
+    this.olLayer = view.addVectorLayer(48, { style: (f) => outlineStyle(f.get('colour'), f.get('dash'), f.get('label')) });
+    this.shown = '';          // what the outlines show now (they are rebuilt when it changes)
+    view.onRender(() => this.render());
+    this.draw = null;         // OL's Draw while the tool is armed (see arm)
+    // A press is the drag of a rectangle (the map does not pan); one that starts off the map
+    // draws from the map's edge.
+    view.registerTool('area', { ol: true, down: () => true });
     $('m-area').addEventListener('input', () => this.fromField());
     // Typing: one undo step per committed change of the field.
     this.committed = '';
@@ -55,7 +61,7 @@ export class AreaTool {
     state.on('tool', (tool) => {
       $('m-area-draw').setAttribute('aria-pressed', String(tool === 'area'));
       $('m-area-draw').textContent = tool === 'area' ? 'drawing… (drag on map)' : 'draw area';
-      if (tool !== 'area') this.drag = null;
+      this.arm(tool === 'area');
       view.invalidate();
     });
     // Another map: the field's rectangle belonged to the last one.
@@ -70,7 +76,7 @@ export class AreaTool {
   fromField() {
     this.outline = parseBbox($('m-area').value);
     $('m-area').classList.remove('invalid');
-    this.view.invalidate();
+    this.render();
   }
 
   setBbox(b) {
@@ -96,7 +102,6 @@ export class AreaTool {
     const before = this.snapshot();
     $('m-area').value = '';
     this.committed = '';
-    this.drag = null;
     if (state.tool === 'area') state.setTool('pan');
     this.fromField();
     if (record) history.push(this, 'clear the area', before, this.snapshot());
@@ -104,9 +109,25 @@ export class AreaTool {
 
   // Escape: the drawing in progress is dropped, the field keeps what it had.
   cancel() {
-    this.drag = null;
     state.setTool('pan');
-    this.view.invalidate();
+  }
+
+  // A fresh Draw each time the tool is armed, removed when it is not: one turned off in the middle
+  // of a drag (Escape) would still count that press as under way at the next one.
+  arm(on) {
+    if (this.draw) {
+      this.draw.abortDrawing();
+      this.view.olMap.removeInteraction(this.draw);
+      this.draw = null;
+    }
+    if (!on) return;
+    this.draw = new Draw({
+      type: 'Circle', freehand: true,
+      geometryFunction: (coords, geometry) => this.box(coords, geometry),
+      style: outlineStyle(FORM_COLOUR, [6, 4], null),
+    });
+    this.draw.on('drawend', (e) => this.drawn(e.feature.getGeometry()));
+    this.view.olMap.addInteraction(this.draw);
   }
 
   renderNote(map) {
@@ -121,43 +142,47 @@ export class AreaTool {
   }
 
   // --- drawing: a point on the map, snapped to the cell corners ---
-  snap(p) {
+  onMap([x, y]) {
+    const m = state.map;
+    return Boolean(m) && x >= 0 && y >= 0 && x <= m.width_m && y <= m.height_m;
+  }
+
+  snap([px, py]) {
     const m = state.map;
     const cw = m.cell_size_m, ch = m.cell_height_m ?? m.cell_size_m;
-    const x = Math.min(Math.max(p.x, 0), m.width_m), y = Math.min(Math.max(p.y, 0), m.height_m);
+    const x = Math.min(Math.max(px, 0), m.width_m), y = Math.min(Math.max(py, 0), m.height_m);
     // Rounded to whole cells, and not past the map's edge by the rounding.
     return [Math.min(Math.round(x / cw) * cw, m.width_m), Math.min(Math.round(y / ch) * ch, m.height_m)];
   }
 
-  down(p) {
-    const m = state.map;
-    if (!m || p.x < 0 || p.y < 0 || p.x > m.width_m || p.y > m.height_m) return false;  // pans
-    const [x, y] = this.snap(p);
-    this.drag = { x, y, x1: x, y1: y };
-    return true;
+  // Draw's geometry: the rectangle between the press and the pointer, corners on the cells.
+  box(coords, geometry) {
+    const v = this.view;
+    const a = state.map ? this.snap(v.fromOl(coords[0])) : [0, 0];
+    const b = state.map ? this.snap(v.fromOl(coords[coords.length - 1])) : a;
+    const ring = [corners([Math.min(a[0], b[0]), Math.min(a[1], b[1]), Math.max(a[0], b[0]), Math.max(a[1], b[1])]).map((c) => v.toOl(c))];
+    ring[0].push(ring[0][0]);
+    if (!geometry) return new Polygon(ring);
+    geometry.setCoordinates(ring);
+    return geometry;
   }
 
-  move(p) {
-    if (!this.drag || !state.map) return;
-    [this.drag.x1, this.drag.y1] = this.snap(p);
-    this.view.invalidate();
-  }
-
-  up(p) {
-    const d = this.drag;
-    if (!d || !state.map) return;  // cancelled with Escape meanwhile
-    this.move(p);
-    this.drag = null;
-    // A click without a drag draws nothing; the tool stays armed for the drag.
-    if (d.x1 === d.x || d.y1 === d.y) return this.view.invalidate();
+  // Draw let go of a rectangle: the field gets it (a click without a drag draws nothing and the
+  // tool stays armed for the drag).
+  drawn(geometry) {
+    if (!state.map) return;
+    const [x0, y0, x1, y1] = geometry.getExtent();
+    const [a, b] = [this.view.fromOl([x0, y0]), this.view.fromOl([x1, y1])];
+    const bbox = [this.snap(a), this.snap(b)].flat();
+    if (bbox[2] <= bbox[0] || bbox[3] <= bbox[1]) return;
     const before = this.snapshot();
-    this.setBbox([Math.min(d.x, d.x1), Math.min(d.y, d.y1), Math.max(d.x, d.x1), Math.max(d.y, d.y1)]);
+    this.setBbox([bbox[0], bbox[1], bbox[2], bbox[3]]);
     history.push(this, 'draw the area', before, this.snapshot());
     this.form.clearFieldError('area');
-    state.setTool('pan');
+    state.setTool('pan');  // Draw has dropped its sketch already: turning it off loses nothing
   }
 
-  // --- the overlay ---
+  // --- the outlines ---
   // The shown mission's area: GET /api/missions/{id} keeps the request as `spec` (result.json has
   // it as `area`); null for a mission on the whole map.
   missionArea() {
@@ -165,53 +190,51 @@ export class AreaTool {
     return m ? m.area ?? m.spec?.area ?? null : null;
   }
 
-  draw(ctx, view) {
+  // The outlines as features, rebuilt only when what they show changed (checked per frame).
+  render() {
     const area = this.missionArea();
-    if (area && state.map && this.missionView.mission.map === state.map.id) {
-      const ring = area.bbox ? corners(area.bbox) : area.polygon;
-      if (ring) this.stroke(ctx, view, ring, MISSION_COLOUR, [2, 4], 'mission area');
-    }
-    if (this.drag) {
-      this.stroke(ctx, view, corners([this.drag.x, this.drag.y, this.drag.x1, this.drag.y1]), FORM_COLOUR, [6, 4], null);
-    } else if (this.outline && this.form.showStarts) {
-      this.stroke(ctx, view, corners(this.outline), FORM_COLOUR, [6, 4], 'area');
-    }
-  }
-
-  stroke(ctx, view, ring, colour, dash, label) {
-    ctx.beginPath();
-    ring.forEach(([x, y], i) => {
-      const [sx, sy] = view.worldToScreen(x, y);
-      if (i === 0) ctx.moveTo(sx, sy);
-      else ctx.lineTo(sx, sy);
-    });
-    ctx.closePath();
-    ctx.setLineDash([]);
-    ctx.strokeStyle = 'rgba(0, 0, 0, 0.7)';
-    ctx.lineWidth = 3.5;
-    ctx.stroke();
-    ctx.setLineDash(dash);
-    ctx.strokeStyle = colour;
-    ctx.lineWidth = 2;
-    ctx.stroke();
-    ctx.setLineDash([]);
-    if (!label) return;
-    // The label above the ring's top-left corner.
-    let lx = Infinity, ly = -Infinity;
-    for (const [x, y] of ring) {
-      lx = Math.min(lx, x);
-      ly = Math.max(ly, y);
-    }
-    const [sx, sy] = view.worldToScreen(lx, ly);
-    ctx.font = '11px system-ui, sans-serif';
-    ctx.textBaseline = 'bottom';
-    ctx.fillStyle = 'rgba(0, 0, 0, 0.6)';
-    ctx.fillText(label, sx + 3, sy - 2);
-    ctx.fillStyle = colour;
-    ctx.fillText(label, sx + 2, sy - 3);
+    const mission = area && state.map && this.missionView.mission.map === state.map.id ? (area.bbox ? corners(area.bbox) : area.polygon) : null;
+    const form = this.outline && this.form.showStarts ? corners(this.outline) : null;
+    const key = JSON.stringify([mission, form, this.view.yStretch, state.map?.id]);
+    if (key === this.shown) return;
+    this.shown = key;
+    const source = this.olLayer.getSource();
+    source.clear();
+    const feature = (ring, colour, dash, label) => {
+      const coords = [[...ring, ring[0]].map((c) => this.view.toOl(c))];
+      source.addFeature(new Feature({ geometry: new Polygon(coords), colour, dash, label }));
+    };
+    if (mission) feature(mission, MISSION_COLOUR, [2, 4], 'mission area');
+    if (form) feature(form, FORM_COLOUR, [6, 4], 'area');
   }
 }
 
+// An outline: a dark halo under a dashed line in `colour`, and `label` at its top-left corner —
+// above it for the form's area, below it (inside) for the mission's, so both read when they meet.
+const styles = new Map();
+function outlineStyle(colour, dash, label) {
+  const key = `${colour} ${dash} ${label}`;
+  if (styles.has(key)) return styles.get(key);
+  const out = [
+    new Style({ stroke: new Stroke({ color: 'rgba(0, 0, 0, 0.7)', width: 3.5 }) }),
+    new Style({ stroke: new Stroke({ color: colour, width: 2, lineDash: dash }) }),
+  ];
+  if (label) {
+    out.push(new Style({
+      geometry: (f) => {
+        const [x0, , , y1] = f.getGeometry().getExtent();
+        return new Point([x0, y1]);
+      },
+      text: new Text({
+        text: label, font: '11px system-ui, sans-serif', textAlign: 'left',
+        textBaseline: label === 'area' ? 'bottom' : 'top', offsetX: 3, offsetY: label === 'area' ? -3 : 4,
+        fill: new Fill({ color: colour }), stroke: new Stroke({ color: 'rgba(0, 0, 0, 0.6)', width: 2 }),
+      }),
+    }));
+  }
+  styles.set(key, out);
+  return out;
+}
 function corners([x0, y0, x1, y1]) {
   return [[x0, y0], [x1, y0], [x1, y1], [x0, y1]];
 }

@@ -4,7 +4,10 @@
 // `origin` in the map's local frame ([0, 0]: the map's own corner; a mission in an area plans on
 // its planning window, whose origin the stream's snapshot gives); row 0 is the north row. Fed by the stream's binary frames (live_stream.js),
 // or rebuilt from the rovers' paths for replay.
+// On the map it is an OpenLayers image layer (issue 24, raster_overlay.js: one cell a block),
+// drawn again by OL when the grid changed (sync, once a frame) or the view moved.
 
+import { RasterOverlay } from './raster_overlay.js';
 import { el } from './util.js';
 
 // RGBA per state / visit count.
@@ -30,7 +33,11 @@ function colour(state, visits) {
 }
 
 export class CoverageLayer {
-  constructor() {
+  // view: the MapView whose OL map shows the grid, at zIndex among its layers.
+  constructor(view, zIndex) {
+    this.raster = new RasterOverlay(view, zIndex, 'coverage-grid',
+      () => (this.ready ? { canvas: this.canvas, rect: [...this.origin, this.cols * this.cell, this.rows * this.cell] } : null));
+    this.olLayer = this.raster.layer;
     this.rows = 0;
     this.cols = 0;
     this.cell = 1;
@@ -156,17 +163,15 @@ export class CoverageLayer {
     return n;
   }
 
-  draw(ctx, view, opacity) {
-    if (!this.ready) return;
-    if (this.dirty) {
+  // Per frame: the layer list's opacity and visibility; a changed grid is painted again.
+  sync(opacity, visible) {
+    this.olLayer.setOpacity(opacity);
+    this.olLayer.setVisible(visible && this.ready);
+    if (this.ready && this.dirty) {
       this.ctx.putImageData(this.image, 0, 0);
       this.dirty = false;
+      this.raster.changed();
     }
-    const [ox, oy] = this.origin;
-    const [sx, sy, sw, sh] = view.rectToScreen(ox, oy, this.cols * this.cell, this.rows * this.cell);
-    ctx.globalAlpha = opacity;
-    ctx.imageSmoothingEnabled = false;
-    ctx.drawImage(this.canvas, sx, sy, sw, sh);
   }
 
   static legend() {

@@ -2,7 +2,8 @@
 // attitude exceedances, collisions, coverage bumps), live as the stream reports them (issue 27:
 // {"type":"incidents", from, complete, incidents}) and then the stored result's list: a list in
 // the dock grouped by kind and cause with counts (163 short legs of one cause are one row that
-// opens), marks on the replay clock's strip and markers on the map (a toggleable layer).
+// opens), marks on the replay clock's strip and markers on the map (a toggleable layer, an OL
+// vector layer: incidents_layer.js).
 // Choosing one anywhere selects it everywhere: the clock seeks to its time, the map centres on it
 // and rings it, its row is highlighted (its group opened).
 
@@ -39,27 +40,7 @@ const CAUSES = {
 const causeOf = (it) => it.cause || (it.note || '').replace(/^target \d+: /, '').replace(/-?\d+(\.\d+)?/g, '#');
 const causeText = (c) => CAUSES[c] || c || '';
 const MIN_SCALE = 8;  // px/m the map zooms in to, at least, to show a chosen incident
-const kindOf = (k) => INCIDENT_KINDS[k] || INCIDENT_KINDS.other;
-
-function marker(ctx, shape, x, y, r) {
-  ctx.beginPath();
-  if (shape === 'circle') ctx.arc(x, y, r, 0, 2 * Math.PI);
-  else if (shape === 'square') ctx.rect(x - r, y - r, 2 * r, 2 * r);
-  else if (shape === 'diamond') ctx.moveTo(x, y - r), ctx.lineTo(x + r, y), ctx.lineTo(x, y + r), ctx.lineTo(x - r, y), ctx.closePath();
-  else if (shape === 'triangle') ctx.moveTo(x, y - r * 1.2), ctx.lineTo(x + r, y + r * 0.8), ctx.lineTo(x - r, y + r * 0.8), ctx.closePath();
-  else {  // cross
-    const a = r * 0.45;
-    for (const [dx, dy] of [[1, 1], [1, -1], [-1, -1], [-1, 1]]) {
-      ctx.lineTo(x + dx * a, y);
-      ctx.lineTo(x + dx * r, y + dy * (r - a));
-      ctx.lineTo(x + dx * (r - a), y + dy * r);
-      ctx.lineTo(x, y + dy * a);
-    }
-    ctx.closePath();
-  }
-  ctx.fill();
-  ctx.stroke();
-}
+export const kindOf = (k) => INCIDENT_KINDS[k] || INCIDENT_KINDS.other;
 
 export class Incidents {
   // onSelect(item): seek the replay to item.at.
@@ -223,36 +204,6 @@ export class Incidents {
   // Marks for the clock's strip, in item order.
   marks() {
     return this.items.map((it, i) => ({ at: it.at, colour: kindOf(it.kind).colour, selected: i === this.selected }));
-  }
-
-  // The map layer: a marker per incident, the selected one ringed and drawn last.
-  draw(ctx, view, opacity) {
-    if (!this.items.length) return;
-    ctx.save();
-    ctx.globalAlpha = opacity;
-    ctx.lineWidth = 1;
-    ctx.strokeStyle = '#000000b0';
-    const r = 5;
-    for (const it of this.items) {
-      if (it.index === this.selected) continue;
-      const [sx, sy] = view.worldToScreen(it.x, it.y);
-      if (sx < -r || sy < -r || sx > view.cssW + r || sy > view.cssH + r) continue;
-      ctx.fillStyle = kindOf(it.kind).colour;
-      marker(ctx, kindOf(it.kind).shape, sx, sy, r);
-    }
-    const sel = this.items[this.selected];
-    if (sel) {
-      const [sx, sy] = view.worldToScreen(sel.x, sel.y);
-      ctx.globalAlpha = 1;
-      ctx.fillStyle = kindOf(sel.kind).colour;
-      marker(ctx, kindOf(sel.kind).shape, sx, sy, r + 2);
-      ctx.strokeStyle = '#ffffff';
-      ctx.lineWidth = 2;
-      ctx.beginPath();
-      ctx.arc(sx, sy, 13, 0, 2 * Math.PI);
-      ctx.stroke();
-    }
-    ctx.restore();
   }
 
   // The incident under a screen point (within 8 px), or -1.

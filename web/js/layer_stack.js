@@ -54,8 +54,13 @@ export class LayerStack {
     this.renderControls();
   }
 
-  // An overlay layer drawn by another module: {id, label, visible, opacity, legend(): Node}.
+  // An overlay layer drawn by another module: {id, label, visible, opacity, legend(): Node}, and
+  // `ol` when it is an OL layer of its own (its visibility and opacity follow the controls).
   addOverlay(layer) {
+    if (layer.ol) {
+      layer.ol.setVisible(Boolean(layer.visible));
+      layer.ol.setOpacity(layer.opacity ?? 1);
+    }
     this.add({ kind: 'overlay', ...layer });
     return this.get(layer.id);
   }
@@ -76,6 +81,8 @@ export class LayerStack {
     if (l.kind === 'png') {
       l.ol.setVisible(visible && Boolean(l.source));
       if (visible) this.loadPng(l);
+    } else if (l.ol) {
+      l.ol.setVisible(visible);  // an overlay drawn as an OL layer (zones.js)
     }
     this.renderControls();
     this.view.invalidate(true);
@@ -263,7 +270,7 @@ export class LayerStack {
           'aria-label': `${l.label} opacity`, id: `${id}-opacity`,
           oninput: (e) => {
             l.opacity = Number(e.target.value);
-            if (l.kind === 'png') l.ol.setOpacity(l.opacity);
+            if (l.ol) l.ol.setOpacity(l.opacity);
             else this.view.invalidate();
           },
         }));

@@ -2,17 +2,24 @@
 // pan by dragging, zoom with the wheel or +/- keys. Two stacked surfaces:
 // - an OpenLayers map underneath (issue 24): the raster layers as tiles of the server's tile API
 //   (layer_stack.js adds them) in a custom projection of the map's local metres, and a ScaleLine.
-//   It takes no input: this view owns pan and zoom and sets the OL view's centre and resolution.
-// - a <canvas> on top for the overlay layers (coverage grid, trails, rovers, PDM editing, zones),
+//   This view owns pan and zoom and sets the OL view's centre and resolution; OL's interactions
+//   get the pointer only for the tools that ask for it (below).
+// - a <canvas> on top for the overlays that are not OL layers: the PDM editor's handles and
+//   brush, a conflict's two versions, a zone set's history, the route profile's marker;
 //   drawn every frame; "base" overlay layers are composed into a cached canvas only when the view
 //   changes. Frames are drawn on requestAnimationFrame only when something asked for it.
 // Maps whose cells are not square (geographic grids: metres along y differ from x) get a tile
 // projection whose y is stretched to x-metres, and the OL surface is scaled back by CSS.
+// Pointer input: the map box (the canvas's parent) listens, so a tool registered with `ol: true`
+// (zones, mission area: OL's Draw/Modify/Snap) lets the pointer through the canvas to the OL
+// viewport, whose interactions see it first; the same events then bubble here for pan and zoom.
 
 import OlMap from 'ol/Map.js';
 import View from 'ol/View.js';
 import ScaleLine from 'ol/control/ScaleLine.js';
 import Projection from 'ol/proj/Projection.js';
+import VectorLayer from 'ol/layer/Vector.js';
+import VectorSource from 'ol/source/Vector.js';
 import { clamp } from './util.js';
 
 let projections = 0;  // OL keeps projections by code: one code per map shown
@@ -44,6 +51,7 @@ export class MapView {
     this.drag = null;
     this.hoverListeners = [];
 
+    this.box = canvas.parentNode;  // takes the pointer (see the header)
     this.olBox = document.createElement('div');
     this.olBox.className = 'map-ol';
     canvas.before(this.olBox);
@@ -96,6 +104,22 @@ export class MapView {
     this.olMap.updateSize();
     this.olView.setCenter([this.cx, this.cy * k]);
     this.olView.setResolution(1 / this.scale);
+  }
+
+  // Local metres ↔ the OL projection's coordinates (y stretched on maps with non-square cells).
+  toOl([x, y]) {
+    return [x, y * this.yStretch];
+  }
+
+  fromOl([x, y]) {
+    return [x, y / this.yStretch];
+  }
+
+  // An OL vector layer over the tiles (zIndex above theirs), for an overlay drawn as features.
+  addVectorLayer(zIndex, options = {}) {
+    const layer = new VectorLayer({ source: new VectorSource(), zIndex, updateWhileAnimating: true, updateWhileInteracting: true, ...options });
+    this.olMap.addLayer(layer);
+    return layer;
   }
 
   fit() {
@@ -250,6 +274,8 @@ export class MapView {
 
   setTool(name) {
     this.tool = name;
+    // An OL tool: the canvas lets the pointer through to the OL viewport (app.css .ol-input).
+    this.box.classList.toggle('ol-input', Boolean(this.tools[name]?.ol));
     this.canvas.classList.toggle('tool-pdm', name === 'pdm');
     this.canvas.classList.toggle('tool-rovers', name === 'rovers');
     this.canvas.classList.toggle('tool-zones', name === 'zones');
@@ -268,19 +294,30 @@ export class MapView {
   }
 
   bindPointer() {
-    const c = this.canvas;
-    c.addEventListener('pointerdown', (e) => {
-      if (e.button !== 0) return;
+    const c = this.canvas, box = this.box;
+    // The box holds the floating panels too: only the canvas and the OL surface are the map.
+    const onMap = (e) => e.target === c || this.olBox.contains(e.target);
+    // A press on the OL viewport (not focusable) would take the focus from the canvas, whose keys
+    // the tools listen to: the canvas keeps it.
+    box.addEventListener('mousedown', (e) => {
+      if (e.button === 0 && this.olBox.contains(e.target)) e.preventDefault();
+    });
+    box.addEventListener('pointerdown', (e) => {
+      if (e.button !== 0 || !onMap(e)) return;
       c.focus({ preventScroll: true });
       const p = this.eventPoint(e);
       const tool = this.tools[this.tool];
       let consumed = false;
       if (tool && tool.down) consumed = tool.down(p, e) === true;
       this.drag = { consumed, tool, lastX: p.sx, lastY: p.sy, startX: p.sx, startY: p.sy, moved: false };
-      c.setPointerCapture(e.pointerId);
+      e.target.setPointerCapture(e.pointerId);
       if (!consumed) c.classList.add('dragging');
     });
-    c.addEventListener('pointermove', (e) => {
+    box.addEventListener('pointermove', (e) => {
+      if (!this.drag && !onMap(e)) {
+        for (const fn of this.hoverListeners) fn(null);  // over a panel: as if the pointer left
+        return;
+      }
       const p = this.eventPoint(e);
       for (const fn of this.hoverListeners) fn(p);
       const d = this.drag;
@@ -310,12 +347,13 @@ export class MapView {
         d.tool.click(p, e);
       }
     };
-    c.addEventListener('pointerup', end);
-    c.addEventListener('pointercancel', end);
-    c.addEventListener('pointerleave', () => {
+    box.addEventListener('pointerup', end);
+    box.addEventListener('pointercancel', end);
+    box.addEventListener('pointerleave', () => {
       if (!this.drag) for (const fn of this.hoverListeners) fn(null);
     });
-    c.addEventListener('wheel', (e) => {
+    box.addEventListener('wheel', (e) => {
+      if (!onMap(e)) return;
       e.preventDefault();
       const p = this.eventPoint(e);
       const delta = e.deltaMode === 1 ? e.deltaY * 16 : e.deltaY;

@@ -8,6 +8,7 @@
 import { api } from './api.js';
 import { parseBbox } from './area_tool.js';
 import { state } from './state.js';
+import { StartMarks } from './start_marks.js';
 import { history } from './undo_stack.js';
 import { $, el, fmt, roverColour, showError } from './util.js';
 
@@ -33,7 +34,8 @@ export class MissionForm {
     this.next = 0;         // the rover the next click places
     this.placing = false;
     this.drag = null;
-    view.addLayer({ id: 'rover-starts', order: 50, draw: (ctx, v) => this.draw(ctx, v) });
+    this.starts = new StartMarks(view, 50);  // an OL layer, following the rovers each frame
+    view.onRender(() => this.starts.sync(this.rovers, state.tool === 'rovers' || this.showStarts));
     view.registerTool('rovers', {
       down: (p) => this.placeDown(p),
       move: (p) => this.placeMove(p),
@@ -382,36 +384,6 @@ export class MissionForm {
         el('span', { class: 'rover-dot', style: `background:${roverColour(k)}` }),
         num('x', 'x (m)'), num('y', 'y (m)'), num('heading', 'heading (deg)'));
     }));
-  }
-
-  draw(ctx, view) {
-    if (state.tool !== 'rovers' && !this.showStarts) return;
-    this.rovers.forEach((r, k) => {
-      if (!r) return;
-      const [sx, sy] = view.worldToScreen(r.x, r.y);
-      const a = (-r.heading * Math.PI) / 180;
-      ctx.strokeStyle = '#000';
-      ctx.lineWidth = 3;
-      ctx.beginPath();
-      ctx.moveTo(sx, sy);
-      ctx.lineTo(sx + 22 * Math.cos(a), sy + 22 * Math.sin(a));
-      ctx.stroke();
-      ctx.strokeStyle = roverColour(k);
-      ctx.lineWidth = 2;
-      ctx.stroke();
-      ctx.beginPath();
-      ctx.arc(sx, sy, 8, 0, 2 * Math.PI);
-      ctx.fillStyle = roverColour(k);
-      ctx.fill();
-      ctx.strokeStyle = '#000';
-      ctx.lineWidth = 1.5;
-      ctx.stroke();
-      ctx.fillStyle = '#000';
-      ctx.font = 'bold 10px system-ui, sans-serif';
-      ctx.textAlign = 'center';
-      ctx.textBaseline = 'middle';
-      ctx.fillText(String(k + 1), sx, sy + 0.5);
-    });
   }
 
   // The PDM menu: the one shown on the map, else (until the operator picks one, "none" included)

@@ -10,7 +10,8 @@ import { PlanLayer } from './plan_layer.js';
 import { counters, state } from './state.js';
 import { TrailLayer, TrailSet } from './trails.js';
 import { $, el, fmt, report, roverColour } from './util.js';
-import { Incidents } from './incidents.js';
+import { Incidents, kindOf } from './incidents.js';
+import { IncidentLayer } from './incidents_layer.js';
 import { MissionClock } from './mission_clock.js';
 import { RunStatus, isActive, isCompleted, isFinal, isRunStatus, isStopped, statusText } from './outcomes.js';
 
@@ -69,14 +70,14 @@ export class MissionView {
     this.selectMap = selectMap;
     this.onFinished = onFinished || (() => {});
     this.onShown = onShown || (() => {});
-    this.coverage = new CoverageLayer();
-    this.trailLayer = new TrailLayer(view);
+    this.coverage = new CoverageLayer(view, 30);
+    this.trailLayer = new TrailLayer(view, 40);
     this.trails = this.trailLayer.add(new TrailSet({ width: 2 }));
     // Coverage under localisation error: where each rover believed it was (dashed, hollow marker);
     // `trails` are then the true positions. A layer of its own, so each can be toggled.
-    this.beliefLayer = new TrailLayer(view);
+    this.beliefLayer = new TrailLayer(view, 41);
     this.believed = this.beliefLayer.add(new TrailSet({ width: 1.5, dash: [5, 4], hollow: true, label: 'believed' }));
-    this.plan = new PlanLayer();
+    this.plan = new PlanLayer(view);
     this.compareSets = [];
     this.mission = null;
     this.result = null;
@@ -87,11 +88,15 @@ export class MissionView {
     const covLayer = layers.addOverlay({ id: 'coverage', label: 'coverage', legendTitle: 'coverage grid (cell state, visits)', visible: true, opacity: 0.6, legend: () => (this.coverage.ready ? CoverageLayer.legend() : null) });
     const trailLayer = layers.addOverlay({ id: 'trails', label: 'trails', legendTitle: 'rover trails', visible: true, opacity: 0.95, legend: () => this.trailLegend() });
     const planLayer = layers.addOverlay({ id: 'plan', label: 'team plan', legendTitle: 'team plan', visible: true, opacity: 0.9, legend: () => (this.plan.route.length || this.plan.paths.length ? el('div', { class: 'muted small' }, 'white: team route through the numbered targets; dashed: each rover\'s planned RRT* path') : null) });
-    view.addLayer({ id: 'coverage', order: 30, draw: (ctx, v) => covLayer.visible && this.coverage.draw(ctx, v, covLayer.opacity) });
-    view.addLayer({ id: 'plan', order: 35, draw: (ctx, v) => planLayer.visible && this.plan.draw(ctx, v, planLayer.opacity) });
-    view.addLayer({ id: 'trails', order: 40, draw: (ctx, v) => this.trailLayer.draw(ctx, v, trailLayer.opacity, trailLayer.visible) });
+    view.onRender(() => this.coverage.sync(covLayer.opacity, covLayer.visible));  // an OL layer
+    view.onRender(() => this.plan.sync(planLayer.opacity, planLayer.visible));  // OL layers
+    // Trails and rovers are OL layers (trails.js): their features follow the sets each frame.
+    view.onRender(() => this.trailLayer.sync(trailLayer.opacity, trailLayer.visible, true));
     const beliefLayer = layers.addOverlay({ id: 'believed', label: 'believed trails', legendTitle: 'believed trails (localisation error)', visible: true, opacity: 0.95, legend: () => this.beliefLegend() });
-    view.addLayer({ id: 'believed', order: 41, draw: (ctx, v) => beliefLayer.visible && this.hasBeliefs() && this.beliefLayer.draw(ctx, v, beliefLayer.opacity, true) });
+    view.onRender(() => {
+      const shown = beliefLayer.visible && this.hasBeliefs();
+      this.beliefLayer.sync(beliefLayer.opacity, shown, shown);
+    });
     view.onRender((t) => this.countFrame(t));
     view.onHover((p) => {
       this.plan.hover = p;
@@ -108,7 +113,8 @@ export class MissionView {
       },
     });
     const incLayer = layers.addOverlay({ id: 'incidents', label: 'incidents', legendTitle: 'incidents', visible: true, opacity: 1, legend: () => this.incidents.legend() });
-    view.addLayer({ id: 'incidents', order: 45, draw: (ctx, v) => incLayer.visible && this.incidents.draw(ctx, v, incLayer.opacity) });
+    this.incidentLayer = new IncidentLayer(view, 47, kindOf);
+    view.onRender(() => this.incidentLayer.sync(this.incidents.items, this.incidents.selected, incLayer.opacity, incLayer.visible));
     this.bindIncidentClicks(view, incLayer);
     this.replay = new MissionClock({
       slider: $('replay-slider'), play: $('replay-play'), speed: $('replay-speed'), label: $('replay-label'), strip: $('replay-strip'),

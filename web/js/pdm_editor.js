@@ -7,13 +7,15 @@
 // the server's PDM is a mixture (components, at most 256), so what is painted is what is saved,
 // editable afterwards like any clicked Gaussian. Painting never pans: the tool takes the drag.
 // A stroke is one step of the undo history. While editing, the mixture density is drawn on a coarse grid as
-// an overlay; once saved, the server's pdm.png for the new id is shown instead.
+// an overlay (an OL image layer); once saved, the server's pdm.png for the new id is shown instead.
 // Several operators (issue 26): unsaved components are a draft of the map (drafts.js), kept over
 // map switches and reloads; "random (G=4)" makes a draft, not a saved PDM; "update" saves the
 // components into the PDM they were loaded from, naming its version, and a 412 shows both; PDMs
 // saved elsewhere arrive from the event stream (remoteChanged); both in pdm_versions.js.
 
 import { api } from './api.js';
+import { RasterOverlay } from './raster_overlay.js';
+import { HANDLE, PdmHandles, ROT_OFFSET } from './pdm_handles.js';
 import { clearDraft, loadDraft, saveDraft } from './drafts.js';
 import { state } from './state.js';
 import { rampLegend } from './legend.js';
@@ -24,8 +26,6 @@ import { $, el, report, showError } from './util.js';
 const GRID = 160;           // overlay cells on the longer side
 const MAX_COMPONENTS = 256; // the server's limit (core/pdm/pdm.hpp kMaxComponents)
 const CUTOFF = 4;           // overlay: a component adds to cells within 4σ (e^-8 beyond)
-const HANDLE = 7;           // px, half size
-const ROT_OFFSET = 26;      // px beyond the σx handle
 // A perceptual ramp (viridis-like) for the overlay and its legend.
 const RAMP = [[68, 1, 84], [59, 82, 139], [33, 145, 140], [94, 201, 98], [253, 231, 37]];
 
@@ -52,9 +52,23 @@ export class PdmEditor {
     this.stroke = null;     // the brush stroke in progress
     this.brushHover = null;
     this.editLayer = layers.addOverlay({ id: 'pdm-edit', label: 'PDM (editing)', legendTitle: 'PDM being edited (mixture density)', visible: true, opacity: 0.6, legend: () => this.legend() });
+    // The density: an OL image layer under the other overlays (raster_overlay.js); the components
+    // and their handles OL features dragged with Modify (pdm_handles.js); the brush stays on the
+    // overlay canvas.
+    this.density = new RasterOverlay(view, 20, 'pdm-density',
+      () => (state.map && this.overlayMax > 0 ? { canvas: this.overlay, rect: [0, 0, state.map.width_m, state.map.height_m] } : null), { smooth: true });
+    view.onRender(() => {
+      this.density.layer.setOpacity(this.editLayer.opacity);
+      this.density.layer.setVisible(this.showOverlay() && this.overlayMax > 0);
+    });
+    this.olHandles = new PdmHandles(view);
+    view.onRender(() => this.olHandles.sync(this.comps, this.active, state.tool === 'pdm' && this.mode === 'shape' && Boolean(state.map)));
     view.addLayer({ id: 'pdm-edit', order: 20, draw: (ctx, v) => this.draw(ctx, v) });
     view.registerTool('pdm', {
-      down: (p, e) => (this.mode === 'paint' ? this.strokeStart(p, e) : this.pointerDown(p)),
+      ol: true,
+      // Shaping: a press Modify took on a handle drags it (the map does not pan); the pointer's
+      // path becomes the component's centre, σ or rotation (pointerMove).
+      down: (p, e) => (this.mode === 'paint' ? this.strokeStart(p, e) : this.olHandles.grabbing() && this.pointerDown(p)),
       move: (p) => (this.stroke ? this.strokeMove(p) : this.pointerMove(p)),
       up: () => (this.stroke ? this.strokeEnd() : this.pointerUp()),
       click: (p) => this.add(p.x, p.y),
@@ -65,7 +79,7 @@ export class PdmEditor {
       },
     });
     for (const mode of ['shape', 'paint']) $(`pdm-mode-${mode}`).addEventListener('click', () => this.setMode(mode));
-    view.canvas.addEventListener('pointerleave', () => {
+    view.box.addEventListener('pointerleave', () => {
       this.brushHover = null;
       view.invalidate();
     });
@@ -334,6 +348,7 @@ export class PdmEditor {
 
   // --- overlay ---
   computeOverlay() {
+    this.density.changed();
     const m = state.map;
     if (!m || this.comps.length === 0) {
       this.overlayMax = 0;
@@ -383,57 +398,8 @@ export class PdmEditor {
   draw(ctx, view) {
     const m = state.map;
     if (!m) return;
-    if (this.showOverlay() && this.overlayMax > 0) {
-      const [sx, sy, sw, sh] = view.rectToScreen(0, 0, m.width_m, m.height_m);
-      ctx.globalAlpha = this.editLayer.opacity;
-      ctx.imageSmoothingEnabled = true;
-      ctx.drawImage(this.overlay, sx, sy, sw, sh);
-      ctx.globalAlpha = 1;
-    }
     if (state.tool !== 'pdm') return;
     if (this.mode === 'paint') return this.drawBrush(ctx, view);
-    if (this.comps.length === 0) return;
-    this.comps.forEach((g, i) => {
-      const h = this.handles(g);
-      const activeOne = i === this.active;
-      ctx.strokeStyle = activeOne ? '#ffb347' : 'rgba(255,255,255,0.8)';
-      ctx.lineWidth = activeOne ? 2 : 1.2;
-      ctx.beginPath();
-      ctx.ellipse(h.centre[0], h.centre[1], g.sigma_x * view.scale, g.sigma_y * view.scale, (-g.rotation_deg * Math.PI) / 180, 0, 2 * Math.PI);
-      ctx.stroke();
-      ctx.setLineDash([3, 3]);
-      ctx.beginPath();
-      ctx.moveTo(...h.centre);
-      ctx.lineTo(...h.rot);
-      ctx.moveTo(...h.centre);
-      ctx.lineTo(...h.sy);
-      ctx.stroke();
-      ctx.setLineDash([]);
-      const square = ([x, y], fill) => {
-        ctx.fillStyle = fill;
-        ctx.fillRect(x - HANDLE / 1.4, y - HANDLE / 1.4, (2 * HANDLE) / 1.4, (2 * HANDLE) / 1.4);
-        ctx.strokeStyle = '#000';
-        ctx.lineWidth = 1;
-        ctx.strokeRect(x - HANDLE / 1.4, y - HANDLE / 1.4, (2 * HANDLE) / 1.4, (2 * HANDLE) / 1.4);
-      };
-      square(h.sx, '#4fb3ff');
-      square(h.sy, '#6bd58b');
-      ctx.beginPath();
-      ctx.arc(h.rot[0], h.rot[1], HANDLE - 1, 0, 2 * Math.PI);
-      ctx.fillStyle = '#ffb347';
-      ctx.fill();
-      ctx.stroke();
-      ctx.beginPath();
-      ctx.arc(h.centre[0], h.centre[1], HANDLE, 0, 2 * Math.PI);
-      ctx.fillStyle = activeOne ? '#ffb347' : '#ffffff';
-      ctx.fill();
-      ctx.stroke();
-      ctx.fillStyle = '#000';
-      ctx.font = 'bold 10px system-ui, sans-serif';
-      ctx.textAlign = 'center';
-      ctx.textBaseline = 'middle';
-      ctx.fillText(String(i + 1), h.centre[0], h.centre[1] + 0.5);
-    });
   }
 
   // Paint mode: the centres as dots and the brush (radius σ: what Shift/Alt erases) under the cursor.

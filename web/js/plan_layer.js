@@ -3,12 +3,20 @@
 // RRT* path as it is accepted (thin, in the rover's colour, under its simulated trail).
 // Target numbers are decluttered (issue 27: "596061626364"): a number is drawn only where it
 // overlaps no number already drawn (route order first), and the target nearest the cursor always
-// shows its number, boxed.
+// shows its number, boxed. Drawn as OpenLayers features (issue 24): two vector layers, the lines
+// and dots, and the numbers over them.
 
+import Feature from 'ol/Feature.js';
+import LineString from 'ol/geom/LineString.js';
+import MultiPoint from 'ol/geom/MultiPoint.js';
+import Point from 'ol/geom/Point.js';
+import { Circle as CircleStyle, Fill, Stroke, Style, Text } from 'ol/style.js';
 import { roverColour } from './util.js';
 
 export class PlanLayer {
-  constructor() {
+  constructor(view) {
+    this.view = view;
+    this.ol = olParts(view);
     this.clear();
     this.hover = null;    // the cursor on the map {sx, sy}, or null
     this.labelled = [];   // the targets whose numbers the last frame drew (tests read it)
@@ -48,81 +56,139 @@ export class PlanLayer {
     }
   }
 
-  draw(ctx, view, opacity) {
-    if (this.empty) return;
-    ctx.save();
-    ctx.globalAlpha = opacity;
-    ctx.lineJoin = 'round';
-    this.paths.forEach((path, k) => {
-      if (path.length < 2) return;
-      ctx.strokeStyle = roverColour(k);
-      ctx.lineWidth = 1;
-      ctx.setLineDash([3, 3]);
-      ctx.beginPath();
-      path.forEach(([x, y], i) => {
-        const [sx, sy] = view.worldToScreen(x, y);
-        if (i === 0) ctx.moveTo(sx, sy);
-        else ctx.lineTo(sx, sy);
-      });
-      ctx.stroke();
+  // --- on the map: OL features (issue 24), updated in place on the frames the map view draws ---
+  // Per frame: the layer list's controls; the rovers' planned paths (appended in place), the
+  // route and its dots when the route is another, the numbers when the view, route or hovered
+  // target changed.
+  sync(opacity, visible) {
+    const ol = this.ol;
+    for (const l of [ol.layer, ol.numbers]) {
+      l.setOpacity(opacity);
+      l.setVisible(visible);
+    }
+    const k = this.view.yStretch;
+    const whole = k !== ol.stretch;
+    ol.stretch = k;
+    const source = ol.layer.getSource();
+    this.paths.forEach((path, i) => {
+      if (!ol.paths[i]) {
+        ol.paths[i] = new Feature(new LineString([]));
+        ol.paths[i].setStyle(new Style({ stroke: new Stroke({ color: roverColour(i), width: 1, lineDash: [3, 3], lineJoin: 'round' }) }));
+        ol.counts[i] = 0;
+        source.addFeature(ol.paths[i]);
+      }
+      const geom = ol.paths[i].getGeometry();
+      if (whole || path.length < ol.counts[i] || ol.sources[i] !== path) {
+        geom.setCoordinates(path.map(([x, y]) => [x, y * k]));
+      } else if (path.length > ol.counts[i]) {
+        const flat = geom.getFlatCoordinates();  // appended in place, one change event
+        for (let j = ol.counts[i]; j < path.length; j++) flat.push(path[j][0], path[j][1] * k);
+        geom.changed();
+      }
+      ol.counts[i] = path.length;
+      ol.sources[i] = path;
     });
-    ctx.setLineDash([]);
-    if (this.route.length > 0) {
-      ctx.strokeStyle = 'rgba(255,255,255,0.85)';
-      ctx.lineWidth = 2;
-      ctx.beginPath();
-      this.route.forEach(([x, y], i) => {
-        const [sx, sy] = view.worldToScreen(x, y);
-        if (i === 0) ctx.moveTo(sx, sy);
-        else ctx.lineTo(sx, sy);
-      });
-      ctx.stroke();
-      ctx.fillStyle = '#fff';
-      ctx.font = '10px sans-serif';
-      ctx.textBaseline = 'alphabetic';
-      const screen = this.route.map(([x, y]) => view.worldToScreen(x, y));
-      for (const [i, [sx, sy]] of screen.entries()) {
-        ctx.beginPath();
-        ctx.arc(sx, sy, i === 0 ? 5 : 3, 0, 2 * Math.PI);
-        ctx.fill();
-      }
-      // The hovered target: the nearest within 12 px of the cursor.
-      let hovered = -1, best = 12;
-      if (this.hover) {
-        screen.forEach(([sx, sy], i) => {
-          const d = Math.hypot(sx - this.hover.sx, sy - this.hover.sy);
-          if (i > 0 && d < best) {
-            best = d;
-            hovered = i;
-          }
-        });
-      }
-      const boxes = [];
-      const box = (i) => {
-        const [sx, sy] = screen[i];
-        const w = ctx.measureText(String(i)).width;
-        return [sx + 4, sy - 13, w, 10];
-      };
-      const hit = (a, b) => a[0] < b[0] + b[2] + 2 && b[0] < a[0] + a[2] + 2 && a[1] < b[1] + b[3] + 1 && b[1] < a[1] + a[3] + 1;
-      if (hovered > 0) boxes.push(box(hovered));
-      this.labelled = [];
-      for (let i = 1; i < screen.length; i++) {
-        if (i === hovered) continue;
-        const b = box(i);
-        if (boxes.some((o) => hit(o, b))) continue;
-        boxes.push(b);
-        this.labelled.push(i);
-        ctx.fillText(String(i), b[0], screen[i][1] - 4);
-      }
-      if (hovered > 0) {
-        const b = box(hovered);
-        ctx.fillStyle = 'rgba(0,0,0,0.8)';
-        ctx.fillRect(b[0] - 2, b[1] - 1, b[2] + 4, b[3] + 3);
-        ctx.fillStyle = '#ffd23f';
-        ctx.fillText(String(hovered), b[0], screen[hovered][1] - 4);
-        this.labelled.push(hovered);
+    for (const f of ol.paths.splice(this.paths.length)) source.removeFeature(f);
+    ol.counts.length = ol.sources.length = ol.paths.length;
+    if (whole || ol.routeShown !== this.route) {
+      ol.routeShown = this.route;
+      const coords = this.route.map(([x, y]) => [x, y * k]);
+      const parts = [ol.route, ol.start, ol.targets];
+      if (!coords.length) {
+        if (source.hasFeature(ol.route)) for (const f of parts) source.removeFeature(f);
+      } else {
+        ol.route.getGeometry().setCoordinates(coords);
+        ol.start.getGeometry().setCoordinates(coords[0]);
+        ol.targets.getGeometry().setCoordinates(coords.slice(1));
+        if (!source.hasFeature(ol.route)) source.addFeatures(parts);
       }
     }
-    ctx.restore();
+    this.syncNumbers();
   }
+
+  // The target numbers: decluttered in screen space (a number only where it overlaps no number
+  // already shown, route order first; the hovered target's always, boxed), made again only when
+  // the view, the route or the hovered target changed.
+  syncNumbers() {
+    const ol = this.ol, view = this.view;
+    const screen = this.route.map(([x, y]) => view.worldToScreen(x, y));
+    let hovered = -1, best = 12;  // the nearest target within 12 px of the cursor
+    if (this.hover) {
+      screen.forEach(([sx, sy], i) => {
+        const d = Math.hypot(sx - this.hover.sx, sy - this.hover.sy);
+        if (i > 0 && d < best) {
+          best = d;
+          hovered = i;
+        }
+      });
+    }
+    const key = `${view.viewVersion} ${hovered}`;
+    if (key === ol.numbersKey && ol.numbersRoute === this.route) return;
+    ol.numbersKey = key;
+    ol.numbersRoute = this.route;
+    const boxes = [];
+    const box = (i) => [screen[i][0] + 4, screen[i][1] - 13, measure(String(i)), 10];
+    const hit = (a, b) => a[0] < b[0] + b[2] + 2 && b[0] < a[0] + a[2] + 2 && a[1] < b[1] + b[3] + 1 && b[1] < a[1] + a[3] + 1;
+    if (hovered > 0) boxes.push(box(hovered));
+    this.labelled = [];
+    const features = [];
+    const k = view.yStretch;
+    for (let i = 1; i < screen.length; i++) {
+      if (i === hovered) continue;
+      const b = box(i);
+      if (boxes.some((o) => hit(o, b))) continue;
+      boxes.push(b);
+      this.labelled.push(i);
+      features.push(numberFeature(this.route[i], k, i, false));
+    }
+    if (hovered > 0) {
+      features.push(numberFeature(this.route[hovered], k, hovered, true));
+      this.labelled.push(hovered);
+    }
+    const source = ol.numbers.getSource();
+    source.clear();
+    source.addFeatures(features);
+  }
+}
+
+const FONT = '10px sans-serif';
+let measurer = null;
+function measure(text) {
+  if (!measurer) {
+    measurer = document.createElement('canvas').getContext('2d');
+    measurer.font = FONT;
+  }
+  return measurer.measureText(text).width;
+}
+
+// Target i's number right of and above its dot; the hovered one yellow on a dark box.
+function numberFeature([x, y], k, i, hovered) {
+  const f = new Feature(new Point([x, y * k]));
+  f.setStyle(new Style({
+    zIndex: hovered ? 1 : 0,
+    text: new Text({
+      text: String(i), font: FONT, textAlign: 'left', textBaseline: 'alphabetic', offsetX: 4, offsetY: -4,
+      fill: new Fill({ color: hovered ? '#ffd23f' : '#ffffff' }),
+      backgroundFill: hovered ? new Fill({ color: 'rgba(0,0,0,0.8)' }) : undefined,
+      padding: hovered ? [1, 2, 2, 2] : undefined,
+    }),
+  }));
+  return f;
+}
+
+// The route's and the dots' styles.
+const ROUTE = new Style({ stroke: new Stroke({ color: 'rgba(255,255,255,0.85)', width: 2, lineJoin: 'round' }) });
+const DOT = (r) => new Style({ image: new CircleStyle({ radius: r, fill: new Fill({ color: '#ffffff' }) }) });
+
+function olParts(view) {
+  const route = new Feature(new LineString([]));
+  route.setStyle(ROUTE);
+  const start = new Feature(new Point([0, 0]));
+  start.setStyle(DOT(5));
+  const targets = new Feature(new MultiPoint([]));
+  targets.setStyle(DOT(3));
+  return {
+    layer: view.addVectorLayer(35), numbers: view.addVectorLayer(35.5, { declutter: false }),
+    paths: [], counts: [], sources: [], route, start, targets, routeShown: null, stretch: 0, numbersKey: '', numbersRoute: null,
+  };
 }

@@ -1,7 +1,12 @@
-// Rover trails and poses on the map. Trails are drawn into a screen-space cache that only gets
-// the new segments while the view stays put, and is redrawn whole after a pan/zoom, a replay
-// seek or a reset — so a live mission with long trails stays cheap per frame.
+// Rover trails and poses on the map: TrailSet holds them (per rover the points so far, the last
+// heading, the replay limit), TrailLayer shows them as OpenLayers features, so they pan and zoom
+// with the map in OL's own render loop (and OL skips sub-pixel steps of long trails itself).
 
+import Feature from 'ol/Feature.js';
+import LineString from 'ol/geom/LineString.js';
+import Point from 'ol/geom/Point.js';
+import { asArray } from 'ol/color.js';
+import { Icon, Stroke, Style } from 'ol/style.js';
 import { roverColour } from './util.js';
 
 export class TrailSet {
@@ -70,121 +75,136 @@ export class TrailSet {
   }
 }
 
+// The trails and rovers of some TrailSets as two OL vector layers (issue 24): a line feature and
+// a rover feature per rover, updated in place from the sets on every frame the map view draws —
+// only the points added since the last frame are appended to a line; a replay seek, a reset or a
+// new map (the y stretch) sets it whole.
 export class TrailLayer {
-  constructor(view) {
+  constructor(view, zIndex) {
     this.view = view;
     this.sets = [];
-    this.cache = document.createElement('canvas');
-    this.cctx = this.cache.getContext('2d');
-    this.key = '';
-    this.drawn = new Map();  // set → per-rover count of points already in the cache
+    this.lines = view.addVectorLayer(zIndex);
+    this.rovers = view.addVectorLayer(zIndex + 0.5);
+    this.shown = new Map();  // set → {version, stretch, lines: [Feature], counts: [n], rovers: [Feature], poses: [key]}
   }
 
   add(set) {
     this.sets.push(set);
-    this.key = '';
     return set;
   }
 
   remove(set) {
     this.sets = this.sets.filter((s) => s !== set);
-    this.key = '';
+    const s = this.shown.get(set);
+    if (!s) return;
+    for (const f of s.lines) this.lines.getSource().removeFeature(f);
+    for (const f of s.rovers) this.rovers.getSource().removeFeature(f);
+    this.shown.delete(set);
   }
 
-  draw(ctx, view, opacity, showTrails) {
-    const { cache, cctx } = this;
-    const dpr = view.dpr;
-    if (cache.width !== view.canvas.width || cache.height !== view.canvas.height) {
-      cache.width = view.canvas.width;
-      cache.height = view.canvas.height;
-      this.key = '';
-    }
-    if (showTrails) {
-      const key = `${view.viewVersion}|${this.sets.map((s) => s.version).join(',')}|${this.sets.length}`;
-      if (key !== this.key) {
-        this.key = key;
-        cctx.setTransform(1, 0, 0, 1, 0, 0);
-        cctx.clearRect(0, 0, cache.width, cache.height);
-        this.drawn = new Map();
-      }
-      cctx.setTransform(dpr, 0, 0, dpr, 0, 0);
-      for (const set of this.sets) this.drawNew(set, view);
-      ctx.save();
-      ctx.setTransform(1, 0, 0, 1, 0, 0);
-      ctx.globalAlpha = opacity;
-      ctx.drawImage(cache, 0, 0);
-      ctx.restore();
-    }
-    for (const set of this.sets) this.drawRovers(ctx, view, set);
+  // Per frame: the layers' opacity and visibility (the layer list's controls), then the features.
+  sync(opacity, showLines, showRovers) {
+    this.lines.setOpacity(opacity);
+    this.lines.setVisible(showLines);
+    this.rovers.setVisible(showRovers);
+    for (const set of this.sets) this.syncSet(set);
   }
 
-  drawNew(set, view) {
-    const ctx = this.cctx;
-    let counts = this.drawn.get(set);
-    if (!counts) {
-      counts = [];
-      this.drawn.set(set, counts);
+  syncSet(set) {
+    const k = this.view.yStretch;
+    let s = this.shown.get(set);
+    if (!s) {
+      s = { version: -1, stretch: k, lines: [], counts: [], rovers: [], poses: [] };
+      this.shown.set(set, s);
     }
-    ctx.lineJoin = 'round';
-    ctx.lineCap = 'round';
-    ctx.lineWidth = set.style.width;
-    ctx.globalAlpha = set.style.alpha;
-    ctx.setLineDash(set.style.dash || []);
-    set.paths.forEach((path, k) => {
+    const whole = s.version !== set.version || s.stretch !== k;
+    s.version = set.version;
+    s.stretch = k;
+    const n = set.paths.length;
+    for (let i = 0; i < n; i++) {
+      const path = set.paths[i];
       const end = Math.min(path.length, set.limit + 1);
-      const from = Math.max(0, (counts[k] || 0) - 1);
-      if (end - from < 2) {
-        counts[k] = Math.max(counts[k] || 0, end);
-        return;
+      if (!s.lines[i]) {
+        s.lines[i] = new Feature(new LineString([]));
+        s.lines[i].setStyle(lineStyle(set.style, i));
+        s.counts[i] = 0;
+        this.lines.getSource().addFeature(s.lines[i]);
       }
-      ctx.strokeStyle = roverColour(k + (set.style.colourOffset || 0));
-      ctx.beginPath();
-      let [lx, ly] = view.worldToScreen(path[from][0], path[from][1]);
-      ctx.moveTo(lx, ly);
-      for (let i = from + 1; i < end; i++) {
-        const [sx, sy] = view.worldToScreen(path[i][0], path[i][1]);
-        // Skip sub-pixel steps (long trails zoomed out), but always end on the last point.
-        if (i < end - 1 && Math.abs(sx - lx) < 0.75 && Math.abs(sy - ly) < 0.75) continue;
-        ctx.lineTo(sx, sy);
-        lx = sx;
-        ly = sy;
+      const geom = s.lines[i].getGeometry();
+      if (whole || end < s.counts[i]) {
+        geom.setCoordinates(path.slice(0, end).map(([x, y]) => [x, y * k]));
+      } else if (end > s.counts[i]) {
+        // Appended in place: the line's own coordinate array grows, one change event a frame.
+        const flat = geom.getFlatCoordinates();
+        for (let j = s.counts[i]; j < end; j++) flat.push(path[j][0], path[j][1] * k);
+        geom.changed();
       }
-      ctx.stroke();
-      counts[k] = end;
-    });
+      s.counts[i] = end;
+      this.syncRover(set, s, i);
+    }
+    for (const f of s.lines.splice(n)) this.lines.getSource().removeFeature(f);
+    for (const f of s.rovers.splice(n)) if (f) this.rovers.getSource().removeFeature(f);
+    s.counts.length = Math.min(s.counts.length, n);
+    s.poses.length = Math.min(s.poses.length, n);
   }
 
-  drawRovers(ctx, view, set) {
-    ctx.save();
-    set.paths.forEach((path, k) => {
-      const pose = set.poseOf(k);
-      if (!pose) return;
-      const [sx, sy] = view.worldToScreen(pose.x, pose.y);
-      const a = (-pose.heading * Math.PI) / 180;  // screen y points down
-      ctx.translate(sx, sy);
-      ctx.rotate(a);
-      ctx.beginPath();
-      ctx.moveTo(9, 0);
-      ctx.lineTo(-6, 6);
-      ctx.lineTo(-3, 0);
-      ctx.lineTo(-6, -6);
-      ctx.closePath();
-      const colour = roverColour(k + (set.style.colourOffset || 0));
-      ctx.globalAlpha = 1;
-      if (set.style.hollow) {
-        // The believed pose (localisation error): an outline in the rover's colour.
-        ctx.strokeStyle = colour;
-        ctx.lineWidth = 2;
-        ctx.stroke();
-      } else {
-        ctx.fillStyle = colour;
-        ctx.strokeStyle = '#000';
-        ctx.lineWidth = 1.5;
-        ctx.fill();
-        ctx.stroke();
-      }
-      ctx.setTransform(view.dpr, 0, 0, view.dpr, 0, 0);
-    });
-    ctx.restore();
+  // Rover i's arrow at the shown end of its trail, pointing along its heading.
+  syncRover(set, s, i) {
+    const pose = set.poseOf(i);
+    const key = pose ? `${pose.x} ${pose.y} ${pose.heading} ${s.stretch}` : '';
+    if (key === s.poses[i]) return;
+    s.poses[i] = key;
+    let f = s.rovers[i];
+    if (!pose) {
+      if (f) this.rovers.getSource().removeFeature(f);
+      s.rovers[i] = null;
+      return;
+    }
+    if (!f) {
+      f = s.rovers[i] = new Feature(new Point([0, 0]));
+      this.rovers.getSource().addFeature(f);
+    }
+    f.getGeometry().setCoordinates([pose.x, pose.y * s.stretch]);
+    const colour = roverColour(i + (set.style.colourOffset || 0));
+    f.setStyle(new Style({ image: new Icon({ img: arrow(colour, Boolean(set.style.hollow)), rotation: (-pose.heading * Math.PI) / 180, rotateWithView: false }) }));
   }
+}
+
+// A trail's line: the rover's colour at the set's alpha, its width and dash.
+function lineStyle(style, k) {
+  const colour = asArray(roverColour(k + (style.colourOffset || 0))).slice();
+  colour[3] = style.alpha ?? 1;
+  return new Style({ stroke: new Stroke({ color: colour, width: style.width, lineDash: style.dash || undefined, lineCap: 'round', lineJoin: 'round' }) });
+}
+
+// A rover's arrow pointing east (rotated by its style): filled with a black edge, or hollow in
+// the rover's colour for a believed pose (localisation error). One canvas per colour and kind.
+const arrows = new Map();
+function arrow(colour, hollow) {
+  const key = `${colour} ${hollow}`;
+  if (arrows.has(key)) return arrows.get(key);
+  const c = document.createElement('canvas');
+  c.width = c.height = 24;
+  const g = c.getContext('2d');
+  g.translate(12, 12);
+  g.beginPath();
+  g.moveTo(9, 0);
+  g.lineTo(-6, 6);
+  g.lineTo(-3, 0);
+  g.lineTo(-6, -6);
+  g.closePath();
+  g.lineJoin = 'round';
+  if (hollow) {
+    g.strokeStyle = colour;
+    g.lineWidth = 2;
+    g.stroke();
+  } else {
+    g.fillStyle = colour;
+    g.strokeStyle = '#000';
+    g.lineWidth = 1.5;
+    g.fill();
+    g.stroke();
+  }
+  arrows.set(key, c);
+  return c;
 }

@@ -1,13 +1,14 @@
 // Keep-out zones (issue 13; QGroundControl's geofence, MMGIS's draw tool): draw, edit and delete
-// polygons on the map canvas, saved with the map (PUT /api/maps/{id}/zones, local frame: metres
-// from the map's lower-left corner). A small editor on the existing canvas map view rather than
-// OpenLayers: the view, its layers and tools are hand-made canvas code, and OpenLayers' Draw and
-// Modify interactions need its own Map and projection to replace them.
+// polygons on the map, saved with the map (PUT /api/maps/{id}/zones, local frame: metres from the
+// map's lower-left corner). The zones are features of an OpenLayers vector layer over the tiles
+// (issue 24), drawn and edited with OL's Draw, Modify and Snap (zone_interactions.js), styled by
+// zone_style.js; this file keeps the model, the panel, undo, drafts and saving.
 //
-// Tool 'zones': a click adds a vertex to the zone being drawn; a click on its first vertex (or
+// Tool 'zones': a click adds a corner to the zone being drawn; a click on its first corner (or
 // Enter, or "finish") closes it (3 points at least); Backspace removes its last corner; Escape
-// asks, then drops it. Without a zone in progress, dragging a vertex moves it, a click inside a
-// zone selects it, Delete removes the selected one. Every edit is a step of the page's undo
+// asks, then drops it. Without a zone in progress, dragging a corner moves it (dragging an edge
+// adds one), a click inside a zone selects it, Delete removes the selected one. A corner within a
+// few pixels of another zone's corner snaps onto it. Every edit is a step of the page's undo
 // history (undo_stack.js).
 // state.zones holds the zones as last saved/loaded (what missions get); edits are kept here until
 // "save zones", and in the map's draft (drafts.js) so they survive switching maps and reloading.
@@ -24,27 +25,11 @@ import { showZoneConflict } from './zone_conflict.js';
 import { area, inside, zonesFromGeoJson, zonesToGeoJson } from './zone_geometry.js';
 import { history } from './undo_stack.js';
 import { $, el, fmt, showError } from './util.js';
-
-const COLOUR = '#ff7a45';
-const HIT_PX = 9;
-
-// A hatch pattern for the zones' fill (diagonal lines), made once.
-function hatchCanvas(size = 8) {
-  const c = document.createElement('canvas');
-  c.width = c.height = size;
-  const g = c.getContext('2d');
-  g.strokeStyle = COLOUR;
-  g.lineWidth = 1.5;
-  g.beginPath();
-  g.moveTo(0, size);
-  g.lineTo(size, 0);
-  g.moveTo(-size / 2, size / 2);
-  g.lineTo(size / 2, -size / 2);
-  g.moveTo(size / 2, size * 1.5);
-  g.lineTo(size * 1.5, size / 2);
-  g.stroke();
-  return c;
-}
+import Feature from 'ol/Feature.js';
+import LineString from 'ol/geom/LineString.js';
+import Polygon from 'ol/geom/Polygon.js';
+import { sketchStyle, zoneStyle, zoneSwatch } from './zone_style.js';
+import { ZoneInteractions } from './zone_interactions.js';
 
 const plural = (n) => `${n} zone${n === 1 ? '' : 's'}`;
 
@@ -59,20 +44,20 @@ export class ZoneEditor {
     this.drawing = null;    // the ring in progress
     this.selected = -1;
     this.dirty = false;
-    this.hover = null;
-    this.drag = null;
-    this.pattern = null;
+    // The zones as OL features (one a zone, updated in place), and the unfinished ring while the
+    // tool is off (Draw shows it while the tool is on).
+    this.olLayer = view.addVectorLayer(45, { style: (f) => zoneStyle(f, state.tool === 'zones') });
+    this.features = [];
+    this.ringLayer = view.addVectorLayer(46, { style: sketchStyle });
     this.layer = layers.addOverlay({
       id: 'zones', label: 'keep-out zones', legendTitle: 'Keep-out zones', visible: true, opacity: 0.8,
-      legend: () => this.legend(),
+      legend: () => this.legend(), ol: this.olLayer,
     });
-    view.addLayer({ id: 'zones', order: 45, draw: (ctx, v) => this.draw(ctx, v) });
+    this.ol = new ZoneInteractions(this, view, this.olLayer.getSource());
     view.registerTool('zones', {
-      down: (p) => this.pointerDown(p),
-      move: (p) => this.pointerMove(p),
-      up: () => this.pointerUp(),
+      ol: true,
+      down: () => this.ol.grabbing(),  // a corner taken by Modify: the map does not pan
       click: (p) => this.click(p),
-      hover: (p) => { this.hover = p; if (this.drawing) view.invalidate(); },
     });
     $('zones-draw').addEventListener('click', () => this.setActive(state.tool !== 'zones'));
     $('zones-finish').addEventListener('click', () => this.finish());
@@ -92,7 +77,8 @@ export class ZoneEditor {
       $('zones-draw').setAttribute('aria-pressed', String(tool === 'zones'));
       $('zones-draw').classList.toggle('active', tool === 'zones');
       if (tool !== 'zones') this.cancel();
-      this.view.invalidate();
+      this.olLayer.changed();  // the corner handles come and go with the tool
+      this.render();
     });
     state.on('map', (map) => { this.loading = this.load(map); });  // awaited by used_versions.js
     state.on('presence', () => this.renderList());
@@ -179,32 +165,56 @@ export class ZoneEditor {
     else clearDraft(m.id, 'zones');
   }
 
-  // --- editing ---
-  hitVertex(p) {
-    for (let z = this.zones.length - 1; z >= 0; z--) {
-      const ring = this.zones[z].ring;
-      for (let i = 0; i < ring.length; i++) {
-        const [sx, sy] = this.view.worldToScreen(ring[i][0], ring[i][1]);
-        if (Math.hypot(sx - p.sx, sy - p.sy) <= HIT_PX) return { z, i };
-      }
-    }
-    return null;
+  // --- editing (the interactions call these: zone_interactions.js) ---
+  // A press may start a zone here: on the map, not inside a zone (a click there selects it).
+  mayStartAt(x, y) {
+    const m = state.map;
+    return Boolean(m) && x >= 0 && y >= 0 && x <= m.width_m && y <= m.height_m && !this.zones.some((z) => inside(z.ring, x, y));
   }
 
-  pointerDown(p) {
-    if (this.drawing) return false;  // a click adds a vertex (click below)
-    const hit = this.hitVertex(p);
-    if (!hit) return false;          // a drag pans; a click selects or starts a zone
-    this.drag = { ...hit, before: JSON.parse(JSON.stringify(this.snapshot())) };
-    this.selected = hit.z;
+  // The corners Draw holds after a click: one corner more (or a new ring), kept on the map.
+  setDrawing(ring) {
+    const m = state.map;
+    if (!m) return;
+    const clamp = ([x, y]) => [Math.min(Math.max(x, 0), m.width_m), Math.min(Math.max(y, 0), m.height_m)];
+    history.record(this, 'add a zone corner', () => {
+      if (!this.drawing) this.selected = -1;
+      this.drawing = ring.length ? ring.map(clamp) : null;
+    });
     this.changed();
-    return true;
   }
 
-  pointerUp() {
-    const d = this.drag;
-    this.drag = null;
-    if (d) history.push(this, `move corner ${d.i + 1} of zone ${d.z + 1}`, d.before, this.snapshot());
+  // Modify took a corner (or an edge): the model before it, for the undo step.
+  grabbed() {
+    return JSON.parse(JSON.stringify(this.snapshot()));
+  }
+
+  // Modify let go: the rings of its features (kept on the map) become the zones'. `dragged`: the
+  // pointer moved; a press on an edge without a drag inserted a corner, which is dropped again.
+  moved(features, before, dragged) {
+    const m = state.map;
+    if (!before || !m) return;
+    if (!dragged) {
+      const z = features.length ? features[0].get('zone') : -1;
+      this.restore({ ...before, selected: z >= 0 ? z : before.selected });
+      return;
+    }
+    const clamp = ([x, y]) => [Math.min(Math.max(x, 0), m.width_m), Math.min(Math.max(y, 0), m.height_m)];
+    const zs = [];
+    for (const f of features) {
+      const z = f.get('zone');
+      if (!(z >= 0 && z < this.zones.length)) continue;
+      this.zones[z].ring = f.getGeometry().getCoordinates()[0].slice(0, -1).map((c) => clamp(this.view.fromOl(c)));
+      zs.push(z);
+    }
+    if (!zs.length) return;
+    this.selected = zs[0];
+    const moved = before.zones[zs[0]]?.ring || [];
+    const now = this.zones[zs[0]].ring;
+    const i = now.findIndex((c, k) => !moved[k] || c[0] !== moved[k][0] || c[1] !== moved[k][1]);
+    const label = now.length > moved.length ? `add a corner to zone ${zs[0] + 1}` : `move corner ${i + 1} of zone ${zs[0] + 1}`;
+    history.push(this, label, before, this.snapshot());
+    this.changed(true);
   }
 
   // --- undo (undo_stack.js): the zones, the ring being drawn, the selection ---
@@ -221,38 +231,13 @@ export class ZoneEditor {
     this.changed();
   }
 
-  pointerMove(p) {
-    if (!this.drag) return;
-    const m = state.map;
-    const x = Math.min(Math.max(p.x, 0), m ? m.width_m : p.x), y = Math.min(Math.max(p.y, 0), m ? m.height_m : p.y);
-    this.zones[this.drag.z].ring[this.drag.i] = [x, y];
-    this.changed(true);
-  }
-
+  // A click the interactions left to the page (not drawing, not on a corner): inside a zone
+  // selects it (outside, Draw has started a zone).
   click(p) {
-    const m = state.map;
-    if (!m) return;
-    if (!this.drawing) {
-      const z = this.zones.findIndex((zone) => inside(zone.ring, p.x, p.y));
-      if (z >= 0) {
-        this.selected = z;
-        this.changed();
-        return;
-      }
-      if (p.x < 0 || p.y < 0 || p.x > m.width_m || p.y > m.height_m) return;
-    }
-    const first = this.drawing?.[0];
-    if (first && this.drawing.length >= 3) {
-      const [sx, sy] = this.view.worldToScreen(first[0], first[1]);
-      if (Math.hypot(sx - p.sx, sy - p.sy) <= HIT_PX) return this.finish();
-    }
-    history.record(this, 'add a zone corner', () => {
-      if (!this.drawing) {
-        this.drawing = [];
-        this.selected = -1;
-      }
-      this.drawing.push([Math.min(Math.max(p.x, 0), m.width_m), Math.min(Math.max(p.y, 0), m.height_m)]);
-    });
+    if (this.drawing) return;
+    const z = this.zones.findIndex((zone) => inside(zone.ring, p.x, p.y));
+    if (z < 0) return;
+    this.selected = z;
     this.changed();
   }
 
@@ -381,7 +366,7 @@ export class ZoneEditor {
     this.keepDraft();
     this.renderList();
     this.layers.renderLegends();
-    this.view.invalidate();
+    this.render();
   }
 
   // --- panel ---
@@ -403,64 +388,32 @@ export class ZoneEditor {
   legend() {
     if (!this.zones.length && !this.drawing) return null;
     const swatch = el('canvas', { width: 28, height: 14, class: 'zone-swatch' });
-    const g = swatch.getContext('2d');
-    g.fillStyle = g.createPattern(hatchCanvas(), 'repeat');
-    g.fillRect(0, 0, 28, 14);
-    g.strokeStyle = COLOUR;
-    g.lineWidth = 2;
-    g.strokeRect(1, 1, 26, 12);
+    zoneSwatch(swatch);
     return el('div', { class: 'zone-legend' }, swatch,
       el('span', {}, `no rover enters (${this.zones.length} zone${this.zones.length === 1 ? '' : 's'}${this.dirty ? ', unsaved' : ''})`));
   }
 
-  // --- drawing ---
-  path(ctx, v, ring) {
-    ctx.beginPath();
-    ring.forEach(([x, y], i) => {
-      const [sx, sy] = v.worldToScreen(x, y);
-      if (i === 0) ctx.moveTo(sx, sy);
-      else ctx.lineTo(sx, sy);
-    });
-  }
-
-  draw(ctx, v) {
-    if (!this.layer.visible) return;
-    if (!this.pattern) this.pattern = ctx.createPattern(hatchCanvas(), 'repeat');
-    const editing = state.tool === 'zones';
-    ctx.globalAlpha = this.layer.opacity;
+  // --- the OL features: updated in place from the model (not rebuilt), then the interactions ---
+  render() {
+    const source = this.olLayer.getSource();
+    const toOl = (ring) => [[...ring, ring[0]].map((c) => this.view.toOl(c))];
     this.zones.forEach((z, i) => {
-      this.path(ctx, v, z.ring);
-      ctx.closePath();
-      ctx.fillStyle = this.pattern;
-      ctx.fill();
-      ctx.strokeStyle = i === this.selected ? '#ffffff' : COLOUR;
-      ctx.lineWidth = i === this.selected ? 3 : 2;
-      ctx.setLineDash(this.dirty ? [6, 3] : []);
-      ctx.stroke();
-      ctx.setLineDash([]);
-      if (editing) this.handles(ctx, v, z.ring);
+      let f = this.features[i];
+      if (!f) {
+        f = new Feature({ geometry: new Polygon(toOl(z.ring)) });
+        this.features.push(f);
+        source.addFeature(f);
+      } else {
+        f.getGeometry().setCoordinates(toOl(z.ring));
+      }
+      f.setProperties({ zone: i, selected: i === this.selected, dirty: this.dirty });
     });
-    if (this.drawing) {
-      ctx.globalAlpha = 1;
-      const ring = this.hover ? [...this.drawing, [this.hover.x, this.hover.y]] : this.drawing;
-      this.path(ctx, v, ring);
-      ctx.strokeStyle = '#ffffff';
-      ctx.lineWidth = 2;
-      ctx.setLineDash([5, 4]);
-      ctx.stroke();
-      ctx.setLineDash([]);
-      this.handles(ctx, v, this.drawing);
-    }
-  }
-
-  handles(ctx, v, ring) {
-    for (const [x, y] of ring) {
-      const [sx, sy] = v.worldToScreen(x, y);
-      ctx.fillStyle = '#0b0d10';
-      ctx.strokeStyle = '#ffffff';
-      ctx.lineWidth = 1.5;
-      ctx.fillRect(sx - 4, sy - 4, 8, 8);
-      ctx.strokeRect(sx - 4, sy - 4, 8, 8);
-    }
+    for (const f of this.features.splice(this.zones.length)) source.removeFeature(f);
+    const editing = state.tool === 'zones';
+    const ring = this.ringLayer.getSource();
+    ring.clear();
+    if (this.drawing && !editing) ring.addFeature(new Feature(new LineString(this.drawing.map((c) => this.view.toOl(c)))));
+    this.ringLayer.setVisible(this.layer.visible);
+    this.ol.sync(editing);
   }
 }
