@@ -130,22 +130,28 @@ std::vector<Pose> formationStarts(const terrain::Dem& dem, const Raster<std::uin
   std::vector<Pose> out;
   std::vector<Eigen::Vector2d> taken;
   const double safety = params.coordination.safetyDistance, spacing = startSpacing(safety);
-  // Lattice spacing lets every rover pass between any two others; what can still shut one in is
-  // the ground: a slot in a pocket of passable ground (on the default map 40 rovers put rover 4
+  // On open ground the lattice always leaves from the outside in; what can still shut a rover in
+  // is the ground: a slot in a pocket of passable ground (on the default map 40 rovers put rover 4
   // in one, and the mission check refused the generated formation).
   const planning::PassableGround passable = planning::passableGround(dem, &classes);
   auto outOfPockets = [&](const Eigen::Vector2d& p) {
     return planning::departureOrder({p}, safety, passable).boxedIn.empty();
   };
+  const auto noRoom = [] {
+    return Error(ErrorCode::InvalidInput, "rovers",
+                 "no room for the rovers' formation near the start: give the starts explicitly");
+  };
   for (const auto& slot : startSlots(n, params.footprint, safety)) {
     auto p = nearestValid(model, centre + slot, std::max(params.footprint, spacing), spacing, taken, nullptr, 0,
                           outOfPockets);
-    if (!p)
-      throw Error(ErrorCode::InvalidInput, "rovers",
-                  "no room for the rovers' formation near the start: give the starts explicitly");
+    if (!p) throw noRoom();
     taken.push_back(*p);
     out.push_back({p->x(), p->y(), 0.0});
   }
+  // One rule for every start (departure.hpp): a formation the mission check would refuse is never
+  // generated. Each slot alone is out of pockets, but slots moved to valid ground may shut one
+  // another in where the ground is narrow.
+  if (!planning::departureOrder(taken, safety, passable).boxedIn.empty()) throw noRoom();
   return out;
 }
 
