@@ -116,6 +116,7 @@ Departure departureOrder(const std::vector<Eigen::Vector2d>& starts, double safe
   for (int k = 0; k < static_cast<int>(starts.size()); ++k) standing.push_back(k);
   if (starts.empty() || !(safety > 0)) {
     out.order = standing;
+    out.firstRound = static_cast<int>(standing.size());
     return out;
   }
   const Window w(starts, safety, passable);
@@ -142,6 +143,7 @@ Departure departureOrder(const std::vector<Eigen::Vector2d>& starts, double safe
       out.boxedIn = stay;
       return out;
     }
+    if (out.order.empty()) out.firstRound = static_cast<int>(left.size());
     out.order.insert(out.order.end(), left.begin(), left.end());
     standing = std::move(stay);
   }

@@ -36,11 +36,13 @@ inline constexpr double kDepartureMargin = 0.5;  // m
 // one with a way out past the rovers of the first round leaves in the second, and so on: the
 // outer rovers of a block or lattice leave first, the inner ones after. For starts the check
 // accepts (pairwise at least `safety`) on open ground the order always exists: the rover with
-// the largest x (then y) can always move away from every other. Returns the rovers in order;
-// the rovers left with no way out in `boxedIn` (empty: all leave).
+// the largest x (then y) can always move away from every other. Returns the rovers in order,
+// how many of them leave in the first round, and the rovers left with no way out in `boxedIn`
+// (empty: all leave).
 struct Departure {
   std::vector<int> order;
   std::vector<int> boxedIn;
+  int firstRound = 0;  // how many of `order` leave in the first round (free to leave at once)
 };
 Departure departureOrder(const std::vector<Eigen::Vector2d>& starts, double safety,
                          const PassableGround& passable = {});

@@ -75,10 +75,10 @@ std::optional<Eigen::Vector2d> nearestValid(const TerrainEdgeModel& model, Eigen
 // Starts for `n` rovers in formation around `centre` (startSlots, each moved to the nearest valid
 // point as for a target, up to a footprint or a slot spacing away, keeping startSpacing from the
 // starts placed before, and never in a pocket a rover alone cannot get out of over passable
-// ground), heading east. The whole formation then passes the mission check's way-out test
-// (planning::departureOrder over passable ground: every rover leaves, the outer ones first).
-// Throws InvalidInput "rovers" when there is no room or the test fails. The first form computes
-// the traversability classes itself.
+// ground: planning::departureOrder for that one start, the mission check's test), heading east.
+// The lattice itself leaves by the same rule from the outside in (startSlots). Throws
+// InvalidInput "rovers" when there is no room. The first form computes the traversability
+// classes itself.
 std::vector<Pose> formationStarts(const terrain::Dem& dem, const TeamMissionParams& params,
                                   const Eigen::Vector2d& centre, int n);
 std::vector<Pose> formationStarts(const terrain::Dem& dem, const Raster<std::uint8_t>& classes,

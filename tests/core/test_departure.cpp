@@ -20,6 +20,7 @@ TEST_CASE("departure: a 3×3 block at the safety distance leaves from the outsid
   const Departure d = departureOrder(starts, 1.0);
   CHECK(d.boxedIn.empty());
   CHECK(d.order == std::vector<int>{0, 1, 2, 3, 5, 6, 7, 8, 4});
+  CHECK(d.firstRound == 8);  // the centre is held back
   // Spread to 2.25 m (the formation's start spacing) the centre is still planned last: the lanes
   // between its neighbours' safety discs are 0.25 m wide, no way out at safety_distance +
   // kDepartureMargin (issue 25: threading such lanes, 7 of 64 rovers never left).
@@ -28,6 +29,7 @@ TEST_CASE("departure: a 3×3 block at the safety distance leaves from the outsid
   // Spread to 3.1 m the lanes are 1.1 m wide, more than 2 × kDepartureMargin: all leave at once.
   for (auto& s : starts) s *= 3.1 / 2.25;
   CHECK(departureOrder(starts, 1.0).order == std::vector<int>{0, 1, 2, 3, 4, 5, 6, 7, 8});
+  CHECK(departureOrder(starts, 1.0).firstRound == 9);
 }
 
 TEST_CASE("departure: the generated formation leaves from the outside in") {
@@ -44,6 +46,7 @@ TEST_CASE("departure: the generated formation leaves from the outside in") {
   const Departure d = departureOrder(slots, 1.0);
   CHECK(d.boxedIn.empty());
   CHECK(d.order == std::vector<int>{1, 2, 3, 4, 6, 7, 8, 10, 11, 13, 14, 15, 0, 5, 9, 12});
+  CHECK(d.firstRound == 12);
 }
 
 TEST_CASE("departure: a rover in a pocket leaves after the rover in its mouth, or not at all") {
