@@ -24,11 +24,12 @@ namespace {
 // does not visit the target). With sub-teams, a goal also keeps the goal spacing plus the
 // departure margin (planning/departure.hpp) from the start of every rover planned after its own
 // (the coordinator's departure order), so a rover stopped anywhere in its acceptance circle there
-// can still leave past a team mate standing at its start: a team of 10 to 64 rovers stands over several search cells, its first
-// targets lie among the starts, and a rover planned before a team mate still standing there
-// (the inner rovers of a formation leave last, planning/departure.hpp) could never end a leg
-// beside it (issue 25: 64 rovers on the default map, 4 of the 8 legs still lost were such
-// goals, 0.9 m from an inner rover's start).
+// can still leave past a team mate standing at its start. A team of 10 to 64 rovers stands over
+// several search cells, its first targets lie among the starts, and a rover planned before a
+// team mate still standing there (the inner rovers of a formation leave last,
+// planning/departure.hpp) could never end a leg beside it (issue 25: 64 rovers on the default
+// map, 4 of the 8 legs still lost were legs to the route's first target, among the starts, and
+// with this rule the 64-rover mission lost 1 to 3 legs in all).
 std::vector<std::vector<std::optional<Eigen::Vector2d>>> slotGoals(
     const terrain::Dem& dem, const Raster<std::uint8_t>& classes, const std::vector<Pose>& starts,
     const Route& route, const TeamMissionParams& params, const Raster<std::uint8_t>* reachable,
