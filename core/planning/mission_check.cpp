@@ -29,8 +29,9 @@ void refuseBoxedIn(const MissionGround& ground, const std::vector<RoverStart>& r
   if (d.boxedIn.empty()) return;
   const std::string field = "rovers[" + std::to_string(d.boxedIn.front()) + "]";
   throw Error(ErrorCode::InvalidInput, field,
-              field + ": start is boxed in: no way out keeping " + metres(safety) +
-                  " m from the other rovers' starts over passable ground, even after the others have left");
+              field + ": start is boxed in: no way out keeping " + metres(safety + kDepartureMargin) +
+                  " m (safety distance + " + metres(kDepartureMargin) +
+                  " m) from the other rovers' starts over passable ground, even after the others have left");
 }
 
 }  // namespace

@@ -62,12 +62,13 @@ Eigen::Vector2d legGoal(const Leg& leg) { return leg.via.empty() ? leg.goal : le
 // Choices made here where the paper is silent are listed in coordination.hpp.
 class Coordinator {
  public:
-  Coordinator(const std::vector<RoverTask>& tasks, std::vector<int> order, const LegPlanner& planner,
+  Coordinator(const std::vector<RoverTask>& tasks, std::vector<int> order, int firstRound, const LegPlanner& planner,
               const LegSimulator& simulator, const ConflictPolicy& policy,
               const CoordinationParams& params, std::uint64_t seed,
               CoordinationObserver* observer, const CancelToken* cancel)
       : tasks_(tasks),
         order_(std::move(order)),
+        firstRound_(firstRound),
         planner_(planner),
         simulator_(simulator),
         policy_(policy),
@@ -296,6 +297,28 @@ class Coordinator {
     return traffic_.standing(k, p, after, end);
   }
 
+  // The delays at which runPiece starts a try: the policy's; for a rover the departure order
+  // holds back (not in its first round: its way out opens only once rovers round it have left)
+  // that has not left its start yet, when the policy recovers (timed), more, every wait_step up
+  // to one past the end of the traffic table, when every rover planned so far stands where it
+  // stays. Such a rover may stand at its start as long as it likes: every rover planned before it
+  // kept the safety distance from it standing there for the whole mission. So a rover inside a
+  // formation waits until the rovers that left before it have driven off (issue 25: with 64
+  // rovers the last of a 2 × 2 block met team mates driving out past it at every delay up to
+  // max_waits × wait_step and skipped all its 5 legs without moving). Rovers free to leave at
+  // once keep the policy's delays.
+  std::vector<int> startDelays(int k) const {
+    std::vector<int> delays = policy_.startDelays();
+    if (!policy_.recovers() || rank_[static_cast<std::size_t>(k)] < firstRound_ ||
+        stops_[static_cast<std::size_t>(k)].size() > 1)
+      return delays;
+    const int step = std::max(1, static_cast<int>(std::lround(p_.waitStep / period_)));
+    const std::size_t now = out_.trajectories[k].samples.size();
+    for (std::size_t t = static_cast<std::size_t>(delays.back()) + step; now + t < traffic_.end() + step; t += step)
+      delays.push_back(static_cast<int>(t));
+    return delays;
+  }
+
   // The steepest |roll| or |pitch| of a try (rad) and which of the two it was: what a leg's note
   // reports beside the attitude check it was refused against (issue 27: a note that named "the
   // attitude limit" while the operator's attitude_limit was 45° and the try tilted 15.0°).
@@ -450,7 +473,7 @@ class Coordinator {
       // The leg's last piece decides whether the rover parks here for good.
       const bool parks = policy_.lastLegParks() && lastLeg && reachesGoal(c0, goal);
       std::optional<Conflict> first;
-      for (int ticks : policy_.startDelays()) {
+      for (int ticks : startDelays(k)) {
         conflict = firstConflict(k, c0.samples, ticks, parks ? kForGood : dwellTicks());
         if (!first) first = conflict;
         // Standing still already conflicts: so does every longer delay (it stands longer; the
@@ -853,6 +876,7 @@ class Coordinator {
 
   const std::vector<RoverTask>& tasks_;
   const std::vector<int> order_;  // the order the rovers are planned in (departureOrder)
+  const int firstRound_;          // how many of order_ leave in its first round
   std::vector<int> rank_;         // per rover, its place in order_
   const LegPlanner& planner_;
   const LegSimulator& simulator_;
@@ -917,9 +941,10 @@ CoordinationResult coordinateWith(const std::vector<RoverTask>& tasks, const Leg
   if (!departure.boxedIn.empty()) {
     const std::string field = "rovers[" + std::to_string(departure.boxedIn.front()) + "]";
     throw Error(ErrorCode::InvalidInput, field,
-                field + ": start is boxed in: no way out past the other rovers' starts keeping the safety distance");
+                field + ": start is boxed in: no way out past the other rovers' starts keeping the safety distance "
+                        "(+ " + oneDecimal(planning::kDepartureMargin) + " m)");
   }
-  return Coordinator(tasks, std::move(departure.order), planner, simulator, policy, params, seed, observer,
+  return Coordinator(tasks, std::move(departure.order), departure.firstRound, planner, simulator, policy, params, seed, observer,
                      cancel)
       .run();
 }

@@ -130,8 +130,8 @@ std::vector<Pose> formationStarts(const terrain::Dem& dem, const Raster<std::uin
   std::vector<Pose> out;
   std::vector<Eigen::Vector2d> taken;
   const double safety = params.coordination.safetyDistance, spacing = startSpacing(safety);
-  // Lattice spacing lets every rover pass between any two others; what can still shut one in is
-  // the ground: a slot in a pocket of passable ground (on the default map 40 rovers put rover 4
+  // On open ground the lattice always leaves from the outside in; what can still shut a rover in
+  // is the ground: a slot in a pocket of passable ground (on the default map 40 rovers put rover 4
   // in one, and the mission check refused the generated formation).
   const planning::PassableGround passable = planning::passableGround(dem, &classes);
   auto outOfPockets = [&](const Eigen::Vector2d& p) {

@@ -23,10 +23,14 @@ std::vector<Eigen::Vector2d> formationSlots(int rovers, double footprint);
 
 // Where each rover starts, as offsets from the formation's centre (issue 25): the formation
 // slots, spread (the whole lattice scaled up) until every two are at least startSpacing(safety)
-// apart. The discs of the safety distance round the standing rovers are then disjoint with a
-// lane of kStartLane between any two, and the plane minus disjoint discs is connected: every
-// rover can drive out past the others while they all still stand. Five rovers in a 5 m
-// footprint (2.36 m apart) are unchanged; 20 rovers go from a 1 m to a 2.25 m lattice.
+// apart. Every rover can leave by the rule of planning::departureOrder (departure.hpp, the one
+// the mission check and the coordinator apply): on open ground the outer rovers leave first, each
+// inner one once the rovers round it have left. The spacing leaves each rover kStartLane more
+// than twice the safety distance from its neighbours (lanes between their safety discs too
+// narrow to count as a way out, so a lattice leaves from the outside in), room for the simulated
+// rover's deviation from its path as the first rovers drive off past the ones still standing.
+// Five rovers in a 5 m footprint (2.36 m apart) are unchanged; 20 rovers go from a 1 m to a
+// 2.25 m lattice.
 inline constexpr double kStartLane = 0.25;  // m, for the simulated rover's deviation from its path
 inline double startSpacing(double safety) { return 2 * safety + kStartLane; }
 std::vector<Eigen::Vector2d> startSlots(int rovers, double footprint, double safety);
@@ -70,9 +74,11 @@ std::optional<Eigen::Vector2d> nearestValid(const TerrainEdgeModel& model, Eigen
 
 // Starts for `n` rovers in formation around `centre` (startSlots, each moved to the nearest valid
 // point as for a target, up to a footprint or a slot spacing away, keeping startSpacing from the
-// starts placed before, and never in a pocket: from every start a rover alone gets out over
-// passable ground, the test the mission check makes, planning::departureOrder), heading east. Throws InvalidInput "rovers"
-// when there is no room. The first form computes the traversability classes itself.
+// starts placed before, and never in a pocket a rover alone cannot get out of over passable
+// ground: planning::departureOrder for that one start, the mission check's test), heading east.
+// The lattice itself leaves by the same rule from the outside in (startSlots). Throws
+// InvalidInput "rovers" when there is no room. The first form computes the traversability
+// classes itself.
 std::vector<Pose> formationStarts(const terrain::Dem& dem, const TeamMissionParams& params,
                                   const Eigen::Vector2d& centre, int n);
 std::vector<Pose> formationStarts(const terrain::Dem& dem, const Raster<std::uint8_t>& classes,

@@ -7,6 +7,7 @@
 
 #include "core/common/error.hpp"
 #include "core/coverage/coverage_planner.hpp"
+#include "core/planning/departure.hpp"
 #include "core/team/formation.hpp"
 #include "core/planning/rover_limits.hpp"
 
@@ -20,11 +21,20 @@ void requireStarts(const std::vector<Pose>& starts) {
 namespace {
 
 // Per target, per rover: the slot goal (nullopt when there is none, or when the rover's sub-team
-// does not visit the target).
+// does not visit the target). With sub-teams, a goal also keeps the goal spacing plus the
+// departure margin (planning/departure.hpp) from the start of every rover planned after its own
+// (the coordinator's departure order), so a rover stopped anywhere in its acceptance circle there
+// can still leave past a team mate standing at its start. A team of 10 to 64 rovers stands over
+// several search cells, its first targets lie among the starts, and a rover planned before a
+// team mate still standing there (the inner rovers of a formation leave last,
+// planning/departure.hpp) could never end a leg beside it (issue 25: 64 rovers on the default
+// map, 4 of the 8 legs still lost were legs to the route's first target, among the starts, and
+// with this rule the 64-rover mission lost 1 to 3 legs in all).
 std::vector<std::vector<std::optional<Eigen::Vector2d>>> slotGoals(
-    const terrain::Dem& dem, const Raster<std::uint8_t>& classes, int rovers, const Route& route,
-    const TeamMissionParams& params, const Raster<std::uint8_t>* reachable, const CancelToken* cancel,
-    const SubTeams* teams) {
+    const terrain::Dem& dem, const Raster<std::uint8_t>& classes, const std::vector<Pose>& starts,
+    const Route& route, const TeamMissionParams& params, const Raster<std::uint8_t>* reachable,
+    const CancelToken* cancel, const SubTeams* teams) {
+  const int rovers = static_cast<int>(starts.size());
   const TerrainEdgeModel model = wholeMapModel(dem, classes, params.coordination.rrt);
   const double spacing = goalSpacing(params.coordination);
   std::vector<int> everyone(static_cast<std::size_t>(rovers));
@@ -35,6 +45,15 @@ std::vector<std::vector<std::optional<Eigen::Vector2d>>> slotGoals(
   const double stopCircle = params.coordination.mode == CoordinationMode::Timed
                                 ? stopCircleRadius(params.coordination.controller)
                                 : 0.0;
+  // Each rover's place in the order the coordinator plans them (departureOrder, as there); a
+  // rover left boxed in (the coordinator refuses the start) last.
+  std::vector<int> rank(static_cast<std::size_t>(rovers), rovers);
+  if (teams) {
+    std::vector<Eigen::Vector2d> at;
+    for (const Pose& s : starts) at.emplace_back(s.x, s.y);
+    const planning::Departure d = planning::departureOrder(at, params.coordination.safetyDistance);
+    for (std::size_t r = 0; r < d.order.size(); ++r) rank[static_cast<std::size_t>(d.order[r])] = static_cast<int>(r);
+  }
   std::vector<std::vector<std::optional<Eigen::Vector2d>>> out;
   for (std::size_t t = 0; t < route.centres.size(); ++t) {
     // Cancelled: the targets left get no goals (64 rovers × 10 000 targets are 640 000 searches).
@@ -47,8 +66,17 @@ std::vector<std::vector<std::optional<Eigen::Vector2d>>> slotGoals(
     std::vector<std::optional<Eigen::Vector2d>> goals(static_cast<std::size_t>(rovers));
     std::vector<Eigen::Vector2d> taken;
     for (std::size_t j = 0; j < members.size(); ++j) {
+      const int me = members[j];
+      const auto clearOfStarts = [&](const Eigen::Vector2d& p) {
+        for (int k = 0; k < rovers; ++k)
+          if (rank[static_cast<std::size_t>(k)] > rank[static_cast<std::size_t>(me)] &&
+              (p - Eigen::Vector2d(starts[k].x, starts[k].y)).norm() < spacing + planning::kDepartureMargin)
+            return false;
+        return true;
+      };
       auto g = nearestValid(model, centre + slots[j], params.footprint / 2, spacing, taken,
-                            reachable, stopCircle);
+                            reachable, stopCircle, teams ? std::function<bool(const Eigen::Vector2d&)>(clearOfStarts)
+                                                         : std::function<bool(const Eigen::Vector2d&)>());
       if (g) taken.push_back(*g);
       goals[static_cast<std::size_t>(members[j])] = g;
     }
@@ -66,7 +94,7 @@ std::vector<RoverTask> teamSearchTasks(const terrain::Dem& dem, const Raster<std
                                        const CancelToken* cancel, const SubTeams* teams) {
   requireStarts(starts);
   const int n = static_cast<int>(starts.size());
-  const auto goals = slotGoals(dem, classes, n, route, params, reachable, cancel, teams);
+  const auto goals = slotGoals(dem, classes, starts, route, params, reachable, cancel, teams);
   std::vector<RoverTask> tasks(starts.size());
   for (int k = 0; k < n; ++k) {
     tasks[k].start = starts[k];
@@ -131,7 +159,7 @@ std::vector<RoverTask> hybridTasks(const terrain::Dem& dem, const Raster<std::ui
                                    const Raster<std::uint8_t>* reachable, const SubTeams* teams) {
   requireStarts(starts);
   const int n = static_cast<int>(starts.size());
-  const auto goals = slotGoals(dem, classes, n, route, params, reachable, cancel, teams);
+  const auto goals = slotGoals(dem, classes, starts, route, params, reachable, cancel, teams);
   const TerrainEdgeModel model = wholeMapModel(dem, classes, params.coordination.rrt);
   const int cells = std::max(1, static_cast<int>(std::lround(params.footprint / params.hybridCell)));
   const double cell = params.footprint / cells;

@@ -76,8 +76,9 @@ double missionRow(std::ostream& out, const terrain::Dem& dem, const Raster<float
 // a random PDM (G = 4, seed 1), 5 rovers in formation at the centre, 64 targets, seed 1; team
 // search and hybrid, in each coordination mode (timed: ours, paper: paper 001's), on one thread
 // and on all cores. The issue's target: median ≤ 5 s, worst ≤ 15 s wall per mission. Then the
-// same team-search mission (timed, all cores) for each of `teamSizes` rovers in the generated
-// formation (issue 25: ≤ 15 s for 20 rovers, ≤ 60 s for 64).
+// team-search mission (timed, all cores) with the orienteering route, and the same mission for
+// each of `teamSizes` rovers in the generated formation (issue 25: ≤ 15 s for 20 rovers, ≤ 60 s
+// for 64).
 int benchMission(std::ostream& out, const std::vector<int>& teamSizes) {
   const terrain::Dem dem = maps::generateTerrain({});
   const GridGeometry& g = dem.geometry();
@@ -102,6 +103,16 @@ int benchMission(std::ostream& out, const std::vector<int>& teamSizes) {
       out << "\n";
     }
   }
+  // The orienteering route (ours, issue 25) on the same mission: the same legs machinery, another
+  // choice of targets.
+  out << "\nroute orienteering (ours): the same 5-rover team-search mission, timed, " << all << " threads\n";
+  missionHeader(out);
+  p.coordination.mode = team::CoordinationMode::Timed;
+  p.coordination.threads = all;
+  p.routeMethod = team::RouteMethod::Orienteering;
+  missionRow(out, dem, pdm, starts, p, false);
+  out << "\n";
+  p.routeMethod = team::RouteMethod::LhcGwConv;
   if (teamSizes.empty()) return 0;
   out << "\nteam size: the same team-search mission, timed, " << all
       << " threads, the generated formation (targets: <= 15 s for 20 rovers, <= 60 s for 64)\n";

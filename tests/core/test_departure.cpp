@@ -20,9 +20,33 @@ TEST_CASE("departure: a 3×3 block at the safety distance leaves from the outsid
   const Departure d = departureOrder(starts, 1.0);
   CHECK(d.boxedIn.empty());
   CHECK(d.order == std::vector<int>{0, 1, 2, 3, 5, 6, 7, 8, 4});
-  // Spread to 2.25 m (the formation's start spacing) every rover can leave at once.
+  CHECK(d.firstRound == 8);  // the centre is held back
+  // Spread to 2.25 m (the formation's start spacing) the centre is still planned last: the lanes
+  // between its neighbours' safety discs are 0.25 m wide, no way out at safety_distance +
+  // kDepartureMargin (issue 25: threading such lanes, 7 of 64 rovers never left).
   for (auto& s : starts) s *= 2.25;
+  CHECK(departureOrder(starts, 1.0).order == std::vector<int>{0, 1, 2, 3, 5, 6, 7, 8, 4});
+  // Spread to 3.1 m the lanes are 1.1 m wide, more than 2 × kDepartureMargin: all leave at once.
+  for (auto& s : starts) s *= 3.1 / 2.25;
   CHECK(departureOrder(starts, 1.0).order == std::vector<int>{0, 1, 2, 3, 4, 5, 6, 7, 8});
+  CHECK(departureOrder(starts, 1.0).firstRound == 9);
+}
+
+TEST_CASE("departure: the generated formation leaves from the outside in") {
+  // 16 rovers: formationSlots' 4 × 4 lattice in farthest-point order from the centre, spread to
+  // the start spacing (2.25 m). Drawn with each rover's index at its slot (x east, y north):
+  //    4   6   7   2
+  //    8   0   9  10
+  //   11  12   5  13
+  //    3  14  15   1
+  // The twelve outer rovers leave first, by index; the four inner ones (0, 5, 9, 12), whose
+  // ways out are lanes 0.25 m wide between standing rovers' safety discs, after them.
+  const std::vector<Eigen::Vector2d> slots = team::startSlots(16, 5.0, 1.0);
+  REQUIRE(slots.size() == 16);
+  const Departure d = departureOrder(slots, 1.0);
+  CHECK(d.boxedIn.empty());
+  CHECK(d.order == std::vector<int>{1, 2, 3, 4, 6, 7, 8, 10, 11, 13, 14, 15, 0, 5, 9, 12});
+  CHECK(d.firstRound == 12);
 }
 
 TEST_CASE("departure: a rover in a pocket leaves after the rover in its mouth, or not at all") {

@@ -871,7 +871,7 @@ TEST_CASE("stages: rovers closer than the safety distance are refused naming the
   const CoordinationParams p;
   CHECK_THROWS_WITH_AS(coordinateWith(tasks, planner, rover, TimedPolicy(p), p, 1),
                        "rovers[1]: start is boxed in: no way out past the other rovers' starts keeping "
-                       "the safety distance",
+                       "the safety distance (+ 0.5 m)",
                        Error);
 }
 
