@@ -74,9 +74,22 @@ std::vector<std::vector<std::optional<Eigen::Vector2d>>> slotGoals(
             return false;
         return true;
       };
+      const auto accept = teams ? std::function<bool(const Eigen::Vector2d&)>(clearOfStarts)
+                                : std::function<bool(const Eigen::Vector2d&)>();
       auto g = nearestValid(model, centre + slots[j], params.footprint / 2, spacing, taken,
-                            reachable, stopCircle, teams ? std::function<bool(const Eigen::Vector2d&)>(clearOfStarts)
-                                                         : std::function<bool(const Eigen::Vector2d&)>());
+                            reachable, stopCircle, accept);
+      // A slot whose own half footprint holds no free ground (it lies in a wall beside the
+      // target, and its team mates took the ground on this side) takes the free ground nearest
+      // the target anywhere in the target's search cell — timed mode only, the paper mode keeps
+      // its slots. On the Kepler site every no-slot was such a corner slot of a target on the
+      // crater floor's edge, with ground for it 1 to 2 m from the target centre.
+      if (!g && stopCircle > 0) {
+        const auto inCell = [&](const Eigen::Vector2d& p) {
+          return (p - centre).cwiseAbs().maxCoeff() <= params.footprint / 2 && (!accept || accept(p));
+        };
+        g = nearestValid(model, centre, params.footprint * M_SQRT1_2, spacing, taken, reachable,
+                         stopCircle, inCell);
+      }
       if (g) taken.push_back(*g);
       goals[static_cast<std::size_t>(members[j])] = g;
     }

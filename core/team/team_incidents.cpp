@@ -64,11 +64,13 @@ Incident collisionIncident(const Conflict& c, double safetyDistance) {
   return make(IncidentKind::Collision, c.rover, c.other, c.time, c.position, c.distance, note, "safety_distance");
 }
 
-Incident noSlotIncident(int rover, int target, const Eigen::Vector2d& at, double footprint) {
-  char note[200];
+Incident noSlotIncident(int rover, int target, const Eigen::Vector2d& at, double footprint,
+                        bool wholeCell) {
+  char note[240];
   std::snprintf(note, sizeof note,
-                "target %d: no valid ground for the rover's slot within half footprint_m (%.2f m of %.2f m)",
-                target, footprint / 2, footprint);
+                "target %d: no valid ground for the rover's slot within half footprint_m (%.2f m of %.2f m)%s",
+                target, footprint / 2, footprint,
+                wholeCell ? ", nor any left free in the target's search cell" : "");
   return make(IncidentKind::NoSlot, rover, -1, 0.0, at, static_cast<double>(target), note, "no_ground");
 }
 

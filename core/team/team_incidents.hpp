@@ -40,7 +40,9 @@ class ExceedanceScan {
 Incident legIncident(const LegRecord& leg, const Eigen::Vector2d& at);
 // Two rovers closer than `safetyDistance` (m) in the plan.
 Incident collisionIncident(const Conflict& c, double safetyDistance);
-// A route target where `rover` found no valid ground for its slot within half `footprint` (m).
-Incident noSlotIncident(int rover, int target, const Eigen::Vector2d& at, double footprint);
+// A route target where `rover` found no valid ground for its slot within half `footprint` (m)
+// and, with `wholeCell` (timed mode, task_builder.cpp), none left anywhere in the search cell.
+Incident noSlotIncident(int rover, int target, const Eigen::Vector2d& at, double footprint,
+                        bool wholeCell = false);
 
 }  // namespace rover::team

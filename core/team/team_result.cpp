@@ -198,7 +198,8 @@ PlanResult toPlanResult(const TeamMissionResult& r, const TeamPlannerParams& p, 
   }
   for (const auto& [rover, target] : r.noSlot)
     out.incidents.push_back(noSlotIncident(rover, target, r.route.centres[static_cast<std::size_t>(target)],
-                                           p.mission.footprint));
+                                           p.mission.footprint,
+                                           p.mission.coordination.mode == CoordinationMode::Timed));
   return out;
 }
 

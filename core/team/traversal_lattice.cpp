@@ -134,6 +134,11 @@ Raster<std::uint8_t> TraversalLattice::reachable(const std::vector<Eigen::Vector
   return out;
 }
 
+bool TraversalLattice::startsWithin(const Raster<std::uint8_t>& region, const Eigen::Vector2d& p) const {
+  const std::vector<int> from = seeds(p);
+  return !from.empty() && std::all_of(from.begin(), from.end(), [&](int i) { return region.at(i) != 0; });
+}
+
 // A rectangle of cells the guide's search is held to, and the cells in it that keep-out zones
 // block (stamped once per window: a zone test per relaxed move cost more than the search itself
 // with the 20 zones a leg's re-plans can gather).

@@ -36,6 +36,11 @@ class TraversalLattice {
   // cells within 0.5 m of it seed the fill even when the start itself is steep (RRT* escapes it
   // the same way).
   Raster<std::uint8_t> reachable(const std::vector<Eigen::Vector2d>& starts) const;
+  // Whether a rover standing at `p` would reach the ground `region` marks and no other: every
+  // cell its flood starts from (as in reachable) is marked there, `region` being what reachable()
+  // returned (closed under the moves, which are symmetric). False off the map. A formation's
+  // starts are held to the first start's ground with it (formation.hpp).
+  bool startsWithin(const Raster<std::uint8_t>& region, const Eigen::Vector2d& p) const;
 
   // The cheapest lattice path from `start` to `goal` (A*, eq. 9 per move, see the .cpp), as
   // waypoints: `start`, cell centres, `goal`, simplified to straight valid edges no longer than

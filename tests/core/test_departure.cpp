@@ -4,12 +4,16 @@
 #include <cmath>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "core/common/error.hpp"
 #include "core/planning/departure.hpp"
 #include "core/planning/mission_check.hpp"
+#include "core/team/coordination.hpp"
 #include "core/team/formation.hpp"
+#include "core/team/traversal_lattice.hpp"
 #include "core/terrain/layers.hpp"
+#include "dem_literals.hpp"
 
 using namespace rover;
 using namespace rover::planning;
@@ -128,4 +132,40 @@ TEST_CASE("formation: generated starts are never in a pocket the mission check r
     rovers.push_back({{s.x, s.y}, s.heading});
   }
   CHECK_NOTHROW(checkMissionStarts(ground, rovers, rules));
+}
+
+TEST_CASE("formation: no start on a shelf of passable ground the rover's moves do not connect") {
+  // 24 × 24 m drawn at 1 m a character (dem_literals.hpp): a shelf 1 m high (x and y in [9, 17))
+  // with vertical sides, and classes that call every cell passable — as on the Kepler site, where
+  // the classes (slope over 3 × 3 cells) passed ground the attitude limit along every move out of
+  // it does not: the pocket test (classes only) sees open ground, the traversal lattice a shelf
+  // cut off from the rest. The formation round (8.5, 8.5) has its slot (+1.67, +1.67) on the shelf.
+  std::vector<std::string> picture(24, std::string(24, '.'));
+  for (int y = 9; y < 17; ++y)
+    for (int x = 9; x < 17; ++x) picture[23 - y][x] = '#';
+  const terrain::Dem dem = test::demFromPicture(picture);
+  const Raster<std::uint8_t> classes(dem.geometry(), 0);
+  team::TeamMissionParams params;
+  const double safety = params.coordination.safetyDistance;
+  // Without the lattice's test that slot would stand: a rover may stop and turn there, and the
+  // passable ground round it is open.
+  const Eigen::Vector2d onShelf(8.5 + 5.0 / 3, 8.5 + 5.0 / 3);
+  const team::TerrainEdgeModel model = team::wholeMapModel(dem, classes, params.coordination.rrt);
+  REQUIRE(model.turnValid(onShelf));
+  REQUIRE(departureOrder({onShelf}, safety, passableGround(dem, &classes)).boxedIn.empty());
+  const team::TraversalLattice lattice = team::makeLattice(dem, classes, params.coordination);
+  REQUIRE(lattice.reachable({{8.5, 8.5}}).at(dem.geometry().index(*localToCell(dem.geometry(), onShelf))) == 0);
+
+  const std::vector<team::Pose> starts = team::formationStarts(dem, classes, params, {8.5, 8.5}, 5);
+  REQUIRE(starts.size() == 5);
+  const Raster<std::uint8_t> ground = lattice.reachable({{starts[0].x, starts[0].y}});
+  for (const team::Pose& s : starts) {
+    CAPTURE(s.x);
+    CAPTURE(s.y);
+    CHECK_FALSE((s.x > 9 && s.x < 17 && s.y > 9 && s.y < 17));  // not on the shelf
+    CHECK(lattice.startsWithin(ground, {s.x, s.y}));           // on the first start's ground
+  }
+  // The shelf itself is connected ground: a formation centred on it stays on it.
+  for (const team::Pose& s : team::formationStarts(dem, classes, params, {13, 13}, 5))
+    CHECK((s.x > 9 && s.x < 17 && s.y > 9 && s.y < 17));
 }

@@ -922,6 +922,9 @@ TEST_CASE("team incidents: notes name the limit and the value reached; causes gr
   const Incident slot = noSlotIncident(0, 7, {5, 5}, 5.0);
   CHECK(slot.note == "target 7: no valid ground for the rover's slot within half footprint_m (2.50 m of 5.00 m)");
   CHECK(slot.cause == "no_ground");
+  CHECK(noSlotIncident(0, 7, {5, 5}, 5.0, true).note ==
+        "target 7: no valid ground for the rover's slot within half footprint_m (2.50 m of 5.00 m), nor any "
+        "left free in the target's search cell");
 
   LegRecord leg;
   leg.rover = 1;
