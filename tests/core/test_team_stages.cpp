@@ -21,6 +21,7 @@
 #include "core/team/route_generator.hpp"
 #include "core/team/task_builder.hpp"
 #include "core/team/team_incidents.hpp"
+#include "core/team/traversal_lattice.hpp"
 #include "core/terrain/layers.hpp"
 #include "dem_literals.hpp"
 
@@ -189,6 +190,49 @@ TEST_CASE("stages: the slot task builder moves a goal off a wall and leaves a wa
   CHECK(teamSearchTasks(dem, classes, starts, route, p, &reachable)[0].legs[0].goal == leg.goal);
   // Without the reachability mask the plateau top is ground a rover may stop on.
   CHECK(SlotTasks(dem, classes, p, nullptr).build(starts, route, nullptr)[0].legs.size() == 2);
+}
+
+TEST_CASE("stages: a slot inside a wall beside the target takes free ground elsewhere in its search cell") {
+  // The target (7.5, 5.5) lies 0.5 m from a wall that steps in to x = 7 south of y = 4, as on the
+  // Kepler site's crater floor edge, where all 5 no-slots of N = 5 were such targets. The slots
+  // are the centre, then (-1.67, +1.67), (+1.67, +1.67), (-1.67, -1.67), (+1.67, -1.67): the
+  // last one (9.17, 3.83) lies in the wall, and the ground within half a footprint of it is all
+  // closer than the goal spacing to the goals its team mates took first. The search cell
+  // (x 5..10, y 3..8) still has free ground on its west side.
+  std::vector<std::string> picture(10, std::string(12, '.'));
+  for (int y = 0; y < 10; ++y)
+    for (int x = y < 4 ? 7 : 8; x < 12; ++x) picture[9 - y][x] = '#';
+  const terrain::Dem dem = demFromPicture(picture);
+  const auto classes = terrain::traversability(dem).classes;
+  TeamMissionParams p;
+  const Raster<std::uint8_t> reachable = makeLattice(dem, classes, p.coordination).reachable({{2, 5}});
+  const Eigen::Vector2d centre(7.5, 5.5);
+  const std::vector<Pose> starts{{1, 1, 0}, {1, 3, 0}, {1, 5, 0}, {1, 7, 0}, {1, 9, 0}};
+  const std::vector<RoverTask> tasks =
+      SlotTasks(dem, classes, p, &reachable).build(starts, routeThrough({centre}), nullptr);
+  REQUIRE(tasks.size() == 5);
+  const double spacing = goalSpacing(p.coordination);
+  const std::vector<Eigen::Vector2d> slots = goalSlots(5, p.footprint, spacing);
+  REQUIRE((slots[4] - Eigen::Vector2d(5.0 / 3, -5.0 / 3)).norm() < 1e-9);
+  std::vector<Eigen::Vector2d> goals;
+  for (const RoverTask& t : tasks) {
+    REQUIRE(t.legs.size() == 1);  // every rover has a leg: no slot without ground
+    goals.push_back(t.legs[0].goal);
+  }
+  const TerrainEdgeModel model = wholeMapModel(dem, classes, p.coordination.rrt);
+  const double stop = stopCircleRadius(p.coordination.controller);
+  // The half-footprint search of the last slot alone finds nothing beside the others' goals.
+  const std::vector<Eigen::Vector2d> others(goals.begin(), goals.begin() + 4);
+  CHECK_FALSE(nearestValid(model, centre + slots[4], p.footprint / 2, spacing, others, &reachable, stop));
+  // Its goal is in the search cell, on ground to stop and turn on, apart from every team mate's.
+  CHECK((goals[4] - centre).cwiseAbs().maxCoeff() <= p.footprint / 2);
+  CHECK(turnableAround(model, goals[4], stop));
+  for (std::size_t a = 0; a < goals.size(); ++a)
+    for (std::size_t b = a + 1; b < goals.size(); ++b) CHECK((goals[a] - goals[b]).norm() >= spacing - 1e-9);
+  // The paper mode keeps its slots: that rover gets no leg there.
+  TeamMissionParams paper = p;
+  paper.coordination.mode = CoordinationMode::Paper;
+  CHECK(SlotTasks(dem, classes, paper, &reachable).build(starts, routeThrough({centre}), nullptr)[4].legs.empty());
 }
 
 TEST_CASE("stages: the hybrid task builder adds coverage moves inside the footprint") {
