@@ -909,7 +909,8 @@ class Coordinator {
 CoordinationResult coordinateWith(const std::vector<RoverTask>& tasks, const LegPlanner& planner,
                                   const LegSimulator& simulator, const ConflictPolicy& policy,
                                   const CoordinationParams& params, std::uint64_t seed,
-                                  CoordinationObserver* observer, const CancelToken* cancel) {
+                                  CoordinationObserver* observer, const CancelToken* cancel,
+                                  const planning::PassableGround& passable) {
   params.validate();
   if (tasks.empty()) throw Error(ErrorCode::InvalidInput, "rovers", "rovers: none given");
   const std::vector<int>& delays = policy.startDelays();
@@ -937,7 +938,7 @@ CoordinationResult coordinateWith(const std::vector<RoverTask>& tasks, const Leg
   // it is planned); one that cannot leave while the others stand is refused.
   std::vector<Eigen::Vector2d> starts;
   for (const RoverTask& t : tasks) starts.emplace_back(t.start.x, t.start.y);
-  planning::Departure departure = planning::departureOrder(starts, params.safetyDistance);
+  planning::Departure departure = planning::departureOrder(starts, params.safetyDistance, passable);
   if (!departure.boxedIn.empty()) {
     const std::string field = "rovers[" + std::to_string(departure.boxedIn.front()) + "]";
     throw Error(ErrorCode::InvalidInput, field,

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "core/common/cancel.hpp"
+#include "core/planning/departure.hpp"
 #include "core/team/coordination.hpp"
 #include "core/team/leg_planner.hpp"
 #include "core/team/leg_simulator.hpp"
@@ -156,11 +157,14 @@ class TimedPolicy : public ConflictPolicy {
 // controller's sample period and acceptance radius); `seed` drives every planning call
 // (deriveSeed per rover, leg, piece and attempt) and the slip seeds, so the result is the same for
 // a seed whatever the thread count. `planner` must be safe to call from several threads.
-// Throws InvalidInput naming rovers[k] when the simulator cannot place a start.
+// Throws InvalidInput naming rovers[k] when the simulator cannot place a start. The rovers are
+// planned in planning::departureOrder over `passable` (empty: open ground; coordinate() gives the
+// lattice's ground, traversal_lattice.hpp departureGround).
 CoordinationResult coordinateWith(const std::vector<RoverTask>& tasks, const LegPlanner& planner,
                                   const LegSimulator& simulator, const ConflictPolicy& policy,
                                   const CoordinationParams& params, std::uint64_t seed,
                                   CoordinationObserver* observer = nullptr,
-                                  const CancelToken* cancel = nullptr);
+                                  const CancelToken* cancel = nullptr,
+                                  const planning::PassableGround& passable = {});
 
 }  // namespace rover::team
