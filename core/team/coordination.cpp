@@ -75,8 +75,13 @@ CoordinationResult coordinateResolved(const terrain::Dem& dem, const Raster<std:
   if (!lattice) lattice = &own.emplace(makeLattice(dem, classes, params));
   const GuidedRrtPlanner planner(dem, classes, *lattice, params.rrt, params.weights,
                                  params.corridorRadius);
+  // The rovers leave in the departure order over the ground the lattice reaches from their
+  // starts (the task builder ranks goals by the same order).
+  std::vector<Eigen::Vector2d> starts;
+  for (const RoverTask& t : tasks) starts.emplace_back(t.start.x, t.start.y);
+  const Raster<std::uint8_t> ground = lattice->reachable(starts);
   return coordinateWith(tasks, planner, simulator, TimedPolicy(params), params, seed, observer,
-                        cancel);
+                        cancel, departureGround(starts, params.safetyDistance, ground));
 }
 
 }  // namespace

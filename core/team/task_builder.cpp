@@ -9,6 +9,7 @@
 #include "core/coverage/coverage_planner.hpp"
 #include "core/planning/departure.hpp"
 #include "core/team/formation.hpp"
+#include "core/team/traversal_lattice.hpp"
 #include "core/planning/rover_limits.hpp"
 
 namespace rover::team {
@@ -45,13 +46,16 @@ std::vector<std::vector<std::optional<Eigen::Vector2d>>> slotGoals(
   const double stopCircle = params.coordination.mode == CoordinationMode::Timed
                                 ? stopCircleRadius(params.coordination.controller)
                                 : 0.0;
-  // Each rover's place in the order the coordinator plans them (departureOrder, as there); a
+  // Each rover's place in the order the coordinator plans them (departureOrder over
+  // departureGround, as there: in timed mode `reachable` is the lattice's flood from the starts); a
   // rover left boxed in (the coordinator refuses the start) last.
   std::vector<int> rank(static_cast<std::size_t>(rovers), rovers);
   if (teams) {
     std::vector<Eigen::Vector2d> at;
     for (const Pose& s : starts) at.emplace_back(s.x, s.y);
-    const planning::Departure d = planning::departureOrder(at, params.coordination.safetyDistance);
+    const double safety = params.coordination.safetyDistance;
+    const planning::Departure d = planning::departureOrder(
+        at, safety, reachable ? departureGround(at, safety, *reachable) : planning::PassableGround{});
     for (std::size_t r = 0; r < d.order.size(); ++r) rank[static_cast<std::size_t>(d.order[r])] = static_cast<int>(r);
   }
   std::vector<std::vector<std::optional<Eigen::Vector2d>>> out;

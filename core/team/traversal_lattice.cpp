@@ -139,6 +139,20 @@ bool TraversalLattice::startsWithin(const Raster<std::uint8_t>& region, const Ei
   return !from.empty() && std::all_of(from.begin(), from.end(), [&](int i) { return region.at(i) != 0; });
 }
 
+planning::PassableGround groundIn(const Raster<std::uint8_t>& region) {
+  return [&region](const Eigen::Vector2d& p) {
+    const auto c = localToCell(region.geometry, p);
+    return c && region(c->row, c->col) != 0;
+  };
+}
+
+planning::PassableGround departureGround(const std::vector<Eigen::Vector2d>& starts, double safety,
+                                         const Raster<std::uint8_t>& region) {
+  planning::PassableGround ground = groundIn(region);
+  if (starts.empty() || !planning::departureOrder(starts, safety, ground).boxedIn.empty()) return {};
+  return ground;
+}
+
 // A rectangle of cells the guide's search is held to, and the cells in it that keep-out zones
 // block (stamped once per window: a zone test per relaxed move cost more than the search itself
 // with the 20 zones a leg's re-plans can gather).

@@ -13,6 +13,7 @@
 
 #include "core/grid/direction.hpp"
 #include "core/grid/raster.hpp"
+#include "core/planning/departure.hpp"
 #include "core/team/terrain_rrt.hpp"
 #include "core/terrain/dem.hpp"
 
@@ -102,5 +103,19 @@ class TraversalLattice {
                                         const Eigen::Vector2d& start,
                                         const Eigen::Vector2d& goal) const;
 };
+
+// The ground `region` marks (1 = passable; off the grid: not), for planning::departureOrder: with
+// the lattice's flood from the starts, the ways out the rovers can really drive (issue 25: on
+// the Kepler site, with open ground, 9 of 64 rovers in the formation's edge against the crater
+// wall were planned first, while every team mate still stood between them and the floor, and
+// every leg of theirs ended short). The region must outlive the result.
+planning::PassableGround groundIn(const Raster<std::uint8_t>& region);
+// The ground the team's departure order (planning::departureOrder) is taken over: groundIn(region)
+// when every rover at `starts` has a way out over it, else open ground (an empty function: on a
+// small map or region the way-out test's margin reaches past the ground, and the coordinator
+// would refuse starts it planned before). The coordinator (coordination.cpp) and the task
+// builder's goal ranks (task_builder.cpp) both take it, so they agree on the order.
+planning::PassableGround departureGround(const std::vector<Eigen::Vector2d>& starts, double safety,
+                                         const Raster<std::uint8_t>& region);
 
 }  // namespace rover::team

@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "core/planning/departure.hpp"
 #include "core/team/coordination.hpp"
 #include "core/team/team_mission.hpp"
 #include "core/team/traversal_lattice.hpp"
@@ -234,4 +235,55 @@ TEST_CASE("team planner: paper mode reproduces today's mission on a fixed case")
   CHECK(a.plan.trajectories[2].samples.size() == 1372);
   CHECK(a.plan.trajectories[2].samples.back().x == doctest::Approx(13.934953753633506).epsilon(1e-12));
   CHECK(a.plan.trajectories[2].samples.back().y == doctest::Approx(23.891397209547701).epsilon(1e-12));
+}
+
+TEST_CASE("team planner: a rover at the end of a dead-end lane leaves after the team mate in front of it") {
+  // A lane 2 m wide (x 1..3, walls 1 m high) closed at its south end, opening north onto open
+  // ground. Rover 0 stands at the dead end, rover 1 in front of it: on open ground both could
+  // leave at once and rover 0 is planned first (index order), but no path past its standing team
+  // mate keeps the safety distance in the lane. Over the ground the lattice reaches (issue 25:
+  // on the Kepler site 9 of 64 rovers between the crater wall and their team mates lost every leg
+  // so) rover 0 leaves after rover 1, and both arrive.
+  std::vector<std::string> picture(14, std::string(18, '.'));
+  for (int y = 0; y < 9; ++y)
+    for (int x : {0, 3}) picture[13 - y][x] = '#';
+  picture[13][1] = picture[13][2] = '#';  // the dead end, y 0..1
+  const terrain::Dem dem = demFromPicture(picture);
+  const auto classes = terrain::traversability(dem).classes;
+  CoordinationParams p;
+  p.threads = 2;
+  const TraversalLattice lattice = makeLattice(dem, classes, p);
+  const std::vector<Eigen::Vector2d> starts{{2, 2}, {2, 4.5}};
+  const Raster<std::uint8_t> ground = lattice.reachable(starts);
+  CHECK(planning::departureOrder(starts, p.safetyDistance).order == std::vector<int>{0, 1});
+  const planning::Departure d =
+      planning::departureOrder(starts, p.safetyDistance, departureGround(starts, p.safetyDistance, ground));
+  CHECK(d.order == std::vector<int>{1, 0});
+  CHECK(d.firstRound == 1);
+
+  std::vector<RoverTask> tasks(2);
+  for (int k = 0; k < 2; ++k) tasks[k].start = {starts[k].x(), starts[k].y(), M_PI / 2};
+  tasks[0].legs.push_back({{9, 11}, {}, 0});
+  tasks[1].legs.push_back({{12, 11}, {}, 0});
+  const CoordinationResult r = coordinate(dem, classes, tasks, p, 3, nullptr, nullptr, &lattice);
+  REQUIRE(r.legs.size() == 2);
+  for (const LegRecord& leg : r.legs) {
+    CAPTURE(leg.rover);
+    CHECK(leg.status == LegStatus::Reached);
+  }
+  CHECK(r.conflicts.empty());
+}
+
+TEST_CASE("team planner: the departure ground falls back to open ground when it lets a rover out nowhere") {
+  // A 12 × 12 m map: the way-out test's margin (ten safety distances past the starts) lies off
+  // the map, so over the lattice's ground no rover has a way out; the team leaves as on open
+  // ground instead of being refused.
+  const terrain::Dem dem = demFromPicture(std::vector<std::string>(12, std::string(12, '.')));
+  const auto classes = terrain::traversability(dem).classes;
+  const CoordinationParams p;
+  const TraversalLattice lattice = makeLattice(dem, classes, p);
+  const std::vector<Eigen::Vector2d> starts{{5, 6}, {7, 6}};
+  const Raster<std::uint8_t> ground = lattice.reachable(starts);
+  CHECK_FALSE(planning::departureOrder(starts, p.safetyDistance, groundIn(ground)).boxedIn.empty());
+  CHECK_FALSE(departureGround(starts, p.safetyDistance, ground));
 }
