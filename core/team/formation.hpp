@@ -77,8 +77,8 @@ std::optional<Eigen::Vector2d> nearestValid(const TerrainEdgeModel& model, Eigen
 // starts placed before, and never in a pocket a rover alone cannot get out of over passable
 // ground: planning::departureOrder for that one start, the mission check's test), and, after the
 // first start, only where the first one's ground on the traversal lattice is (the rover's own
-// validity rules, TraversalLattice::startsWithin: no start on ground cut off from its team
-// mates'), heading east. The lattice itself leaves by the same rule from the outside in
+// validity rules, TraversalLattice::startsWithin, on a window of the map round the formation:
+// no start on ground cut off from its team mates'), heading east. The lattice itself leaves by the same rule from the outside in
 // (startSlots). Throws
 // InvalidInput "rovers" when there is no room. The first form computes the traversability
 // classes itself.
