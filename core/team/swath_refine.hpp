@@ -36,15 +36,32 @@ class SwathModel {
   // The mass under the rovers' discs driving straight from `start` through `stops` in formation,
   // by `horizon` metres per rover (the whole route when it is shorter).
   double seen(const Eigen::Vector2d& start, const std::vector<Eigen::Vector2d>& stops, double horizon) const;
+  // The same in two parts, for many routes that share their first `count` stops: keepPrefix
+  // marks the start and the legs to stops[count − 1] once; seenAfter then adds the legs from there
+  // through stops[count..] of each route (stops[0, count) must be the kept ones). The sum is
+  // exactly seen()'s, as each leg is sampled from its own start.
+  void keepPrefix(const Eigen::Vector2d& start, const std::vector<Eigen::Vector2d>& stops, std::size_t count,
+                  double horizon) const;
+  double seenAfter(const std::vector<Eigen::Vector2d>& stops, std::size_t count, double horizon) const;
+  bool prefixReachesHorizon() const { return baseDone_; }
 
  private:
   void mark(const Eigen::Vector2d& p, double& mass) const;
+  std::uint32_t nextGeneration() const;
+  // Marks the legs from `a` (at `d` metres) through stops[from..] up to the horizon; false when
+  // the horizon was reached.
+  bool walk(Eigen::Vector2d& a, double& d, const std::vector<Eigen::Vector2d>& stops, std::size_t from,
+            std::size_t to, double horizon, double& mass) const;
   const SearchGrid& grid_;
   double sub_;                                 // sub-cell side, m
   int rows_, cols_;                            // sub-cell grid
   std::vector<Eigen::Vector2d> slots_;
-  mutable std::vector<std::uint32_t> stamp_;   // sub-cell marked in evaluation `generation_`
-  mutable std::uint32_t generation_ = 0;
+  // A sub-cell is seen when its stamp is base_ (the kept prefix) or generation_ (this route).
+  mutable std::vector<std::uint32_t> stamp_;
+  mutable std::uint32_t generation_ = 0, base_ = UINT32_MAX;
+  mutable double baseMass_ = 0, baseDistance_ = 0;
+  mutable Eigen::Vector2d baseEnd_{0, 0};
+  mutable bool baseDone_ = false;  // the prefix already reached the horizon
 };
 
 // Improves `route.cells` for SwathModel::seen by `horizon` metres, keeping the route within
