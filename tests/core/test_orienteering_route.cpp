@@ -168,3 +168,32 @@ TEST_CASE("swath refinement: a target on empty ground is moved back onto the mas
   // Deterministic: the same route again.
   CHECK(refineForSwath(grid, route, reach, budget, budget) == refined);
 }
+
+TEST_CASE("orienteering: three separated Gaussians on a 150 m site are all visited, with the swath refinement") {
+  // Paper 001's site size in 5 m search cells (30 × 30), three equal Gaussians (σ = 7 m) 40–55 m
+  // from the team's start at the centre and 60–70 m from each other; 64 targets.
+  const std::vector<Eigen::Vector2d> means{{45, 55}, {108, 60}, {75, 112}};  // x east, y north
+  const SearchGrid grid = fiveMetreGrid(30, 30, [&](int r, int c) {
+    const Eigen::Vector2d p{c + 0.5, 150 - r - 0.5};
+    double m = 0;
+    for (const auto& mu : means) m += std::exp(-(p - mu).squaredNorm() / (2 * 7.0 * 7.0));
+    return m;
+  });
+  const CellIndex start = grid.cellAt({75, 75});
+  const Route ours = computeRoute(grid, start, RouteMethod::Orienteering, RouteParams{});
+  const Route lhc = computeRoute(grid, start, RouteMethod::LhcGwConv, RouteParams{});
+  auto visits = [](const Route& r, const Eigen::Vector2d& mu) {
+    for (const auto& c : r.centres)
+      if ((c - mu).norm() <= 10) return true;
+    return false;
+  };
+  int lhcVisits = 0;
+  for (const auto& mu : means) {
+    CHECK(visits(ours, mu));
+    lhcVisits += visits(lhc, mu) ? 1 : 0;
+  }
+  CHECK(lhcVisits < 3);
+  CHECK(routeLength(ours) <= 64 * 5.0 + 1e-9);
+  const SwathModel swath(grid);
+  CHECK(swath.seen(ours.startCentre, ours.centres, 300) > swath.seen(lhc.startCentre, lhc.centres, 300));
+}
