@@ -1,7 +1,5 @@
 #include "core/team/orienteering_route.hpp"
 
-#include "core/team/swath_refine.hpp"
-
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -205,12 +203,7 @@ Route orienteeringRoute(const SearchGrid& grid, CellIndex start, const RoutePara
   }
   std::vector<CellIndex> route;
   for (std::size_t i = 1; i < best->nodes().size(); ++i) route.push_back(cells[static_cast<std::size_t>(best->nodes()[i] - 1)]);
-  // Refined on what the rovers' discs see by the horizon (swath_refine.hpp): 90 % of the budget,
-  // as the rovers' own paths run some 10 % longer than the straight legs (RRT* round slopes and
-  // neighbours), and SPEC §3.5 reads the curve against the distance each rover drove.
-  const Route cellRoute = scoredRoute(grid, start, std::move(route));
-  const double budget = params.targets * grid.footprint;
-  return scoredRoute(grid, start, refineForSwath(grid, cellRoute, reach, budget, kSwathHorizon * budget));
+  return scoredRoute(grid, start, std::move(route));
 }
 
 }  // namespace rover::team

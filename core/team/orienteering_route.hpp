@@ -21,9 +21,6 @@
 //   reaches further down the ranking on a PDM with any structure, and it bounds the cost at
 //   O(rounds · candidates · targets) distance evaluations (a few ms for 64 targets).
 // - With no mass anywhere in reach, the route is the lawnmower's (nothing to prefer).
-// - The cell route is then refined on what the rovers' discs actually see along the legs by 90 %
-//   of the budget (swath_refine.hpp): a cell's whole mass is not what a team of five 1 m discs
-//   sees, and SPEC §3.5 measures the swath against each rover's distance.
 #include "core/team/route_search.hpp"
 
 namespace rover::team {
@@ -31,8 +28,8 @@ namespace rover::team {
 inline constexpr int kOrienteeringCandidates = 1024;
 
 // The route from `start` of at most `params.targets` targets and at most
-// params.targets × grid.footprint metres (straight segments between centres): the cells of the
-// most original mass the heuristic finds, refined for the swath the team sees by 90 % of that. Throws InvalidParameter "targets", InvalidInput
+// params.targets × grid.footprint metres (straight segments between centres), collecting the
+// most original mass the heuristic finds. Throws InvalidParameter "targets", InvalidInput
 // "start" outside the grid.
 Route orienteeringRoute(const SearchGrid& grid, CellIndex start, const RouteParams& params);
 

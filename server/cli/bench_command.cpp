@@ -129,7 +129,10 @@ double seenBy(const team::SearchGrid& grid, const team::Route& route, double met
 // against the mean distance per rover) by `metres`, for rovers that drive straight in formation:
 // each from its slot at the start to its slot at each target in turn (the mission's goal
 // slots), sampled every 0.1 m. The mission adds RRT* detours and waits; this is the route's part
-// of it, without the planning noise, in milliseconds instead of a mission's seconds.
+// of it, without the planning noise, in milliseconds instead of a mission's seconds. It overrates
+// long legs: a route refined on it (issue 25; fewer, longer legs on the formation's widest 1:2
+// slope) read x1.34 over LHC_GW_CONV here on the synthetic map, but its missions (swinton, 20
+// PDMs) saw 5 % less by 300 m than the unrefined route's, as the rovers' paths wander off long legs.
 double sweptBy(const Raster<float>& pdm, const team::Route& route, double metres) {
   const team::TeamMissionParams p;
   const auto slots = team::goalSlots(5, p.footprint, team::goalSpacing(p.coordination));

@@ -9,7 +9,6 @@
 
 #include "core/common/error.hpp"
 #include "core/team/route_generator.hpp"
-#include "core/team/swath_refine.hpp"
 #include "core/terrain/layers.hpp"
 
 using namespace rover;
@@ -67,10 +66,7 @@ TEST_CASE("orienteering: two separated masses are both visited where LHC_GW_CONV
   };
   CHECK_FALSE(visitsEast(lhc));
   CHECK(visitsEast(ours));
-  // What the team sees by the horizon (the route's goal): more than LHC_GW_CONV sees on one mass.
-  const SwathModel swath(grid);
-  const double horizon = kSwathHorizon * 40.0;
-  CHECK(swath.seen(ours.startCentre, ours.centres, horizon) > swath.seen(lhc.startCentre, lhc.centres, horizon));
+  CHECK(ours.score > lhc.score);  // 14.6 against 13.1: the second mass is worth the 24 m between
   // Within its budget: targets × footprint metres, and no more targets than asked.
   CHECK(routeLength(ours) <= 40.0 + 1e-9);
   CHECK(ours.cells.size() <= 40u);
@@ -128,50 +124,10 @@ SearchGrid fiveMetreGrid(int rows, int cols, auto&& mass) {
 
 }  // namespace
 
-TEST_CASE("swath: five 1 m discs see a 3 m swath along a row and 1.5 times that on a 1:2 slope") {
-  // Density 1 per m² everywhere: the mass seen is the area under the discs.
-  const SearchGrid grid = fiveMetreGrid(12, 12, [](int, int) { return 1.0; });
-  const SwathModel swath(grid);
-  // Legs of 40 m from a cell centre; the metres from 20 to 40 are away from the start, where the
-  // formation's own length (its corners 3.3 m apart) adds to the first strips.
-  const Eigen::Vector2d start{7.5, 7.5};
-  const double slope = 40 / std::sqrt(5.0);
-  const std::vector<Eigen::Vector2d> row{start + Eigen::Vector2d{40, 0}}, knight{start + Eigen::Vector2d{2 * slope, slope}};
-  const double rowGain = swath.seen(start, row, 40) - swath.seen(start, row, 20);
-  const double knightGain = swath.seen(start, knight, 40) - swath.seen(start, knight, 20);
-  // Along a row the corner rovers drive in each other's tracks: three 1 m strips, 3 m² a metre.
-  CHECK(rowGain == doctest::Approx(3 * 20).epsilon(0.05));
-  // On a 1:2 slope the five tracks are distinct and overlap a little: about 4.5 m² a metre.
-  CHECK(knightGain > 1.4 * rowGain);
-  CHECK(knightGain < 5 * 20);
-}
-
-TEST_CASE("swath refinement: a target on empty ground is moved back onto the mass, within the budget") {
-  // Mass only in search row 2 (map rows 10..14); the route from (2, 0) east along the row, but its
-  // third target is two rows up, on empty ground.
-  const SearchGrid grid = fiveMetreGrid(5, 12, [](int r, int) { return r >= 10 && r < 15 ? 1.0 : 0.0; });
-  std::vector<CellIndex> cells;
-  for (int c = 1; c < 12; ++c) cells.push_back({c == 3 ? 0 : 2, c});
-  const Route route = scoredRoute(grid, {2, 0}, cells);
-  const std::vector<std::uint8_t> reach(static_cast<std::size_t>(grid.geometry().cellCount()), 1);
-  const double budget = routeLength(route);
-  const std::vector<CellIndex> refined = refineForSwath(grid, route, reach, budget, budget);
-  const Route after = scoredRoute(grid, {2, 0}, refined);
-  const SwathModel swath(grid);
-  CHECK(swath.seen(after.startCentre, after.centres, budget) > swath.seen(route.startCentre, route.centres, budget));
-  CHECK(routeLength(after) <= budget + 1e-9);
-  std::set<std::pair<int, int>> seen;
-  for (const CellIndex& c : refined) {
-    CHECK(c.row != 0);  // no leg into the empty rows is left
-    CHECK(seen.insert({c.row, c.col}).second);
-  }
-  // Deterministic: the same route again.
-  CHECK(refineForSwath(grid, route, reach, budget, budget) == refined);
-}
-
-TEST_CASE("orienteering: three separated Gaussians on a 150 m site are all visited, with the swath refinement") {
+TEST_CASE("orienteering: three separated Gaussians on a 150 m site are all visited where LHC_GW_CONV misses some") {
   // Paper 001's site size in 5 m search cells (30 × 30), three equal Gaussians (σ = 7 m) 40–55 m
-  // from the team's start at the centre and 60–70 m from each other; 64 targets.
+  // from the team's start at the centre and 60–70 m from each other; 64 targets (issue 25: on
+  // such a case all of LHC_GW_CONV's targets stayed round one Gaussian).
   const std::vector<Eigen::Vector2d> means{{45, 55}, {108, 60}, {75, 112}};  // x east, y north
   const SearchGrid grid = fiveMetreGrid(30, 30, [&](int r, int c) {
     const Eigen::Vector2d p{c + 0.5, 150 - r - 0.5};
@@ -194,6 +150,5 @@ TEST_CASE("orienteering: three separated Gaussians on a 150 m site are all visit
   }
   CHECK(lhcVisits < 3);
   CHECK(routeLength(ours) <= 64 * 5.0 + 1e-9);
-  const SwathModel swath(grid);
-  CHECK(swath.seen(ours.startCentre, ours.centres, 300) > swath.seen(lhc.startCentre, lhc.centres, 300));
+  CHECK(ours.score > lhc.score);
 }
