@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # The README's test command: installs what is missing, builds, and runs every test —
 # the Release build's full CTest suite, the unit tests again under AddressSanitizer +
-# UndefinedBehaviorSanitizer (a second build directory, failing on any report), the browser tests in
-# Debian's Chromium, every libFuzzer harness for a bounded time (tests/fuzz/run.sh), and the
+# UndefinedBehaviorSanitizer (clang's build-fuzz/, failing on any report), every libFuzzer harness
+# for a bounded time from that build (tests/fuzz/run.sh), the browser tests in Debian's Chromium, and the
 # container smoke test (podman). ROVERPLAN_SKIP_CONTAINER=1 skips the
 # last one for quick local runs; CI runs everything.
 set -euo pipefail
@@ -24,21 +24,22 @@ ninja -C build
 stage "Tests (Release)"
 ctest --test-dir build --output-on-failure -j "$jobs"
 
+# One sanitized build serves two stages: clang with ASan + UBSan and libFuzzer's coverage
+# instrumentation (build-fuzz/, as tests/fuzz/run.sh configures it) makes the unit-test binaries,
+# run here under the sanitizers, and then the fuzz harnesses link against the same libraries. (Two
+# separate builds, GCC's ASan and clang's fuzzing, were half of a fresh machine's test time.)
 # The script tests that start the roverplan binary (label "binary": serve-restart, disk-full, exports,
-# study-launcher, contract-lint) run in the Release pass only: the sanitizer build makes the
-# unit-test binaries, not roverplan.
-# Warnings are checked by the Release build; with sanitizers at -O1 GCC 12 reports false
-# maybe-uninitialized warnings inside std::regex, so this build does not use -Werror.
-# -g1: line tables only, all a sanitizer's stack trace shows; full debug info (-g) nearly doubled
-# the compile time of a Beast-heavy file (48.7 -> 26.8 s for server/api/mission_routes.cpp).
-stage "Sanitizer build (build-asan/: ASan + UBSan)"
-cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=Debug -DROVER_SANITIZE=ON -DROVER_WERROR=OFF \
-  -DCMAKE_CXX_FLAGS_DEBUG="-O1 -g1" >/dev/null
-ninja -C build-asan test_core test_maps test_server
+# study-launcher, contract-lint) run in the Release pass only: this build makes the unit-test
+# binaries, not roverplan. -gline-tables-only: what a sanitizer's stack trace shows, at about half
+# the compile time of -g.
+stage "Sanitizer build (build-fuzz/: clang, ASan + UBSan, fuzzer instrumentation)"
+cmake -S . -B build-fuzz -G Ninja -DCMAKE_BUILD_TYPE=Debug -DCMAKE_CXX_COMPILER=clang++ -DROVER_FUZZ=ON \
+  -DROVER_WERROR=OFF -DCMAKE_CXX_FLAGS_DEBUG="-O1 -gline-tables-only" >/dev/null
+ninja -C build-fuzz test_core test_maps test_server
 stage "Unit tests under sanitizers"
 export ASAN_OPTIONS=abort_on_error=1:detect_leaks=1:strict_string_checks=1
 export UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
-ctest --test-dir build-asan --output-on-failure -j "$jobs" -R '^(core|maps|server)/' -LE binary
+ctest --test-dir build-fuzz --output-on-failure -j "$jobs" -R '^(core|maps|server)/' -LE binary
 
 stage "Fuzzing (libFuzzer, ${ROVERPLAN_FUZZ_SECONDS:-30} s per target)"
 bash tests/fuzz/run.sh "${ROVERPLAN_FUZZ_SECONDS:-30}"

@@ -85,7 +85,7 @@ const studies = new StudiesPanel({
     await launched(mission);
   },
 });
-const view3d = new View3D({ container: $('view3d'), message: $('view3d-message'), layers, missionView });
+const view3d = new View3D({ container: $('view3d'), message: $('view3d-message'), missionView });
 const routeProfile = new RouteProfile({ view, layers, missionView });
 const liveSync = new LiveSync({ feed, presence, mapsPanel, pdmEditor, zoneEditor, runs, studies, chooseMap });
 const formDraft = new FormDraft(missionForm);
