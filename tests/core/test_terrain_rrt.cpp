@@ -460,7 +460,10 @@ TEST_CASE("rrt: the patch evaluation is the exact maximum over the edge, never b
         {{0.0, 0.0}, {0.6, 0.1}},      // from the map's corner, through the clamped border half cell
         {{4, 3}, {4, 3.9}},            // due north: no column crossed
         {{2.2, 2.2}, {2.2, 2.2}}};     // zero length
-    for (const auto& [a, b] : edges) {
+    for (const auto& edge : edges) {
+      // Named variables, not a structured binding: clang 14 cannot capture one in CAPTURE's lambda.
+      const Eigen::Vector2d& a = edge.first;
+      const Eigen::Vector2d& b = edge.second;
       CAPTURE(a.transpose());
       CAPTURE(b.transpose());
       const EdgeTerms p = patch.edgeTerms(a, b), s = sampled.edgeTerms(a, b), e = dense.edgeTerms(a, b);

@@ -28,7 +28,8 @@ void checkTable() {
   std::set<int> values;
   std::set<std::string_view> names;
   for (const auto& [value, name] : EnumNames<E>::table) {
-    CAPTURE(name);
+    const std::string_view shown = name;  // clang 14 cannot capture a structured binding
+    CAPTURE(shown);
     CHECK(values.insert(static_cast<int>(value)).second);
     CHECK(names.insert(name).second);
     CHECK(!name.empty());
@@ -79,7 +80,8 @@ TEST_CASE("outcome names: every table names each value once and reads back") {
 
 TEST_CASE("outcome names: a run is over in every status but queued and running") {
   for (const auto& [s, name] : EnumNames<RunStatus>::table) {
-    CAPTURE(name);
+    const std::string_view shown = name;  // clang 14 cannot capture a structured binding
+    CAPTURE(shown);
     CHECK(isFinal(s) == (s != RunStatus::Queued && s != RunStatus::Running));
   }
   // A study's statuses are a subset of the missions', with the same "is it over" rule.
@@ -122,7 +124,8 @@ TEST_CASE("outcome names: the database stores every status and reads it back") {
   m.createdAt = "2026-01-01T00:00:00.000Z";
   db.insertMission(m);
   for (const auto& [status, name] : EnumNames<RunStatus>::table) {
-    CAPTURE(name);
+    const std::string_view shown = name;  // clang 14 cannot capture a structured binding
+    CAPTURE(shown);
     db.updateMission("m", status, "");
     CHECK(db.getMission("m")->status == status);
   }
