@@ -128,7 +128,9 @@ TEST_CASE("import jail: a worker killed by SIGSEGV or SIGKILL is a 400 with the 
   test::ApiServer s(t.str("data"));
   const jail::JailConfig normal = s.maps.importJail();
   const std::size_t before = s.get("/api/maps").json().size();
-  for (const auto& [signal, number] : {std::pair<std::string, int>{"SEGV", 11}, {"KILL", 9}}) {
+  for (const auto& kill : {std::pair<std::string, int>{"SEGV", 11}, {"KILL", 9}}) {
+    const std::string& signal = kill.first;  // not a structured binding: clang 14 cannot capture one
+    const int number = kill.second;
     CAPTURE(signal);
     s.maps.setImportJail(shellWorker(s, "kill -" + signal + " $$"));
     auto r = upload(s, "crash.tif", goodTiff(t));
