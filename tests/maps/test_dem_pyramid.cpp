@@ -152,7 +152,8 @@ TEST_CASE("pyramid: below the native zoom, heights come from the overview: the b
   // so blocks at the hole weigh their cells differently); elsewhere, and on 700 × 530 whose edge
   // blocks are cut, each value must lie within the heights of the cells it stands for and their
   // neighbours' (the overview's resampling window).
-  for (auto [rows, cols] : {std::pair{1024, 768}, std::pair{700, 530}}) {
+  for (const auto& size : {std::pair{1024, 768}, std::pair{700, 530}}) {
+    const int rows = size.first, cols = size.second;  // clang 14 cannot capture a structured binding
     CAPTURE(rows);
     StoredMap m(wavyDem(rows, cols, 1.0));
     const TileGrid g = tileGridOf(rows, cols);

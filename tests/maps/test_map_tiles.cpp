@@ -116,11 +116,13 @@ TEST_CASE("tiles: addressing on literal grids (one tile, odd sizes, partial edge
 
 TEST_CASE("tiles: hostile addresses name no tile") {
   TileGrid g = tileGridOf(1001, 333);
-  for (auto [z, x, y] : std::vector<std::array<long long, 3>>{
+  for (const auto& zxy : std::vector<std::array<long long, 3>>{
            {-1, 0, 0}, {0, -1, 0}, {0, 0, -1}, {5, 0, 0}, {0, 1, 0}, {0, 0, 1}, {2, 2, 0}, {2, 0, 4},
            {4, 6, 0}, {4, 0, 16}, {1LL << 40, 0, 0}, {2, 1LL << 40, 0}, {2, 0, 999999999},
-           {std::numeric_limits<long long>::max(), 0, 0}, {2, std::numeric_limits<long long>::min(), 0}})
+           {std::numeric_limits<long long>::max(), 0, 0}, {2, std::numeric_limits<long long>::min(), 0}}) {
+    const long long z = zxy[0], x = zxy[1], y = zxy[2];  // clang 14 cannot capture a structured binding
     CHECK_MESSAGE(!tileWindow(g, z, x, y), z << "/" << x << "/" << y);
+  }
 }
 
 TEST_CASE("tiles: at the native zoom a tile is byte for byte the crop of the whole-map picture, every layer") {

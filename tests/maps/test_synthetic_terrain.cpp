@@ -114,7 +114,9 @@ TEST_CASE("synthetic terrain geometry, georeference and CRS") {
   CHECK(dem.z.geo.geotransform == expected);
   CHECK(dem.z.geo.crsWkt == bodyCrsWkt("moon"));
 
-  for (const auto& [body, radius] : {std::pair{"moon", 1737400.0}, std::pair{"mars", 3396190.0}}) {
+  for (const auto& bodyRadius : {std::pair{"moon", 1737400.0}, std::pair{"mars", 3396190.0}}) {
+    const char* const body = bodyRadius.first;  // not a structured binding: clang 14 cannot capture one
+    const double radius = bodyRadius.second;
     CAPTURE(body);
     const std::string wkt = bodyCrsWkt(body);
     CHECK(wkt.find(std::to_string(static_cast<long>(radius))) != std::string::npos);
@@ -134,9 +136,11 @@ TEST_CASE("synthetic terrain geometry, georeference and CRS") {
 
 TEST_CASE("synthetic terrain heights are all finite") {
   for (const char* preset : {"moon", "mars"}) {
-    for (const auto& [size, cell] :
+    for (const auto& sizeCell :
          {std::pair{16, 0.25}, std::pair{600, 0.25}, std::pair{100, 10.0}, std::pair{64, 1000.0},
           std::pair{300, 0.01}, std::pair{16, 1e-300}}) {
+      const int size = sizeCell.first;  // not a structured binding: clang 14 cannot capture one
+      const double cell = sizeCell.second;
       CAPTURE(preset);
       CAPTURE(size);
       CAPTURE(cell);
@@ -190,7 +194,9 @@ TEST_CASE("synthetic terrain class shares at the defaults are near paper 001's s
 
 TEST_CASE("synthetic terrain stays plausible on larger and coarser grids") {
   for (const char* preset : {"moon", "mars"}) {
-    for (const auto& [size, cell] : {std::pair{256, 2.0}, std::pair{300, 10.0}}) {
+    for (const auto& sizeCell : {std::pair{256, 2.0}, std::pair{300, 10.0}}) {
+      const int size = sizeCell.first;  // not a structured binding: clang 14 cannot capture one
+      const double cell = sizeCell.second;
       CAPTURE(preset);
       CAPTURE(size);
       CAPTURE(cell);
