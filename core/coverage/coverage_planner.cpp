@@ -122,15 +122,15 @@ Engine::Turn Engine::play(CoverageRover& r, std::int64_t step) {
     return Turn::Next;
   }
   const bool wasCircling = r.circling;
+  const int dir = neighbourDir(world_.geometry(), r.cell, next);
   Motion motion;
-  if (const Drive drive = plant_->drive(r, next, step, motion); drive != Drive::Moved) {
+  if (const Drive drive = plant_->drive(r, next, dir, step, motion); drive != Drive::Moved) {
     // Not moved: a team mate truly in the way, or a bump (the map changed: the goal, which
     // counts known obstacles, may now be met).
     if (drive == Drive::Blocked) recorder_.waited(r.id);
     checkRegionGoal(r);
     return team_.teamGoalReached(p_.coverage) ? Turn::TeamGoal : Turn::Next;
   }
-  const int dir = neighbourDir(world_.geometry(), r.cell, next);
   KnowledgeMap& m = team_.map(r.mapId);
   const bool revisit = m.visit(next);
   recorder_.moved(r.id, next, r.heading, dir, motion.horizontal, motion.dh, revisit);

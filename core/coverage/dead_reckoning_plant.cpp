@@ -17,7 +17,7 @@ class DeadReckoningPlant final : public Plant {
  public:
   DeadReckoningPlant(const World& world, const CoverageParams& params, TeamOccupancy& team,
                      Recorder& recorder, const std::vector<CoverageRover>& rovers)
-      : world_(world), g_(world.geometry()), p_(params), team_(team), recorder_(recorder),
+      : Plant(false), world_(world), g_(world.geometry()), p_(params), team_(team), recorder_(recorder),
         trueOccupant_(team.occupants()), trueVisited_(g_.cellCount(), 0) {
     if (p_.localisation.loopClosure) lastEntered_.assign(g_.cellCount(), 0);
     for (const CoverageRover& r : rovers) {
@@ -33,7 +33,7 @@ class DeadReckoningPlant final : public Plant {
   void sense(const CoverageRover& r) override {
     senseWindow(world_, p_.senseRadius, team_.map(r.mapId), r.cell, of(r).trueCell, recorder_);
   }
-  Drive drive(CoverageRover& r, int next, std::int64_t step, Motion& motion) override;
+  Drive drive(CoverageRover& r, int next, int dir, std::int64_t step, Motion& motion) override;
   void arrived(CoverageRover& r) override;
   bool stopsWalledIn() const override { return true; }
   int trueVisited() const override { return trueVisitedCount_; }
@@ -74,11 +74,10 @@ class DeadReckoningPlant final : public Plant {
   int bumpCount_ = 0;
 };
 
-Drive DeadReckoningPlant::drive(CoverageRover& r, int next, std::int64_t step, Motion& motion) {
+Drive DeadReckoningPlant::drive(CoverageRover& r, int next, int dir, std::int64_t step, Motion& motion) {
   TrueState& s = of(r);
   DeadReckoning& odo = s.odo;
   const CellIndex a = g_.cell(r.cell), b = g_.cell(next);
-  const int dir = dirOf(b.row - a.row, b.col - a.col);
   // Commanded: from the believed position to the centre of `next` (local y is north, rows south).
   const Eigen::Vector2d step2((b.col - a.col) * g_.cellWidth, (a.row - b.row) * g_.cellWidth);
   const bool centred = odo.offset().x() == 0 && odo.offset().y() == 0;

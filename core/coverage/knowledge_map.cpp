@@ -12,11 +12,13 @@ KnowledgeMap::KnowledgeMap(const GridGeometry& g, std::vector<std::uint8_t> regi
       visits_(g.cellCount(), 0) {
   regionCells_ = region_.empty() ? g.cellCount()
                                  : static_cast<int>(std::count(region_.begin(), region_.end(), 1));
+  unknown_ = regionCells_;
 }
 
 bool KnowledgeMap::markObstacle(int i) {
   if (state_[i] == CellState::Obstacle) return false;
   if (state_[i] == CellState::Visited) --visited_;
+  if (state_[i] == CellState::Unknown && inRegion(i)) --unknown_;
   state_[i] = CellState::Obstacle;
   visits_[i] = 0;
   ++knownObstacles_;

@@ -27,6 +27,9 @@ class KnowledgeMap {
   const std::uint32_t* visitsData() const { return visits_.data(); }
   const std::uint8_t* regionData() const { return region_.empty() ? nullptr : region_.data(); }
   int regionCells() const { return regionCells_; }
+  // Cells of the region still Unknown. Under a perfect pose a map never forgets, so at 0 sensing
+  // can change nothing more (the last two thirds of a run to full coverage, spent revisiting).
+  int unknownCells() const { return unknown_; }
   int visitedCount() const { return visited_; }
   int knownObstacles() const { return knownObstacles_; }
 
@@ -36,6 +39,7 @@ class KnowledgeMap {
     if (state_[i] != CellState::Unknown) return false;
     state_[i] = obstacle ? CellState::Obstacle : CellState::Free;
     knownObstacles_ += obstacle;
+    unknown_ -= inRegion(i);
     return true;
   }
   // sense() over `count` cells from `first`, `stride` apart (a row or column of a sensing window),
@@ -52,6 +56,7 @@ class KnowledgeMap {
       const bool isObstacle = obstacle[i] != 0;
       state[i] = isObstacle ? CellState::Obstacle : CellState::Free;
       found += isObstacle;
+      --unknown_;
       changed(i, state[i]);
     }
     knownObstacles_ += found;
@@ -59,7 +64,10 @@ class KnowledgeMap {
   // Enters a cell (it must not be an obstacle); returns whether it was visited before.
   bool visit(int i) {
     const bool before = visits_[i] > 0;
-    if (!before) ++visited_;
+    if (!before) {
+      ++visited_;
+      unknown_ -= state_[i] == CellState::Unknown && inRegion(i);  // a start cell, before sensing
+    }
     state_[i] = CellState::Visited;
     ++visits_[i];
     return before;
@@ -87,6 +95,7 @@ class KnowledgeMap {
   std::vector<CellState> state_;
   std::vector<std::uint32_t> visits_;
   int regionCells_ = 0;
+  int unknown_ = 0;
   int visited_ = 0;
   int knownObstacles_ = 0;
   // goalReached's last answer's inputs and the visited count they need.

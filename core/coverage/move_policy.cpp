@@ -14,7 +14,11 @@ MovePolicy::MovePolicy(const World& world, const CoverageParams& params, const T
   for (int heading = 0; heading < kDirections; ++heading)
     for (int rel = 0; rel < kDirections; ++rel) staticCost_[heading][rel] = table.cost(rel, rotateDir(heading, rel));
   heightTerm_ = params.beta != 0 && world.hasHeights();
-  for (int dir = 0; dir < kDirections; ++dir) offset_[dir] = kDirRow[dir] * g_.cols + kDirCol[dir];
+  for (int heading = 0; heading < kDirections; ++heading)
+    for (int rel = 0; rel < kDirections; ++rel) {
+      const int dir = (heading + rel) & 7;
+      offset_[heading][rel] = kDirRow[dir] * g_.cols + kDirCol[dir];
+    }
   onBorder_.assign(static_cast<std::size_t>(g_.cellCount()), 0);
   for (int row = 0; row < g_.rows; ++row)
     for (int col = 0; col < g_.cols; ++col)
@@ -62,6 +66,7 @@ int MovePolicy::costStep(CoverageRover& r) {
   const double alpha = p_.alpha, mcVisited = p_.mcVisited, beta = p_.beta;
   const double hCur = heightTerm_ ? world_.height(r.cell) : 0.0;
   const std::array<double, 8>& staticCost = staticCost_[r.heading];
+  const std::array<int, 8>& offset = offset_[r.heading];
   int best = -1;
   double bestCost = std::numeric_limits<double>::infinity();
   double blockedStraightCost = std::numeric_limits<double>::infinity();
@@ -77,7 +82,7 @@ int MovePolicy::costStep(CoverageRover& r) {
     if (cost < bestCost) bestCost = cost, best = i;
   };
   if (!onBorder_[static_cast<std::size_t>(r.cell)]) {
-    for (int rel = 0; rel < kDirections; ++rel) consider(r.cell + offset_[(r.heading + rel) & 7], rel);
+    for (int rel = 0; rel < kDirections; ++rel) consider(r.cell + offset[rel], rel);
   } else {
     for (const Neighbour& n : neighbours8(g_, r.cell, r.heading)) consider(n.index, (n.dir - r.heading) & 7);
   }

@@ -49,9 +49,9 @@ class MovePolicy {
   std::array<std::array<double, 8>, 8> staticCost_{};
   // Paper 000 eq. 3's height term only where it can be non-zero (β > 0 on a world with heights).
   bool heightTerm_ = false;
-  // Flat-index offset of the neighbour in each direction, for cells off the border, and which
-  // cells are on it (a lookup instead of GridGeometry::cell's division).
-  std::array<int, 8> offset_{};
+  // Flat-index offset of the neighbour `rel` steps left of each heading, for cells off the
+  // border, and which cells are on it (a lookup instead of GridGeometry::cell's division).
+  std::array<std::array<int, 8>, 8> offset_{};
   std::vector<std::uint8_t> onBorder_;
   // Breadth-first search scratch, reused between searches (a stamp instead of clearing).
   std::vector<int> bfsParent_;

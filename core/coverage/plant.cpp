@@ -39,17 +39,18 @@ class PerfectPlant final : public Plant {
  public:
   PerfectPlant(const World& world, const CoverageParams& params, TeamOccupancy& team, Recorder& recorder,
                std::size_t rovers)
-      : world_(world),
+      : Plant(true),
+        world_(world),
         g_(world.geometry()),
         radius_(params.senseRadius),
+        length_{g_.cellWidth * 1.0, g_.cellWidth * std::numbers::sqrt2},
         team_(team),
         recorder_(recorder),
         lastSensed_(rovers, kNotYet) {}
 
   void sense(const CoverageRover& r) override;
-  Drive drive(CoverageRover& r, int next, std::int64_t, Motion& motion) override {
-    const int dir = neighbourDir(g_, r.cell, next);
-    motion.horizontal = g_.cellWidth * (isDiagonal(dir) ? std::numbers::sqrt2 : 1.0);
+  Drive drive(CoverageRover& r, int next, int dir, std::int64_t, Motion& motion) override {
+    motion.horizontal = length_[isDiagonal(dir)];
     motion.dh = world_.height(next) - world_.height(r.cell);
     return Drive::Moved;
   }
@@ -67,8 +68,23 @@ class PerfectPlant final : public Plant {
   const World& world_;
   const GridGeometry& g_;
   const int radius_;
+  // Metres of a straight and of a diagonal one-cell move.
+  const double length_[2];
   TeamOccupancy& team_;
   Recorder& recorder_;
+  // The row and column of `cell`, a neighbour of `from` (or `from` itself) after a move, found
+  // from the flat offset; GridGeometry::cell's division only for anything else.
+  CellIndex cellAfter(CellIndex from, int cell) const {
+    if (from.row >= 0 && g_.cols >= 3) {
+      const int d = cell - g_.index(from);
+      const int dRow = d < -1 ? -1 : (d > 1 ? 1 : 0);
+      const CellIndex c{from.row + dRow, from.col + d - dRow * g_.cols};
+      if (c.col >= 0 && c.col < g_.cols && c.col - from.col >= -1 && c.col - from.col <= 1 && g_.contains(c))
+        return c;
+    }
+    return g_.cell(cell);
+  }
+
   // Per rover, the cell it last sensed from (row and column: no division to find them again).
   static constexpr CellIndex kNotYet{-1, -1};
   std::vector<CellIndex> lastSensed_;
@@ -78,9 +94,11 @@ void PerfectPlant::sense(const CoverageRover& r) {
   // Every cell within R of the cell the rover last sensed from is known already (the map never
   // forgets under a perfect pose), so after a one-cell move only the row and column the move
   // brought into range are read, in the same row-major order as the whole window.
+  KnowledgeMap& m = team_.map(r.mapId);
+  if (m.unknownCells() == 0) return;  // nothing left to learn, and nothing is ever forgotten
   CellIndex& last = lastSensed_[r.id];
-  const CellIndex c = g_.cell(r.cell);
   const CellIndex p = last;
+  const CellIndex c = cellAfter(p, r.cell);
   last = c;
   if (p.row < 0 || std::abs(p.row - c.row) > 1 || std::abs(p.col - c.col) > 1) {
     senseWindow(world_, radius_, team_.map(r.mapId), r.cell, r.cell, recorder_);
@@ -88,7 +106,6 @@ void PerfectPlant::sense(const CoverageRover& r) {
   }
   // Moved by (dr, dc), each -1..1: the row c.row + dr·R and the column c.col + dc·R came into
   // range (the parts inside the grid), read row by row.
-  KnowledgeMap& m = team_.map(r.mapId);
   const int R = radius_;
   const int dr = c.row - p.row, dc = c.col - p.col;
   const int newRow = dr != 0 ? c.row + dr * R : -1;

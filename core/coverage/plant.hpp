@@ -35,12 +35,15 @@ struct Motion {
 class Plant {
  public:
   virtual ~Plant() = default;
+  // Whether the believed pose is always the true one: then the truly visited cells are the
+  // team's visited cells, which the recorder reads once a step instead of asking trueVisited().
+  bool poseIsTrue() const { return poseIsTrue_; }
   // Myopic, omnidirectional sensing: every cell within Chebyshev radius R (SPEC §1 step 1) is
   // written into the rover's map as the plant sees it.
   virtual void sense(const CoverageRover& r) = 0;
-  // Drives `r` from its believed cell toward the neighbouring cell `next` at `step`; on Moved,
-  // `motion` is what truly happened.
-  virtual Drive drive(CoverageRover& r, int next, std::int64_t step, Motion& motion) = 0;
+  // Drives `r` from its believed cell toward the neighbouring cell `next`, in direction `dir`
+  // (neighbourDir from the cell to `next`), at `step`; on Moved, `motion` is what truly happened.
+  virtual Drive drive(CoverageRover& r, int next, int dir, std::int64_t step, Motion& motion) = 0;
   // After the engine booked a Moved drive (map, occupancy and heading updated).
   virtual void arrived(CoverageRover& r) = 0;
   // Whether a rover its own map walls in stops for good (its map can then never open again).
@@ -53,6 +56,12 @@ class Plant {
   virtual RoverPose pose(const CoverageRover& r) const = 0;
   // Adds the plant's metrics, tracks and incidents to a finished result.
   virtual void summarise(CoverageResult& result) const = 0;
+
+ protected:
+  explicit Plant(bool poseIsTrue) : poseIsTrue_(poseIsTrue) {}
+
+ private:
+  const bool poseIsTrue_;
 };
 
 // Senses around the believed cell what lies around the true cell (the same cell for a perfect

@@ -39,12 +39,11 @@ void Recorder::bumped(const Bump& b) {
 
 MoveEnergy::MoveEnergy(const EnergyModel& e, double cell)
     : e_(e), straight_(cell * 1.0), diagonal_(cell * std::numbers::sqrt2) {
-  for (int steps = 0; steps <= 4; ++steps) turn_[steps] = turnEnergy(e, 0, steps);
+  for (int from = 0; from < 8; ++from)
+    for (int to = 0; to < 8; ++to) turn_[from][to] = turnEnergy(e, 0, std::abs(turnSteps(from, to)));
   flatStraight_ = forwardEnergy(e, straight_, 0.0);
   flatDiagonal_ = forwardEnergy(e, diagonal_, 0.0);
 }
-
-int MoveEnergy::turnIndex(int fromDir, int toDir) { return std::abs(turnSteps(fromDir, toDir)); }
 
 double MoveEnergy::forward(double horizontal, double dh) const {
   // forwardEnergy(e, h, ±0) is the same number for the same h: look the two grid moves up.
@@ -89,7 +88,8 @@ void Recorder::moved(int rover, int to, int fromHeading, int dir, double horizon
 
 void Recorder::stepEnded(std::int64_t step, std::int64_t moves, const TeamOccupancy& team, const Plant& plant,
                          const std::vector<CoverageRover>& rovers) {
-  curve_.push_back({step, moves, team.visitedTotal(), plant.trueVisited()});
+  const int visited = team.visitedTotal();
+  curve_.push_back({step, moves, visited, plant.poseIsTrue() ? visited : plant.trueVisited()});
   if (sink_) emit(step, team, plant, rovers);
 }
 

@@ -24,15 +24,16 @@ class TeamOccupancy;
 class MoveEnergy {
  public:
   MoveEnergy(const EnergyModel& e, double cell);
-  double turn(int fromDir, int toDir) const { return turn_[turnIndex(fromDir, toDir)]; }
+  double turn(int fromDir, int toDir) const { return turn_[fromDir & 7][toDir & 7]; }
   double forward(double horizontal, double dh) const;
   // atan(|Δh| / horizontal) in degrees: 0 on the flat without the call.
   static double pitchDeg(double horizontal, double dh);
 
  private:
-  static int turnIndex(int fromDir, int toDir);
   EnergyModel e_;
-  std::array<double, 5> turn_{};
+  // Per heading and direction (the five distinct values turnEnergy gives, looked up without
+  // turnSteps' two remainders a move).
+  std::array<std::array<double, 8>, 8> turn_{};
   double straight_, diagonal_, flatStraight_, flatDiagonal_;
 };
 

@@ -10,6 +10,7 @@
 #include "core/common/error.hpp"
 #include "core/coverage/coverage_planner.hpp"
 #include "core/coverage/energy.hpp"
+#include "core/coverage/knowledge_map.hpp"
 #include "core/coverage/recorder.hpp"
 #include "core/grid/neighbours.hpp"
 #include "core/planning/rover_limits.hpp"
@@ -111,6 +112,33 @@ TEST_CASE("a perfect pose senses every cell within R of every cell it stood in")
           }
       }
   }
+}
+
+TEST_CASE("a map counts the unknown cells of its region through every way a cell becomes known") {
+  // The perfect plant stops sensing at 0 (nothing left to learn): the count must be exact.
+  const GridGeometry g{3, 4, 1.0, 1.0};
+  std::vector<std::uint8_t> region(12, 1);
+  region[11] = 0;  // one cell belongs to another rover
+  KnowledgeMap m(g, region);
+  CHECK(m.unknownCells() == 11);
+  m.visit(5);  // a start cell, entered before the first sensing
+  CHECK(m.unknownCells() == 10);
+  m.visit(5);  // a revisit changes nothing
+  CHECK(m.unknownCells() == 10);
+  CHECK(m.sense(0, true));
+  CHECK_FALSE(m.sense(0, false));  // known already
+  CHECK(m.unknownCells() == 9);
+  const std::uint8_t truth[12] = {1, 0, 0, 1, 0, 0, 0, 0, 0, 0, 0, 1};
+  int told = 0;
+  m.senseLine(8, 1, 4, truth, [&](int, CellState) { ++told; });  // cell 11 is outside the region
+  CHECK(told == 3);
+  CHECK(m.unknownCells() == 6);
+  CHECK(m.markObstacle(1));  // a bump into a cell never sensed
+  CHECK(m.markObstacle(5));  // a bump into a visited cell: it was known already
+  CHECK(m.unknownCells() == 5);
+  for (int i : {2, 3, 4, 6, 7}) m.sense(i, truth[i] != 0);
+  CHECK(m.unknownCells() == 0);
+  CHECK(m.state(11) == CellState::Unknown);
 }
 
 TEST_CASE("reachable cells: all free cells after full coverage, the flood otherwise") {
