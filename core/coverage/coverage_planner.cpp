@@ -92,6 +92,12 @@ class Engine {
       r.doneReason = StopReason::GoalReached;
     }
   }
+  // The recorder's curve point; a true pose's truly visited cells are the maps' visited cells.
+  void stepEnded(std::int64_t step) {
+    const int visited = team_.visitedTotal();
+    recorder_.stepEnded(step, moves_, visited, plant_->poseIsTrue() ? visited : plant_->trueVisited(), team_,
+                        *plant_, rovers_);
+  }
   enum class Turn { Next, TeamGoal };
   // One rover's turn in a step.
   Turn play(CoverageRover& r, std::int64_t step);
@@ -153,7 +159,7 @@ CoverageResult Engine::run() {
   std::int64_t step = 0;
   for (auto& r : rovers_) checkRegionGoal(r);
   bool goal = team_.teamGoalReached(p_.coverage);
-  recorder_.stepEnded(0, 0, team_, *plant_, rovers_);
+  stepEnded(0);
 
   StopReason stop = StopReason::StepBudget;
   while (true) {
@@ -178,7 +184,7 @@ CoverageResult Engine::run() {
         break;
       }
     }
-    recorder_.stepEnded(step, moves_, team_, *plant_, rovers_);
+    stepEnded(step);
   }
   return recorder_.finish(stop, step, team_, *plant_);
 }

@@ -38,20 +38,6 @@ bool MovePolicy::hasUnvisitedNeighbour(const CoverageRover& r) const {
   return false;
 }
 
-int MovePolicy::choose(CoverageRover& r) {
-  if (p_.frontier && !hasUnvisitedNeighbour(r)) {
-    r.circling = false;
-    return frontierStep(r);
-  }
-  r.plan.clear();
-  if (r.circling) {
-    int next = contourStep(r, false);
-    if (next >= 0) return next;
-    r.circling = false;
-  }
-  return costStep(r);
-}
-
 int MovePolicy::costStep(CoverageRover& r) {
   // Paper 000 eq. 3: mc = α(mc_static + mc_visited·V) + β·|Δh|; the cheapest neighbour wins, ties
   // go to the first in the order straight, L45, L90, ... (rarely needed: left ≠ right). Without

@@ -20,7 +20,20 @@ class MovePolicy {
 
   // The next cell for `r`, or -1 when it has no legal move this step. In frontier mode a rover
   // with nothing reachable left unexplored is marked done (NothingLeft).
-  int choose(CoverageRover& r);
+  // Inline: the engine asks every move, and most moves go straight to costStep.
+  int choose(CoverageRover& r) {
+    if (p_.frontier && !hasUnvisitedNeighbour(r)) {
+      r.circling = false;
+      return frontierStep(r);
+    }
+    r.plan.clear();
+    if (r.circling) {
+      int next = contourStep(r, false);
+      if (next >= 0) return next;
+      r.circling = false;
+    }
+    return costStep(r);
+  }
   // After a move made while circling: gives up or regains the line. Returns the heading the
   // rover had when it turned back onto its line (a spot turn the caller books), else -1.
   int afterContourMove(CoverageRover& r);

@@ -36,7 +36,7 @@ class Plant {
  public:
   virtual ~Plant() = default;
   // Whether the believed pose is always the true one: then the truly visited cells are the
-  // team's visited cells, which the recorder reads once a step instead of asking trueVisited().
+  // team's visited cells, which the engine reads once a step instead of asking trueVisited().
   bool poseIsTrue() const { return poseIsTrue_; }
   // Myopic, omnidirectional sensing: every cell within Chebyshev radius R (SPEC §1 step 1) is
   // written into the rover's map as the plant sees it.

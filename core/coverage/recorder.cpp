@@ -45,18 +45,6 @@ MoveEnergy::MoveEnergy(const EnergyModel& e, double cell)
   flatDiagonal_ = forwardEnergy(e, diagonal_, 0.0);
 }
 
-double MoveEnergy::forward(double horizontal, double dh) const {
-  // forwardEnergy(e, h, ±0) is the same number for the same h: look the two grid moves up.
-  if (dh == 0 && horizontal == straight_) return flatStraight_;
-  if (dh == 0 && horizontal == diagonal_) return flatDiagonal_;
-  return forwardEnergy(e_, horizontal, dh);
-}
-
-double MoveEnergy::pitchDeg(double horizontal, double dh) {
-  if (dh == 0) return 0.0;  // atan(0) · 180/π
-  return std::atan(std::fabs(dh) / horizontal) * 180.0 / std::numbers::pi;
-}
-
 Recorder::Recorder(const World& world, const CoverageParams& params, EventSink* sink,
                    const std::vector<StartCell>& starts)
     : world_(world),
@@ -70,27 +58,6 @@ Recorder::Recorder(const World& world, const CoverageParams& params, EventSink* 
   // One curve point a step; a run to full coverage takes about as many steps as there are cells
   // (capped: a big map's run stops earlier or grows the vector as usual).
   curve_.reserve(static_cast<std::size_t>(std::min(g_.cellCount(), 1 << 20)) + 1);
-}
-
-void Recorder::moved(int rover, int to, int fromHeading, int dir, double horizontal, double dh, bool revisit) {
-  RoverTrack& t = track(rover);
-  const double pitchDeg = MoveEnergy::pitchDeg(horizontal, dh);
-  t.energyJ += energy_.turn(fromHeading, dir) + energy_.forward(horizontal, dh);
-  t.distanceM += horizontal;
-  t.maxPitchDeg = std::max(t.maxPitchDeg, pitchDeg);
-  if (p_.recordTracks) {
-    t.pitchDeg.push_back(static_cast<float>(pitchDeg));
-    t.cells.push_back(to);
-  }
-  ++t.moves;
-  t.revisits += revisit;
-}
-
-void Recorder::stepEnded(std::int64_t step, std::int64_t moves, const TeamOccupancy& team, const Plant& plant,
-                         const std::vector<CoverageRover>& rovers) {
-  const int visited = team.visitedTotal();
-  curve_.push_back({step, moves, visited, plant.poseIsTrue() ? visited : plant.trueVisited()});
-  if (sink_) emit(step, team, plant, rovers);
 }
 
 void Recorder::emit(std::int64_t step, const TeamOccupancy& team, const Plant& plant,

@@ -4,13 +4,17 @@
 // energy, pitch), the coverage curve, the events a sink asked for, and the metrics at the end.
 // Energy and pitch of the flat one-cell moves of a world without heights are worked out once, not
 // per move (the trigonometry per move was a tenth of a study's time, .decisions/0001).
+#include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstdint>
+#include <numbers>
 #include <vector>
 
 #include "core/coverage/coverage_params.hpp"
 #include "core/coverage/coverage_planner.hpp"
 #include "core/coverage/coverage_rover.hpp"
+#include "core/coverage/energy.hpp"
 #include "core/coverage/world.hpp"
 #include "core/planning/events.hpp"
 
@@ -25,9 +29,17 @@ class MoveEnergy {
  public:
   MoveEnergy(const EnergyModel& e, double cell);
   double turn(int fromDir, int toDir) const { return turn_[fromDir & 7][toDir & 7]; }
-  double forward(double horizontal, double dh) const;
+  double forward(double horizontal, double dh) const {
+    // forwardEnergy(e, h, ±0) is the same number for the same h: look the two grid moves up.
+    if (dh == 0 && horizontal == straight_) return flatStraight_;
+    if (dh == 0 && horizontal == diagonal_) return flatDiagonal_;
+    return forwardEnergy(e_, horizontal, dh);
+  }
   // atan(|Δh| / horizontal) in degrees: 0 on the flat without the call.
-  static double pitchDeg(double horizontal, double dh);
+  static double pitchDeg(double horizontal, double dh) {
+    if (dh == 0) return 0.0;  // atan(0) · 180/π
+    return std::atan(std::fabs(dh) / horizontal) * 180.0 / std::numbers::pi;
+  }
 
  private:
   EnergyModel e_;
@@ -52,15 +64,33 @@ class Recorder {
   }
   // A move that happened: `horizontal` metres and `dh` metres up on the truth, from heading
   // `fromHeading` into direction `dir`; `revisit` when the cell was visited before.
-  void moved(int rover, int to, int fromHeading, int dir, double horizontal, double dh, bool revisit);
+  // Inline with stepEnded: the engine calls both every move, and the calls' own cost was a tenth
+  // of a move's instructions.
+  void moved(int rover, int to, int fromHeading, int dir, double horizontal, double dh, bool revisit) {
+    RoverTrack& t = track(rover);
+    const double pitchDeg = MoveEnergy::pitchDeg(horizontal, dh);
+    t.energyJ += energy_.turn(fromHeading, dir) + energy_.forward(horizontal, dh);
+    t.distanceM += horizontal;
+    t.maxPitchDeg = std::max(t.maxPitchDeg, pitchDeg);
+    if (p_.recordTracks) {
+      t.pitchDeg.push_back(static_cast<float>(pitchDeg));
+      t.cells.push_back(to);
+    }
+    ++t.moves;
+    t.revisits += revisit;
+  }
   // A spot turn without a move (back onto a circumnavigated line, or towards a bump).
   void turned(int rover, int fromDir, int toDir) { track(rover).energyJ += energy_.turn(fromDir, toDir); }
   void waited(int rover) { ++track(rover).waits; }
   // A bump that is listed (kMaxBumpRecords): told to the sink at once as an incident.
   void bumped(const Bump& b);
-  // The curve's point after a step, and the step's events when there is a sink.
-  void stepEnded(std::int64_t step, std::int64_t moves, const TeamOccupancy& team, const Plant& plant,
-                 const std::vector<CoverageRover>& rovers);
+  // The curve's point after a step (`visited` cells in the rovers' maps, `trueVisited` truly
+  // stood in), and the step's events when there is a sink.
+  void stepEnded(std::int64_t step, std::int64_t moves, int visited, int trueVisited, const TeamOccupancy& team,
+                 const Plant& plant, const std::vector<CoverageRover>& rovers) {
+    curve_.push_back({step, moves, visited, trueVisited});
+    if (sink_) emit(step, team, plant, rovers);
+  }
   std::int64_t moves() const { return curve_.empty() ? 0 : curve_.back().moves; }
 
   // The result: tracks, curve, metrics (the plant adds its own), the team's final view.
