@@ -61,6 +61,24 @@ class KnowledgeMap {
     }
     knownObstacles_ += found;
   }
+  // sense() over the cells `centre + offsets[k]` (all in the grid), in order: the perfect plant's
+  // read of the cells a one-cell move away from the border brings into range.
+  template <class Changed>
+  void senseAround(int centre, const std::vector<int>& offsets, const std::uint8_t* obstacle, Changed&& changed) {
+    CellState* const state = state_.data();
+    const std::uint8_t* const region = region_.empty() ? nullptr : region_.data();
+    int found = 0;
+    for (const int offset : offsets) {
+      const int i = centre + offset;
+      if ((region && !region[i]) || state[i] != CellState::Unknown) continue;
+      const bool isObstacle = obstacle[i] != 0;
+      state[i] = isObstacle ? CellState::Obstacle : CellState::Free;
+      found += isObstacle;
+      --unknown_;
+      changed(i, state[i]);
+    }
+    knownObstacles_ += found;
+  }
   // Enters a cell (it must not be an obstacle); returns whether it was visited before.
   bool visit(int i) {
     const bool before = visits_[i] > 0;

@@ -1,6 +1,7 @@
 #include "core/coverage/plant.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cstdlib>
 #include <numbers>
 
@@ -38,15 +39,7 @@ namespace {
 class PerfectPlant final : public Plant {
  public:
   PerfectPlant(const World& world, const CoverageParams& params, TeamOccupancy& team, Recorder& recorder,
-               std::size_t rovers)
-      : Plant(true),
-        world_(world),
-        g_(world.geometry()),
-        radius_(params.senseRadius),
-        length_{g_.cellWidth * 1.0, g_.cellWidth * std::numbers::sqrt2},
-        team_(team),
-        recorder_(recorder),
-        lastSensed_(rovers, kNotYet) {}
+               std::size_t rovers);
 
   void sense(const CoverageRover& r) override;
   Drive drive(CoverageRover& r, int next, int dir, std::int64_t, Motion& motion) override {
@@ -65,6 +58,10 @@ class PerfectPlant final : public Plant {
   void summarise(CoverageResult&) const override {}
 
  private:
+  // After a one-cell move from `from` to `to`: the row and column the move brought into range,
+  // clipped to the grid.
+  void senseEntering(KnowledgeMap& m, CellIndex from, CellIndex to);
+
   const World& world_;
   const GridGeometry& g_;
   const int radius_;
@@ -72,23 +69,37 @@ class PerfectPlant final : public Plant {
   const double length_[2];
   TeamOccupancy& team_;
   Recorder& recorder_;
-  // The row and column of `cell`, a neighbour of `from` (or `from` itself) after a move, found
-  // from the flat offset; GridGeometry::cell's division only for anything else.
-  CellIndex cellAfter(CellIndex from, int cell) const {
-    if (from.row >= 0 && g_.cols >= 3) {
-      const int d = cell - g_.index(from);
-      const int dRow = d < -1 ? -1 : (d > 1 ? 1 : 0);
-      const CellIndex c{from.row + dRow, from.col + d - dRow * g_.cols};
-      if (c.col >= 0 && c.col < g_.cols && c.col - from.col >= -1 && c.col - from.col <= 1 && g_.contains(c))
-        return c;
-    }
-    return g_.cell(cell);
-  }
-
-  // Per rover, the cell it last sensed from (row and column: no division to find them again).
-  static constexpr CellIndex kNotYet{-1, -1};
-  std::vector<CellIndex> lastSensed_;
+  // Per rover, the cell it last sensed from (-1 before its first sensing).
+  std::vector<int> lastSensed_;
+  // Cells whose window of radius R lies inside the grid, and per direction of a move the offsets
+  // from the new cell of the cells entering its window, in the window's row-major order: a move
+  // between two such cells reads them without clipping anything.
+  std::vector<std::uint8_t> inner_;
+  std::array<std::vector<int>, 8> entering_;
 };
+
+PerfectPlant::PerfectPlant(const World& world, const CoverageParams& params, TeamOccupancy& team,
+                           Recorder& recorder, std::size_t rovers)
+    : Plant(true),
+      world_(world),
+      g_(world.geometry()),
+      radius_(params.senseRadius),
+      length_{g_.cellWidth * 1.0, g_.cellWidth * std::numbers::sqrt2},
+      team_(team),
+      recorder_(recorder),
+      lastSensed_(rovers, -1),
+      inner_(static_cast<std::size_t>(g_.cellCount()), 0) {
+  const int R = radius_;
+  for (int row = R; row < g_.rows - R; ++row)
+    for (int col = R; col < g_.cols - R; ++col) inner_[static_cast<std::size_t>(g_.index(row, col))] = 1;
+  for (int dir = 0; dir < kDirections; ++dir)
+    for (int dRow = -R; dRow <= R; ++dRow)
+      for (int dCol = -R; dCol <= R; ++dCol) {
+        // In the new window; in the old one (centred one step back) unless this far ahead.
+        const int oldRow = dRow + kDirRow[dir], oldCol = dCol + kDirCol[dir];
+        if (std::abs(oldRow) > R || std::abs(oldCol) > R) entering_[dir].push_back(dRow * g_.cols + dCol);
+      }
+}
 
 void PerfectPlant::sense(const CoverageRover& r) {
   // Every cell within R of the cell the rover last sensed from is known already (the map never
@@ -96,14 +107,29 @@ void PerfectPlant::sense(const CoverageRover& r) {
   // brought into range are read, in the same row-major order as the whole window.
   KnowledgeMap& m = team_.map(r.mapId);
   if (m.unknownCells() == 0) return;  // nothing left to learn, and nothing is ever forgotten
-  CellIndex& last = lastSensed_[r.id];
-  const CellIndex p = last;
-  const CellIndex c = cellAfter(p, r.cell);
-  last = c;
+  const int from = lastSensed_[static_cast<std::size_t>(r.id)];
+  lastSensed_[static_cast<std::size_t>(r.id)] = r.cell;
+  auto changed = [&](int i, CellState s) { recorder_.cellChanged(i, s, 0); };
+  if (from >= 0 && inner_[static_cast<std::size_t>(r.cell)]) {
+    // The move's direction from the flat offset: exact, as the new cell is off the border.
+    const int d = r.cell - from;
+    const int dRow = d < -1 ? -1 : (d > 1 ? 1 : 0), dCol = d - dRow * g_.cols;
+    if (d != 0 && dCol >= -1 && dCol <= 1) {
+      m.senseAround(r.cell, entering_[static_cast<std::size_t>(dirOf(dRow, dCol))],
+                    world_.obstacles.values.data(), changed);
+      return;
+    }
+  }
+  const CellIndex c = g_.cell(r.cell);
+  const CellIndex p = from >= 0 ? g_.cell(from) : CellIndex{-1, -1};
   if (p.row < 0 || std::abs(p.row - c.row) > 1 || std::abs(p.col - c.col) > 1) {
-    senseWindow(world_, radius_, team_.map(r.mapId), r.cell, r.cell, recorder_);
+    senseWindow(world_, radius_, m, r.cell, r.cell, recorder_);
     return;
   }
+  senseEntering(m, p, c);
+}
+
+void PerfectPlant::senseEntering(KnowledgeMap& m, CellIndex p, CellIndex c) {
   // Moved by (dr, dc), each -1..1: the row c.row + dr·R and the column c.col + dc·R came into
   // range (the parts inside the grid), read row by row.
   const int R = radius_;
