@@ -19,7 +19,19 @@ PaperPolicy::PaperPolicy(const CoordinationParams& p) : waits_(p.maxWaits), dwel
 // step aside on real ground. The whole dwell_check (10 s by default): a stop checked for less
 // left a rover no time to get out of the way when its next leg found no clear try
 // (.decisions/0002).
-TimedPolicy::TimedPolicy(const CoordinationParams& p, StopRules rules) : rules_(rules), dwell_(p.dwellCheck) {
+// The standing rovers' zones: the safety distance plus half the departure margin (1.25 m by
+// default), inside the way out the departure order guarantees each rover (safety + margin, less
+// its grid step; planning/departure.hpp) and clear of every goal the task builder gives with
+// sub-teams (safety + both acceptance circles + the margin from a later rover's start), with a
+// quarter metre past the safety distance for the simulated rover's deviation from its path.
+// Without them the planner met the standing rovers one conflict at a time, one zone per try: on
+// the Kepler site with 40 rovers, 5 legs went round the formation's 3 × 3 m lattice of standing
+// rovers by trial and error, each spending its 20 re-plans on 20 different standing rovers, and
+// ended short or skipped (issue 25).
+TimedPolicy::TimedPolicy(const CoordinationParams& p, StopRules rules)
+    : rules_(rules),
+      dwell_(p.dwellCheck),
+      standing_(p.safetyDistance > 0 ? p.safetyDistance + planning::kDepartureMargin / 2 : 0.0) {
   const double period = p.controller.samplePeriod;
   const int step = std::max(1, static_cast<int>(std::lround(p.delayStep / period)));
   const int maxTicks = static_cast<int>(std::lround(p.maxWaits * p.waitStep / period));

@@ -91,6 +91,10 @@ class ConflictPolicy {
   // How many such moves and where they look: aside().
   virtual bool recovers() const = 0;
   virtual const AsideSearch& aside() const = 0;
+  // The radius of the keep-out zone round the start of every rover planned after this one (which
+  // stands there, in the traffic table, for the whole mission while this one is planned), given
+  // to every plan of this rover from its first try; 0 = none, the conflicts place the zones.
+  virtual double standingKeepOut() const = 0;
 };
 
 // Paper 001 fig. 8 as SPEC §3.4 reads it: re-plan with a new seed (and a keep-out zone) on each
@@ -111,6 +115,7 @@ class PaperPolicy : public ConflictPolicy {
   bool lastLegParks() const override { return true; }
   bool recovers() const override { return false; }
   const AsideSearch& aside() const override { return aside_; }
+  double standingKeepOut() const override { return 0.0; }
 
  private:
   std::vector<int> delays_{0};
@@ -144,11 +149,13 @@ class TimedPolicy : public ConflictPolicy {
   bool lastLegParks() const override { return false; }
   bool recovers() const override { return true; }
   const AsideSearch& aside() const override { return aside_; }
+  double standingKeepOut() const override { return standing_; }
 
  private:
   std::vector<int> delays_;
   StopRules rules_;
   double dwell_;
+  double standing_;
   AsideSearch aside_;
 };
 

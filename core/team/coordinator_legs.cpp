@@ -17,14 +17,16 @@ namespace rover::team::detail {
 Coordinator::Outcome Coordinator::runPiece(int k, int i, int piece, const Eigen::Vector2d& goal, LegRecord& rec,
                  bool& reachedGoal) {
   const bool lastLeg = i + 1 == static_cast<int>(tasks_[k].legs.size());
-  std::vector<KeepOutZone> keepOut;
+  // The standing rovers' zones first (if the policy has them), then one per refused try.
+  std::vector<KeepOutZone> keepOut = standingZones(k, here(k), goal);
+  const std::size_t standing = keepOut.size();
   std::optional<Candidate> firstTry;  // the first try within the attitude check
   std::optional<Conflict> conflict;
   std::optional<PathStatus> noPath;
   int zoneTries = 0;       // tries refused for a sample in a keep-out zone
   int unturnableEnds = 0;  // tries refused for ending where the rover cannot turn
   std::optional<Tilt> leastTilt;  // of the tries refused for tilting past the attitude check
-  std::size_t zonesBefore = 0;  // keep-out zones of the previous try
+  std::size_t zonesBefore = standing;  // keep-out zones of the previous try
   bool shortBefore = false;     // the previous try's plan ended short of a cut-off goal
   int unzonedRun = 0;           // policy_.unzonedConflictsEndReplans(): such tries in a row
   bool lastTry = false;         // policy_.repeatedShortEndsReplans(), unzonedConflictsEndReplans()
@@ -54,12 +56,12 @@ Coordinator::Outcome Coordinator::runPiece(int k, int i, int piece, const Eigen:
     shortBefore = isShort;
     if (!path.hasPath() || path.waypoints.size() < 2) {
       noPath = path.status;
-      // Without keep-out zones a new seed cannot turn an invalid start or goal valid.
-      if (keepOut.empty() && path.status == PathStatus::InvalidGoal && policy_.invalidGoalEndsPiece()) {
+      // Without a try's keep-out zones a new seed cannot turn an invalid start or goal valid.
+      if (keepOut.size() == standing && path.status == PathStatus::InvalidGoal && policy_.invalidGoalEndsPiece()) {
         rec.note = "no path: invalid_goal (not on ground a rover may stop on)";
         return Outcome::InvalidGoal;
       }
-      if (keepOut.empty() &&
+      if (keepOut.size() == standing &&
           (path.status == PathStatus::InvalidGoal || path.status == PathStatus::InvalidStart))
         break;
       continue;

@@ -804,7 +804,7 @@ class SeededPlanner final : public LegPlanner {
 TEST_CASE("stages: legs planned ahead on workers are the plans made alone, asked for in any order") {
   std::vector<PlanAhead::Job> jobs;
   for (int j = 0; j < 60; ++j)
-    jobs.push_back({{0, 0}, 0.0, {static_cast<double>(j + 1), 1}, 1000u + static_cast<unsigned>(j), j % 7 != 3});
+    jobs.push_back({{0, 0}, 0.0, {static_cast<double>(j + 1), 1}, 1000u + static_cast<unsigned>(j), j % 7 != 3, {}});
   const SeededPlanner planner;
   std::vector<std::vector<Eigen::Vector2d>> alone;
   for (const auto& job : jobs) alone.push_back(planner.plan(job.start, job.heading, job.goal, job.seed, {}, nullptr).waypoints);
@@ -847,7 +847,7 @@ TEST_CASE("stages: a speculated re-plan is the plan made alone, used only for it
   for (unsigned workers : {0u, 1u, 3u}) {
     CAPTURE(workers);
     std::vector<PlanAhead::Job> jobs;
-    for (int j = 0; j < 8; ++j) jobs.push_back({{0, 0}, 0.0, {static_cast<double>(j + 1), 1}, 7u + j, true});
+    for (int j = 0; j < 8; ++j) jobs.push_back({{0, 0}, 0.0, {static_cast<double>(j + 1), 1}, 7u + j, true, {}});
     PlanAhead ahead(planner, jobs, workers, nullptr);
     // A run of tries with the same zones, each speculating the next, as the coordinator does.
     for (std::uint64_t seed = 100; seed < 110; ++seed) {
