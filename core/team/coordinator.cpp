@@ -51,7 +51,7 @@ CoordinationResult coordinateWith(const std::vector<RoverTask>& tasks, const Leg
                                   const LegSimulator& simulator, const ConflictPolicy& policy,
                                   const CoordinationParams& params, std::uint64_t seed,
                                   CoordinationObserver* observer, const CancelToken* cancel,
-                                  const planning::PassableGround& passable) {
+                                  const planning::Departure* departure) {
   params.validate();
   if (tasks.empty()) throw Error(ErrorCode::InvalidInput, "rovers", "rovers: none given");
   const std::vector<int>& delays = policy.startDelays();
@@ -77,16 +77,28 @@ CoordinationResult coordinateWith(const std::vector<RoverTask>& tasks, const Leg
   }
   // Rovers boxed in by others leave after them (the table holds every rover at its start until
   // it is planned); one that cannot leave while the others stand is refused.
-  std::vector<Eigen::Vector2d> starts;
-  for (const RoverTask& t : tasks) starts.emplace_back(t.start.x, t.start.y);
-  planning::Departure departure = planning::departureOrder(starts, params.safetyDistance, passable);
-  if (!departure.boxedIn.empty()) {
-    const std::string field = "rovers[" + std::to_string(departure.boxedIn.front()) + "]";
+  planning::Departure open;
+  if (!departure) {
+    std::vector<Eigen::Vector2d> starts;
+    for (const RoverTask& t : tasks) starts.emplace_back(t.start.x, t.start.y);
+    open = planning::departureOrder(starts, params.safetyDistance);
+    departure = &open;
+  }
+  std::vector<int> seen(tasks.size(), 0);
+  bool once = departure->order.size() + departure->boxedIn.size() == tasks.size() &&
+              departure->firstRound >= 0 && departure->firstRound <= static_cast<int>(departure->order.size());
+  for (const auto* list : {&departure->order, &departure->boxedIn})
+    for (int k : *list) once = once && k >= 0 && k < static_cast<int>(tasks.size()) && seen[static_cast<std::size_t>(k)]++ == 0;
+  if (!once)
+    throw Error(ErrorCode::InvalidParameter, "coordination",
+                "coordination: the departure order must hold every rover once");
+  if (!departure->boxedIn.empty()) {
+    const std::string field = "rovers[" + std::to_string(departure->boxedIn.front()) + "]";
     throw Error(ErrorCode::InvalidInput, field,
                 field + ": start is boxed in: no way out past the other rovers' starts keeping the safety distance "
                         "(+ " + detail::oneDecimal(planning::kDepartureMargin) + " m)");
   }
-  return detail::Coordinator(tasks, std::move(departure.order), departure.firstRound, planner, simulator, policy, params, seed, observer,
+  return detail::Coordinator(tasks, departure->order, departure->firstRound, planner, simulator, policy, params, seed, observer,
                      cancel)
       .run();
 }

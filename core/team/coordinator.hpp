@@ -165,13 +165,15 @@ class TimedPolicy : public ConflictPolicy {
 // (deriveSeed per rover, leg, piece and attempt) and the slip seeds, so the result is the same for
 // a seed whatever the thread count. `planner` must be safe to call from several threads.
 // Throws InvalidInput naming rovers[k] when the simulator cannot place a start. The rovers are
-// planned in planning::departureOrder over `passable` (empty: open ground; coordinate() gives the
-// lattice's ground, traversal_lattice.hpp departureGround).
+// planned in `departure`, planning::departureOrder of the tasks' starts (null: over open ground;
+// coordinate() gives it over the lattice's ground, traversal_lattice.hpp departureOverGround);
+// InvalidInput naming the first boxed-in rover when it leaves one boxed in, InvalidParameter
+// when it does not hold every rover once.
 CoordinationResult coordinateWith(const std::vector<RoverTask>& tasks, const LegPlanner& planner,
                                   const LegSimulator& simulator, const ConflictPolicy& policy,
                                   const CoordinationParams& params, std::uint64_t seed,
                                   CoordinationObserver* observer = nullptr,
                                   const CancelToken* cancel = nullptr,
-                                  const planning::PassableGround& passable = {});
+                                  const planning::Departure* departure = nullptr);
 
 }  // namespace rover::team

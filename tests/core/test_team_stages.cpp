@@ -521,6 +521,14 @@ TEST_CASE("stages: the coordinator reports an invalid and an unreachable goal an
     bool recovers() const override { return false; }
   };
   CHECK_THROWS_AS(coordinateWith(tasks, planner, rover, NoRecovery(p), p, 1), Error);
+  // A departure order given by the caller must hold every rover once.
+  planning::Departure twice;
+  twice.order = {0, 0};  // one rover, twice
+  twice.firstRound = 1;
+  const char* notOnce = "coordination: the departure order must hold every rover once";
+  CHECK_THROWS_WITH_AS(coordinateWith(tasks, planner, rover, TimedPolicy(p), p, 1, nullptr, nullptr, &twice), notOnce, Error);
+  planning::Departure missing;
+  CHECK_THROWS_WITH_AS(coordinateWith(tasks, planner, rover, TimedPolicy(p), p, 1, nullptr, nullptr, &missing), notOnce, Error);
 }
 
 TEST_CASE("stages: a rover whose spot will be run over steps aside, then goes on (timed)") {
