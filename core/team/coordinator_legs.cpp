@@ -145,6 +145,32 @@ Coordinator::Outcome Coordinator::runPiece(int k, int i, int piece, const Eigen:
     rec.note = "no path: " + std::string(enumName(*noPath));
     return *noPath == PathStatus::InvalidGoal ? Outcome::InvalidGoal : Outcome::NoPath;
   }
+  // Timed (recovers): before the leg is skipped, the first try within the limits started later
+  // than the policy's delays, every wait_step up to one past the end of the traffic table (when
+  // every rover planned so far has stopped for good). The policy's delays (max_waits ×
+  // wait_step, 30 s by default) do not outlast a team mate's visit to a dead end: on the Kepler
+  // site with 10 rovers, three rovers of one sub-team went in turn into a pocket of the crater
+  // wall 3 m wide, and the third one's leg met the first or the second there at every delay up
+  // to 30 s (issue 25). max_waits = 0 still means no waiting.
+  if (policy_.recovers() && p_.maxWaits > 0) {
+    const std::vector<int> delays = startDelays(k);
+    const int step = std::max(1, static_cast<int>(std::lround(p_.waitStep / period_)));
+    const std::size_t now = out_.trajectories[k].samples.size();
+    for (std::size_t t = static_cast<std::size_t>(delays.back()) + step; now + t < traffic_.end() + step; t += step) {
+      if (cancelled()) return Outcome::Cancelled;
+      const int ticks = static_cast<int>(t);
+      const std::optional<Conflict> late = firstConflict(k, firstTry->samples, ticks, dwellTicks());
+      // Standing still already conflicts: so does every longer wait.
+      if (late && late->index < now + t) break;
+      if (late) continue;
+      ++rec.waits;
+      ++out_.waits;
+      rec.waitTime += ticks * period_;
+      reachedGoal = firstTry->reached && (firstTry->path.back() - goal).norm() < 1e-9;
+      commit(k, delayed(k, *firstTry, ticks));
+      return Outcome::Accepted;
+    }
+  }
   for (int w = 1; w <= policy_.waitsAfterReplans(); ++w) {
     if (cancelled()) return Outcome::Cancelled;
     const int ticks = static_cast<int>(std::lround(w * p_.waitStep / period_));

@@ -712,7 +712,8 @@ TEST_CASE("stages: timed re-plans end after three tries that meet a rover standi
   // west along y = 5.8 and paces between x = 9.5 and 10.5 from 18.8 s for 80 s, within 1 m of
   // rover 1's goal. Every try meets it while rover 1 stands at the goal (or drives its last metre,
   // started later), and no keep-out zone can be placed there: it would wall the goal in. Timed:
-  // the re-plans end after three such tries and the leg is skipped; paper: all 20 re-plans.
+  // the re-plans end after three such tries, and the rover waits (past max_waits × wait_step)
+  // until rover 0 has done pacing and gone, then goes; paper: all 20 re-plans.
   std::vector<RoverTask> tasks(2);
   tasks[0].start = {20, 5.8, M_PI};
   tasks[0].legs.push_back({{10.5, 5.8}, {}, 0});
@@ -726,10 +727,18 @@ TEST_CASE("stages: timed re-plans end after three tries that meet a rover standi
     return *std::find_if(r.legs.begin(), r.legs.end(), [](const LegRecord& l) { return l.rover == 1; });
   };
   const CoordinationResult timed = coordinateWith(tasks, planner, rover, TimedPolicy(p), p, 1);
-  CHECK(leg1(timed).status == LegStatus::Skipped);
-  CHECK(leg1(timed).reason == LegReason::Conflict);
   CHECK(leg1(timed).replans == TimedPolicy(p).unzonedConflictsEndReplans() - 1);
+  CHECK(leg1(timed).status == LegStatus::Reached);
+  CHECK(leg1(timed).waits == 1);
+  CHECK(leg1(timed).waitTime > p.maxWaits * p.waitStep);
+  CHECK(leg1(timed).endTime > 18.8 + 80);  // after the pacing
   CHECK(timed.conflicts.empty());
+  // max_waits = 0: no waiting at all, the leg is skipped.
+  CoordinationParams noWaits = p;
+  noWaits.maxWaits = 0;
+  const CoordinationResult impatient = coordinateWith(tasks, planner, rover, TimedPolicy(noWaits), noWaits, 1);
+  CHECK(leg1(impatient).status == LegStatus::Skipped);
+  CHECK(leg1(impatient).reason == LegReason::Conflict);
   TimedPolicy::StopRules untiring;
   untiring.unzonedConflictsEndReplans = 0;
   CHECK(leg1(coordinateWith(tasks, planner, rover, TimedPolicy(p, untiring), p, 1)).replans == p.maxReplans);
@@ -740,8 +749,9 @@ TEST_CASE("stages: timed re-plans end after three tries that meet a rover standi
   tasks[0].legs.clear();
   for (int j = 0; j < 50; ++j) tasks[0].legs.push_back({{j % 2 == 0 ? 9.5 : 10.5, 3.8}, {}, j});
   const CoordinationResult onTheWay = coordinateWith(tasks, planner, rover, TimedPolicy(p), p, 1);
-  CHECK(leg1(onTheWay).status == LegStatus::Skipped);
   CHECK(leg1(onTheWay).replans == p.maxReplans);
+  CHECK(leg1(onTheWay).status == LegStatus::Reached);  // waited for the pacing to end, as above
+  CHECK(onTheWay.conflicts.empty());
 }
 
 namespace {
