@@ -66,6 +66,12 @@ Coordinator::Outcome Coordinator::runPiece(int k, int i, int piece, const Eigen:
         break;
       continue;
     }
+    // Timed: a plan cut off from the goal by the keep-out zones of earlier tries, after a try
+    // that reached the goal, is not driven: it would end the leg short of a goal the rover
+    // reaches once the traffic has passed (the wait below). On the Kepler site with 20 rovers a
+    // leg's 14th plan went 0.2 m, walled in by four tries' zones round a team mate passing by the
+    // goal; the rover drove it, made no progress from there, and the leg ended 3 m short (issue 25).
+    if (isShort && policy_.recovers() && firstTry && firstTry->reached) continue;
     const Candidate c0 = simulateTry(k, path.waypoints, 0, slipSeed(0x51ee5ull, k, i, piece, attempt));
     if (cancelled()) return Outcome::Cancelled;
     std::optional<Eigen::Vector2d> steep = firstExceedance(c0.samples);

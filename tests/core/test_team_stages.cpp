@@ -755,6 +755,55 @@ TEST_CASE("stages: timed re-plans end after three tries that meet a rover standi
 }
 
 namespace {
+// A fake planner whose plans keep-out zones cut off: straight to the goal, or, when a zone
+// reaches the straight line, a 0.2 m stub towards it, cut off from the goal.
+class ZonedShortPlanner final : public LegPlanner {
+ public:
+  PathResult plan(const Eigen::Vector2d& from, double, const Eigen::Vector2d& goal, std::uint64_t,
+                  const std::vector<KeepOutZone>& keepOut, const CancelToken*) const override {
+    const bool cut = std::any_of(keepOut.begin(), keepOut.end(), [&](const KeepOutZone& z) {
+      const double s = std::clamp((z.centre - from).dot(goal - from) / (goal - from).squaredNorm(), 0.0, 1.0);
+      return (from + s * (goal - from) - z.centre).norm() < z.radius;
+    });
+    PathResult r;
+    r.status = cut ? PathStatus::Approximate : PathStatus::Exact;
+    r.goalCutOff = cut;
+    r.waypoints = {from, cut ? Eigen::Vector2d(from + 0.2 * (goal - from).normalized()) : goal};
+    return r;
+  }
+  bool edgeValid(const Eigen::Vector2d&, const Eigen::Vector2d&) const override { return true; }
+  bool canStop(const Eigen::Vector2d&) const override { return true; }
+};
+}  // namespace
+
+TEST_CASE("stages: timed, a plan the earlier tries' zones cut off is not driven when a try reached the goal") {
+  // Rover 0 paces across rover 1's way 1.2 m short of its goal for about 100 s; rover 1's first
+  // try reaches the goal but meets it, and the keep-out zone round rover 0 (1 m) cuts every later
+  // plan off 0.2 m on. Driven, such a stub ends the piece without progress and the leg short of
+  // a goal the rover reaches once rover 0 has gone (issue 25, the Kepler site). Timed: the stubs
+  // are not driven; the re-plans end (two short tries with the same zones) and the first try
+  // waits for the pacing to end.
+  std::vector<RoverTask> tasks(2);
+  tasks[0].start = {12, 3.8, M_PI};
+  for (int j = 0; j < 50; ++j) tasks[0].legs.push_back({{j % 2 == 0 ? 9.5 : 10.5, 3.8}, {}, j});
+  tasks[1].start = {10, 0, M_PI / 2};
+  tasks[1].legs = {{{10, 5}, {}, 0}};
+  const ZonedShortPlanner planner;
+  const StraightLineRover rover;
+  CoordinationParams p;
+  p.keepOutRadius = 1.0;  // a zone round rover 0 that does not hold rover 1's goal
+  const CoordinationResult r = coordinateWith(tasks, planner, rover, TimedPolicy(p), p, 1);
+  const auto leg = std::find_if(r.legs.begin(), r.legs.end(), [](const LegRecord& l) { return l.rover == 1; });
+  REQUIRE(leg != r.legs.end());
+  CHECK(leg->status == LegStatus::Reached);
+  CHECK(leg->pieces == 1);  // the first try, later; no stub
+  CHECK(leg->replans == 2);
+  CHECK(leg->waitTime > p.maxWaits * p.waitStep);
+  CHECK(r.conflicts.empty());
+  CHECK((endOf(r.trajectories[1]) - Eigen::Vector2d(10, 5)).norm() <= p.controller.acceptanceRadius + 1e-9);
+}
+
+namespace {
 // The fake rover on a strip x < 1 steeper than the limit across: turning in place there by more
 // than 45° tilts it to 20°; driving is fine everywhere.
 class StripRover final : public LegSimulator {
