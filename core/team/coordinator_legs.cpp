@@ -19,7 +19,7 @@ Coordinator::Outcome Coordinator::runPiece(int k, int i, int piece, const Eigen:
   const bool lastLeg = i + 1 == static_cast<int>(tasks_[k].legs.size());
   // The standing rovers' zones first (if the policy has them), then one per refused try.
   std::vector<KeepOutZone> keepOut = standingZones(k, here(k), goal);
-  const std::size_t standing = keepOut.size();
+  std::size_t standing = keepOut.size();
   std::optional<Candidate> firstTry;  // the first try within the attitude check
   std::optional<Conflict> conflict;
   std::optional<PathStatus> noPath;
@@ -54,6 +54,16 @@ Coordinator::Outcome Coordinator::runPiece(int k, int i, int piece, const Eigen:
     const bool isShort = path.status == PathStatus::Approximate && path.goalCutOff;
     lastTry = policy_.repeatedShortEndsReplans() && isShort && shortBefore && sameZones;
     shortBefore = isShort;
+    // The standing rovers' zones alone cut the goal off: a passage one of them stands in is
+    // narrower than the zones (safety + 0.25 m each side) though not than the safety distance.
+    // The piece plans on without them, as before them: its conflicts place the zones.
+    if (standing > 0 && keepOut.size() == standing &&
+        (isShort || path.status == PathStatus::NoSolution)) {
+      keepOut.clear();
+      standing = zonesBefore = 0;
+      shortBefore = lastTry = false;
+      continue;
+    }
     if (!path.hasPath() || path.waypoints.size() < 2) {
       noPath = path.status;
       // Without a try's keep-out zones a new seed cannot turn an invalid start or goal valid.

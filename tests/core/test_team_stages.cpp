@@ -803,6 +803,28 @@ TEST_CASE("stages: timed, a plan the earlier tries' zones cut off is not driven 
   CHECK((endOf(r.trajectories[1]) - Eigen::Vector2d(10, 5)).norm() <= p.controller.acceptanceRadius + 1e-9);
 }
 
+TEST_CASE("stages: timed, a goal the standing rovers' zones alone cut off is planned for without them") {
+  // Rover 1, planned after rover 0, stands 1.1 m beside rover 0's straight way: farther than the
+  // safety distance, inside its keep-out zone (safety + 0.25 m), which cuts every plan off. The
+  // piece plans on without the standing zones and rover 0 drives past, 1.1 m from rover 1.
+  std::vector<RoverTask> tasks(2);
+  tasks[0].start = {0, 0, 0};
+  tasks[0].legs.push_back({{10, 0}, {}, 0});
+  tasks[1].start = {5, 1.1, 0};
+  const ZonedShortPlanner planner;
+  const StraightLineRover rover;
+  const CoordinationParams p;
+  const TimedPolicy policy(p);
+  REQUIRE(policy.standingKeepOut() > 1.1);
+  const CoordinationResult r = coordinateWith(tasks, planner, rover, policy, p, 1);
+  REQUIRE(r.legs.size() == 1);
+  CHECK(r.legs[0].status == LegStatus::Reached);
+  CHECK(r.legs[0].pieces == 1);
+  CHECK(r.legs[0].replans == 1);  // the plan with the standing zone, then the one without
+  CHECK(r.conflicts.empty());
+  CHECK((endOf(r.trajectories[0]) - Eigen::Vector2d(10, 0)).norm() < 1e-9);
+}
+
 namespace {
 // The fake rover on a strip x < 1 steeper than the limit across: turning in place there by more
 // than 45° tilts it to 20°; driving is fine everywhere.
