@@ -62,6 +62,7 @@ Coordinator::Outcome Coordinator::runPiece(int k, int i, int piece, const Eigen:
       keepOut.clear();
       standing = zonesBefore = 0;
       shortBefore = lastTry = false;
+      if (attempt == p_.maxReplans) noPath = path.status;  // no re-plan left: the leg ends here
       continue;
     }
     if (!path.hasPath() || path.waypoints.size() < 2) {
