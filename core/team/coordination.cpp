@@ -80,8 +80,9 @@ CoordinationResult coordinateResolved(const terrain::Dem& dem, const Raster<std:
   std::vector<Eigen::Vector2d> starts;
   for (const RoverTask& t : tasks) starts.emplace_back(t.start.x, t.start.y);
   const Raster<std::uint8_t> ground = lattice->reachable(starts);
+  const GroundDeparture departure = departureOverGround(starts, params.safetyDistance, ground);
   return coordinateWith(tasks, planner, simulator, TimedPolicy(params), params, seed, observer,
-                        cancel, departureGround(starts, params.safetyDistance, ground));
+                        cancel, &departure.departure);
 }
 
 }  // namespace

@@ -19,7 +19,19 @@ PaperPolicy::PaperPolicy(const CoordinationParams& p) : waits_(p.maxWaits), dwel
 // step aside on real ground. The whole dwell_check (10 s by default): a stop checked for less
 // left a rover no time to get out of the way when its next leg found no clear try
 // (.decisions/0002).
-TimedPolicy::TimedPolicy(const CoordinationParams& p, StopRules rules) : rules_(rules), dwell_(p.dwellCheck) {
+// The standing rovers' zones: the safety distance plus half the departure margin (1.25 m by
+// default), inside the way out the departure order guarantees each rover (safety + margin, less
+// its grid step; planning/departure.hpp) and clear of every goal the task builder gives with
+// sub-teams (safety + both acceptance circles + the margin from a later rover's start), with a
+// quarter metre past the safety distance for the simulated rover's deviation from its path.
+// Without them the planner met the standing rovers one conflict at a time, one zone per try: on
+// the Kepler site with 40 rovers, 5 legs went round the formation's 3 × 3 m lattice of standing
+// rovers by trial and error, each spending its 20 re-plans on 20 different standing rovers, and
+// ended short or skipped (issue 25).
+TimedPolicy::TimedPolicy(const CoordinationParams& p, StopRules rules)
+    : rules_(rules),
+      dwell_(p.dwellCheck),
+      standing_(p.safetyDistance > 0 ? p.safetyDistance + planning::kDepartureMargin / 2 : 0.0) {
   const double period = p.controller.samplePeriod;
   const int step = std::max(1, static_cast<int>(std::lround(p.delayStep / period)));
   const int maxTicks = static_cast<int>(std::lround(p.maxWaits * p.waitStep / period));
@@ -39,7 +51,7 @@ CoordinationResult coordinateWith(const std::vector<RoverTask>& tasks, const Leg
                                   const LegSimulator& simulator, const ConflictPolicy& policy,
                                   const CoordinationParams& params, std::uint64_t seed,
                                   CoordinationObserver* observer, const CancelToken* cancel,
-                                  const planning::PassableGround& passable) {
+                                  const planning::Departure* departure) {
   params.validate();
   if (tasks.empty()) throw Error(ErrorCode::InvalidInput, "rovers", "rovers: none given");
   const std::vector<int>& delays = policy.startDelays();
@@ -65,16 +77,28 @@ CoordinationResult coordinateWith(const std::vector<RoverTask>& tasks, const Leg
   }
   // Rovers boxed in by others leave after them (the table holds every rover at its start until
   // it is planned); one that cannot leave while the others stand is refused.
-  std::vector<Eigen::Vector2d> starts;
-  for (const RoverTask& t : tasks) starts.emplace_back(t.start.x, t.start.y);
-  planning::Departure departure = planning::departureOrder(starts, params.safetyDistance, passable);
-  if (!departure.boxedIn.empty()) {
-    const std::string field = "rovers[" + std::to_string(departure.boxedIn.front()) + "]";
+  planning::Departure open;
+  if (!departure) {
+    std::vector<Eigen::Vector2d> starts;
+    for (const RoverTask& t : tasks) starts.emplace_back(t.start.x, t.start.y);
+    open = planning::departureOrder(starts, params.safetyDistance);
+    departure = &open;
+  }
+  std::vector<int> seen(tasks.size(), 0);
+  bool once = departure->order.size() + departure->boxedIn.size() == tasks.size() &&
+              departure->firstRound >= 0 && departure->firstRound <= static_cast<int>(departure->order.size());
+  for (const auto* list : {&departure->order, &departure->boxedIn})
+    for (int k : *list) once = once && k >= 0 && k < static_cast<int>(tasks.size()) && seen[static_cast<std::size_t>(k)]++ == 0;
+  if (!once)
+    throw Error(ErrorCode::InvalidParameter, "coordination",
+                "coordination: the departure order must hold every rover once");
+  if (!departure->boxedIn.empty()) {
+    const std::string field = "rovers[" + std::to_string(departure->boxedIn.front()) + "]";
     throw Error(ErrorCode::InvalidInput, field,
                 field + ": start is boxed in: no way out past the other rovers' starts keeping the safety distance "
                         "(+ " + detail::oneDecimal(planning::kDepartureMargin) + " m)");
   }
-  return detail::Coordinator(tasks, std::move(departure.order), departure.firstRound, planner, simulator, policy, params, seed, observer,
+  return detail::Coordinator(tasks, departure->order, departure->firstRound, planner, simulator, policy, params, seed, observer,
                      cancel)
       .run();
 }

@@ -91,6 +91,10 @@ class ConflictPolicy {
   // How many such moves and where they look: aside().
   virtual bool recovers() const = 0;
   virtual const AsideSearch& aside() const = 0;
+  // The radius of the keep-out zone round the start of every rover planned after this one (which
+  // stands there, in the traffic table, for the whole mission while this one is planned), given
+  // to every plan of this rover from its first try; 0 = none, the conflicts place the zones.
+  virtual double standingKeepOut() const = 0;
 };
 
 // Paper 001 fig. 8 as SPEC §3.4 reads it: re-plan with a new seed (and a keep-out zone) on each
@@ -111,6 +115,7 @@ class PaperPolicy : public ConflictPolicy {
   bool lastLegParks() const override { return true; }
   bool recovers() const override { return false; }
   const AsideSearch& aside() const override { return aside_; }
+  double standingKeepOut() const override { return 0.0; }
 
  private:
   std::vector<int> delays_{0};
@@ -144,11 +149,13 @@ class TimedPolicy : public ConflictPolicy {
   bool lastLegParks() const override { return false; }
   bool recovers() const override { return true; }
   const AsideSearch& aside() const override { return aside_; }
+  double standingKeepOut() const override { return standing_; }
 
  private:
   std::vector<int> delays_;
   StopRules rules_;
   double dwell_;
+  double standing_;
   AsideSearch aside_;
 };
 
@@ -158,13 +165,15 @@ class TimedPolicy : public ConflictPolicy {
 // (deriveSeed per rover, leg, piece and attempt) and the slip seeds, so the result is the same for
 // a seed whatever the thread count. `planner` must be safe to call from several threads.
 // Throws InvalidInput naming rovers[k] when the simulator cannot place a start. The rovers are
-// planned in planning::departureOrder over `passable` (empty: open ground; coordinate() gives the
-// lattice's ground, traversal_lattice.hpp departureGround).
+// planned in `departure`, planning::departureOrder of the tasks' starts (null: over open ground;
+// coordinate() gives it over the lattice's ground, traversal_lattice.hpp departureOverGround);
+// InvalidInput naming the first boxed-in rover when it leaves one boxed in, InvalidParameter
+// when it does not hold every rover once.
 CoordinationResult coordinateWith(const std::vector<RoverTask>& tasks, const LegPlanner& planner,
                                   const LegSimulator& simulator, const ConflictPolicy& policy,
                                   const CoordinationParams& params, std::uint64_t seed,
                                   CoordinationObserver* observer = nullptr,
                                   const CancelToken* cancel = nullptr,
-                                  const planning::PassableGround& passable = {});
+                                  const planning::Departure* departure = nullptr);
 
 }  // namespace rover::team

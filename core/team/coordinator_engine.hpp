@@ -84,6 +84,12 @@ class Coordinator {
   // rover may drive is not planned; one that it may not is planned ahead too.
   void planAhead();
 
+  // The keep-out zones round the starts of the rovers planned after k (policy_.standingKeepOut()),
+  // which stand there for the whole of k's plan: every plan of a leg of k from `from` to `goal`
+  // stays out of them from its first try. A zone holding `from` or `goal` is left out, as
+  // keepOutOf leaves out a conflict's (the coordinator's own checks still keep the rovers apart).
+  std::vector<KeepOutZone> standingZones(int k, const Eigen::Vector2d& from, const Eigen::Vector2d& goal) const;
+
   // Every straight move of a via leg's fixed points, from `from`, is one the rover may drive.
   bool viaValid(const Eigen::Vector2d& from, const Leg& leg) const;
 

@@ -17,14 +17,16 @@ namespace rover::team::detail {
 Coordinator::Outcome Coordinator::runPiece(int k, int i, int piece, const Eigen::Vector2d& goal, LegRecord& rec,
                  bool& reachedGoal) {
   const bool lastLeg = i + 1 == static_cast<int>(tasks_[k].legs.size());
-  std::vector<KeepOutZone> keepOut;
+  // The standing rovers' zones first (if the policy has them), then one per refused try.
+  std::vector<KeepOutZone> keepOut = standingZones(k, here(k), goal);
+  std::size_t standing = keepOut.size();
   std::optional<Candidate> firstTry;  // the first try within the attitude check
   std::optional<Conflict> conflict;
   std::optional<PathStatus> noPath;
   int zoneTries = 0;       // tries refused for a sample in a keep-out zone
   int unturnableEnds = 0;  // tries refused for ending where the rover cannot turn
   std::optional<Tilt> leastTilt;  // of the tries refused for tilting past the attitude check
-  std::size_t zonesBefore = 0;  // keep-out zones of the previous try
+  std::size_t zonesBefore = standing;  // keep-out zones of the previous try
   bool shortBefore = false;     // the previous try's plan ended short of a cut-off goal
   int unzonedRun = 0;           // policy_.unzonedConflictsEndReplans(): such tries in a row
   bool lastTry = false;         // policy_.repeatedShortEndsReplans(), unzonedConflictsEndReplans()
@@ -52,18 +54,35 @@ Coordinator::Outcome Coordinator::runPiece(int k, int i, int piece, const Eigen:
     const bool isShort = path.status == PathStatus::Approximate && path.goalCutOff;
     lastTry = policy_.repeatedShortEndsReplans() && isShort && shortBefore && sameZones;
     shortBefore = isShort;
+    // The standing rovers' zones alone cut the goal off: a passage one of them stands in is
+    // narrower than the zones (safety + 0.25 m each side) though not than the safety distance.
+    // The piece plans on without them, as before them: its conflicts place the zones.
+    if (standing > 0 && keepOut.size() == standing &&
+        (isShort || path.status == PathStatus::NoSolution)) {
+      keepOut.clear();
+      standing = zonesBefore = 0;
+      shortBefore = lastTry = false;
+      if (attempt == p_.maxReplans) noPath = path.status;  // no re-plan left: the leg ends here
+      continue;
+    }
     if (!path.hasPath() || path.waypoints.size() < 2) {
       noPath = path.status;
-      // Without keep-out zones a new seed cannot turn an invalid start or goal valid.
-      if (keepOut.empty() && path.status == PathStatus::InvalidGoal && policy_.invalidGoalEndsPiece()) {
+      // Without a try's keep-out zones a new seed cannot turn an invalid start or goal valid.
+      if (keepOut.size() == standing && path.status == PathStatus::InvalidGoal && policy_.invalidGoalEndsPiece()) {
         rec.note = "no path: invalid_goal (not on ground a rover may stop on)";
         return Outcome::InvalidGoal;
       }
-      if (keepOut.empty() &&
+      if (keepOut.size() == standing &&
           (path.status == PathStatus::InvalidGoal || path.status == PathStatus::InvalidStart))
         break;
       continue;
     }
+    // Timed: a plan cut off from the goal by the keep-out zones of earlier tries, after a try
+    // that reached the goal, is not driven: it would end the leg short of a goal the rover
+    // reaches once the traffic has passed (the wait below). On the Kepler site with 20 rovers a
+    // leg's 14th plan went 0.2 m, walled in by four tries' zones round a team mate passing by the
+    // goal; the rover drove it, made no progress from there, and the leg ended 3 m short (issue 25).
+    if (isShort && policy_.recovers() && firstTry && firstTry->reached) continue;
     const Candidate c0 = simulateTry(k, path.waypoints, 0, slipSeed(0x51ee5ull, k, i, piece, attempt));
     if (cancelled()) return Outcome::Cancelled;
     std::optional<Eigen::Vector2d> steep = firstExceedance(c0.samples);
@@ -142,6 +161,32 @@ Coordinator::Outcome Coordinator::runPiece(int k, int i, int piece, const Eigen:
     }
     rec.note = "no path: " + std::string(enumName(*noPath));
     return *noPath == PathStatus::InvalidGoal ? Outcome::InvalidGoal : Outcome::NoPath;
+  }
+  // Timed (recovers): before the leg is skipped, the first try within the limits started later
+  // than the policy's delays, every wait_step up to one past the end of the traffic table (when
+  // every rover planned so far has stopped for good). The policy's delays (max_waits ×
+  // wait_step, 30 s by default) do not outlast a team mate's visit to a dead end: on the Kepler
+  // site with 10 rovers, three rovers of one sub-team went in turn into a pocket of the crater
+  // wall 3 m wide, and the third one's leg met the first or the second there at every delay up
+  // to 30 s (issue 25). max_waits = 0 still means no waiting.
+  if (policy_.recovers() && p_.maxWaits > 0) {
+    const std::vector<int> delays = startDelays(k);
+    const int step = std::max(1, static_cast<int>(std::lround(p_.waitStep / period_)));
+    const std::size_t now = out_.trajectories[k].samples.size();
+    for (std::size_t t = static_cast<std::size_t>(delays.back()) + step; now + t < traffic_.end() + step; t += step) {
+      if (cancelled()) return Outcome::Cancelled;
+      const int ticks = static_cast<int>(t);
+      const std::optional<Conflict> late = firstConflict(k, firstTry->samples, ticks, dwellTicks());
+      // Standing still already conflicts: so does every longer wait.
+      if (late && late->index < now + t) break;
+      if (late) continue;
+      ++rec.waits;
+      ++out_.waits;
+      rec.waitTime += ticks * period_;
+      reachedGoal = firstTry->reached && (firstTry->path.back() - goal).norm() < 1e-9;
+      commit(k, delayed(k, *firstTry, ticks));
+      return Outcome::Accepted;
+    }
   }
   for (int w = 1; w <= policy_.waitsAfterReplans(); ++w) {
     if (cancelled()) return Outcome::Cancelled;

@@ -82,13 +82,27 @@ void Coordinator::planAhead() {
     for (int i = 0; i < static_cast<int>(task.legs.size()); ++i) {
       const Leg& leg = task.legs[i];
       const Eigen::Vector2d goal = legGoal(leg);
-      jobs.push_back({start, heading, goal, seedFor(seed_, k, i, 0, 0), leg.via.empty() || !viaValid(start, leg)});
+      jobs.push_back({start, heading, goal, seedFor(seed_, k, i, 0, 0), leg.via.empty() || !viaValid(start, leg),
+                      standingZones(k, start, goal)});
       if ((goal - start).norm() > 1e-9) heading = std::atan2(goal.y() - start.y(), goal.x() - start.x());
       start = goal;
     }
   }
   const unsigned threads = p_.threads == 0 ? hardwareThreads() : p_.threads;
   ahead_ = std::make_unique<PlanAhead>(planner_, std::move(jobs), threads > 1 ? threads - 1 : 0, cancel_);
+}
+
+std::vector<KeepOutZone> Coordinator::standingZones(int k, const Eigen::Vector2d& from,
+                                                    const Eigen::Vector2d& goal) const {
+  std::vector<KeepOutZone> zones;
+  const double radius = policy_.standingKeepOut();
+  if (!(radius > 0)) return zones;
+  for (std::size_t j = 0; j < tasks_.size(); ++j) {
+    if (rank_[j] <= rank_[static_cast<std::size_t>(k)]) continue;  // planned before k, or k
+    const Eigen::Vector2d at(tasks_[j].start.x, tasks_[j].start.y);
+    if ((from - at).norm() > radius && (goal - at).norm() > radius) zones.push_back({at, radius});
+  }
+  return zones;
 }
 
 bool Coordinator::viaValid(const Eigen::Vector2d& from, const Leg& leg) const {

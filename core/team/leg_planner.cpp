@@ -1,6 +1,7 @@
 #include "core/team/leg_planner.hpp"
 
 #include <algorithm>
+#include <cmath>
 
 namespace rover::team {
 
@@ -19,7 +20,18 @@ PathResult TerrainLegPlanner::boxed(const Eigen::Vector2d& from, double heading,
                                     const CancelToken* cancel, const Corridor* corridor) const {
   RrtParams rrt = rrt_;
   rrt.seed = seed;
-  return planPath(dem_, classes_, from, heading, goal, rrt, weights_, cancel, keepOut, corridor);
+  // Only the zones that reach into the search bounds (the tree never leaves them, so the others
+  // change nothing): a timed leg gets a zone round every standing team mate's start
+  // (ConflictPolicy::standingKeepOut), up to 63, and RRT* tests every zone at every point it checks.
+  const SearchBounds box = corridor ? corridor->bounds : searchBounds(dem_.geometry(), from, goal, rrt.clearance);
+  std::vector<KeepOutZone> near;
+  for (const KeepOutZone& z : keepOut) {
+    const Eigen::Vector2d q = z.centre.cwiseMax(box.min).cwiseMin(box.max);
+    // Kept: a zone the planner refuses (not finite, negative), and one reaching the box.
+    if (!z.centre.allFinite() || !std::isfinite(z.radius) || z.radius < 0 || (q - z.centre).norm() <= z.radius)
+      near.push_back(z);
+  }
+  return planPath(dem_, classes_, from, heading, goal, rrt, weights_, cancel, near, corridor);
 }
 
 GuidedRrtPlanner::GuidedRrtPlanner(const terrain::Dem& dem, const Raster<std::uint8_t>& classes,

@@ -39,7 +39,7 @@ void PlanAhead::run(std::size_t j) {
     // Once cancelled, the jobs left are not planned at all: each would still run its guide
     // search before RRT* saw the token (64 rovers × 10 000 targets: minutes after a cancel).
     if (!(cancel_ && cancel_->cancelled()))
-      results_[j] = planner_.plan(job.start, job.heading, job.goal, job.seed, {}, cancel_);
+      results_[j] = planner_.plan(job.start, job.heading, job.goal, job.seed, job.keepOut, cancel_);
   } catch (...) {
     errors_[j] = std::current_exception();
   }

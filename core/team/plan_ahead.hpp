@@ -35,6 +35,7 @@ class PlanAhead {
     Eigen::Vector2d goal{0, 0};
     std::uint64_t seed = 0;
     bool planned = true;          // false: nothing to plan (a via leg the rover may drive as given)
+    std::vector<KeepOutZone> keepOut;  // zones the plan stays out of from the first try
   };
   // Starts `workers` threads (0: none; every plan is then made by the thread that asks for it).
   // `planner` must be safe to call from several threads and outlive this object. Destroyed

@@ -47,15 +47,15 @@ std::vector<std::vector<std::optional<Eigen::Vector2d>>> slotGoals(
                                 ? stopCircleRadius(params.coordination.controller)
                                 : 0.0;
   // Each rover's place in the order the coordinator plans them (departureOrder over
-  // departureGround, as there: in timed mode `reachable` is the lattice's flood from the starts); a
+  // departureOverGround, as there: in timed mode `reachable` is the lattice's flood from the starts); a
   // rover left boxed in (the coordinator refuses the start) last.
   std::vector<int> rank(static_cast<std::size_t>(rovers), rovers);
   if (teams) {
     std::vector<Eigen::Vector2d> at;
     for (const Pose& s : starts) at.emplace_back(s.x, s.y);
     const double safety = params.coordination.safetyDistance;
-    const planning::Departure d = planning::departureOrder(
-        at, safety, reachable ? departureGround(at, safety, *reachable) : planning::PassableGround{});
+    const planning::Departure d = reachable ? departureOverGround(at, safety, *reachable).departure
+                                            : planning::departureOrder(at, safety);
     for (std::size_t r = 0; r < d.order.size(); ++r) rank[static_cast<std::size_t>(d.order[r])] = static_cast<int>(r);
   }
   std::vector<std::vector<std::optional<Eigen::Vector2d>>> out;
@@ -93,6 +93,20 @@ std::vector<std::vector<std::optional<Eigen::Vector2d>>> slotGoals(
         };
         g = nearestValid(model, centre, params.footprint * M_SQRT1_2, spacing, taken, reachable,
                          stopCircle, inCell);
+        // The cell has free ground, but all of it lies among the starts of rovers that leave
+        // after this one (the cell overlaps the formation): the slot takes the free ground
+        // nearest the target outside the formation, up to one and a half footprints from the
+        // target centre (the cell's corners are 0.71 footprints out). On the Kepler site with 40
+        // rovers, the target over the formation's top row left 3 of its 5 slots without ground
+        // (issue 25); with this, all 5 have a slot, the farthest 5.3 m from the centre.
+        if (!g && teams) {
+          const auto inCellAnyStart = [&](const Eigen::Vector2d& p) {
+            return (p - centre).cwiseAbs().maxCoeff() <= params.footprint / 2;
+          };
+          if (nearestValid(model, centre, params.footprint * M_SQRT1_2, spacing, taken, reachable,
+                           stopCircle, inCellAnyStart))
+            g = nearestValid(model, centre, 1.5 * params.footprint, spacing, taken, reachable, stopCircle, accept);
+        }
       }
       if (g) taken.push_back(*g);
       goals[static_cast<std::size_t>(members[j])] = g;

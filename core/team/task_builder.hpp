@@ -2,8 +2,11 @@
 // The task builder stage: the legs of each rover along the team route. Two builders:
 // - SlotTasks (paper 001 §3.6): at every target, the target centre plus the rover's formation
 //   slot, moved to the nearest valid point (RRT* validity, at least the safety distance from the
-//   team mates' goals) within half a footprint when it is not; a target with no such point gives
-//   that rover no leg there.
+//   team mates' goals) within half a footprint when it is not; timed, else the free ground
+//   nearest the target in its search cell, and with sub-teams, when the cell's free ground all
+//   lies among the starts of rovers that leave later, the nearest outside them up to 1.5
+//   footprints from the target (task_builder.cpp); a target with no such point gives that rover
+//   no leg there.
 // - HybridTasks (SPEC §4): the slot leg above and then the rover's moves of a myopic coverage run
 //   (Laîné & Yoshida / Santra et al., SPEC §1, frontier mode, heights for β) over the footprint
 //   from the slots, as fixed points.

@@ -146,11 +146,17 @@ planning::PassableGround groundIn(const Raster<std::uint8_t>& region) {
   };
 }
 
-planning::PassableGround departureGround(const std::vector<Eigen::Vector2d>& starts, double safety,
-                                         const Raster<std::uint8_t>& region) {
-  planning::PassableGround ground = groundIn(region);
-  if (starts.empty() || !planning::departureOrder(starts, safety, ground).boxedIn.empty()) return {};
-  return ground;
+GroundDeparture departureOverGround(const std::vector<Eigen::Vector2d>& starts, double safety,
+                                    const Raster<std::uint8_t>& region) {
+  GroundDeparture out;
+  if (!starts.empty()) {
+    out.ground = groundIn(region);
+    out.departure = planning::departureOrder(starts, safety, out.ground);
+    if (out.departure.boxedIn.empty()) return out;
+  }
+  out.ground = {};
+  out.departure = planning::departureOrder(starts, safety);
+  return out;
 }
 
 // A rectangle of cells the guide's search is held to, and the cells in it that keep-out zones

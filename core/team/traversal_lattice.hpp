@@ -110,12 +110,18 @@ class TraversalLattice {
 // wall were planned first, while every team mate still stood between them and the floor, and
 // every leg of theirs ended short). The region must outlive the result.
 planning::PassableGround groundIn(const Raster<std::uint8_t>& region);
-// The ground the team's departure order (planning::departureOrder) is taken over: groundIn(region)
-// when every rover at `starts` has a way out over it, else open ground (an empty function: on a
-// small map or region the way-out test's margin reaches past the ground, and the coordinator
-// would refuse starts it planned before). The coordinator (coordination.cpp) and the task
-// builder's goal ranks (task_builder.cpp) both take it, so they agree on the order.
-planning::PassableGround departureGround(const std::vector<Eigen::Vector2d>& starts, double safety,
-                                         const Raster<std::uint8_t>& region);
+// The team's departure order (planning::departureOrder) with the ground it was taken over:
+// groundIn(region) when every rover at `starts` has a way out over it, else open ground (`ground`
+// an empty function: on a small map or region the way-out test's margin reaches past the ground,
+// and the coordinator would refuse starts it planned before). The coordinator (coordination.cpp)
+// and the task builder's goal ranks (task_builder.cpp) both take it, so they agree on the order;
+// each computes it once (twice when it falls back). `ground` refers to `region`, which must
+// outlive it.
+struct GroundDeparture {
+  planning::Departure departure;
+  planning::PassableGround ground;  // empty: open ground
+};
+GroundDeparture departureOverGround(const std::vector<Eigen::Vector2d>& starts, double safety,
+                                    const Raster<std::uint8_t>& region);
 
 }  // namespace rover::team

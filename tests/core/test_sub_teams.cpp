@@ -9,6 +9,8 @@
 #include <string>
 #include <vector>
 
+#include "core/planning/departure.hpp"
+#include "core/team/formation.hpp"
 #include "core/team/sub_teams.hpp"
 #include "core/team/task_builder.hpp"
 #include "core/team/team_mission.hpp"
@@ -124,6 +126,45 @@ TEST_CASE("sub-teams: the slot builder flies one formation per sub-team, never s
   // One team (no split): every rover at every target, as paper 001.
   const std::vector<RoverTask> all = SlotTasks(dem, classes, p, nullptr).build(starts, route, nullptr);
   for (const RoverTask& t : all) CHECK(t.legs.size() == 4);
+}
+
+TEST_CASE("sub-teams: a slot whose search cell lies among the starts gets ground outside the formation") {
+  // Issue 25, the Kepler site with 40 rovers: a target's search cell overlapped the formation, and
+  // all its free ground lay within the goal spacing plus the departure margin of rovers that leave
+  // after the sub-team's (the task builder keeps goals that far from them): 3 slots had no ground.
+  // Here 20 rovers stand on the generated formation's 2.25 m lattice on flat ground and the first
+  // target's cell lies inside the block: every ground point of it is 1.6 m or less from a start.
+  const terrain::Dem dem = test::demFromPicture(std::vector<std::string>(30, std::string(30, '.')));
+  const auto classes = terrain::traversability(dem).classes;
+  TeamMissionParams p;
+  std::vector<Pose> starts;
+  for (int i = 0; i < 20; ++i) starts.push_back({10 + 2.25 * (i % 5), 10 + 2.25 * (i / 5), 0});
+  const Route route = routeThrough({{14.5, 13.375}, {14.5, 22}, {22, 22}, {22, 14.5}});
+  const SubTeams s = splitTeam(starts, route.centres, 5);
+  REQUIRE(s.count() == 4);
+  const std::vector<RoverTask> tasks = SlotTasks(dem, classes, p, nullptr, &s).build(starts, route, nullptr);
+  // The coordinator's order (departure.hpp): which starts still stand when each rover is planned.
+  std::vector<Eigen::Vector2d> at;
+  for (const Pose& st : starts) at.emplace_back(st.x, st.y);
+  const planning::Departure d = planning::departureOrder(at, p.coordination.safetyDistance);
+  REQUIRE(d.boxedIn.empty());
+  std::vector<int> rank(starts.size());
+  for (std::size_t r = 0; r < d.order.size(); ++r) rank[static_cast<std::size_t>(d.order[r])] = static_cast<int>(r);
+  const double clear = goalSpacing(p.coordination) + planning::kDepartureMargin;
+  const std::vector<int>& team = s.rovers[static_cast<std::size_t>(s.ofTarget[0])];
+  std::vector<Eigen::Vector2d> goals;
+  for (int k : team) {
+    CAPTURE(k);
+    const auto leg = std::find_if(tasks[k].legs.begin(), tasks[k].legs.end(), [](const Leg& l) { return l.target == 0; });
+    REQUIRE(leg != tasks[k].legs.end());  // a slot for every rover of the sub-team
+    // Clear of every rover still standing when it gets there, and of its team mates' goals.
+    for (std::size_t j = 0; j < starts.size(); ++j)
+      if (rank[j] > rank[static_cast<std::size_t>(k)]) CHECK((leg->goal - at[j]).norm() >= clear - 1e-9);
+    for (const auto& g : goals) CHECK((leg->goal - g).norm() >= goalSpacing(p.coordination) - 1e-9);
+    goals.push_back(leg->goal);
+    // Near the target all the same: within one and a half footprints of its centre.
+    CHECK((leg->goal - route.centres[0]).norm() <= 1.5 * p.footprint + 1e-9);
+  }
 }
 
 TEST_CASE("sub-teams: a mission of seven rovers splits in two, 0 collisions, same plan on 1 and 2 threads") {

@@ -8,8 +8,10 @@
 #include "core/common/cancel.hpp"
 #include "core/common/error.hpp"
 #include "core/common/random.hpp"
+#include "core/planning/departure.hpp"
 #include "core/planning/planner.hpp"
 #include "core/team/coordination.hpp"
+#include "core/team/coordinator.hpp"
 #include "core/team/formation.hpp"
 #include "core/team/team_entry.hpp"
 #include "core/team/team_mission.hpp"
@@ -365,6 +367,58 @@ TEST_CASE("team: a 3×3 block at the safety distance leaves without a collision,
       CHECK(a[i].y == b[i].y);
     }
   }
+}
+
+TEST_CASE("team: a rover whose goal lies past a formation's top row against a wall plans round the standing rovers at once") {
+  // Issue 25, the Kepler site with 40 rovers: the formation's top row stood 0.75 m under the
+  // crater wall, and a rover at its west end had its first goal just past the row's east end.
+  // The rovers planned after it stand at their starts for the whole of its plan; the planner saw
+  // them only one conflict at a time (a keep-out zone per try), spent the re-plans on them and
+  // the leg ended 6.6 m short. Timed: every plan keeps out of the standing rovers' starts from
+  // the first try (ConflictPolicy::standingKeepOut), so the first plan goes round the block.
+  const terrain::Dem dem = test::demFromPicture({
+      "##############################",
+      "##############################",
+      "##############################",
+      "..............................",
+      "..............................",
+      "..............................",
+      "..............................",
+      "..............................",
+      "..............................",
+      "..............................",
+      "..............................",
+      "..............................",
+      "..............................",
+      "..............................",
+      "..............................",
+      "..............................",
+      "..............................",
+      "..............................",
+      "..............................",
+      "..............................",
+  });  // 30 × 20 m, the wall's foot at y = 17
+  const Raster<std::uint8_t> classes = classesOf(dem);
+  CoordinationParams p;
+  p.threads = 1;
+  // Two rows of five at the generated formation's spacing (2.25 m), the top row 1 m under the
+  // wall: none may pass north of another. Rover 0, at the top row's west end, leaves first.
+  std::vector<RoverTask> tasks;
+  for (int row = 0; row < 2; ++row)
+    for (int c = 0; c < 5; ++c) tasks.push_back({{6.0 + 2.25 * c, 16.0 - 2.25 * row, 0.0}, {}});
+  tasks[0].legs.push_back({{17.5, 16.0}, {}, 0});
+  const TimedPolicy timed(p);
+  CHECK(timed.standingKeepOut() == doctest::Approx(p.safetyDistance + planning::kDepartureMargin / 2));
+  CHECK(PaperPolicy(p).standingKeepOut() == 0.0);  // the paper mode meets them by its conflicts
+  const CoordinationResult r = coordinate(dem, classes, tasks, p, 3);
+  REQUIRE(r.legs.size() == 1);
+  CHECK(r.legs[0].status == LegStatus::Reached);
+  CHECK(r.legs[0].replans == 0);  // the first plan already went round
+  CHECK(r.conflicts.empty());
+  // Every waypoint of the rover's path keeps the zone's radius from the standing rovers.
+  for (const Eigen::Vector2d& w : r.paths[0])
+    for (std::size_t j = 1; j < tasks.size(); ++j)
+      CHECK((w - Eigen::Vector2d(tasks[j].start.x, tasks[j].start.y)).norm() >= timed.standingKeepOut() - 1e-9);
 }
 
 TEST_CASE("team: the hybrid mission covers each footprint and senses more of it") {

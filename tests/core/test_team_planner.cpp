@@ -256,8 +256,9 @@ TEST_CASE("team planner: a rover at the end of a dead-end lane leaves after the 
   const std::vector<Eigen::Vector2d> starts{{2, 2}, {2, 4.5}};
   const Raster<std::uint8_t> ground = lattice.reachable(starts);
   CHECK(planning::departureOrder(starts, p.safetyDistance).order == std::vector<int>{0, 1});
-  const planning::Departure d =
-      planning::departureOrder(starts, p.safetyDistance, departureGround(starts, p.safetyDistance, ground));
+  const GroundDeparture over = departureOverGround(starts, p.safetyDistance, ground);
+  CHECK(over.ground);  // the lattice's ground, not the open-ground fallback
+  const planning::Departure& d = over.departure;
   CHECK(d.order == std::vector<int>{1, 0});
   CHECK(d.firstRound == 1);
 
@@ -285,5 +286,8 @@ TEST_CASE("team planner: the departure ground falls back to open ground when it 
   const std::vector<Eigen::Vector2d> starts{{5, 6}, {7, 6}};
   const Raster<std::uint8_t> ground = lattice.reachable(starts);
   CHECK_FALSE(planning::departureOrder(starts, p.safetyDistance, groundIn(ground)).boxedIn.empty());
-  CHECK_FALSE(departureGround(starts, p.safetyDistance, ground));
+  const GroundDeparture over = departureOverGround(starts, p.safetyDistance, ground);
+  CHECK_FALSE(over.ground);
+  CHECK(over.departure.order == planning::departureOrder(starts, p.safetyDistance).order);
+  CHECK(over.departure.boxedIn.empty());
 }

@@ -521,6 +521,14 @@ TEST_CASE("stages: the coordinator reports an invalid and an unreachable goal an
     bool recovers() const override { return false; }
   };
   CHECK_THROWS_AS(coordinateWith(tasks, planner, rover, NoRecovery(p), p, 1), Error);
+  // A departure order given by the caller must hold every rover once.
+  planning::Departure twice;
+  twice.order = {0, 0};  // one rover, twice
+  twice.firstRound = 1;
+  const char* notOnce = "coordination: the departure order must hold every rover once";
+  CHECK_THROWS_WITH_AS(coordinateWith(tasks, planner, rover, TimedPolicy(p), p, 1, nullptr, nullptr, &twice), notOnce, Error);
+  planning::Departure missing;
+  CHECK_THROWS_WITH_AS(coordinateWith(tasks, planner, rover, TimedPolicy(p), p, 1, nullptr, nullptr, &missing), notOnce, Error);
 }
 
 TEST_CASE("stages: a rover whose spot will be run over steps aside, then goes on (timed)") {
@@ -704,7 +712,8 @@ TEST_CASE("stages: timed re-plans end after three tries that meet a rover standi
   // west along y = 5.8 and paces between x = 9.5 and 10.5 from 18.8 s for 80 s, within 1 m of
   // rover 1's goal. Every try meets it while rover 1 stands at the goal (or drives its last metre,
   // started later), and no keep-out zone can be placed there: it would wall the goal in. Timed:
-  // the re-plans end after three such tries and the leg is skipped; paper: all 20 re-plans.
+  // the re-plans end after three such tries, and the rover waits (past max_waits × wait_step)
+  // until rover 0 has done pacing and gone, then goes; paper: all 20 re-plans.
   std::vector<RoverTask> tasks(2);
   tasks[0].start = {20, 5.8, M_PI};
   tasks[0].legs.push_back({{10.5, 5.8}, {}, 0});
@@ -718,10 +727,18 @@ TEST_CASE("stages: timed re-plans end after three tries that meet a rover standi
     return *std::find_if(r.legs.begin(), r.legs.end(), [](const LegRecord& l) { return l.rover == 1; });
   };
   const CoordinationResult timed = coordinateWith(tasks, planner, rover, TimedPolicy(p), p, 1);
-  CHECK(leg1(timed).status == LegStatus::Skipped);
-  CHECK(leg1(timed).reason == LegReason::Conflict);
   CHECK(leg1(timed).replans == TimedPolicy(p).unzonedConflictsEndReplans() - 1);
+  CHECK(leg1(timed).status == LegStatus::Reached);
+  CHECK(leg1(timed).waits == 1);
+  CHECK(leg1(timed).waitTime > p.maxWaits * p.waitStep);
+  CHECK(leg1(timed).endTime > 18.8 + 80);  // after the pacing
   CHECK(timed.conflicts.empty());
+  // max_waits = 0: no waiting at all, the leg is skipped.
+  CoordinationParams noWaits = p;
+  noWaits.maxWaits = 0;
+  const CoordinationResult impatient = coordinateWith(tasks, planner, rover, TimedPolicy(noWaits), noWaits, 1);
+  CHECK(leg1(impatient).status == LegStatus::Skipped);
+  CHECK(leg1(impatient).reason == LegReason::Conflict);
   TimedPolicy::StopRules untiring;
   untiring.unzonedConflictsEndReplans = 0;
   CHECK(leg1(coordinateWith(tasks, planner, rover, TimedPolicy(p, untiring), p, 1)).replans == p.maxReplans);
@@ -732,8 +749,80 @@ TEST_CASE("stages: timed re-plans end after three tries that meet a rover standi
   tasks[0].legs.clear();
   for (int j = 0; j < 50; ++j) tasks[0].legs.push_back({{j % 2 == 0 ? 9.5 : 10.5, 3.8}, {}, j});
   const CoordinationResult onTheWay = coordinateWith(tasks, planner, rover, TimedPolicy(p), p, 1);
-  CHECK(leg1(onTheWay).status == LegStatus::Skipped);
   CHECK(leg1(onTheWay).replans == p.maxReplans);
+  CHECK(leg1(onTheWay).status == LegStatus::Reached);  // waited for the pacing to end, as above
+  CHECK(onTheWay.conflicts.empty());
+}
+
+namespace {
+// A fake planner whose plans keep-out zones cut off: straight to the goal, or, when a zone
+// reaches the straight line, a 0.2 m stub towards it, cut off from the goal.
+class ZonedShortPlanner final : public LegPlanner {
+ public:
+  PathResult plan(const Eigen::Vector2d& from, double, const Eigen::Vector2d& goal, std::uint64_t,
+                  const std::vector<KeepOutZone>& keepOut, const CancelToken*) const override {
+    const bool cut = std::any_of(keepOut.begin(), keepOut.end(), [&](const KeepOutZone& z) {
+      const double s = std::clamp((z.centre - from).dot(goal - from) / (goal - from).squaredNorm(), 0.0, 1.0);
+      return (from + s * (goal - from) - z.centre).norm() < z.radius;
+    });
+    PathResult r;
+    r.status = cut ? PathStatus::Approximate : PathStatus::Exact;
+    r.goalCutOff = cut;
+    r.waypoints = {from, cut ? Eigen::Vector2d(from + 0.2 * (goal - from).normalized()) : goal};
+    return r;
+  }
+  bool edgeValid(const Eigen::Vector2d&, const Eigen::Vector2d&) const override { return true; }
+  bool canStop(const Eigen::Vector2d&) const override { return true; }
+};
+}  // namespace
+
+TEST_CASE("stages: timed, a plan the earlier tries' zones cut off is not driven when a try reached the goal") {
+  // Rover 0 paces across rover 1's way 1.2 m short of its goal for about 100 s; rover 1's first
+  // try reaches the goal but meets it, and the keep-out zone round rover 0 (1 m) cuts every later
+  // plan off 0.2 m on. Driven, such a stub ends the piece without progress and the leg short of
+  // a goal the rover reaches once rover 0 has gone (issue 25, the Kepler site). Timed: the stubs
+  // are not driven; the re-plans end (two short tries with the same zones) and the first try
+  // waits for the pacing to end.
+  std::vector<RoverTask> tasks(2);
+  tasks[0].start = {12, 3.8, M_PI};
+  for (int j = 0; j < 50; ++j) tasks[0].legs.push_back({{j % 2 == 0 ? 9.5 : 10.5, 3.8}, {}, j});
+  tasks[1].start = {10, 0, M_PI / 2};
+  tasks[1].legs = {{{10, 5}, {}, 0}};
+  const ZonedShortPlanner planner;
+  const StraightLineRover rover;
+  CoordinationParams p;
+  p.keepOutRadius = 1.0;  // a zone round rover 0 that does not hold rover 1's goal
+  const CoordinationResult r = coordinateWith(tasks, planner, rover, TimedPolicy(p), p, 1);
+  const auto leg = std::find_if(r.legs.begin(), r.legs.end(), [](const LegRecord& l) { return l.rover == 1; });
+  REQUIRE(leg != r.legs.end());
+  CHECK(leg->status == LegStatus::Reached);
+  CHECK(leg->pieces == 1);  // the first try, later; no stub
+  CHECK(leg->replans == 2);
+  CHECK(leg->waitTime > p.maxWaits * p.waitStep);
+  CHECK(r.conflicts.empty());
+  CHECK((endOf(r.trajectories[1]) - Eigen::Vector2d(10, 5)).norm() <= p.controller.acceptanceRadius + 1e-9);
+}
+
+TEST_CASE("stages: timed, a goal the standing rovers' zones alone cut off is planned for without them") {
+  // Rover 1, planned after rover 0, stands 1.1 m beside rover 0's straight way: farther than the
+  // safety distance, inside its keep-out zone (safety + 0.25 m), which cuts every plan off. The
+  // piece plans on without the standing zones and rover 0 drives past, 1.1 m from rover 1.
+  std::vector<RoverTask> tasks(2);
+  tasks[0].start = {0, 0, 0};
+  tasks[0].legs.push_back({{10, 0}, {}, 0});
+  tasks[1].start = {5, 1.1, 0};
+  const ZonedShortPlanner planner;
+  const StraightLineRover rover;
+  const CoordinationParams p;
+  const TimedPolicy policy(p);
+  REQUIRE(policy.standingKeepOut() > 1.1);
+  const CoordinationResult r = coordinateWith(tasks, planner, rover, policy, p, 1);
+  REQUIRE(r.legs.size() == 1);
+  CHECK(r.legs[0].status == LegStatus::Reached);
+  CHECK(r.legs[0].pieces == 1);
+  CHECK(r.legs[0].replans == 1);  // the plan with the standing zone, then the one without
+  CHECK(r.conflicts.empty());
+  CHECK((endOf(r.trajectories[0]) - Eigen::Vector2d(10, 0)).norm() < 1e-9);
 }
 
 namespace {
@@ -804,7 +893,7 @@ class SeededPlanner final : public LegPlanner {
 TEST_CASE("stages: legs planned ahead on workers are the plans made alone, asked for in any order") {
   std::vector<PlanAhead::Job> jobs;
   for (int j = 0; j < 60; ++j)
-    jobs.push_back({{0, 0}, 0.0, {static_cast<double>(j + 1), 1}, 1000u + static_cast<unsigned>(j), j % 7 != 3});
+    jobs.push_back({{0, 0}, 0.0, {static_cast<double>(j + 1), 1}, 1000u + static_cast<unsigned>(j), j % 7 != 3, {}});
   const SeededPlanner planner;
   std::vector<std::vector<Eigen::Vector2d>> alone;
   for (const auto& job : jobs) alone.push_back(planner.plan(job.start, job.heading, job.goal, job.seed, {}, nullptr).waypoints);
@@ -847,7 +936,7 @@ TEST_CASE("stages: a speculated re-plan is the plan made alone, used only for it
   for (unsigned workers : {0u, 1u, 3u}) {
     CAPTURE(workers);
     std::vector<PlanAhead::Job> jobs;
-    for (int j = 0; j < 8; ++j) jobs.push_back({{0, 0}, 0.0, {static_cast<double>(j + 1), 1}, 7u + j, true});
+    for (int j = 0; j < 8; ++j) jobs.push_back({{0, 0}, 0.0, {static_cast<double>(j + 1), 1}, 7u + j, true, {}});
     PlanAhead ahead(planner, jobs, workers, nullptr);
     // A run of tries with the same zones, each speculating the next, as the coordinator does.
     for (std::uint64_t seed = 100; seed < 110; ++seed) {
