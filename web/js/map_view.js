@@ -17,7 +17,8 @@
 // pointer through ToolInput, an OL interaction under the tools' own Draw/Modify (which see a
 // press first and keep it from DragPan when they take it) and over DragPan: a press a tool takes
 // (its down() says true) is a drag of the tool's, not a pan; a press it leaves and releases
-// without moving is its click.
+// without moving (OL's move tolerance, 1 px) is its click. DragPan pans from its first drag event
+// on: the pixel or two before it are not panned (OL's way).
 // Maps whose cells are not square (geographic grids: a cell's metres along y differ from x) need
 // no stretching: the projection is in metres both ways and the tile grid's tiles are as tall as
 // their cells make them (layer_stack.js), so features keep their shapes.
@@ -39,11 +40,9 @@ let projections = 0;  // OL keeps projections by code: one code per map shown
 // How far the view zooms: out to a quarter of the tile grid's coarsest zoom (the whole map in one
 // tile), in to one zoom past its finest (itself two past one DEM cell a tile pixel: there a cell
 // covers 8 CSS pixels, the closest look issue 24 asks for; OL magnifies the finest tiles).
-export const ZOOMS_OUT = 2;
-export const ZOOMS_IN_PAST_GRID = 1;
+const ZOOMS_OUT = 2;
+const ZOOMS_IN_PAST_GRID = 1;
 const VIEW_EVENTS = ['change:center', 'change:resolution'];
-// A press that moves no more than this many CSS pixels is a click (and no pan).
-const CLICK_TOLERANCE = 3;
 
 // The tools' share of the pointer (see the header): one OL interaction, added right after the
 // pan/zoom ones so that every interaction added later (Draw, Modify, Snap) sees a press first.
@@ -127,6 +126,8 @@ export class MapView {
     this.renderListeners = [];
     this.tools = {};         // name → {down, move, up, click, hover}
     this.tool = 'pan';
+    this.panClicks = [];     // fn(p): a click (not a drag) in the pan tool (onPanClick)
+    this.registerTool('pan', { click: (p) => this.panClicks.forEach((fn) => fn(p)) });
     this.hoverListeners = [];
     this.pushing = false;    // viewChanged() is setting OL's view: its change events are ours
 
@@ -145,7 +146,7 @@ export class MapView {
     interactions.push(this.input);
     this.olMap = new OlMap({
       target: this.olBox, controls: [new ScaleLine({ target: this.scaleBox })], interactions, layers: [],
-      keyboardEventTarget: canvas, moveTolerance: CLICK_TOLERANCE,
+      keyboardEventTarget: canvas,
     });
     this.setProjection(100, 100);
 
@@ -362,6 +363,12 @@ export class MapView {
   setTool(name) {
     this.tool = name;
     for (const t of ['pdm', 'rovers', 'zones', 'area']) this.box.classList.toggle(`tool-${t}`, name === t);
+  }
+
+  // fn(p) on a click of the map in the pan tool: a press released within the move tolerance,
+  // p = {sx, sy, x, y} (incident markers, a rover's trail).
+  onPanClick(fn) {
+    this.panClicks.push(fn);
   }
 
   onHover(fn) {
