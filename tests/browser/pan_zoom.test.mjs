@@ -1,7 +1,8 @@
 // Pan and zoom on the 2D map are OpenLayers' own interactions (issue 24): a drag pans (the ground
 // under the press follows the pointer), the wheel zooms about the pointer, a double click zooms in
-// the pan tool, the view stops at the tile grid's limits; in the zones tool a drag pans and adds
-// no corner while a click adds one; two quick clicks placing rovers are no double-click zoom.
+// the pan tool, the arrow keys pan, the view stops at the tile grid's limits; in the zones tool a
+// drag pans and adds no corner while a click adds one; two quick clicks placing rovers are no
+// double-click zoom.
 import assert from 'node:assert/strict';
 import { test } from 'node:test';
 import { mapPoint, openPage, sleep, suiteWithServer, waitForMap } from './lib/harness.mjs';
@@ -36,7 +37,7 @@ const worldAt = (page, x, y) => page.evaluate(([x, y]) => {
 }, [x, y]);
 
 suiteWithServer('pan and zoom', { timeout: 180000 }, (ctx) => {
-  test('a drag pans, the wheel zooms about the pointer, a double click zooms, the zoom has limits', async () => {
+  test('a drag pans, the wheel zooms about the pointer, a double click zooms, the arrows pan, the zoom has limits', async () => {
     const { page, errors, context } = await openPage(ctx.browser, `${ctx.server.url}/`);
     await waitForMap(page);
     const map = await page.evaluate(() => window.__roverplanApp.state.map);
@@ -67,6 +68,13 @@ suiteWithServer('pan and zoom', { timeout: 180000 }, (ctx) => {
     await page.waitForFunction((s) => window.__roverplanApp.view.scale > s * 1.5, v2.scale);
     const v3 = await settled(page);
     assert.ok(Math.abs(v3.scale / v2.scale - 2) < 0.01, `a double click doubles the scale: ${v2.scale} → ${v3.scale}`);
+
+    // The arrow keys on the focused map pan it (OL's KeyboardPan: 128 px a press).
+    await page.focus('#map-canvas');
+    await page.keyboard.press('ArrowRight');
+    await page.waitForFunction((x) => window.__roverplanApp.view.cx > x, v3.cx);
+    const v4 = await settled(page);
+    assert.ok(Math.abs((v4.cx - v3.cx) * v4.scale - 128) < 1 && v4.cy === v3.cy, `ArrowRight: ${(v4.cx - v3.cx) * v4.scale} px east`);
 
     // The limits: in to 8 px a cell (one zoom past the tile grid's finest), out to a quarter of
     // the scale of the grid's coarsest zoom (the whole map in one tile).
