@@ -40,9 +40,9 @@ export class AreaTool {
     this.shown = '';          // what the outlines show now (they are rebuilt when it changes)
     view.onRender(() => this.render());
     this.draw = null;         // OL's Draw while the tool is armed (see arm)
-    // A press is the drag of a rectangle (the map does not pan); one that starts off the map
-    // draws from the map's edge.
-    view.registerTool('area', { ol: true, down: () => true });
+    // A press is the drag of a rectangle: freehand Draw takes it before the map's DragPan sees it;
+    // one that starts off the map draws from the map's edge.
+    view.registerTool('area', {});
     $('m-area').addEventListener('input', () => this.fromField());
     // Typing: one undo step per committed change of the field.
     this.committed = '';
@@ -158,9 +158,9 @@ export class AreaTool {
   // Draw's geometry: the rectangle between the press and the pointer, corners on the cells.
   box(coords, geometry) {
     const v = this.view;
-    const a = state.map ? this.snap(v.fromOl(coords[0])) : [0, 0];
-    const b = state.map ? this.snap(v.fromOl(coords[coords.length - 1])) : a;
-    const ring = [corners([Math.min(a[0], b[0]), Math.min(a[1], b[1]), Math.max(a[0], b[0]), Math.max(a[1], b[1])]).map((c) => v.toOl(c))];
+    const a = state.map ? this.snap(coords[0]) : [0, 0];
+    const b = state.map ? this.snap(coords[coords.length - 1]) : a;
+    const ring = [corners([Math.min(a[0], b[0]), Math.min(a[1], b[1]), Math.max(a[0], b[0]), Math.max(a[1], b[1])])];
     ring[0].push(ring[0][0]);
     if (!geometry) return new Polygon(ring);
     geometry.setCoordinates(ring);
@@ -172,8 +172,7 @@ export class AreaTool {
   drawn(geometry) {
     if (!state.map) return;
     const [x0, y0, x1, y1] = geometry.getExtent();
-    const [a, b] = [this.view.fromOl([x0, y0]), this.view.fromOl([x1, y1])];
-    const bbox = [this.snap(a), this.snap(b)].flat();
+    const bbox = [this.snap([x0, y0]), this.snap([x1, y1])].flat();
     if (bbox[2] <= bbox[0] || bbox[3] <= bbox[1]) return;
     const before = this.snapshot();
     this.setBbox([bbox[0], bbox[1], bbox[2], bbox[3]]);
@@ -195,13 +194,13 @@ export class AreaTool {
     const area = this.missionArea();
     const mission = area && state.map && this.missionView.mission.map === state.map.id ? (area.bbox ? corners(area.bbox) : area.polygon) : null;
     const form = this.outline && this.form.showStarts ? corners(this.outline) : null;
-    const key = JSON.stringify([mission, form, this.view.yStretch, state.map?.id]);
+    const key = JSON.stringify([mission, form, state.map?.id]);
     if (key === this.shown) return;
     this.shown = key;
     const source = this.olLayer.getSource();
     source.clear();
     const feature = (ring, colour, dash, label) => {
-      const coords = [[...ring, ring[0]].map((c) => this.view.toOl(c))];
+      const coords = [[...ring, ring[0]]];
       source.addFeature(new Feature({ geometry: new Polygon(coords), colour, dash, label }));
     };
     if (mission) feature(mission, MISSION_COLOUR, [2, 4], 'mission area');

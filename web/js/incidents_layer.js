@@ -39,7 +39,6 @@ export class IncidentLayer {
     this.layer = view.addVectorLayer(zIndex);
     this.features = [];
     this.items = null;     // the list the features show
-    this.stretch = 0;
     this.selected = -1;
   }
 
@@ -47,10 +46,8 @@ export class IncidentLayer {
   sync(items, selected, opacity, visible) {
     this.layer.setOpacity(opacity);
     this.layer.setVisible(visible);
-    const k = this.view.yStretch;
-    if (items !== this.items || k !== this.stretch) {
+    if (items !== this.items) {
       this.items = items;
-      this.stretch = k;
       this.selected = selected;
       // In place: the features of the incidents kept move to their (same) place, new ones are
       // added, those past the new list's end go.
@@ -59,10 +56,10 @@ export class IncidentLayer {
       items.forEach((it, i) => {
         let f = this.features[i];
         if (!f) {
-          f = this.features[i] = new Feature(new Point([it.x, it.y * k]));
+          f = this.features[i] = new Feature(new Point([it.x, it.y]));
           added.push(f);
         } else {
-          f.getGeometry().setCoordinates([it.x, it.y * k]);
+          f.getGeometry().setCoordinates([it.x, it.y]);
         }
         f.setStyle(markerStyle(this.kindOf(it.kind), i === selected));
       });

@@ -97,7 +97,6 @@ export class LayerStack {
     this.rasters = {};
     this.renderControls();
     if (!map) return;
-    this.view.setProjection(map.width_m, map.height_m, map.cell_size_m / (map.cell_height_m || map.cell_size_m));
     const loads = this.layers.filter((l) => l.kind === 'png' && l.visible).map((l) => this.loadPng(l));
     this.loadRasters(map);
     await Promise.all(loads);
@@ -127,7 +126,11 @@ export class LayerStack {
   }
 
   // The layer's tiles on the map's tile grid (the map's `tiles`), fetched with the token (so they
-  // load behind --token too); the first tile that arrives counts the layer as loaded.
+  // load behind --token too); the first tile that arrives counts the layer as loaded. A tile is
+  // 256 × 256 pixels of `resolutions` × `resolutions_y` metres: on a map whose cells are not square
+  // the grid's tiles are 256 view pixels wide and 256 × (cell height / cell width) tall, so OL
+  // draws each tile over its true extent in metres (the tile size per axis; OL's tile renderer
+  // draws an image into its tile's rectangle) and the view needs no stretching.
   loadPng(layer) {
     const map = state.map;
     if (!map || layer.source || layer.loading) return;
@@ -142,12 +145,13 @@ export class LayerStack {
       return;
     }
     const gen = this.generation, pdm = layer.id === 'pdm' ? state.pdmId : '';
-    const t = map.tiles, k = this.view.yStretch, top = t.extent[3] * k;
+    const t = map.tiles, top = t.extent[3];
+    const aspect = t.resolutions_y ? t.resolutions_y[0] / t.resolutions[0] : 1;  // cell height / width
     const signal = this.aborter.signal;
     const q = pdm ? `?pdm=${encodeURIComponent(pdm)}` : '';
     const source = new XYZ({
       projection: this.view.projection,
-      tileGrid: new TileGrid({ extent: [0, 0, t.extent[2], top], origin: [0, top], resolutions: t.resolutions, tileSize: t.tile_size }),
+      tileGrid: new TileGrid({ extent: [0, 0, t.extent[2], top], origin: [0, top], resolutions: t.resolutions, tileSize: [t.tile_size, t.tile_size * aspect] }),
       tileUrlFunction: ([z, x, y]) => `/api/maps/${map.id}/tiles/${layer.id}/${z}/${x}/${y}.png${q}`,
       tileLoadFunction: (tile, src) => loadTile(tile, src, signal),
       interpolate: false,  // magnified cells stay crisp squares

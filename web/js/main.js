@@ -114,7 +114,7 @@ async function selectMap(id) {
   state.pdmId = '';
   showMapTitle(map);
   mapsPanel.remember(id);
-  view.setExtent(map.width_m, map.height_m, true);
+  view.setExtent(map.width_m, map.height_m, true, map.tiles);  // before the layers: their tiles take its projection
   const loading = layers.setMap(map);
   state.emit('map', map);
   state.emit('pdms', state.pdms);
@@ -282,8 +282,8 @@ $('view-3d').addEventListener('click', () => showView('3d'));
 // The toolbar's zoom works on the view shown: the 2D map or the 3D terrain (issue 27: in 3D it
 // did nothing).
 const in3d = () => !$('view3d').hidden;
-$('zoom-in').addEventListener('click', () => (in3d() ? view3d.zoom(1.25) : view.zoomAt(1.25)));
-$('zoom-out').addEventListener('click', () => (in3d() ? view3d.zoom(0.8) : view.zoomAt(0.8)));
+$('zoom-in').addEventListener('click', () => (in3d() ? view3d.zoom(1.25) : view.zoomStep(1)));
+$('zoom-out').addEventListener('click', () => (in3d() ? view3d.zoom(0.8) : view.zoomStep(-1)));
 $('zoom-fit').addEventListener('click', () => (in3d() ? view3d.fit() : view.fit()));
 $('export-png').addEventListener('click', () => {
   const url = $('view3d').hidden ? view.snapshot().toDataURL('image/png') : view3d.toDataURL();

@@ -1,18 +1,27 @@
-// The 2D map view in the local frame (x east, y north, metres from the map's lower-left corner),
-// pan by dragging, zoom with the wheel or +/- keys. Two stacked surfaces:
+// The 2D map view in the local frame (x east, y north, metres from the map's lower-left corner).
+// Two stacked surfaces:
 // - an OpenLayers map underneath (issue 24): the raster layers as tiles of the server's tile API
-//   (layer_stack.js adds them) in a custom projection of the map's local metres, and a ScaleLine.
-//   This view owns pan and zoom and sets the OL view's centre and resolution; OL's interactions
-//   get the pointer only for the tools that ask for it (below).
-// - a <canvas> on top for the overlays that are not OL layers: the PDM editor's handles and
-//   brush, a conflict's two versions, a zone set's history, the route profile's marker;
-//   drawn every frame; "base" overlay layers are composed into a cached canvas only when the view
-//   changes. Frames are drawn on requestAnimationFrame only when something asked for it.
-// Maps whose cells are not square (geographic grids: metres along y differ from x) get a tile
-// projection whose y is stretched to x-metres, and the OL surface is scaled back by CSS.
-// Pointer input: the map box (the canvas's parent) listens, so a tool registered with `ol: true`
-// (zones, mission area: OL's Draw/Modify/Snap) lets the pointer through the canvas to the OL
-// viewport, whose interactions see it first; the same events then bubble here for pan and zoom.
+//   (layer_stack.js adds them) in a custom projection of the map's local metres, the overlays
+//   that are OL layers, a ScaleLine — and the pointer: pan and zoom are OL's own interactions
+//   (DragPan with its inertia, MouseWheelZoom, PinchZoom, DoubleClickZoom in the pan tool only,
+//   KeyboardPan and KeyboardZoom on the focused map), the view's resolutions bounded by the
+//   map's tile grid (see setProjection).
+// - a <canvas> on top, transparent to the pointer, for the overlays that are not OL layers: the
+//   PDM editor's brush, a conflict's two versions, a zone set's history, the route profile's
+//   marker; drawn when something asked for it; "base" overlay layers are composed into a cached
+//   canvas only when the view changes.
+// The view's state is mirrored here as cx, cy (the centre, metres) and scale (CSS pixels per
+// metre), read by the canvas overlays and the tools; code that moves the view sets them and calls
+// viewChanged(), which hands them to OL's view (its constraints apply).
+// Tools (the mission form's rover placing, the PDM editor, zones, the mission area) get the
+// pointer through ToolInput, an OL interaction under the tools' own Draw/Modify (which see a
+// press first and keep it from DragPan when they take it) and over DragPan: a press a tool takes
+// (its down() says true) is a drag of the tool's, not a pan; a press it leaves and releases
+// without moving (OL's move tolerance, 1 px) is its click. DragPan pans from its first drag event
+// on: the pixel or two before it are not panned (OL's way).
+// Maps whose cells are not square (geographic grids: a cell's metres along y differ from x) need
+// no stretching: the projection is in metres both ways and the tile grid's tiles are as tall as
+// their cells make them (layer_stack.js), so features keep their shapes.
 
 import OlMap from 'ol/Map.js';
 import View from 'ol/View.js';
@@ -20,9 +29,78 @@ import ScaleLine from 'ol/control/ScaleLine.js';
 import Projection from 'ol/proj/Projection.js';
 import VectorLayer from 'ol/layer/Vector.js';
 import VectorSource from 'ol/source/Vector.js';
-import { clamp } from './util.js';
+import Interaction, { zoomByDelta } from 'ol/interaction/Interaction.js';
+import { defaults as defaultInteractions } from 'ol/interaction/defaults.js';
+import KeyboardPan from 'ol/interaction/KeyboardPan.js';
+import KeyboardZoom from 'ol/interaction/KeyboardZoom.js';
+import { primaryAction } from 'ol/events/condition.js';
 
 let projections = 0;  // OL keeps projections by code: one code per map shown
+
+// How far the view zooms: out to a quarter of the tile grid's coarsest zoom (the whole map in one
+// tile), in to one zoom past its finest (itself two past one DEM cell a tile pixel: there a cell
+// covers 8 CSS pixels, the closest look issue 24 asks for; OL magnifies the finest tiles).
+const ZOOMS_OUT = 2;
+const ZOOMS_IN_PAST_GRID = 1;
+const VIEW_EVENTS = ['change:center', 'change:resolution'];
+
+// The tools' share of the pointer (see the header): one OL interaction, added right after the
+// pan/zoom ones so that every interaction added later (Draw, Modify, Snap) sees a press first.
+class ToolInput extends Interaction {
+  constructor(view) {
+    super();
+    this.view = view;
+    this.press = null;      // the press under way: {tool, consumed, moved}
+    this.clickable = null;  // the press just released, when its click is the tool's
+    this.toolsPressed = ['', ''];  // the tool (name) of the last two presses
+  }
+
+  handleEvent(e) {
+    const v = this.view, oe = e.originalEvent;
+    switch (e.type) {
+      case 'pointerdown': {
+        if (!primaryAction(e)) return true;
+        const tool = v.tools[v.tool];
+        this.toolsPressed = [this.toolsPressed[1], v.tool];
+        const consumed = Boolean(tool && tool.down && tool.down(v.eventPoint(oe), oe) === true);
+        this.press = { tool, consumed, moved: false };
+        v.box.classList.toggle('dragging', !consumed);
+        return !consumed;  // a press the tool took is no pan
+      }
+      case 'pointerdrag': {
+        const d = this.press;
+        if (!d) return true;
+        d.moved = true;
+        if (!d.consumed) return true;
+        if (d.tool.move) d.tool.move(v.eventPoint(oe), oe);
+        return false;
+      }
+      case 'pointerup': {
+        const d = this.press;
+        this.press = null;
+        v.box.classList.remove('dragging');
+        if (d && d.consumed && d.tool.up) d.tool.up(v.eventPoint(oe), oe, d.moved);
+        // OL's click follows at once (when the pointer stayed within the move tolerance): the
+        // tool's for a press that came here (not one a Draw or Modify took) and that it left.
+        this.clickable = d && !d.consumed && d.tool && d.tool.click ? d.tool : null;
+        return true;
+      }
+      case 'click': {
+        const tool = this.clickable;
+        this.clickable = null;
+        if (tool) tool.click(v.eventPoint(oe), oe);
+        return true;
+      }
+      case 'dblclick':
+        // DoubleClickZoom (under this) zooms only where clicks mean nothing else: two quick
+        // clicks placing rovers or PDM components are no zoom, the last of them neither when it
+        // ended the tool (the last rover placed).
+        return this.toolsPressed.every((t) => t === 'pan');
+      default:
+        return true;
+    }
+  }
+}
 
 export class MapView {
   constructor(canvas) {
@@ -46,21 +124,31 @@ export class MapView {
     this.baseDirty = true;
     this.pending = false;
     this.renderListeners = [];
-    this.tools = {};         // name → {down, move, up, cursor}
+    this.tools = {};         // name → {down, move, up, click, hover}
     this.tool = 'pan';
-    this.drag = null;
+    this.panClicks = [];     // fn(p): a click (not a drag) in the pan tool (onPanClick)
+    this.registerTool('pan', { click: (p) => this.panClicks.forEach((fn) => fn(p)) });
     this.hoverListeners = [];
+    this.pushing = false;    // viewChanged() is setting OL's view: its change events are ours
 
-    this.box = canvas.parentNode;  // takes the pointer (see the header)
+    this.box = canvas.parentNode;
     this.olBox = document.createElement('div');
     this.olBox.className = 'map-ol';
     canvas.before(this.olBox);
     this.scaleBox = document.createElement('div');
     this.scaleBox.className = 'map-scale';
     canvas.after(this.scaleBox);
-    this.yStretch = 1;  // tile-projection units per metre along y (1: square cells)
-    this.olMap = new OlMap({ target: this.olBox, controls: [new ScaleLine({ target: this.scaleBox })], interactions: [], layers: [] });
-    this.setProjection(100, 100, 1);
+    // Pan and zoom: OL's, without rotation; the keys on the focused canvas (the map's keyboard
+    // target), zooming at once (the tests and the +/- buttons read the new scale straight away).
+    const interactions = defaultInteractions({ altShiftDragRotate: false, pinchRotate: false, shiftDragZoom: false, keyboard: false });
+    for (const i of [new KeyboardPan(), new KeyboardZoom({ duration: 0 })]) interactions.push(i);
+    this.input = new ToolInput(this);
+    interactions.push(this.input);
+    this.olMap = new OlMap({
+      target: this.olBox, controls: [new ScaleLine({ target: this.scaleBox })], interactions, layers: [],
+      keyboardEventTarget: canvas,
+    });
+    this.setProjection(100, 100);
 
     new ResizeObserver(() => this.resize()).observe(canvas);
     this.resize();
@@ -69,50 +157,61 @@ export class MapView {
   }
 
   // --- geometry ---
-  setExtent(widthM, heightM, fit = true) {
+  // A map of widthM × heightM metres with its tile grid (`tiles` of GET /api/maps/{id}): its
+  // projection and view (setProjection), fitted in the window when `fit`.
+  setExtent(widthM, heightM, fit = true, tiles = null) {
     this.widthM = widthM;
     this.heightM = heightM;
+    this.setProjection(widthM, heightM, tiles);
     if (fit) this.fit();
     else this.invalidate(true);
   }
 
-  // A new map: a projection in its local metres (`yStretch` = cell width / cell height, 1 for
-  // square cells), returned for the tile sources of that map.
-  setProjection(widthM, heightM, yStretch = 1) {
-    this.yStretch = yStretch > 0 && Number.isFinite(yStretch) ? yStretch : 1;
-    this.projection = new Projection({
-      code: `roverplan-local-${++projections}`, units: 'm', extent: [0, 0, widthM, heightM * this.yStretch],
-    });
+  // A new map: a projection in its local metres (the tile sources of that map take it), and a
+  // view whose resolutions are those of the map's tile grid (`tiles`, GET /api/maps/{id}), ZOOMS_OUT
+  // coarser and ZOOMS_IN_PAST_GRID finer; zooming between them is smooth.
+  setProjection(widthM, heightM, tiles = null) {
+    this.projection = new Projection({ code: `roverplan-local-${++projections}`, units: 'm', extent: [0, 0, widthM, heightM] });
+    const grid = tiles && tiles.resolutions && tiles.resolutions.length ? tiles.resolutions : [Math.max(widthM, heightM) / 256];
+    const resolutions = [];
+    for (let k = ZOOMS_OUT; k > 0; k--) resolutions.push(grid[0] * 2 ** k);
+    resolutions.push(...grid);
+    for (let k = 1; k <= ZOOMS_IN_PAST_GRID; k++) resolutions.push(grid[grid.length - 1] / 2 ** k);
+    if (this.olView) this.olView.un(VIEW_EVENTS, this.onOlChange);
     this.olView = new View({
-      projection: this.projection, center: [this.cx, this.cy * this.yStretch], resolution: 1 / this.scale,
-      minResolution: 1e-6, maxResolution: 1e7, constrainResolution: false, smoothResolutionConstraint: false,
-      enableRotation: false,
+      projection: this.projection, center: [this.cx, this.cy], resolution: 1 / this.scale, resolutions,
+      constrainResolution: false, smoothResolutionConstraint: false, enableRotation: false,
     });
+    this.onOlChange = () => this.pull();
+    this.olView.on(VIEW_EVENTS, this.onOlChange);
     this.olMap.setView(this.olView);
-    this.syncOl();
-    return this.projection;
+    this.pull();
   }
 
-  // The OL view follows this one: same centre, metres per CSS pixel along x.
-  syncOl() {
-    if (!this.olView) return;
-    const k = this.yStretch;
-    // The OL surface is k times as tall and squeezed back by CSS, so its y units land on metres.
-    this.olBox.style.height = `${this.cssH * k}px`;
-    this.olBox.style.top = `${(this.cssH - this.cssH * k) / 2}px`;
-    this.olBox.style.transform = k === 1 ? '' : `scaleY(${1 / k})`;
-    this.olMap.updateSize();
-    this.olView.setCenter([this.cx, this.cy * k]);
-    this.olView.setResolution(1 / this.scale);
+  // The OL view moved (an interaction, an animation, a constraint): the mirror follows.
+  pull() {
+    const c = this.olView.getCenter(), r = this.olView.getResolution();
+    if (!c || !r) return;
+    this.cx = c[0];
+    this.cy = c[1];
+    this.scale = 1 / r;
+    if (this.pushing) return;
+    this.viewVersion++;
+    this.invalidate(true);
   }
 
-  // Local metres ↔ the OL projection's coordinates (y stretched on maps with non-square cells).
-  toOl([x, y]) {
-    return [x, y * this.yStretch];
-  }
-
-  fromOl([x, y]) {
-    return [x, y / this.yStretch];
+  // The mirror was set (cx, cy, scale): OL's view takes it, within its constraints.
+  push() {
+    const centre = [this.cx, this.cy], resolution = 1 / this.scale;  // the change events rewrite them
+    this.pushing = true;
+    try {
+      this.olView.cancelAnimations();
+      this.olView.setCenter(centre);
+      this.olView.setResolution(resolution);
+    } finally {
+      this.pushing = false;
+    }
+    this.pull();
   }
 
   // An OL vector layer over the tiles (zIndex above theirs), for an overlay drawn as features.
@@ -150,25 +249,14 @@ export class MapView {
     return [sx, sy, w * this.scale, h * this.scale];
   }
 
-  zoomAt(factor, sx = this.cssW / 2, sy = this.cssH / 2) {
-    const [wx, wy] = this.screenToWorld(sx, sy);
-    const fitScale = Math.min(this.cssW / this.widthM, this.cssH / this.heightM);
-    this.scale = clamp(this.scale * factor, fitScale / 8, fitScale * 400);
-    // Keep the world point under the cursor where it was.
-    this.cx = wx - (sx - this.cssW / 2) / this.scale;
-    this.cy = wy + (sy - this.cssH / 2) / this.scale;
-    this.viewChanged();
-  }
-
-  panBy(dx, dy) {
-    this.cx -= dx / this.scale;
-    this.cy += dy / this.scale;
-    this.viewChanged();
+  // One zoom step of the view (delta ±1: twice or half the scale), as OL's KeyboardZoom does it.
+  zoomStep(delta) {
+    zoomByDelta(this.olView, delta, undefined, 0);
   }
 
   viewChanged() {
+    this.push();
     this.viewVersion++;
-    this.syncOl();
     this.invalidate(true);
   }
 
@@ -185,7 +273,7 @@ export class MapView {
       c.width = Math.round(w * dpr);
       c.height = Math.round(h * dpr);
     }
-    this.olBox.style.width = `${w}px`;
+    this.olMap.updateSize();
     if (first) this.fit();
     else this.viewChanged();
   }
@@ -257,7 +345,7 @@ export class MapView {
     const box = this.canvas.getBoundingClientRect();
     for (const c of this.olBox.querySelectorAll('.ol-layer canvas')) {
       if (!c.width || !c.height) continue;
-      const r = c.getBoundingClientRect();  // CSS transforms included (the y stretch too)
+      const r = c.getBoundingClientRect();
       const opacity = Number(c.parentNode.style.opacity || 1);
       ctx.globalAlpha = Number.isFinite(opacity) ? opacity : 1;
       ctx.drawImage(c, (r.left - box.left) * this.dpr, (r.top - box.top) * this.dpr, r.width * this.dpr, r.height * this.dpr);
@@ -274,12 +362,13 @@ export class MapView {
 
   setTool(name) {
     this.tool = name;
-    // An OL tool: the canvas lets the pointer through to the OL viewport (app.css .ol-input).
-    this.box.classList.toggle('ol-input', Boolean(this.tools[name]?.ol));
-    this.canvas.classList.toggle('tool-pdm', name === 'pdm');
-    this.canvas.classList.toggle('tool-rovers', name === 'rovers');
-    this.canvas.classList.toggle('tool-zones', name === 'zones');
-    this.canvas.classList.toggle('tool-area', name === 'area');
+    for (const t of ['pdm', 'rovers', 'zones', 'area']) this.box.classList.toggle(`tool-${t}`, name === t);
+  }
+
+  // fn(p) on a click of the map in the pan tool: a press released within the move tolerance,
+  // p = {sx, sy, x, y} (incident markers, a rover's trail).
+  onPanClick(fn) {
+    this.panClicks.push(fn);
   }
 
   onHover(fn) {
@@ -293,93 +382,53 @@ export class MapView {
     return { sx, sy, x, y };
   }
 
+  // What OL's interactions leave to the page: the focus (the map's keys), the pointer read-out and
+  // the tools' hover.
   bindPointer() {
     const c = this.canvas, box = this.box;
-    // The box holds the floating panels too: only the canvas and the OL surface are the map.
-    const onMap = (e) => e.target === c || this.olBox.contains(e.target);
+    // The box holds the floating panels too: only the OL surface is the map.
+    const onMap = (e) => this.olBox.contains(e.target);
     // A press on the OL viewport (not focusable) would take the focus from the canvas, whose keys
-    // the tools listen to: the canvas keeps it.
+    // OL and the tools listen to: the canvas keeps it, and takes it on a press on the map.
     box.addEventListener('mousedown', (e) => {
-      if (e.button === 0 && this.olBox.contains(e.target)) e.preventDefault();
+      if (e.button === 0 && onMap(e)) e.preventDefault();
     });
     box.addEventListener('pointerdown', (e) => {
-      if (e.button !== 0 || !onMap(e)) return;
-      c.focus({ preventScroll: true });
-      const p = this.eventPoint(e);
-      const tool = this.tools[this.tool];
-      let consumed = false;
-      if (tool && tool.down) consumed = tool.down(p, e) === true;
-      this.drag = { consumed, tool, lastX: p.sx, lastY: p.sy, startX: p.sx, startY: p.sy, moved: false };
-      e.target.setPointerCapture(e.pointerId);
-      if (!consumed) c.classList.add('dragging');
-    });
+      if (e.button === 0 && onMap(e)) c.focus({ preventScroll: true });
+    }, true);
     box.addEventListener('pointermove', (e) => {
-      if (!this.drag && !onMap(e)) {
+      const pressed = this.input.press;
+      if (!pressed && !onMap(e)) {
         for (const fn of this.hoverListeners) fn(null);  // over a panel: as if the pointer left
         return;
       }
       const p = this.eventPoint(e);
       for (const fn of this.hoverListeners) fn(p);
-      const d = this.drag;
-      if (!d) {
-        const tool = this.tools[this.tool];
-        if (tool && tool.hover) tool.hover(p);
-        return;
-      }
-      if (Math.hypot(p.sx - d.startX, p.sy - d.startY) > 3) d.moved = true;
-      if (d.consumed) {
-        if (d.tool.move) d.tool.move(p, e);
-      } else if (d.moved) {
-        this.panBy(p.sx - d.lastX, p.sy - d.lastY);
-      }
-      d.lastX = p.sx;
-      d.lastY = p.sy;
+      if (pressed) return;
+      const tool = this.tools[this.tool];
+      if (tool && tool.hover) tool.hover(p);
     });
-    const end = (e) => {
-      const d = this.drag;
-      if (!d) return;
-      this.drag = null;
-      c.classList.remove('dragging');
-      const p = this.eventPoint(e);
-      if (d.consumed) {
-        if (d.tool.up) d.tool.up(p, e, d.moved);
-      } else if (!d.moved && d.tool && d.tool.click && e.type === 'pointerup') {
-        d.tool.click(p, e);
-      }
-    };
-    box.addEventListener('pointerup', end);
-    box.addEventListener('pointercancel', end);
     box.addEventListener('pointerleave', () => {
-      if (!this.drag) for (const fn of this.hoverListeners) fn(null);
+      if (!this.input.press) for (const fn of this.hoverListeners) fn(null);
     });
-    box.addEventListener('wheel', (e) => {
-      if (!onMap(e)) return;
-      e.preventDefault();
-      const p = this.eventPoint(e);
-      const delta = e.deltaMode === 1 ? e.deltaY * 16 : e.deltaY;
-      this.zoomAt(Math.exp(-delta * 0.0015), p.sx, p.sy);
-    }, { passive: false });
   }
 
+  // The keys OL's KeyboardPan/KeyboardZoom do not take: '0' fits the map; '=' and '_' (+ and −
+  // without Shift) zoom too, and + and − work anywhere on the page that is not a text field.
   bindKeys() {
     const handle = (e) => {
       if (e.ctrlKey || e.metaKey || e.altKey) return false;
-      const step = 60;
       switch (e.key) {
-        case '+': case '=': this.zoomAt(1.25); return true;
-        case '-': case '_': this.zoomAt(0.8); return true;
+        case '+': case '=': this.zoomStep(1); return true;
+        case '-': case '_': this.zoomStep(-1); return true;
         case '0': this.fit(); return true;
-        case 'ArrowLeft': this.panBy(step, 0); return true;
-        case 'ArrowRight': this.panBy(-step, 0); return true;
-        case 'ArrowUp': this.panBy(0, step); return true;
-        case 'ArrowDown': this.panBy(0, -step); return true;
         default: return false;
       }
     };
     this.canvas.addEventListener('keydown', (e) => {
+      if (e.defaultPrevented || e.key === '+' || e.key === '-') return;  // OL's KeyboardZoom has them
       if (handle(e)) e.preventDefault();
     });
-    // +/- also work anywhere on the page that is not a text field.
     window.addEventListener('keydown', (e) => {
       if (e.target === this.canvas || e.defaultPrevented) return;
       const t = e.target;

@@ -594,14 +594,9 @@ export class MissionView {
 
   // A click (not a drag) on the map in pan mode selects the incident marker under it.
   bindIncidentClicks(view, layer) {
-    const canvas = view.canvas;
-    let down = null;
-    canvas.addEventListener('pointerdown', (e) => { down = [e.clientX, e.clientY]; });
-    canvas.addEventListener('click', (e) => {
-      if (!down || Math.hypot(e.clientX - down[0], e.clientY - down[1]) > 3) return;
-      if (view.tool !== 'pan' || !layer.visible || !this.incidents.items.length) return;
-      const r = canvas.getBoundingClientRect();
-      const i = this.incidents.hit(e.clientX - r.left, e.clientY - r.top);
+    view.onPanClick((p) => {
+      if (!layer.visible || !this.incidents.items.length) return;
+      const i = this.incidents.hit(p.sx, p.sy);
       if (i >= 0) {
         this.incidents.select(i, { centre: false });
         this.replay.drawStrip();

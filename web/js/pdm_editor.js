@@ -61,16 +61,19 @@ export class PdmEditor {
       this.density.layer.setOpacity(this.editLayer.opacity);
       this.density.layer.setVisible(this.showOverlay() && this.overlayMax > 0);
     });
-    this.olHandles = new PdmHandles(view);
+    // Shaping: the handle Modify took follows the pointer; its path becomes the component's
+    // centre, σ or rotation.
+    this.olHandles = new PdmHandles(view, {
+      grab: (p) => this.pointerDown(p), drag: (p) => this.pointerMove(p), release: () => this.pointerUp(),
+    });
     view.onRender(() => this.olHandles.sync(this.comps, this.active, state.tool === 'pdm' && this.mode === 'shape' && Boolean(state.map)));
     view.addLayer({ id: 'pdm-edit', order: 20, draw: (ctx, v) => this.draw(ctx, v) });
     view.registerTool('pdm', {
-      ol: true,
-      // Shaping: a press Modify took on a handle drags it (the map does not pan); the pointer's
-      // path becomes the component's centre, σ or rotation (pointerMove).
-      down: (p, e) => (this.mode === 'paint' ? this.strokeStart(p, e) : this.olHandles.grabbing() && this.pointerDown(p)),
-      move: (p) => (this.stroke ? this.strokeMove(p) : this.pointerMove(p)),
-      up: () => (this.stroke ? this.strokeEnd() : this.pointerUp()),
+      // Painting: a press is a brush stroke (no pan). Shaping: a press on a handle is Modify's,
+      // which keeps it from the map's pan and passes the pointer's path on (pdm_handles.js).
+      down: (p, e) => this.mode === 'paint' && this.strokeStart(p, e),
+      move: (p) => this.strokeMove(p),
+      up: () => this.strokeEnd(),
       click: (p) => this.add(p.x, p.y),
       hover: (p) => {
         if (this.mode !== 'paint') return;

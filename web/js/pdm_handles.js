@@ -16,15 +16,24 @@ import { Circle as CircleStyle, Fill, RegularShape, Stroke, Style, Text } from '
 export const HANDLE = 7;       // px, half size
 export const ROT_OFFSET = 26;  // px beyond the σx handle
 
-// Modify, remembering whether it took the last press (then the map view does not pan).
+// Modify telling the editor of the handle it took (a press it takes is no pan of the map: OL
+// gives it to the interactions added later first, and Modify keeps a press it takes), of the
+// pointer's path while dragging it and of the release.
 class GrabModify extends Modify {
   handleDownEvent(e) {
     this.grabbed = super.handleDownEvent(e);
+    if (this.grabbed) this.hooks.grab(this.mapView.eventPoint(e.originalEvent));
     return this.grabbed;
+  }
+
+  handleDragEvent(e) {
+    super.handleDragEvent(e);
+    if (this.grabbed) this.hooks.drag(this.mapView.eventPoint(e.originalEvent));
   }
 
   handleUpEvent(e) {
     const pass = super.handleUpEvent(e);
+    if (this.grabbed) this.hooks.release();
     this.grabbed = false;
     return pass;
   }
@@ -45,13 +54,16 @@ const centreStyle = (i, active) => new Style({
 });
 
 export class PdmHandles {
-  constructor(view) {
+  // hooks: {grab(p), drag(p), release()} with p a map view point {sx, sy, x, y}.
+  constructor(view, hooks) {
     this.view = view;
     this.shapes = view.addVectorLayer(21);   // ellipses and axes, over the density (20)
     this.handles = view.addVectorLayer(22);  // the handles Modify drags
     this.parts = [];                         // per component {ellipse, axes, centre, sx, sy, rot}
     this.key = '';
     this.modify = new GrabModify({ source: this.handles.getSource(), pixelTolerance: HANDLE + 3, style: new Style({}) });
+    this.modify.mapView = view;
+    this.modify.hooks = hooks;
     this.modify.setActive(false);
     // A handle let go where the component did not follow it (σ at its minimum) goes back.
     this.modify.on('modifyend', () => {
@@ -59,11 +71,6 @@ export class PdmHandles {
       view.invalidate();
     });
     view.olMap.addInteraction(this.modify);
-  }
-
-  // Modify took the press now under way.
-  grabbing() {
-    return this.modify.getActive() && this.modify.grabbed === true;
   }
 
   // The handles' places in local metres (rot: ROT_OFFSET px beyond σx at the view's scale).
@@ -83,10 +90,9 @@ export class PdmHandles {
     this.modify.setActive(shown);
     if (!shown) return;
     const v = this.view;
-    const key = `${JSON.stringify(comps)} ${active} ${v.viewVersion} ${v.yStretch}`;
+    const key = `${JSON.stringify(comps)} ${active} ${v.viewVersion}`;
     if (key === this.key) return;
     this.key = key;
-    const k = v.yStretch, ol = ([x, y]) => [x, y * k];
     const shapes = this.shapes.getSource(), handles = this.handles.getSource();
     comps.forEach((g, i) => {
       let p = this.parts[i];
@@ -105,12 +111,12 @@ export class PdmHandles {
       const ring = [];
       for (let j = 0; j <= 64; j++) {
         const t = (2 * Math.PI * j) / 64, u = g.sigma_x * Math.cos(t), w = g.sigma_y * Math.sin(t);
-        ring.push(ol([g.x + c * u - s * w, g.y + s * u + c * w]));
+        ring.push([g.x + c * u - s * w, g.y + s * u + c * w]);
       }
       p.ellipse.getGeometry().setCoordinates([ring]);
       p.ellipse.setStyle(ellipseStyle(i === active));
-      p.axes.getGeometry().setCoordinates([ol(h.rot), ol(h.centre), ol(h.sy)]);
-      for (const kind of ['centre', 'sx', 'sy', 'rot']) p[kind].getGeometry().setCoordinates(ol(h[kind]));
+      p.axes.getGeometry().setCoordinates([h.rot, h.centre, h.sy]);
+      for (const kind of ['centre', 'sx', 'sy', 'rot']) p[kind].getGeometry().setCoordinates(h[kind]);
       p.centre.setStyle(centreStyle(i, i === active));
     });
     for (const p of this.parts.splice(comps.length)) {

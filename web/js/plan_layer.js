@@ -66,9 +66,6 @@ export class PlanLayer {
       l.setOpacity(opacity);
       l.setVisible(visible);
     }
-    const k = this.view.yStretch;
-    const whole = k !== ol.stretch;
-    ol.stretch = k;
     const source = ol.layer.getSource();
     this.paths.forEach((path, i) => {
       if (!ol.paths[i]) {
@@ -78,21 +75,19 @@ export class PlanLayer {
         source.addFeature(ol.paths[i]);
       }
       const geom = ol.paths[i].getGeometry();
-      if (whole || path.length < ol.counts[i] || ol.sources[i] !== path) {
-        geom.setCoordinates(path.map(([x, y]) => [x, y * k]));
+      if (path.length < ol.counts[i] || ol.sources[i] !== path) {
+        geom.setCoordinates(path.map(([x, y]) => [x, y]));
       } else if (path.length > ol.counts[i]) {
-        const flat = geom.getFlatCoordinates();  // appended in place, one change event
-        for (let j = ol.counts[i]; j < path.length; j++) flat.push(path[j][0], path[j][1] * k);
-        geom.changed();
+        for (let j = ol.counts[i]; j < path.length; j++) geom.appendCoordinate([path[j][0], path[j][1]]);
       }
       ol.counts[i] = path.length;
       ol.sources[i] = path;
     });
     for (const f of ol.paths.splice(this.paths.length)) source.removeFeature(f);
     ol.counts.length = ol.sources.length = ol.paths.length;
-    if (whole || ol.routeShown !== this.route) {
+    if (ol.routeShown !== this.route) {
       ol.routeShown = this.route;
-      const coords = this.route.map(([x, y]) => [x, y * k]);
+      const coords = this.route.map(([x, y]) => [x, y]);
       const parts = [ol.route, ol.start, ol.targets];
       if (!coords.length) {
         if (source.hasFeature(ol.route)) for (const f of parts) source.removeFeature(f);
@@ -132,17 +127,16 @@ export class PlanLayer {
     if (hovered > 0) boxes.push(box(hovered));
     this.labelled = [];
     const features = [];
-    const k = view.yStretch;
     for (let i = 1; i < screen.length; i++) {
       if (i === hovered) continue;
       const b = box(i);
       if (boxes.some((o) => hit(o, b))) continue;
       boxes.push(b);
       this.labelled.push(i);
-      features.push(numberFeature(this.route[i], k, i, false));
+      features.push(numberFeature(this.route[i], i, false));
     }
     if (hovered > 0) {
-      features.push(numberFeature(this.route[hovered], k, hovered, true));
+      features.push(numberFeature(this.route[hovered], hovered, true));
       this.labelled.push(hovered);
     }
     const source = ol.numbers.getSource();
@@ -162,8 +156,8 @@ function measure(text) {
 }
 
 // Target i's number right of and above its dot; the hovered one yellow on a dark box.
-function numberFeature([x, y], k, i, hovered) {
-  const f = new Feature(new Point([x, y * k]));
+function numberFeature([x, y], i, hovered) {
+  const f = new Feature(new Point([x, y]));
   f.setStyle(new Style({
     zIndex: hovered ? 1 : 0,
     text: new Text({
@@ -189,6 +183,6 @@ function olParts(view) {
   targets.setStyle(DOT(3));
   return {
     layer: view.addVectorLayer(35), numbers: view.addVectorLayer(35.5, { declutter: false }),
-    paths: [], counts: [], sources: [], route, start, targets, routeShown: null, stretch: 0, numbersKey: '', numbersRoute: null,
+    paths: [], counts: [], sources: [], route, start, targets, routeShown: null, numbersKey: '', numbersRoute: null,
   };
 }

@@ -24,8 +24,8 @@ export class RasterOverlay {
     this.source.changed();
   }
 
-  // OL's canvasFunction: `extent` in OL units (y stretched by the view's yStretch), `resolution`
-  // units a CSS pixel, `size` in device pixels.
+  // OL's canvasFunction: `extent` in local metres, `resolution` metres a CSS pixel, `size` in
+  // device pixels.
   paint(extent, resolution, pixelRatio, size) {
     const out = this.out;
     out.width = Math.max(1, Math.round(size[0]));
@@ -33,10 +33,10 @@ export class RasterOverlay {
     const w = this.what();
     if (!w) return out;
     const g = out.getContext('2d');
-    const k = this.view.yStretch, px = pixelRatio / resolution;
+    const px = pixelRatio / resolution;
     const [x0, y0, width, height] = w.rect;
     g.imageSmoothingEnabled = this.smooth;
-    g.drawImage(w.canvas, (x0 - extent[0]) * px, (extent[3] - (y0 + height) * k) * px, width * px, height * k * px);
+    g.drawImage(w.canvas, (x0 - extent[0]) * px, (extent[3] - (y0 + height)) * px, width * px, height * px);
     return out;
   }
 }

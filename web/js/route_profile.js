@@ -338,13 +338,8 @@ export class RouteProfile {
 
   // --- choosing a rover by clicking its trail (pan tool, a click not a drag) ---
   bindTrailClicks() {
-    const c = this.view.canvas;
-    let down = null;
-    c.addEventListener('pointerdown', (e) => { down = [e.clientX, e.clientY]; });
-    c.addEventListener('click', (e) => {
-      if (!down || Math.hypot(e.clientX - down[0], e.clientY - down[1]) > 3 || this.view.tool !== 'pan') return;
-      const r = c.getBoundingClientRect();
-      const k = this.trailAt(e.clientX - r.left, e.clientY - r.top);
+    this.view.onPanClick((p) => {
+      const k = this.trailAt(p.sx, p.sy);
       if (k < 0) return;
       this.choose(k);
       $('dock-tab-profile').click();

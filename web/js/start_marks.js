@@ -54,9 +54,9 @@ export class StartMarks {
   sync(rovers, shown) {
     this.layer.setVisible(shown);
     if (!shown) return;
-    const k = this.view.yStretch, source = this.layer.getSource();
+    const source = this.layer.getSource();
     rovers.forEach((r, i) => {
-      const key = r ? `${r.x} ${r.y} ${r.heading} ${k}` : '';
+      const key = r ? `${r.x} ${r.y} ${r.heading}` : '';
       if (key === this.shownKey[i]) return;
       this.shownKey[i] = key;
       let f = this.features[i];
@@ -66,10 +66,10 @@ export class StartMarks {
         return;
       }
       if (!f) {
-        f = this.features[i] = new Feature(new Point([r.x, r.y * k]));
+        f = this.features[i] = new Feature(new Point([r.x, r.y]));
         source.addFeature(f);
       } else {
-        f.getGeometry().setCoordinates([r.x, r.y * k]);
+        f.getGeometry().setCoordinates([r.x, r.y]);
       }
       f.setStyle(startStyle(i, r.heading));
     });

@@ -9,6 +9,8 @@ import { asArray } from 'ol/color.js';
 import { Icon, Stroke, Style } from 'ol/style.js';
 import { roverColour } from './util.js';
 
+const APPEND_MAX = 64;  // points appended one by one to a trail's line in a frame; more: set whole
+
 export class TrailSet {
   constructor(style = {}) {
     this.paths = [];       // per rover: array of [x, y]
@@ -77,15 +79,15 @@ export class TrailSet {
 
 // The trails and rovers of some TrailSets as two OL vector layers (issue 24): a line feature and
 // a rover feature per rover, updated in place from the sets on every frame the map view draws —
-// only the points added since the last frame are appended to a line; a replay seek, a reset or a
-// new map (the y stretch) sets it whole.
+// only the points added since the last frame are appended to a line (LineString's
+// appendCoordinate); a replay seek or a reset sets it whole (setCoordinates).
 export class TrailLayer {
   constructor(view, zIndex) {
     this.view = view;
     this.sets = [];
     this.lines = view.addVectorLayer(zIndex);
     this.rovers = view.addVectorLayer(zIndex + 0.5);
-    this.shown = new Map();  // set → {version, stretch, lines: [Feature], counts: [n], rovers: [Feature], poses: [key]}
+    this.shown = new Map();  // set → {version, lines: [Feature], counts: [n], rovers: [Feature], poses: [key]}
   }
 
   add(set) {
@@ -111,15 +113,13 @@ export class TrailLayer {
   }
 
   syncSet(set) {
-    const k = this.view.yStretch;
     let s = this.shown.get(set);
     if (!s) {
-      s = { version: -1, stretch: k, lines: [], counts: [], rovers: [], poses: [] };
+      s = { version: -1, lines: [], counts: [], rovers: [], poses: [] };
       this.shown.set(set, s);
     }
-    const whole = s.version !== set.version || s.stretch !== k;
+    const whole = s.version !== set.version;
     s.version = set.version;
-    s.stretch = k;
     const n = set.paths.length;
     for (let i = 0; i < n; i++) {
       const path = set.paths[i];
@@ -131,13 +131,11 @@ export class TrailLayer {
         this.lines.getSource().addFeature(s.lines[i]);
       }
       const geom = s.lines[i].getGeometry();
-      if (whole || end < s.counts[i]) {
-        geom.setCoordinates(path.slice(0, end).map(([x, y]) => [x, y * k]));
-      } else if (end > s.counts[i]) {
-        // Appended in place: the line's own coordinate array grows, one change event a frame.
-        const flat = geom.getFlatCoordinates();
-        for (let j = s.counts[i]; j < end; j++) flat.push(path[j][0], path[j][1] * k);
-        geom.changed();
+      // A long stretch at once (a seek ahead) is set whole: appendCoordinate is a change event a point.
+      if (whole || end < s.counts[i] || end - s.counts[i] > APPEND_MAX) {
+        geom.setCoordinates(path.slice(0, end).map(([x, y]) => [x, y]));
+      } else {
+        for (let j = s.counts[i]; j < end; j++) geom.appendCoordinate([path[j][0], path[j][1]]);
       }
       s.counts[i] = end;
       this.syncRover(set, s, i);
@@ -151,7 +149,7 @@ export class TrailLayer {
   // Rover i's arrow at the shown end of its trail, pointing along its heading.
   syncRover(set, s, i) {
     const pose = set.poseOf(i);
-    const key = pose ? `${pose.x} ${pose.y} ${pose.heading} ${s.stretch}` : '';
+    const key = pose ? `${pose.x} ${pose.y} ${pose.heading}` : '';
     if (key === s.poses[i]) return;
     s.poses[i] = key;
     let f = s.rovers[i];
@@ -164,7 +162,7 @@ export class TrailLayer {
       f = s.rovers[i] = new Feature(new Point([0, 0]));
       this.rovers.getSource().addFeature(f);
     }
-    f.getGeometry().setCoordinates([pose.x, pose.y * s.stretch]);
+    f.getGeometry().setCoordinates([pose.x, pose.y]);
     const colour = roverColour(i + (set.style.colourOffset || 0));
     f.setStyle(new Style({ image: new Icon({ img: arrow(colour, Boolean(set.style.hollow)), rotation: (-pose.heading * Math.PI) / 180, rotateWithView: false }) }));
   }

@@ -6,7 +6,8 @@
 // moved as the zone's ring, and every change of the model made elsewhere (undo, Backspace, a
 // restored draft) is put back into Draw's sketch (sync).
 // Interactions see an event last-added first: Snap moves the pointer's coordinate, then Modify
-// takes a press on a corner or an edge (the map view then does not pan), else Draw has it.
+// takes a press on a corner or an edge (and keeps it from the map's DragPan, added before), else
+// Draw has it: a click adds a corner, a drag pans the map (Draw lets the press through).
 
 import Draw from 'ol/interaction/Draw.js';
 import Modify from 'ol/interaction/Modify.js';
@@ -27,7 +28,7 @@ class RingDraw extends Draw {
   }
 }
 
-// Modify, remembering whether it took the last press (the map view asks, to not pan).
+// Modify, telling when it took a press (the model before it is kept for the undo step).
 class GrabModify extends Modify {
   handleDownEvent(e) {
     this.grabbed = super.handleDownEvent(e);
@@ -57,7 +58,7 @@ export class ZoneInteractions {
     this.draw = new RingDraw({
       type: 'Polygon', style: sketchStyle, snapTolerance: HIT_PX + 3,
       geometryFunction: (coords, geometry) => this.sketchGeometry(coords, geometry),
-      condition: (e) => primaryAction(e) && (Boolean(editor.drawing) || editor.mayStartAt(...view.fromOl(e.coordinate))),
+      condition: (e) => primaryAction(e) && (Boolean(editor.drawing) || editor.mayStartAt(...e.coordinate)),
     });
     this.draw.afterUp = () => this.fromSketch();
     this.draw.on('drawabort', () => { this.sketch = null; });
@@ -83,11 +84,6 @@ export class ZoneInteractions {
     }
   }
 
-  // Modify took the press now under way (the map view then does not pan).
-  grabbing() {
-    return this.modify.getActive() && this.modify.grabbed === true;
-  }
-
   // Draw's polygon from its sketch coordinates ([[corner, ..., the point under the pointer]]),
   // kept to read the corners back (committed).
   sketchGeometry(coords, geometry) {
@@ -102,7 +98,7 @@ export class ZoneInteractions {
   // when nothing is drawn.
   committed() {
     if (!this.sketch) return null;
-    return this.sketch[0].slice(0, -1).map((c) => this.view.fromOl(c));
+    return this.sketch[0].slice(0, -1).map(([x, y]) => [x, y]);
   }
 
   fromSketch() {
@@ -125,7 +121,7 @@ export class ZoneInteractions {
     this.syncing = true;
     try {
       this.draw.abortDrawing();
-      if (want && want.length) this.draw.appendCoordinates(want.map((c) => this.view.toOl(c)));
+      if (want && want.length) this.draw.appendCoordinates(want.map(([x, y]) => [x, y]));
     } finally {
       this.syncing = false;
     }

@@ -55,8 +55,6 @@ export class ZoneEditor {
     });
     this.ol = new ZoneInteractions(this, view, this.olLayer.getSource());
     view.registerTool('zones', {
-      ol: true,
-      down: () => this.ol.grabbing(),  // a corner taken by Modify: the map does not pan
       click: (p) => this.click(p),
     });
     $('zones-draw').addEventListener('click', () => this.setActive(state.tool !== 'zones'));
@@ -204,7 +202,7 @@ export class ZoneEditor {
     for (const f of features) {
       const z = f.get('zone');
       if (!(z >= 0 && z < this.zones.length)) continue;
-      this.zones[z].ring = f.getGeometry().getCoordinates()[0].slice(0, -1).map((c) => clamp(this.view.fromOl(c)));
+      this.zones[z].ring = f.getGeometry().getCoordinates()[0].slice(0, -1).map((c) => clamp(c));
       zs.push(z);
     }
     if (!zs.length) return;
@@ -396,15 +394,15 @@ export class ZoneEditor {
   // --- the OL features: updated in place from the model (not rebuilt), then the interactions ---
   render() {
     const source = this.olLayer.getSource();
-    const toOl = (ring) => [[...ring, ring[0]].map((c) => this.view.toOl(c))];
+    const closed = (ring) => [[...ring, ring[0]].map(([x, y]) => [x, y])];
     this.zones.forEach((z, i) => {
       let f = this.features[i];
       if (!f) {
-        f = new Feature({ geometry: new Polygon(toOl(z.ring)) });
+        f = new Feature({ geometry: new Polygon(closed(z.ring)) });
         this.features.push(f);
         source.addFeature(f);
       } else {
-        f.getGeometry().setCoordinates(toOl(z.ring));
+        f.getGeometry().setCoordinates(closed(z.ring));
       }
       f.setProperties({ zone: i, selected: i === this.selected, dirty: this.dirty });
     });
@@ -412,7 +410,7 @@ export class ZoneEditor {
     const editing = state.tool === 'zones';
     const ring = this.ringLayer.getSource();
     ring.clear();
-    if (this.drawing && !editing) ring.addFeature(new Feature(new LineString(this.drawing.map((c) => this.view.toOl(c)))));
+    if (this.drawing && !editing) ring.addFeature(new Feature(new LineString(this.drawing.map(([x, y]) => [x, y]))));
     this.ringLayer.setVisible(this.layer.visible);
     this.ol.sync(editing);
   }
