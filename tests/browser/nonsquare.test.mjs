@@ -1,7 +1,7 @@
 // A map whose cells are not square (0.5 m wide, 1 m tall: a GeoTIFF with different x and y pixel
 // sizes, made with GDAL here from a checkerboard grid) on the 2D map (issue 24): the OpenLayers view
 // is in metres both ways and the tiles cover their true extent, with no CSS stretching. At the
-// closest zoom a cell is 8 × 16 screen pixels, the cell boundaries the tiles show are where the
+// zoom where a cell is 8 × 16 screen pixels, the cell boundaries the tiles show are where the
 // pointer read-out puts them (either side of a colour change the read-out gives the next cell and
 // the other height), and a rover's start mark, a disc, is as tall as it is wide (read from
 // screenshots, what the operator sees).
@@ -93,19 +93,19 @@ describe('a map with non-square cells', { skip: missing || false, timeout: 18000
     await page.waitForFunction((n) => document.getElementById('map-title').textContent.includes(n), 'oblong');
     await page.waitForFunction(() => window.__roverplanApp.layers.rasters.elevation);  // the read-out's heights
 
-    // The closest zoom (the view's finest resolution), centred on a cell corner: x 16 m is a
-    // boundary between columns, y 24 m one between rows.
+    // Zoomed in to 8 px a cell across (16 px/m; the view goes on to 32), centred on a cell corner:
+    // x 16 m is a boundary between columns, y 24 m one between rows.
     const view = await page.evaluate(() => {
       const v = window.__roverplanApp.view;
       v.cx = 16;
       v.cy = 24;
-      v.scale = 1e6;  // the view's limit takes over
+      v.scale = 8 / 0.5;
       v.viewChanged();
       const r = v.canvas.getBoundingClientRect();
       return { scale: v.scale, cx: v.cx, cy: v.cy, left: r.left, top: r.top, w: v.cssW, h: v.cssH };
     });
-    console.log(`# closest zoom: ${view.scale} px/m, a cell ${view.scale * DX} × ${view.scale * DY} px`);
-    assert.equal(view.scale * DX, 8, 'a cell is 8 px wide at the closest zoom');
+    console.log(`# zoomed in: ${view.scale} px/m, a cell ${view.scale * DX} × ${view.scale * DY} px`);
+    assert.equal(view.scale * DX, 8, 'a cell is 8 px wide');
     assert.equal(view.scale * DY, 16, 'and 16 px tall');
     await page.evaluate(() => new Promise((done) => {
       const m = window.__roverplanApp.view.olMap;

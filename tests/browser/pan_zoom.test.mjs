@@ -76,7 +76,7 @@ suiteWithServer('pan and zoom', { timeout: 180000 }, (ctx) => {
     const v4 = await settled(page);
     assert.ok(Math.abs((v4.cx - v3.cx) * v4.scale - 128) < 1 && v4.cy === v3.cy, `ArrowRight: ${(v4.cx - v3.cx) * v4.scale} px east`);
 
-    // The limits: in to 8 px a cell (one zoom past the tile grid's finest), out to a quarter of
+    // The limits: in to 32 px a cell (three zooms past the tile grid's finest), out to a quarter of
     // the scale of the grid's coarsest zoom (the whole map in one tile).
     await page.focus('#map-canvas');
     for (let i = 0; i < 20; i++) await page.keyboard.press('+');
@@ -84,7 +84,7 @@ suiteWithServer('pan and zoom', { timeout: 180000 }, (ctx) => {
     for (let i = 0; i < 30; i++) await page.keyboard.press('-');
     const coarsest = (await viewOf(page)).scale;
     console.log(`# zoom limits: ${coarsest.toFixed(4)} … ${finest.toFixed(2)} px/m (a cell ${(finest * map.cell_size_m).toFixed(2)} px at the closest)`);
-    assert.ok(Math.abs(finest * map.cell_size_m - 8) < 1e-6, `closest: a cell is 8 px (${finest * map.cell_size_m})`);
+    assert.ok(Math.abs(finest * map.cell_size_m - 32) < 1e-6, `closest: a cell is 32 px (${finest * map.cell_size_m})`);
     assert.ok(Math.abs(coarsest * map.tiles.resolutions[0] * 4 - 1) < 1e-6, `farthest: ${coarsest} px/m`);
     await page.keyboard.press('0');  // fits the map again
     assert.deepEqual(errors, []);

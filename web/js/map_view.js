@@ -38,10 +38,11 @@ import { primaryAction } from 'ol/events/condition.js';
 let projections = 0;  // OL keeps projections by code: one code per map shown
 
 // How far the view zooms: out to a quarter of the tile grid's coarsest zoom (the whole map in one
-// tile), in to one zoom past its finest (itself two past one DEM cell a tile pixel: there a cell
-// covers 8 CSS pixels, the closest look issue 24 asks for; OL magnifies the finest tiles).
+// tile), in to three zooms past its finest (itself two past one DEM cell a tile pixel: there a
+// cell covers 32 CSS pixels, enough to read rover-scale ground on a 1 m map; issue 24 asks for at
+// least 8; OL magnifies the finest tiles).
 const ZOOMS_OUT = 2;
-const ZOOMS_IN_PAST_GRID = 1;
+const ZOOMS_IN_PAST_GRID = 3;
 const VIEW_EVENTS = ['change:center', 'change:resolution'];
 
 // The tools' share of the pointer (see the header): one OL interaction, added right after the
