@@ -27,8 +27,9 @@
 namespace rover::maps {
 
 // Writes `dem` as the map's COG, atomically (PATH.tmp, then rename). Memory: the COG driver reads
-// `dem` in place (a MEM dataset over its cells, no copy) plus GDAL's block cache; disk: a temporary
-// overview file of about a third of the result next to it. A full disk throws DiskFull.
+// `dem` in place (a MEM dataset over its cells, no copy) plus GDAL's block cache; disk: while it
+// writes, a temporary uncompressed overview file next to it (4·N/3 bytes for N cells: a third of
+// the float grid). A full disk throws DiskFull.
 void writeDemCog(const std::string& path, const Raster<float>& dem);
 
 // Writes the class pyramid, atomically. Memory: the levels below full resolution (a third of
