@@ -14,7 +14,6 @@
 #include <limits>
 #include <list>
 #include <mutex>
-#include <optional>
 #include <string>
 #include <stdexcept>
 #include <vector>
@@ -30,22 +29,6 @@ namespace {
 
 namespace fs = std::filesystem;
 constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
-
-// A GDAL configuration option set on this thread for a scope, its previous value back after.
-class TemporaryConfig {
- public:
-  TemporaryConfig(const char* key, const char* value) : key_(key) {
-    if (const char* was = CPLGetThreadLocalConfigOption(key, nullptr)) was_ = was;
-    CPLSetThreadLocalConfigOption(key, value);
-  }
-  ~TemporaryConfig() { CPLSetThreadLocalConfigOption(key_, was_ ? was_->c_str() : nullptr); }
-  TemporaryConfig(const TemporaryConfig&) = delete;
-  TemporaryConfig& operator=(const TemporaryConfig&) = delete;
-
- private:
-  const char* key_;
-  std::optional<std::string> was_;
-};
 
 int ceilDiv(int a, int b) { return static_cast<int>((static_cast<long long>(a) + b - 1) / b); }
 
@@ -276,7 +259,7 @@ void writeDemCog(const std::string& path, const Raster<float>& dem) {
   // COG` with these options took 2.9 s of CPU, 1.3 s with the temporary file uncompressed, and the
   // COG is byte for byte the same. The price is disk while writing: 4·N/3 bytes instead of about
   // half that (COG_TMP_COMPRESSION is read on this thread, when the driver starts).
-  const TemporaryConfig uncompressedOverviews("COG_TMP_COMPRESSION", "NONE");
+  const ThreadConfig uncompressedOverviews("COG_TMP_COMPRESSION", "NONE");
   Dataset out(GDALCreateCopy(GDALGetDriverByName("COG"), tmp.c_str(), src.get(), FALSE,
                              const_cast<char**>(options), nullptr, nullptr));
   const int err = errno;
