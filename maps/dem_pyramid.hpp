@@ -31,6 +31,9 @@ namespace rover::maps {
 // writes, a temporary uncompressed overview file next to it (4·N/3 bytes for N cells: a third of
 // the float grid). A full disk throws DiskFull.
 void writeDemCog(const std::string& path, const Raster<float>& dem);
+// The same COG (byte for byte) from a grid file (maps/grid_file.hpp) of `g`'s shape, read through
+// GDAL as a raw band: memory is GDAL's block cache and the driver's buffers, not the grid.
+void writeDemCog(const std::string& path, const std::string& gridFile, const GridGeometry& g, const GeoReference& geo);
 
 // Writes the class pyramid, atomically. Memory: the levels below full resolution (a third of
 // `classes`' bytes). A full disk throws DiskFull.
