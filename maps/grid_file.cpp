@@ -52,7 +52,8 @@ void readGridRows(const std::string& path, int cols, int row0, int rows, float* 
 }
 
 terrain::Traversability traversabilityOfGridFile(const std::string& path, const GridGeometry& g,
-                                                 const std::vector<double>& rowCellWidth, int bandRows) {
+                                                 const std::vector<double>& rowCellWidth, int bandRows,
+                                                 const std::function<void(const float*, std::size_t)>& eachBand) {
   terrain::Traversability out;
   out.classes = Raster<std::uint8_t>(g, 0);
   bandRows = std::max(1, bandRows);
@@ -62,6 +63,7 @@ terrain::Traversability traversabilityOfGridFile(const std::string& path, const 
     const int top = std::max(0, r0 - 1), bottom = std::min(g.rows, r1 + 1);  // the halo rows
     if (band.z.geometry.rows != bottom - top) band.z = Raster<float>(GridGeometry{bottom - top, g.cols, g.cellWidth, g.cellHeight}, 0.0f);
     readGridRows(path, g.cols, top, bottom - top, band.z.values.data());
+    if (eachBand) eachBand(&band.z(r0 - top, 0), static_cast<std::size_t>(r1 - r0) * g.cols);
     if (!rowCellWidth.empty()) band.rowCellWidth.assign(rowCellWidth.begin() + top, rowCellWidth.begin() + bottom);
     // A halo row alone (the band's first or last row off the map's edge) would miss its own
     // neighbours, so only the band's own rows are kept.

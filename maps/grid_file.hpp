@@ -6,6 +6,7 @@
 // traversability classes, and through GDAL (a raw band, no copy) for the map's COG; the file's
 // pages are the kernel's page cache, not the server's heap.
 #include <cstdio>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -37,7 +38,10 @@ void readGridRows(const std::string& path, int cols, int row0, int rows, float* 
 // terrain::traversability of the grid file (one thread), computed in bands of `bandRows` rows each
 // read with one row of halo above and below: the same classes and shares as on the whole grid
 // (every cell's 8 neighbours are in its band), holding bandRows + 2 rows of heights at a time.
+// `eachBand(values, n)`, when given, sees each band's own cells (halo rows left out) in row order
+// (the import digests the heights there, off the critical path).
 terrain::Traversability traversabilityOfGridFile(const std::string& path, const GridGeometry& g,
-                                                 const std::vector<double>& rowCellWidth, int bandRows);
+                                                 const std::vector<double>& rowCellWidth, int bandRows,
+                                                 const std::function<void(const float*, std::size_t)>& eachBand = {});
 
 }  // namespace rover::maps
