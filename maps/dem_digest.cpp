@@ -43,29 +43,43 @@ struct Digest {
 
 }  // namespace
 
-std::string demSha256(const terrain::Dem& dem) {
-  Digest d;
+struct DemDigest::State {
+  Digest sha;
+  std::vector<float> block;
+};
+
+DemDigest::DemDigest(const GridGeometry& g, const std::vector<double>& rowCellWidth) : state_(std::make_unique<State>()) {
+  Digest& d = state_->sha;
   static const char tag[] = "roverplan-dem-v1";
   d.add(tag, sizeof tag - 1);
-  const GridGeometry& g = dem.geometry();
   d.value<std::int64_t>(g.rows);
   d.value<std::int64_t>(g.cols);
   d.value<double>(g.cellWidth);
   d.value<double>(g.cellHeight);
-  d.value<std::int64_t>(static_cast<std::int64_t>(dem.rowCellWidth.size()));
-  if (!dem.rowCellWidth.empty()) d.add(dem.rowCellWidth.data(), dem.rowCellWidth.size() * sizeof(double));
+  d.value<std::int64_t>(static_cast<std::int64_t>(rowCellWidth.size()));
+  if (!rowCellWidth.empty()) d.add(rowCellWidth.data(), rowCellWidth.size() * sizeof(double));
+}
+
+DemDigest::~DemDigest() = default;
+
+void DemDigest::add(const float* z, std::size_t n) {
   // In blocks, so NaNs (any payload) are written as one value without copying the whole grid.
   const float canonicalNaN = std::numeric_limits<float>::quiet_NaN();
-  std::vector<float> block;
-  const float* z = dem.z.values.data();  // row-major, row 0 at the top
-  const std::size_t n = static_cast<std::size_t>(dem.z.values.size());
+  std::vector<float>& block = state_->block;
   for (std::size_t i = 0; i < n; i += 1 << 16) {
     const std::size_t m = std::min<std::size_t>(1 << 16, n - i);
     block.assign(z + i, z + i + m);
     for (float& v : block)
       if (std::isnan(v)) v = canonicalNaN;
-    d.add(block.data(), m * sizeof(float));
+    state_->sha.add(block.data(), m * sizeof(float));
   }
+}
+
+std::string DemDigest::hex() { return state_->sha.hex(); }
+
+std::string demSha256(const terrain::Dem& dem) {
+  DemDigest d(dem.geometry(), dem.rowCellWidth);
+  d.add(dem.z.values.data(), static_cast<std::size_t>(dem.z.values.size()));  // row-major, row 0 at the top
   return d.hex();
 }
 

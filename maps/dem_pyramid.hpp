@@ -27,9 +27,13 @@
 namespace rover::maps {
 
 // Writes `dem` as the map's COG, atomically (PATH.tmp, then rename). Memory: the COG driver reads
-// `dem` in place (a MEM dataset over its cells, no copy) plus GDAL's block cache; disk: a temporary
-// overview file of about a third of the result next to it. A full disk throws DiskFull.
+// `dem` in place (a MEM dataset over its cells, no copy) plus GDAL's block cache; disk: while it
+// writes, a temporary uncompressed overview file next to it (4·N/3 bytes for N cells: a third of
+// the float grid). A full disk throws DiskFull.
 void writeDemCog(const std::string& path, const Raster<float>& dem);
+// The same COG (byte for byte) from a grid file (maps/grid_file.hpp) of `g`'s shape, read through
+// GDAL as a raw band: memory is GDAL's block cache and the driver's buffers, not the grid.
+void writeDemCog(const std::string& path, const std::string& gridFile, const GridGeometry& g, const GeoReference& geo);
 
 // Writes the class pyramid, atomically. Memory: the levels below full resolution (a third of
 // `classes`' bytes). A full disk throws DiskFull.

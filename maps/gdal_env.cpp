@@ -191,6 +191,16 @@ std::string uploadFormatsInWords() {
          "also inside a .zip or .tar";
 }
 
+ThreadConfig::ThreadConfig(const char* key, const char* value) : key_(key) {
+  if (const char* was = CPLGetThreadLocalConfigOption(key, nullptr)) {
+    had_ = true;
+    was_ = was;
+  }
+  CPLSetThreadLocalConfigOption(key, value);
+}
+
+ThreadConfig::~ThreadConfig() { CPLSetThreadLocalConfigOption(key_.c_str(), had_ ? was_.c_str() : nullptr); }
+
 UploadSandbox::UploadSandbox(const std::string& root, bool allowHdf5) : state_(std::make_unique<State>()) {
   ensureGdal();
   state_->allowHdf5 = allowHdf5;

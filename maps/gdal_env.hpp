@@ -91,6 +91,21 @@ class GdalErrorLog {
   std::vector<std::string> messages_;
 };
 
+// A GDAL configuration option set on this thread while alive (CPLSetThreadLocalConfigOption),
+// its previous thread-local value back afterwards: for an option a driver reads when it opens or
+// creates a dataset.
+class ThreadConfig {
+ public:
+  ThreadConfig(const char* key, const char* value);
+  ~ThreadConfig();
+  ThreadConfig(const ThreadConfig&) = delete;
+  ThreadConfig& operator=(const ThreadConfig&) = delete;
+
+ private:
+  std::string key_, was_;
+  bool had_ = false;
+};
+
 // Whether GDAL reported running out of memory (CPLE_OutOfMemory) under any GdalErrorLog of this
 // process so far: the import worker, under RLIMIT_AS, answers such a failure 413, not "corrupt".
 bool gdalRanOutOfMemory();

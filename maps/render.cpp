@@ -88,17 +88,27 @@ const Raster<T>& required(RenderLayer layer, const Raster<T>* r, const char* wha
 // Rounded to the nearest byte, half away from zero as lround; NaN and below 0 → 0.
 std::uint8_t toByte(double v) { return v > 0 ? static_cast<std::uint8_t>(std::min(v, 255.0) + 0.5) : 0; }
 
+}  // namespace
+
 // Percentiles from at most ~1M cells: a fixed stride through the grid, so deterministic; a colour
 // scale needs no more precision, and a full-size 4096² DEM stays fast.
-ColourRange elevationRange(const float* v, std::size_t n) {
-  const std::size_t stride = std::max<std::size_t>(1, n >> 20);
-  std::vector<float> h;
-  h.reserve(n / stride + 1);
-  for (std::size_t i = 0; i < n; i += stride)
-    if (std::isfinite(v[i])) h.push_back(v[i]);
-  if (h.empty() && stride > 1)  // a sparse DEM the stride missed: take every cell
-    for (std::size_t i = 0; i < n; ++i)
-      if (std::isfinite(v[i])) h.push_back(v[i]);
+ElevationSample::ElevationSample(std::size_t n) : stride_(std::max<std::size_t>(1, n >> 20)) {
+  heights_.reserve(n / stride_ + 1);
+}
+
+void ElevationSample::add(std::size_t first, const float* v, std::size_t n) {
+  for (std::size_t i = (stride_ - first % stride_) % stride_; i < n; i += stride_)
+    if (std::isfinite(v[i])) heights_.push_back(v[i]);
+}
+
+void ElevationSample::addEvery(const float* v, std::size_t n) {  // a sparse DEM the stride missed
+  every_ = true;
+  for (std::size_t i = 0; i < n; ++i)
+    if (std::isfinite(v[i])) heights_.push_back(v[i]);
+}
+
+ColourRange ElevationSample::range() {
+  std::vector<float>& h = heights_;
   double lo = 0, hi = 0;
   if (!h.empty()) {  // 2nd and 98th percentiles (nearest rank) clip outliers and spikes
     auto pct = [&](double q) {
@@ -114,6 +124,15 @@ ColourRange elevationRange(const float* v, std::size_t n) {
     hi += 0.5;
   }
   return {lo, hi};
+}
+
+namespace {
+
+ColourRange elevationRange(const float* v, std::size_t n) {
+  ElevationSample s(n);
+  s.add(0, v, n);
+  if (s.needsEveryCell()) s.addEvery(v, n);
+  return s.range();
 }
 
 ColourRange pdmRange(const float* v, std::size_t n) {

@@ -35,6 +35,24 @@ struct ColourRange {
 // match. Hillshade, slope and classes have fixed scales and ignore it.
 ColourRange colourRange(RenderLayer layer, const Raster<float>& values);
 
+// colourRange(Elevation, …) of a grid of `cells` heights seen in pieces (a map import streams
+// them): add() each piece with the index of its first cell, in any order, then range(). When
+// every sampled cell was nodata on a sparse grid, needsEveryCell() asks for a second pass of
+// addEvery() over all the cells, as colourRange takes them.
+class ElevationSample {
+ public:
+  explicit ElevationSample(std::size_t cells);
+  void add(std::size_t first, const float* values, std::size_t n);
+  bool needsEveryCell() const { return heights_.empty() && stride_ > 1 && !every_; }
+  void addEvery(const float* values, std::size_t n);
+  ColourRange range();
+
+ private:
+  std::size_t stride_;
+  bool every_ = false;
+  std::vector<float> heights_;
+};
+
 struct RenderOptions {
   int maxSize = 0;      // > 0: downsample (box average) so neither side exceeds it — an overview
   bool legend = true;   // a legend strip with title, colour bar / class swatches and values

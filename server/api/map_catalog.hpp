@@ -146,8 +146,12 @@ class MapCatalog {
  private:
   // Runs the import worker on the client's files in `inDir`; answers ApiError 400/413 for the
   // file's faults (its own message, a crash with the signal, a deadline), 500 when it cannot start.
+  // With `rows`, the heights are not kept: the result's raster has its geometry and no values,
+  // and `rows(header, firstRow, count, values)` sees them in checked chunks, in order
+  // (jail::readWorkerGrid; `header`: the grid's geometry, georeferencing and row widths).
+  using GridRows = std::function<void(const terrain::Dem&, int, int, const float*)>;
   maps::LoadedDem importJailed(const std::string& inDir, jail::ImportRequest req, std::string& rasterName,
-                               ImportStages* stages = nullptr);
+                               ImportStages* stages = nullptr, const GridRows* rows = nullptr);
   std::shared_ptr<const MapData> loadFromDisk(const store::MapRecord& r);
   // The stored DEM's header (grid, per-row widths), read once per map for its tiles
   // (map_tile_files.cpp); a few maps are kept.

@@ -13,6 +13,7 @@
 #include <fstream>
 #include <iostream>
 #include <iterator>
+#include <optional>
 #include <thread>
 
 #include "core/common/error.hpp"
@@ -20,6 +21,8 @@
 #include "maps/dem_io.hpp"
 #include "maps/dem_pyramid.hpp"
 #include "maps/georef.hpp"
+#include "maps/grid_file.hpp"
+#include "maps/render.hpp"
 #include "maps/tile_grid.hpp"
 #include "maps/synthetic_terrain.hpp"
 #include "server/api/import_stages.hpp"
@@ -44,7 +47,7 @@ std::string safeName(const std::string& name, const std::string& fallback) {
   return out;
 }
 
-nlohmann::json metaFor(const maps::LoadedDem& d, const terrain::Traversability& t,
+nlohmann::json metaFor(const maps::LoadedDem& d, const terrain::ClassShares& shares,
                        const std::vector<std::string>& sources, const std::string& digest) {
   const GridGeometry& g = d.dem.geometry();
   using TC = terrain::TerrainClass;
@@ -62,10 +65,10 @@ nlohmann::json metaFor(const maps::LoadedDem& d, const terrain::Traversability& 
           {"resampling", d.info.resampling},
           {"elevation", {{"min", d.info.minHeight}, {"max", d.info.maxHeight}}},
           {"classes",
-           {{"traversable_pct", t.shares.percent(TC::Traversable)},
-            {"high_risk_pct", t.shares.percent(TC::HighRisk)},
-            {"impassable_pct", t.shares.percent(TC::Impassable)},
-            {"nodata_pct", t.shares.percent(TC::NoData)}}}};
+           {{"traversable_pct", shares.percent(TC::Traversable)},
+            {"high_risk_pct", shares.percent(TC::HighRisk)},
+            {"impassable_pct", shares.percent(TC::Impassable)},
+            {"nodata_pct", shares.percent(TC::NoData)}}}};
 }
 
 }  // namespace
@@ -93,7 +96,7 @@ jail::JailConfig MapCatalog::importJail() const {
 }
 
 maps::LoadedDem MapCatalog::importJailed(const std::string& inDir, jail::ImportRequest req, std::string& rasterName,
-                                         ImportStages* stages) {
+                                         ImportStages* stages, const GridRows* rows) {
   const jail::JailConfig config = importJail();
   const bool pdm = req.kind == "pdm";
   const std::string invalid = pdm ? "invalid_pdm" : "invalid_dem";
@@ -143,9 +146,19 @@ maps::LoadedDem MapCatalog::importJailed(const std::string& inDir, jail::ImportR
                                              std::to_string(run.exitStatus) + ")", "file");
   }
   try {
-    jail::WorkerResult r = jail::readWorkerResult(out, req.load.maxCells);
+    if (!rows) {
+      jail::WorkerResult r = jail::readWorkerResult(out, req.load.maxCells);
+      rasterName = r.rasterName;
+      return std::move(r.dem);
+    }
+    jail::WorkerResult r = jail::readWorkerHeader(out, req.load.maxCells);
+    const int cols = r.dem.dem.geometry().cols;
+    jail::readWorkerGrid(out, r.dem.dem.geometry(), r.dem.info, std::max(1, (4 << 20) / (4 * cols)),
+                         [&](int r0, int n, const float* v) { (*rows)(r.dem.dem, r0, n, v); });
     rasterName = r.rasterName;
     return std::move(r.dem);
+  } catch (const maps::DiskFull&) {
+    throw;  // `rows` writing into the data dir: the disk's fault (storingGeoTiff answers it)
   } catch (const Error& e) {
     throw ApiError(400, invalid, e.what(), e.field());
   } catch (const std::runtime_error& e) {
@@ -195,38 +208,78 @@ store::MapRecord MapCatalog::importDem(const std::vector<UploadedFile>& files, c
     // GDAL's writers allocate and free buffers of several MiB per strip: kept in the heap for the
     // import (server/missions/bulk_heap.hpp), returned when it ends.
     const missions::BulkHeap bulkHeap;
-    maps::LoadedDem d = importJailed(staging, req, raster, &stages);
+    // The heights never sit in this process's memory (issue 24: an import holds no full-size
+    // float copy; the worker's grid is the only one, and it has ended). They stream from the
+    // worker's output in checked chunks of 4 MiB into the server's own grid file (in the staging
+    // folder, never the worker's file, which a process the worker left behind could
+    // still change), sampled for the colour ramp on the way. dem.tif is then written
+    // from that file through GDAL (a raw band) while a second thread computes the classes from it
+    // in bands of rows (GDAL computes the COG's overviews on one core, so the other was idle),
+    // writes classes.tif and the class shares. Memory: the chunk, the classes (a byte a cell,
+    // plus a third for the pyramid's levels), a band of 256 rows, GDAL's block cache and write
+    // buffers; the file's pages are the kernel's page cache.
+    // "~" is outside every staged upload's name (safeName), so no client file is overwritten.
+    const std::string gridFile = (fs::path(staging) / "import~grid.f32").string();
+    std::optional<maps::DemDigest> digester;
+    std::optional<maps::ElevationSample> sample;
+    std::optional<maps::GridFileWriter> writer;
+    const GridRows streamed = [&](const terrain::Dem& header, int r0, int n, const float* v) {
+      const GridGeometry& g = header.geometry();
+      if (!writer) {
+        writer.emplace(gridFile, g);
+        digester.emplace(g, header.rowCellWidth);
+        sample.emplace(static_cast<std::size_t>(g.cellCount()));
+      }
+      const std::size_t first = static_cast<std::size_t>(r0) * g.cols, cells = static_cast<std::size_t>(n) * g.cols;
+      writer->append(v, cells);
+      sample->add(first, v, cells);
+    };
+    maps::LoadedDem d;
+    storingGeoTiff([&] {
+      d = importJailed(staging, req, raster, &stages, &streamed);
+      writer->close();
+    });
+    const GridGeometry& g = d.dem.geometry();
+    if (sample->needsEveryCell()) {  // a sparse grid: every finite height, read back by rows
+      std::vector<float> rows(static_cast<std::size_t>(std::max(1, (4 << 20) / (4 * g.cols))) * g.cols);
+      const int step = static_cast<int>(rows.size() / g.cols);
+      for (int r0 = 0; r0 < g.rows; r0 += step) {
+        const int n = std::min(step, g.rows - r0);
+        maps::readGridRows(gridFile, g.cols, r0, n, rows.data());
+        sample->addEvery(rows.data(), static_cast<std::size_t>(n) * g.cols);
+      }
+    }
+    // Every tile's ramp, fixed at import (the full-size picture's: maps::colourRange).
+    const maps::ColourRange ramp = sample->range();
     stages.done("grid");
-    // The heights (one float copy, the worker's grid) and their classes (a byte a cell, plus a
-    // third for the pyramid's levels) are the import's whole memory; the map is stored as its tile
-    // pyramid (maps/dem_pyramid.hpp), so no tile ever needs the whole raster again.
-    // The classes, their pyramid and the grid's digest are made on a second thread while this one
-    // writes dem.tif: GDAL computes the COG's overviews on one core, so the other was idle (on
-    // 49 M cells they took 0.9 s of CPU after dem.tif's 3.2 s). The future's destructor waits, so
-    // `d` outlives the thread when the COG write throws.
-    terrain::Traversability t;
-    std::string digest;
-    double classSeconds = 0, pyramidSeconds = 0, digestSeconds = 0;
+    terrain::ClassShares shares;
+    double classSeconds = 0, pyramidSeconds = 0;
     auto alongside = std::async(std::launch::async, [&] {
       auto since = [](auto from) { return std::chrono::duration<double>(std::chrono::steady_clock::now() - from).count(); };
       auto from = std::chrono::steady_clock::now();
-      t = terrain::traversability(d.dem, {}, false, 1);  // one thread: the COG writer has the other
+      // The digest reads the bands' rows as they pass (0.2 s of CPU on 49 M cells, off the path
+      // to the first tiles: this thread ends before dem.tif's).
+      terrain::Traversability t = maps::traversabilityOfGridFile(
+          gridFile, g, d.dem.rowCellWidth, 256, [&](const float* v, std::size_t n) { digester->add(v, n); });
+      t.classes.geo = d.dem.z.geo;
       classSeconds = since(from);
       from = std::chrono::steady_clock::now();
       storingGeoTiff([&] { maps::writeClassPyramid((fs::path(staging) / kClassFile).string(), t.classes); });
-      t.classes = {};  // only its shares are kept (the record's classes)
       pyramidSeconds = since(from);
-      from = std::chrono::steady_clock::now();
-      digest = maps::demSha256(d.dem);
-      digestSeconds = since(from);
+      shares = t.shares;  // only the shares are kept (the record's classes)
     });
-    storingGeoTiff([&] { maps::writeDemCog((fs::path(staging) / kDemFile).string(), d.dem.z); });
-    stages.done("dem.tif");
-    alongside.get();
+    {
+      // The future's destructor waits, so the grid file outlives the thread when the COG throws.
+      storingGeoTiff([&] { maps::writeDemCog((fs::path(staging) / kDemFile).string(), gridFile, g, d.dem.z.geo); });
+      stages.done("dem.tif");
+      alongside.get();
+    }
     stages.done("then waiting for classes.tif");
+    const std::string digest = digester->hex();
+    fs::remove(gridFile);  // not part of the map's folder
     char alongsideLine[128];
-    std::snprintf(alongsideLine, sizeof alongsideLine, "alongside dem.tif: classes %.2f s, classes.tif %.2f s, digest %.2f s",
-                  classSeconds, pyramidSeconds, digestSeconds);
+    std::snprintf(alongsideLine, sizeof alongsideLine, "alongside dem.tif: classes %.2f s, classes.tif %.2f s",
+                  classSeconds, pyramidSeconds);
     stages.note(alongsideLine);
     store::MapRecord rec;
     rec.id = store::DataDir::newId();
@@ -239,9 +292,7 @@ store::MapRecord MapCatalog::importDem(const std::vector<UploadedFile>& files, c
       rec.name = name;
     }
     rec.createdAt = store::nowIso();
-    rec.meta = metaFor(d, t, sources, digest);
-    // Every tile's ramp, fixed at import (the full-size picture's: maps::colourRange).
-    const maps::ColourRange ramp = maps::colourRange(maps::RenderLayer::Elevation, d.dem.z);
+    rec.meta = metaFor(d, shares, sources, digest);
     rec.meta["colour_range"] = {ramp.lo, ramp.hi};
     rec.meta["storage"] = {{"elevation", "cog"},
                            {"codec", "zstd"},

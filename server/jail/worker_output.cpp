@@ -6,6 +6,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <stdexcept>
 
 #include <nlohmann/json.hpp>
@@ -174,7 +175,7 @@ void writeWorkerResult(const std::string& outDir, const maps::LoadedDem& d, cons
   fs::rename(fs::path(outDir) / "result.json.tmp", fs::path(outDir) / "result.json");
 }
 
-WorkerResult readWorkerResult(const std::string& outDir, std::int64_t maxCells) {
+WorkerResult readWorkerHeader(const std::string& outDir, std::int64_t maxCells) {
   const json j = readJson(fs::path(outDir) / "result.json");
   WorkerResult r;
   const double rows = number(j, "rows"), cols = number(j, "cols");
@@ -203,19 +204,8 @@ WorkerResult readWorkerResult(const std::string& outDir, std::int64_t maxCells) 
   geo.crsWkt = text(j, "crs_wkt", kMaxWktBytes);
   maps::checkGeoreference(geo, g.rows, g.cols);  // rover::Error naming geotransform.<part>
   r.rasterName = text(j, "raster");
-
-  const fs::path grid = fs::path(outDir) / "grid.f32";
-  std::error_code ec;
-  const auto size = fs::file_size(grid, ec);
-  const std::uintmax_t expected = static_cast<std::uintmax_t>(g.cellCount()) * sizeof(float);
-  if (ec || size != expected) bad("grid.f32 does not hold rows x cols float32 values");
-  dem.z = Raster<float>(g, 0.0f);
+  dem.z.geometry = g;  // no values yet: readWorkerGrid streams them
   dem.z.geo = geo;
-  {
-    std::ifstream in(grid, std::ios::binary);
-    in.read(reinterpret_cast<char*>(dem.z.values.data()), static_cast<std::streamsize>(expected));
-    if (!in) bad("grid.f32 does not read");
-  }
   maps::DemInfo& info = r.dem.info;
   if (!j.contains("info") || !j["info"].is_object()) bad("info is not an object");
   const json& i = j["info"];
@@ -229,23 +219,56 @@ WorkerResult readWorkerResult(const std::string& outDir, std::int64_t maxCells) 
   info.offset = number(i, "offset");
   info.resampling = text(i, "resampling", 64);
   if (i.contains("nodata")) info.nodata = number(i, "nodata");
+  return r;
+}
+
+void readWorkerGrid(const std::string& outDir, const GridGeometry& g, maps::DemInfo& info, int rowsPerChunk,
+                    const std::function<void(int, int, const float*)>& each) {
+  const fs::path grid = fs::path(outDir) / "grid.f32";
+  std::error_code ec;
+  const auto size = fs::file_size(grid, ec);
+  const std::uintmax_t expected = static_cast<std::uintmax_t>(g.cellCount()) * sizeof(float);
+  if (ec || size != expected) bad("grid.f32 does not hold rows x cols float32 values");
+  std::ifstream in(grid, std::ios::binary);
+  rowsPerChunk = std::clamp(rowsPerChunk, 1, g.rows);
+  std::vector<float> chunk(static_cast<std::size_t>(rowsPerChunk) * g.cols);
   // The figures the map's record shows, from the grid itself.
   double lo = INFINITY, hi = -INFINITY;
   std::int64_t nodata = 0;
-  for (int k = 0; k < g.cellCount(); ++k) {
-    const float v = dem.z.at(k);
-    if (std::isnan(v)) {
-      ++nodata;
-      continue;
+  for (int r0 = 0; r0 < g.rows; r0 += rowsPerChunk) {
+    const int n = std::min(rowsPerChunk, g.rows - r0);
+    const std::size_t cells = static_cast<std::size_t>(n) * g.cols;
+    in.read(reinterpret_cast<char*>(chunk.data()), static_cast<std::streamsize>(cells * sizeof(float)));
+    if (!in) bad("grid.f32 does not read");
+    for (std::size_t k = 0; k < cells; ++k) {
+      const float v = chunk[k];
+      if (std::isnan(v)) {
+        ++nodata;
+        continue;
+      }
+      if (std::isinf(v)) throw Error(ErrorCode::InvalidInput, "file", "the raster holds infinite values");
+      lo = std::min(lo, static_cast<double>(v));
+      hi = std::max(hi, static_cast<double>(v));
     }
-    if (std::isinf(v)) throw Error(ErrorCode::InvalidInput, "file", "the raster holds infinite values");
-    lo = std::min(lo, static_cast<double>(v));
-    hi = std::max(hi, static_cast<double>(v));
+    each(r0, n, chunk.data());
   }
   if (nodata == g.cellCount()) throw Error(ErrorCode::InvalidInput, "file", "every cell is nodata");
   info.nodataCells = nodata;
   info.minHeight = lo;
   info.maxHeight = hi;
+}
+
+WorkerResult readWorkerResult(const std::string& outDir, std::int64_t maxCells) {
+  WorkerResult r = readWorkerHeader(outDir, maxCells);
+  Raster<float>& z = r.dem.dem.z;
+  const GridGeometry g = z.geometry;
+  const GeoReference geo = z.geo;
+  // Up to 4 MiB a chunk: the one full-size copy is `z` itself.
+  z = Raster<float>(g, 0.0f);
+  z.geo = geo;
+  readWorkerGrid(outDir, g, r.dem.info, std::max(1, (4 << 20) / (4 * g.cols)), [&](int r0, int n, const float* v) {
+    std::copy(v, v + static_cast<std::size_t>(n) * g.cols, z.values.data() + static_cast<std::size_t>(r0) * g.cols);
+  });
   return r;
 }
 

@@ -10,6 +10,7 @@
 // recomputes every figure it reports (min/max height, nodata count) from the grid itself; it never
 // hands the output to GDAL.
 #include <cstdint>
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -49,5 +50,15 @@ struct WorkerResult {
 // or over `maxCells`, or rover::Error (the georeferencing's field) when its georeferencing or cell
 // sizes are out of range.
 WorkerResult readWorkerResult(const std::string& outDir, std::int64_t maxCells);
+
+// readWorkerResult in two steps, so the server never holds the grid (issue 24: a map import holds
+// no full-size float copy): the header (every check of readWorkerResult but the values'; the
+// raster has its geometry and georeferencing, no values), then the values in chunks of
+// `rowsPerChunk` rows, each checked (no infinity) before `each(firstRow, rows, values)` sees it, the
+// record's figures (min/max height, nodata count) set in `info` at the end. Each throws as
+// readWorkerResult does; a chunk seen before a throw must be forgotten by the caller.
+WorkerResult readWorkerHeader(const std::string& outDir, std::int64_t maxCells);
+void readWorkerGrid(const std::string& outDir, const GridGeometry& g, maps::DemInfo& info, int rowsPerChunk,
+                    const std::function<void(int, int, const float*)>& each);
 
 }  // namespace rover::jail

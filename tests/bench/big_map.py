@@ -2,6 +2,10 @@
 """Full-size DEMs through the server (issue 24), printed, never asserted.
 
   tests/bench/big_map.py [ROVERPLAN ...] [--sizes 7000x7000,20000x15000] [--clients 16] [--tiles 128]
+                         [--dem FILE] [--rounds N]
+
+With --dem, that file is uploaded instead of a generated DEM (one "size"); with --rounds N, the
+binaries take turns N times (A B A B ...), for before/after figures on a shared machine.
 
 With several binaries (e.g. main's and a branch's), each size's DEM is made once and put through
 each binary in turn, on its own fresh server: a side-by-side from one sitting on the same input.
@@ -25,7 +29,7 @@ import threading, time, urllib.request
 
 root = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 args = sys.argv[1:]
-opts = {"--sizes": "7000x7000,20000x15000", "--clients": "16", "--tiles": "128"}
+opts = {"--sizes": "7000x7000,20000x15000", "--clients": "16", "--tiles": "128", "--dem": "", "--rounds": "1"}
 binaries = []
 while args:
     a = args.pop(0)
@@ -78,12 +82,13 @@ def make_dem(work, cols, rows):
     return out
 
 
-def cpu_of(pid):
-    """User and system CPU seconds of `pid` and its reaped children (the import worker)."""
+def cpu_of(pid, children=True):
+    """User and system CPU seconds of `pid`, and of its reaped children (an import worker run
+    without bubblewrap; under bwrap, bwrap reaps it and the server never counts it)."""
     try:
         with open(f"/proc/{pid}/stat") as f:
             fields = f.read().rsplit(")", 1)[1].split()
-        return sum(int(v) for v in fields[11:15]) / os.sysconf("SC_CLK_TCK")
+        return sum(int(v) for v in fields[11:15 if children else 13]) / os.sysconf("SC_CLK_TCK")
     except OSError:
         return 0.0
 
@@ -108,8 +113,10 @@ def import_workers():
         if p.isdigit():
             try:
                 with open(f"/proc/{p}/cmdline", "rb") as f:
-                    if b"import-worker" in f.read() and int(p) != os.getpid():
-                        out.append(int(p))
+                    argv = f.read().split(b"\0")
+                # bwrap's own command line names the worker too: only the worker itself.
+                if b"import-worker" in argv and not argv[0].endswith(b"bwrap") and int(p) != os.getpid():
+                    out.append(int(p))
             except OSError:
                 pass
     return out
@@ -127,14 +134,19 @@ def get(url, headers=None):
 
 
 def bench(work, cols, rows):
-    print(f"== {cols} x {rows} ({cols * rows / 1e6:.0f} M cells, 1 m)")
-    t = time.perf_counter()
-    dem = make_dem(work, cols, rows)
-    print(f"generated with gdal in {time.perf_counter() - t:.0f} s: {os.path.getsize(dem) / 1e6:.0f} MB upload")
-    for binary in binaries:
-        if len(binaries) > 1:
-            print(f"-- {binary}")
-        serve(work, dem, binary)
+    if opts["--dem"]:
+        dem = opts["--dem"]
+        print(f"== {dem}: {os.path.getsize(dem) / 1e6:.0f} MB upload")
+    else:
+        print(f"== {cols} x {rows} ({cols * rows / 1e6:.0f} M cells, 1 m)")
+        t = time.perf_counter()
+        dem = make_dem(work, cols, rows)
+        print(f"generated with gdal in {time.perf_counter() - t:.0f} s: {os.path.getsize(dem) / 1e6:.0f} MB upload")
+    for round in range(int(opts["--rounds"])):
+        for binary in binaries:
+            if len(binaries) > 1 or round:
+                print(f"-- {binary}" + (f" (round {round + 1})" if int(opts["--rounds"]) > 1 else ""))
+            serve(work, dem, binary)
 
 
 def serve(work, dem, binary):
@@ -160,12 +172,14 @@ def serve(work, dem, binary):
         threading.Thread(target=drain, daemon=True).start()
         cpu0 = cpu_of(server.pid)
         worker_peak = [0]
+        worker_cpu = {}  # pid -> its last CPU seconds seen (the server never sees them: bwrap reaps it)
         done = threading.Event()
 
-        def sample():  # the import worker's resident size (a child of the server), every 50 ms
+        def sample():  # the import worker's resident size and CPU (a child of the server), every 50 ms
             while not done.is_set():
                 for c in import_workers():
                     worker_peak[0] = max(worker_peak[0], kib(status_of(c), "VmRSS"))
+                    worker_cpu[c] = max(worker_cpu.get(c, 0.0), cpu_of(c, children=False))
                 time.sleep(0.05)
 
         sampler = threading.Thread(target=sample)
@@ -195,8 +209,10 @@ def serve(work, dem, binary):
         done.set()
         sampler.join()
         st = status_of(server.pid)
+        cpu_worker = sum(worker_cpu.values())
         print(f"upload + import: {t_import:.1f} s; upload -> first tiles (z=0 and native, elevation and hillshade): "
-              f"{t_first:.1f} s (cpu {cpu_first:.1f} s, server and worker); statuses {[x[1] for x in firsts]}")
+              f"{t_first:.1f} s (cpu {cpu_first + cpu_worker:.1f} s: server {cpu_first:.1f} s, import worker "
+              f"{cpu_worker:.1f} s sampled); statuses {[x[1] for x in firsts]}")
         for line in log:
             if line.startswith("import "):
                 print("  stages: " + line)
@@ -260,7 +276,7 @@ def serve(work, dem, binary):
 work = tempfile.mkdtemp(prefix="roverplan-big-map-")
 try:
     print(f"load average at start: {os.getloadavg()[0]:.2f} ({os.cpu_count()} cores)")
-    for size in opts["--sizes"].split(","):
+    for size in (["0x0"] if opts["--dem"] else opts["--sizes"].split(",")):
         cols, rows = (int(v) for v in size.split("x"))
         bench(work, cols, rows)
         for f in os.listdir(work):

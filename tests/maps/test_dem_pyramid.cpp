@@ -10,6 +10,8 @@
 #include <cmath>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <limits>
 #include <memory>
 #include <vector>
@@ -18,6 +20,7 @@
 #include "core/terrain/layers.hpp"
 #include "maps/dem_io.hpp"
 #include "maps/dem_pyramid.hpp"
+#include "maps/grid_file.hpp"
 #include "maps/map_tiles.hpp"
 #include "maps/tile_grid.hpp"
 
@@ -277,4 +280,39 @@ TEST_CASE("pyramid: a stored raster rewritten at the same path is read afresh, n
     for (int c = 0; c < span.cols; ++c) REQUIRE(sameFloat(b.z(r, c), second.z(span.r0 + r, span.c0 + c)));
   forgetStoredRasters(dir.path.string());
   CHECK(sameFloat(readDemBlocks(dir.file("dem.tif"), header, 1, span).z(0, 0), second.z(10, 20)));
+}
+
+TEST_CASE("pyramid: a map imported from a grid file (no float copy in memory) gives the same COG and classes") {
+  // Odd sizes and bands that do not divide the rows, a nodata hole, and a geographic map's row
+  // widths: the band-wise classes equal the whole-grid ones cell for cell, shares included.
+  for (const bool geographic : {false, true}) {
+    CAPTURE(geographic);
+    terrain::Dem dem = wavyDem(533, 401, 0.5);
+    if (geographic)
+      for (int r = 0; r < 533; ++r) dem.rowCellWidth.push_back(0.5 * std::cos((40.0 + r * 0.01) * 3.14159265 / 180.0));
+    TempDir dir;
+    const std::string grid = dir.file("grid.f32");
+    {
+      GridFileWriter w(grid, dem.geometry());
+      for (int r0 = 0; r0 < 533; r0 += 100)  // in chunks, as the import streams them
+        w.append(&dem.z(r0, 0), static_cast<std::size_t>(std::min(100, 533 - r0)) * 401);
+      w.close();
+    }
+    const terrain::Traversability whole = terrain::traversability(dem);
+    for (int band : {1, 7, 256, 600}) {
+      CAPTURE(band);
+      const terrain::Traversability banded = traversabilityOfGridFile(grid, dem.geometry(), dem.rowCellWidth, band);
+      CHECK(banded.classes.values == whole.classes.values);
+      CHECK(banded.shares.counts == whole.shares.counts);
+    }
+    writeDemCog(dir.file("memory.tif"), dem.z);
+    writeDemCog(dir.file("file.tif"), grid, dem.geometry(), dem.z.geo);
+    std::vector<float> rows(3 * 401);
+    readGridRows(grid, 401, 200, 3, rows.data());
+    CHECK(sameFloat(rows[401 + 5], dem.z(201, 5)));
+    std::ifstream a(dir.file("memory.tif"), std::ios::binary), b(dir.file("file.tif"), std::ios::binary);
+    const std::string ab((std::istreambuf_iterator<char>(a)), {}), bb((std::istreambuf_iterator<char>(b)), {});
+    CHECK(ab.size() > 100000u);
+    CHECK(ab == bb);  // byte for byte
+  }
 }

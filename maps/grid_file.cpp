@@ -1,0 +1,80 @@
+#include "maps/grid_file.hpp"
+
+#include <algorithm>
+#include <cerrno>
+#include <stdexcept>
+
+#include "maps/dem_error.hpp"
+#include "maps/dem_io.hpp"
+
+namespace rover::maps {
+
+namespace {
+
+[[noreturn]] void failWrite(const std::string& path, int err, double bytes) {
+  std::remove(path.c_str());
+  if (lacksSpace(path, err, bytes)) throw DiskFull(path.substr(path.find_last_of('/') + 1));
+  throw std::runtime_error("cannot write " + path);
+}
+
+}  // namespace
+
+GridFileWriter::GridFileWriter(std::string path, const GridGeometry& g)
+    : path_(std::move(path)), bytes_(static_cast<double>(g.cellCount()) * 4.0) {
+  errno = 0;
+  f_ = std::fopen(path_.c_str(), "wb");
+  if (!f_) failWrite(path_, errno, bytes_);
+}
+
+GridFileWriter::~GridFileWriter() {
+  if (f_) std::fclose(f_);
+}
+
+void GridFileWriter::append(const float* values, std::size_t n) {
+  errno = 0;
+  if (std::fwrite(values, sizeof(float), n, f_) != n) failWrite(path_, errno, bytes_);  // little-endian hosts
+}
+
+void GridFileWriter::close() {
+  errno = 0;
+  const int failed = std::fclose(f_);
+  f_ = nullptr;
+  if (failed != 0) failWrite(path_, errno, bytes_);
+}
+
+void readGridRows(const std::string& path, int cols, int row0, int rows, float* out) {
+  std::FILE* f = std::fopen(path.c_str(), "rb");
+  const std::size_t n = static_cast<std::size_t>(rows) * cols;
+  const bool ok = f && std::fseek(f, static_cast<long>(static_cast<std::size_t>(row0) * cols * sizeof(float)), SEEK_SET) == 0 &&
+                  std::fread(out, sizeof(float), n, f) == n;
+  if (f) std::fclose(f);
+  if (!ok) throw std::runtime_error("cannot read rows of the grid file " + path);
+}
+
+terrain::Traversability traversabilityOfGridFile(const std::string& path, const GridGeometry& g,
+                                                 const std::vector<double>& rowCellWidth, int bandRows,
+                                                 const std::function<void(const float*, std::size_t)>& eachBand) {
+  terrain::Traversability out;
+  out.classes = Raster<std::uint8_t>(g, 0);
+  bandRows = std::max(1, bandRows);
+  terrain::Dem band;
+  for (int r0 = 0; r0 < g.rows; r0 += bandRows) {
+    const int r1 = std::min(g.rows, r0 + bandRows);
+    const int top = std::max(0, r0 - 1), bottom = std::min(g.rows, r1 + 1);  // the halo rows
+    if (band.z.geometry.rows != bottom - top) band.z = Raster<float>(GridGeometry{bottom - top, g.cols, g.cellWidth, g.cellHeight}, 0.0f);
+    readGridRows(path, g.cols, top, bottom - top, band.z.values.data());
+    if (eachBand) eachBand(&band.z(r0 - top, 0), static_cast<std::size_t>(r1 - r0) * g.cols);
+    if (!rowCellWidth.empty()) band.rowCellWidth.assign(rowCellWidth.begin() + top, rowCellWidth.begin() + bottom);
+    // A halo row alone (the band's first or last row off the map's edge) would miss its own
+    // neighbours, so only the band's own rows are kept.
+    const terrain::Traversability t = terrain::traversability(band, {}, false, 1);
+    for (int r = r0; r < r1; ++r) {
+      const std::uint8_t* from = &t.classes(r - top, 0);
+      std::copy(from, from + g.cols, &out.classes(r, 0));
+      for (int c = 0; c < g.cols; ++c) ++out.shares.counts[from[c]];
+    }
+  }
+  return out;
+}
+
+}  // namespace rover::maps

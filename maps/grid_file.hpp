@@ -1,0 +1,47 @@
+#pragma once
+// A map's heights as a plain file while it is imported (issue 24: an import holds no full-size
+// float copy in memory): rows × cols little-endian float32, row 0 at the top, NaN for nodata,
+// written by the server from the import worker's checked output (never the worker's own file,
+// which a process the worker left behind could still change). Read back in bands of rows for the
+// traversability classes, and through GDAL (a raw band, no copy) for the map's COG; the file's
+// pages are the kernel's page cache, not the server's heap.
+#include <cstdio>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "core/grid/geometry.hpp"
+#include "core/terrain/layers.hpp"
+
+namespace rover::maps {
+
+class GridFileWriter {
+ public:
+  // Creates (truncates) `path`; throws DiskFull when the disk lacks room for the grid, else
+  // std::runtime_error.
+  GridFileWriter(std::string path, const GridGeometry& g);
+  ~GridFileWriter();
+  GridFileWriter(const GridFileWriter&) = delete;
+  GridFileWriter& operator=(const GridFileWriter&) = delete;
+  void append(const float* values, std::size_t n);  // the next n cells in row order
+  void close();                                       // flushes; throws as the constructor
+
+ private:
+  std::string path_;
+  double bytes_;
+  std::FILE* f_ = nullptr;
+};
+
+// Cells [row0 · cols, (row0 + rows) · cols) of the grid file into `out`; throws std::runtime_error.
+void readGridRows(const std::string& path, int cols, int row0, int rows, float* out);
+
+// terrain::traversability of the grid file (one thread), computed in bands of `bandRows` rows each
+// read with one row of halo above and below: the same classes and shares as on the whole grid
+// (every cell's 8 neighbours are in its band), holding bandRows + 2 rows of heights at a time.
+// `eachBand(values, n)`, when given, sees each band's own cells (halo rows left out) in row order
+// (the import digests the heights there, off the critical path).
+terrain::Traversability traversabilityOfGridFile(const std::string& path, const GridGeometry& g,
+                                                 const std::vector<double>& rowCellWidth, int bandRows,
+                                                 const std::function<void(const float*, std::size_t)>& eachBand = {});
+
+}  // namespace rover::maps
