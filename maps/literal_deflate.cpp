@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
+#include <cstring>
 #include <memory>
 #include <queue>
 
@@ -72,22 +74,27 @@ std::array<std::uint16_t, N> canonicalCodes(const std::array<std::uint8_t, N>& l
   return codes;
 }
 
-// Bits into bytes, least significant first.
+// Bits into bytes, least significant first. Each put stores eight bytes and moves on by the whole
+// bytes written (no branch a code: a mispredicted one every few codes cost more than the store),
+// so the buffer needs 8 bytes beyond the stream's end.
 class BitWriter {
+  static_assert(std::endian::native == std::endian::little, "put() stores the accumulator as it is in memory");
+
  public:
   explicit BitWriter(std::uint8_t* out) : out_(out) {}
   void put(std::uint32_t bits, int n) {  // n <= 32
     acc_ |= std::uint64_t(bits) << count_;
     count_ += n;
-    if (count_ >= 32) {
-      for (int i = 0; i < 4; ++i) *out_++ = static_cast<std::uint8_t>(acc_ >> (8 * i));
-      acc_ >>= 32;
-      count_ -= 32;
-    }
+    std::memcpy(out_, &acc_, 8);  // little-endian: the oldest bits first
+    const int whole = count_ >> 3;
+    out_ += whole;
+    acc_ = whole == 8 ? 0 : acc_ >> (8 * whole);
+    count_ &= 7;
   }
   std::uint8_t* finish() {  // pads the last byte with zeros
-    for (; count_ > 0; count_ -= 8, acc_ >>= 8) *out_++ = static_cast<std::uint8_t>(acc_);
+    if (count_ > 0) *out_++ = static_cast<std::uint8_t>(acc_);
     count_ = 0;
+    acc_ = 0;
     return out_;
   }
 
@@ -149,9 +156,10 @@ bool literalZlib(const std::uint8_t* data, std::size_t n, std::vector<std::uint8
     for (int v = 0; v < 256; ++v) total[v] += hist[b][v] = h[0][v] + h[1][v] + h[2][v] + h[3][v];
   }
   if (n > 0 && double(*std::max_element(total.begin(), total.end())) > maxCommonest * double(n)) return false;
-  // At most 15 bits a byte, a block's header under 300 bytes, the zlib header and Adler-32.
+  // At most 15 bits a byte, a block's header under 300 bytes, the zlib header and Adler-32, and the
+  // BitWriter's 8 bytes of slack.
   // (Written into a buffer without std::vector's zero-fill, then appended.)
-  std::unique_ptr<std::uint8_t[]> buffer(new std::uint8_t[n / 8 * 15 + 16 + 300 * blocks + 8]);
+  std::unique_ptr<std::uint8_t[]> buffer(new std::uint8_t[n / 8 * 15 + 16 + 300 * blocks + 16]);
   buffer[0] = 0x78;  // deflate, 32 KiB window
   buffer[1] = 0x01;  // fastest; (0x78 << 8 | 0x01) is a multiple of 31
   BitWriter w(buffer.get() + 2);
