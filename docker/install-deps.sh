@@ -17,6 +17,7 @@ build_pkgs=(
   libssl-dev   # SHA-256 of a map's grid (maps/dem_digest)
   libopenmpi-dev openmpi-bin   # `mpirun -np N roverplan study run` (server/studies/study_mpi.cpp)
   libzstd-dev zlib1g-dev   # MCAP replays: zstd chunks and CRC-32 (server/exports/mcap_writer.cpp)
+  libdeflate-dev   # PNG tiles and layers: deflate, CRC-32, Adler-32 (maps/png_encode.cpp)
 )
 test_pkgs=(
   gdal-bin   # gdaldem/gdalinfo/ogrinfo: reference outputs the tests compare against
@@ -29,7 +30,7 @@ test_pkgs=(
 )
 # curl: HEALTHCHECK; bubblewrap: the import jail (without it imports run with rlimits only, and
 # netCDF-4 is refused; `serve` says which at start).
-runtime_pkgs=(libompl16 libgdal32 libsqlite3-0 libssl3 libopenmpi3 libzstd1 zlib1g gdal-data curl ca-certificates bubblewrap)
+runtime_pkgs=(libompl16 libgdal32 libsqlite3-0 libssl3 libopenmpi3 libzstd1 zlib1g libdeflate0 gdal-data curl ca-certificates bubblewrap)
 bench_pkgs=(wrk nginx-light time curl)  # tests/bench/*: load generator and the nginx baseline
 
 mode=${1:-all}

@@ -38,16 +38,23 @@ void forCells(const GridGeometry& g, int step, const Span& s, Fn&& fn) {
 
 // Copies the tile's blocks out of `span`-sized pixels (`px` per block, `channels` values each) into
 // a kTileSize² tile, each block magnified; the rest of `tile` is left as it was.
+// A row of blocks is placed once and its magnified copies are copies of that tile row (no
+// division a pixel: placing was a tenth of a cold tile's rendering).
 template <class T>
 void placeBlocks(const TileWindow& w, const Span& span, const T* blocks, int channels, T* tile) {
   const int m = w.magnify;
-  for (int py = 0; py < w.blockRows * m; ++py) {
-    const int br = w.blockRow0 + py / m - span.r0;
-    for (int px = 0; px < w.blockCols * m; ++px) {
-      const int bc = w.blockCol0 + px / m - span.c0;
-      std::copy_n(blocks + (std::size_t(br) * span.cols + bc) * channels, channels,
-                  tile + (std::size_t(py) * kTileSize + px) * channels);
+  const std::size_t rowValues = std::size_t(w.blockCols) * m * channels;
+  for (int i = 0; i < w.blockRows; ++i) {
+    const T* from = blocks + (std::size_t(w.blockRow0 + i - span.r0) * span.cols + (w.blockCol0 - span.c0)) * channels;
+    T* first = tile + std::size_t(i) * m * kTileSize * channels;
+    if (m == 1) {
+      std::copy_n(from, rowValues, first);
+      continue;
     }
+    T* out = first;
+    for (int j = 0; j < w.blockCols; ++j, from += channels)
+      for (int k = 0; k < m; ++k, out += channels) std::copy_n(from, channels, out);
+    for (int k = 1; k < m; ++k) std::copy_n(first, rowValues, first + std::size_t(k) * kTileSize * channels);
   }
 }
 

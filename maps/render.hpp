@@ -1,7 +1,7 @@
 #pragma once
 // Colourised PNG renderings of terrain layers with a legend (issue: terrain layers, exports):
-// hillshaded elevation, hillshade, slope, traversability classes, PDM. Encoded with GDAL's PNG
-// driver in memory, so the server can answer with the bytes and the CLI can write them.
+// hillshaded elevation, hillshade, slope, traversability classes, PDM. Encoded in memory
+// (maps/png_encode.cpp), so the server can answer with the bytes and the CLI can write them.
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -72,8 +72,11 @@ struct Image {
 // Throws rover::Error (InvalidInput, field "layer") when the raster the layer needs is missing or
 // empty, (InvalidInput, field "hillshade") when the shading raster does not match the DEM.
 Image renderLayer(RenderLayer layer, const RenderInput& input, const RenderOptions& options = {});
-// PNG bytes (8-bit RGBA, every row filtered "Up", zlib level 1: maps/png_encode.cpp); throws rover::Error (InvalidInput,
-// field "image") for an image whose buffer does not match its size.
-std::vector<std::uint8_t> encodePng(const Image& image);
+// PNG bytes (every row filtered "Up", deflate level 1: maps/png_encode.cpp): 8-bit RGBA, or with
+// Smallest the fewest bytes a pixel that decode to the same RGBA (grey, a palette, RGB, RGBA; what
+// tiles use). Throws rover::Error (InvalidInput, field "image") for an image whose buffer does not
+// match its size.
+enum class PngColours { Rgba, Smallest };
+std::vector<std::uint8_t> encodePng(const Image& image, PngColours colours = PngColours::Rgba);
 
 }  // namespace rover::maps

@@ -47,7 +47,9 @@ std::string tileBytes(const Source& blocks, maps::RenderLayer layer, const std::
     bytes.resize(values.size() * 4);
     std::memcpy(bytes.data(), values.data(), bytes.size());  // x86-64 and aarch64 are little-endian
   } else {
-    const auto png = maps::encodePng(maps::renderTile(layer, blocks, window));
+    // The fewest bytes a pixel that give the same RGBA (a palette, grey or RGB where they can):
+    // less to deflate, store and send.
+    const auto png = maps::encodePng(maps::renderTile(layer, blocks, window), maps::PngColours::Smallest);
     bytes.assign(png.begin(), png.end());
   }
   return bytes;
