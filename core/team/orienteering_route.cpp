@@ -48,10 +48,11 @@ class OpenPath {
 
   const std::vector<int>& nodes() const { return path_; }
   // Keeps the path as it is and lets later moves only extend it past its end, within a new budget
-  // and with a new insertion power: phase 2 of the two-phase route.
-  void extend(double budget, double greed) {
+  // and target count and with a new insertion power: phase 2 of the two-phase route.
+  void extend(double budget, int maxTargets, double greed) {
     frozen_ = path_.size();
     budget_ = budget;
+    maxTargets_ = maxTargets;
     greed_ = greed;
   }
   // The mass of the nodes reached within `metres` along the path (start included).
@@ -244,7 +245,7 @@ Route orienteeringRoute(const SearchGrid& grid, CellIndex start, const RoutePara
     std::optional<OpenPath> extended;
     for (double greed : kGreedPowers) {
       OpenPath path = *early;
-      path.extend(budget, greed);
+      path.extend(budget, params.targets, greed);
       improve(path);
       keepBest(extended, std::move(path));
     }
