@@ -205,6 +205,32 @@ Route orienteeringRoute(const SearchGrid& grid, CellIndex start, const RoutePara
     centres.push_back(grid.centre(c));
     mass.push_back(grid.mass(c.row, c.col));
   }
+  // The separated masses: candidate cells at least as heavy as each of their 8 neighbours and
+  // at least 1 % of the heaviest (flat crumbs are not masses). A path visits one when it has a
+  // target within 2 cells of it (Chebyshev).
+  std::vector<CellIndex> peaks;
+  const double heaviest = grid.mass(cells.front().row, cells.front().col);
+  for (const CellIndex& c : cells) {
+    const double m = grid.mass(c.row, c.col);
+    if (m < 0.01 * heaviest) continue;
+    bool peak = true;
+    for (int dr = -1; dr <= 1 && peak; ++dr)
+      for (int dc = -1; dc <= 1; ++dc)
+        if (g.contains(CellIndex{c.row + dr, c.col + dc}) && grid.mass(c.row + dr, c.col + dc) > m) {
+          peak = false;
+          break;
+        }
+    if (peak) peaks.push_back(c);
+  }
+  auto visitedPeaks = [&](const OpenPath& path) {
+    std::vector<std::uint8_t> seen(peaks.size(), 0);
+    for (std::size_t i = 1; i < path.nodes().size(); ++i) {
+      const CellIndex& c = cells[static_cast<std::size_t>(path.nodes()[i] - 1)];
+      for (std::size_t k = 0; k < peaks.size(); ++k)
+        if (std::max(std::abs(c.row - peaks[k].row), std::abs(c.col - peaks[k].col)) <= 2) seen[k] = 1;
+    }
+    return seen;
+  };
   // Greedy insertion ranks by mass^greed per added metre: 1 favours cheap cells near the path,
   // larger powers the heavy cores farther away. Each is improved by local search (shorten,
   // fill the freed length, trade light cells for heavy ones; each round improves the path or
@@ -233,7 +259,8 @@ Route orienteeringRoute(const SearchGrid& grid, CellIndex start, const RoutePara
   // then on from its end with the rest of the budget and targets (whole-PDM orienteering again, so
   // the remaining separated masses are still sought). The route best at its end is often not the
   // best by the horizon, where the measure is read. Kept only when it has strictly more mass by
-  // the horizon than the one-phase route.
+  // the horizon than the one-phase route and visits every separated mass that route visits (the
+  // horizon must not cost a Gaussian the whole-PDM route reaches: issue 25's caldera case).
   if (budget > kOrienteeringHorizonM) {
     std::optional<OpenPath> early;
     for (double greed : kGreedPowers) {
@@ -249,7 +276,12 @@ Route orienteeringRoute(const SearchGrid& grid, CellIndex start, const RoutePara
       improve(path);
       keepBest(extended, std::move(path));
     }
-    if (extended->collectedBy(kOrienteeringHorizonM) > best->collectedBy(kOrienteeringHorizonM)) best = std::move(extended);
+    const std::vector<std::uint8_t> wholeVisits = visitedPeaks(*best), twoPhaseVisits = visitedPeaks(*extended);
+    bool keepsMasses = true;
+    for (std::size_t k = 0; k < peaks.size(); ++k)
+      if (wholeVisits[k] && !twoPhaseVisits[k]) keepsMasses = false;
+    if (keepsMasses && extended->collectedBy(kOrienteeringHorizonM) > best->collectedBy(kOrienteeringHorizonM))
+      best = std::move(extended);
   }
   std::vector<CellIndex> route;
   for (std::size_t i = 1; i < best->nodes().size(); ++i) route.push_back(cells[static_cast<std::size_t>(best->nodes()[i] - 1)]);
