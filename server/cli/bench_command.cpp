@@ -215,7 +215,8 @@ int benchRoutes(std::ostream& out, int runs, const std::vector<std::string>& dem
   out << "bench routes: " << runs << " random PDMs (G = 4, seeds 1.." << runs
       << ") per map, start at the centre, 64 targets, 5 m cells; p300 = mass seen by 300 m along the "
          "route; swept p300 = mass under the 5 rovers' 1 m discs by 300 m per rover, driving straight in "
-         "formation between the targets (the mission's measure without RRT* detours) (target: "
+         "formation between the targets (the mission's measure without RRT* detours); swept p250 = the same by "
+         "250 m, where a mission's rovers, driving 1.2x the straight legs, have driven 300 m each (target: "
          "orienteering >= 1.2x LHC_GW_CONV, paired; route no longer)\n";
   for (const auto& [name, dem] : worlds) {
     const GridGeometry& g = dem.geometry();
@@ -224,7 +225,7 @@ int benchRoutes(std::ostream& out, int runs, const std::vector<std::string>& dem
     for (std::size_t i = 0; i < valid.size(); ++i)
       valid[i] = t.classes.at(static_cast<std::int64_t>(i)) != static_cast<std::uint8_t>(terrain::TerrainClass::NoData);
     team::RouteParams params;
-    Paired p300, swept;
+    Paired p300, swept, swept250;
     double lhcLen = 0, oursLen = 0, lhcS = 0, oursS = 0;
     for (int s = 1; s <= runs; ++s) {
       const Raster<float> pdm = pdm::discretise(pdm::randomGaussians(g, 4, static_cast<std::uint64_t>(s)), g, valid);
@@ -240,12 +241,14 @@ int benchRoutes(std::ostream& out, int runs, const std::vector<std::string>& dem
       const team::Route ours = timed(team::RouteMethod::Orienteering, oursS);
       p300.add(seenBy(grid, lhc, 300), seenBy(grid, ours, 300));
       swept.add(sweptBy(pdm, lhc, 300), sweptBy(pdm, ours, 300));
+      swept250.add(sweptBy(pdm, lhc, 250), sweptBy(pdm, ours, 250));
       lhcLen += routeLength(lhc);
       oursLen += routeLength(ours);
     }
     out << name << ":\n";
     p300.print(out, "p300", runs);
     swept.print(out, "swept p300", runs);
+    swept250.print(out, "swept p250", runs);
     out << std::setprecision(1) << "  route length   LHC_GW_CONV " << lhcLen / runs << " m   orienteering "
         << oursLen / runs << " m\n"
         << std::setprecision(2) << "  compute        LHC_GW_CONV " << 1000 * lhcS / runs << " ms   orienteering "
