@@ -11,6 +11,7 @@
 #include "core/terrain/layers.hpp"
 #include "maps/map_tiles.hpp"
 #include "maps/tile_grid.hpp"
+#include "tile_fixtures.hpp"
 
 using namespace rover;
 using namespace rover::maps;
@@ -129,13 +130,8 @@ TEST_CASE("tiles: at the native zoom a tile is byte for byte the crop of the who
   const terrain::Dem dem = wavyDem(300, 530, 0.5);
   const auto shade = terrain::hillshade(dem), slope = terrain::slopeHorn(dem);
   const auto trav = terrain::traversability(dem);
-  Raster<float> mass(dem.geometry(), 0.0f);
-  for (int r = 0; r < 300; ++r)
-    for (int c = 0; c < 530; ++c) mass(r, c) = static_cast<float>(std::exp(-((r - 150) * (r - 150) + (c - 300) * (c - 300)) / 8000.0));
-  TileSource src;
-  src.dem = &dem;
-  src.classes = &trav.classes;
-  src.pdm = &mass;
+  const Raster<float> mass = test::massBump(dem.geometry(), 150, 300, 8000.0);
+  TileSource src = test::tileSourceOf(dem, trav.classes, mass);
   const TileGrid g = tileGridOf(300, 530);
   REQUIRE(g.nativeZoom == 2);
   RenderOptions whole;

@@ -19,6 +19,7 @@
 #include "maps/literal_deflate.hpp"
 #include "maps/map_tiles.hpp"
 #include "maps/render.hpp"
+#include "tile_fixtures.hpp"
 
 using namespace rover;
 using namespace rover::maps;
@@ -188,13 +189,8 @@ TEST_CASE("png: every layer's tile, encoded as tiles are, decodes to the rendere
   for (int r = 100; r < 107; ++r)
     for (int c = 265; c < 274; ++c) dem.z(r, c) = std::numeric_limits<float>::quiet_NaN();
   const auto trav = terrain::traversability(dem);
-  Raster<float> mass(dem.geometry(), 0.0f);
-  for (int r = 0; r < 300; ++r)
-    for (int c = 0; c < 530; ++c) mass(r, c) = static_cast<float>(std::exp(-((r - 150) * (r - 150) + (c - 300) * (c - 300)) / 8000.0));
-  TileSource src;
-  src.dem = &dem;
-  src.classes = &trav.classes;
-  src.pdm = &mass;
+  const Raster<float> mass = test::massBump(dem.geometry(), 150, 300, 8000.0);
+  TileSource src = test::tileSourceOf(dem, trav.classes, mass);
   const TileGrid g = tileGridOf(300, 530);
   int types = 0;
   for (auto layer : {RenderLayer::Elevation, RenderLayer::Hillshade, RenderLayer::Slope, RenderLayer::Traversability,
