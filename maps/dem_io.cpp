@@ -17,6 +17,8 @@
 #include <memory>
 #include <numbers>
 #include <sstream>
+#include <string>
+#include <thread>
 #include <vector>
 
 #include "core/common/error.hpp"
@@ -429,11 +431,14 @@ LoadedDem loadDem(const std::string& path, const LoadOptions& opt) {
   // 228 MiB (the block cache had filled to its 256 MiB cap with blocks read once) for 8 % less CPU.
   // The threads only decode bytes read through the handle already open (no file is opened off
   // this thread, where the upload sandbox does not reach); a warped read keeps the block cache
-  // (the warper reads overlapping windows).
+  // (the warper reads overlapping windows). At most 4 threads: each reserves a stack and decode
+  // buffers inside the worker's address-space limit (server/jail), which a many-core host must not
+  // spend before the grid.
   std::optional<ThreadConfig> decodeThreads;
   Dataset threaded;
   if (!warped && info.driver == "GTiff") {
-    decodeThreads.emplace("GDAL_NUM_THREADS", "ALL_CPUS");
+    const std::string threads = std::to_string(std::clamp(std::thread::hardware_concurrency(), 1u, 4u));
+    decodeThreads.emplace("GDAL_NUM_THREADS", threads.c_str());
     threaded = openSource(path, sandbox, shown);
     if (GDALGetRasterXSize(threaded.get()) != info.sourceCols || GDALGetRasterYSize(threaded.get()) != info.sourceRows)
       failFile(shown, "the file reads differently when opened twice");

@@ -14,7 +14,7 @@ namespace {
 [[noreturn]] void failWrite(const std::string& path, int err, double bytes) {
   std::remove(path.c_str());
   if (lacksSpace(path, err, bytes)) throw DiskFull(path.substr(path.find_last_of('/') + 1));
-  throw std::runtime_error("cannot write " + path);
+  throw GridFileError("cannot write " + path);
 }
 
 }  // namespace
@@ -48,7 +48,7 @@ void readGridRows(const std::string& path, int cols, int row0, int rows, float* 
   const bool ok = f && std::fseek(f, static_cast<long>(static_cast<std::size_t>(row0) * cols * sizeof(float)), SEEK_SET) == 0 &&
                   std::fread(out, sizeof(float), n, f) == n;
   if (f) std::fclose(f);
-  if (!ok) throw std::runtime_error("cannot read rows of the grid file " + path);
+  if (!ok) throw GridFileError("cannot read rows of the grid file " + path);
 }
 
 terrain::Traversability traversabilityOfGridFile(const std::string& path, const GridGeometry& g,

@@ -7,6 +7,7 @@
 // pages are the kernel's page cache, not the server's heap.
 #include <cstdio>
 #include <functional>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -15,10 +16,17 @@
 
 namespace rover::maps {
 
+// The server's own grid file failed to write or read (not the disk being full): the server's
+// fault, never the upload's, so the import answers it 500 rather than 400.
+class GridFileError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
 class GridFileWriter {
  public:
   // Creates (truncates) `path`; throws DiskFull when the disk lacks room for the grid, else
-  // std::runtime_error.
+  // GridFileError.
   GridFileWriter(std::string path, const GridGeometry& g);
   ~GridFileWriter();
   GridFileWriter(const GridFileWriter&) = delete;

@@ -101,10 +101,15 @@ void ElevationSample::add(std::size_t first, const float* v, std::size_t n) {
     if (std::isfinite(v[i])) heights_.push_back(v[i]);
 }
 
+void ElevationSample::countFinite(const float* v, std::size_t n) {
+  for (std::size_t i = 0; i < n; ++i) finite_ += std::isfinite(v[i]);
+}
+
 void ElevationSample::addEvery(const float* v, std::size_t n) {  // a sparse DEM the stride missed
   every_ = true;
+  const std::size_t stride = std::max<std::size_t>(1, finite_ >> 20);
   for (std::size_t i = 0; i < n; ++i)
-    if (std::isfinite(v[i])) heights_.push_back(v[i]);
+    if (std::isfinite(v[i]) && finiteSeen_++ % stride == 0) heights_.push_back(v[i]);
 }
 
 ColourRange ElevationSample::range() {
@@ -131,7 +136,10 @@ namespace {
 ColourRange elevationRange(const float* v, std::size_t n) {
   ElevationSample s(n);
   s.add(0, v, n);
-  if (s.needsEveryCell()) s.addEvery(v, n);
+  if (s.needsEveryCell()) {
+    s.countFinite(v, n);
+    s.addEvery(v, n);
+  }
   return s.range();
 }
 

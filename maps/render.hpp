@@ -37,19 +37,24 @@ ColourRange colourRange(RenderLayer layer, const Raster<float>& values);
 
 // colourRange(Elevation, …) of a grid of `cells` heights seen in pieces (a map import streams
 // them): add() each piece with the index of its first cell, in any order, then range(). When
-// every sampled cell was nodata on a sparse grid, needsEveryCell() asks for a second pass of
-// addEvery() over all the cells, as colourRange takes them.
+// every sampled cell was nodata on a sparse grid, needsEveryCell() asks for two more passes over
+// all the cells, in order, as colourRange takes them: countFinite() over each piece, then
+// addEvery() over each piece, which keeps every k-th finite height (again at most ~1M: a grid of
+// nodata on the fixed stride must not make the sample a full-size copy).
 class ElevationSample {
  public:
   explicit ElevationSample(std::size_t cells);
   void add(std::size_t first, const float* values, std::size_t n);
   bool needsEveryCell() const { return heights_.empty() && stride_ > 1 && !every_; }
+  void countFinite(const float* values, std::size_t n);
   void addEvery(const float* values, std::size_t n);
   ColourRange range();
 
  private:
   std::size_t stride_;
   bool every_ = false;
+  std::size_t finite_ = 0;      // finite cells counted by countFinite
+  std::size_t finiteSeen_ = 0;  // finite cells addEvery has passed
   std::vector<float> heights_;
 };
 

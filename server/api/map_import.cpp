@@ -159,6 +159,8 @@ maps::LoadedDem MapCatalog::importJailed(const std::string& inDir, jail::ImportR
     return std::move(r.dem);
   } catch (const maps::DiskFull&) {
     throw;  // `rows` writing into the data dir: the disk's fault (storingGeoTiff answers it)
+  } catch (const maps::GridFileError&) {
+    throw;  // the server's own file: a 500 (server/api/error_table), logged with its path
   } catch (const Error& e) {
     throw ApiError(400, invalid, e.what(), e.field());
   } catch (const std::runtime_error& e) {
@@ -240,14 +242,19 @@ store::MapRecord MapCatalog::importDem(const std::vector<UploadedFile>& files, c
       writer->close();
     });
     const GridGeometry& g = d.dem.geometry();
-    if (sample->needsEveryCell()) {  // a sparse grid: every finite height, read back by rows
+    if (sample->needsEveryCell()) {  // a sparse grid: its finite heights counted, then sampled, read back by rows
       std::vector<float> rows(static_cast<std::size_t>(std::max(1, (4 << 20) / (4 * g.cols))) * g.cols);
       const int step = static_cast<int>(rows.size() / g.cols);
-      for (int r0 = 0; r0 < g.rows; r0 += step) {
-        const int n = std::min(step, g.rows - r0);
-        maps::readGridRows(gridFile, g.cols, r0, n, rows.data());
-        sample->addEvery(rows.data(), static_cast<std::size_t>(n) * g.cols);
-      }
+      for (const bool counting : {true, false})
+        for (int r0 = 0; r0 < g.rows; r0 += step) {
+          const int n = std::min(step, g.rows - r0);
+          maps::readGridRows(gridFile, g.cols, r0, n, rows.data());
+          const std::size_t cells = static_cast<std::size_t>(n) * g.cols;
+          if (counting)
+            sample->countFinite(rows.data(), cells);
+          else
+            sample->addEvery(rows.data(), cells);
+        }
     }
     // Every tile's ramp, fixed at import (the full-size picture's: maps::colourRange).
     const maps::ColourRange ramp = sample->range();

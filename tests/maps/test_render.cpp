@@ -2,6 +2,7 @@
 #include <doctest/doctest.h>
 #include <gdal.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -434,4 +435,35 @@ TEST_CASE("render: a 4096² slope raster gives a 1024 px overview with maxSize 1
   CHECK(img.width == 1024);
   CHECK(img.height >= 1024 + 28);
   CHECK_FALSE(encodePng(img).empty());
+}
+
+TEST_CASE("render: an elevation ramp seen in pieces equals the whole grid's, also when the fixed stride meets only nodata") {
+  // 3 M cells: the fixed stride is 3, and every third cell is nodata, so the sample falls back to
+  // the finite cells, itself a stride through them (never a full-size copy of the grid).
+  const std::size_t n = 3u << 20;
+  std::vector<float> v(n);
+  for (std::size_t i = 0; i < n; ++i) v[i] = i % 3 == 0 ? std::numeric_limits<float>::quiet_NaN() : static_cast<float>(i);
+  const GridGeometry g{3 << 10, 1 << 10, 1.0, 1.0};
+  Raster<float> grid(g, 0.0f);
+  std::copy(v.begin(), v.end(), grid.values.data());
+  const ColourRange whole = colourRange(RenderLayer::Elevation, grid);
+  ElevationSample s(n);
+  const std::size_t piece = 1000 * 1024;  // pieces of whole rows, as an import streams them
+  for (std::size_t first = 0; first < n; first += piece) s.add(first, v.data() + first, std::min(piece, n - first));
+  REQUIRE(s.needsEveryCell());
+  for (const bool counting : {true, false})
+    for (std::size_t first = 0; first < n; first += piece) {
+      const std::size_t k = std::min(piece, n - first);
+      if (counting)
+        s.countFinite(v.data() + first, k);
+      else
+        s.addEvery(v.data() + first, k);
+    }
+  const ColourRange streamed = s.range();
+  CHECK(streamed.lo == whole.lo);
+  CHECK(streamed.hi == whole.hi);
+  // The 2nd and 98th percentiles of the finite heights, spread evenly over 0 … n, to within the
+  // sampling.
+  CHECK(whole.lo == doctest::Approx(0.02 * n).epsilon(0.01));
+  CHECK(whole.hi == doctest::Approx(0.98 * n).epsilon(0.01));
 }
