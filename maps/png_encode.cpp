@@ -1,33 +1,18 @@
 #include "maps/render.hpp"
 
-// encodePng: an Image as PNG bytes, written directly with libdeflate (issue 24: cold tile latency).
-// GDAL's PNG driver (used before) goes through libpng, which tries all five row filters on every
-// row and keeps the best: with zlib level 1 that choice cost about as much as the compression
-// itself (a profile of 16 clients fetching cold tiles: libpng 12 %, zlib 16 % of the server's CPU).
-// Here every row takes the "Up" filter (the difference with the row above: one subtraction a
-// byte), then deflate level 1. On tiles of a generated terrain (elevation, hillshade, slope,
-// traversability at two zooms) that gives files within a few percent of libpng's adaptive
-// choice at the same level (elevation 104.7 vs 102.6 kB, hillshade 35.2 vs 37.1 kB), where no
-// filter is 10-50 % larger and "Sub" no smaller; level 6 would be 15-35 % smaller for 4-10× the
-// time. Whole-map renderings (up to 4096² and full size) take the same path.
-// The deflate is libdeflate's (what GDAL's CPLZLibDeflate calls on Debian, used before): at level
-// 1 it takes 2.1-2.3× less time than zlib's and its streams are 6-12 % smaller (elevation 77.9 vs
-// 87.2 kB, slope 96.3 vs 102.4 kB, hillshade 38.0 vs 43.3 kB on 256² tiles). Called directly, one
-// compressor per thread is kept instead of one allocated per picture, and its CRC-32 is used.
-//
-// PngColours::Smallest (tiles) writes the fewest bytes a pixel that still decode to exactly the
-// image's RGBA: grey (1 byte) when every pixel is opaque grey, a palette (PLTE, tRNS for its
-// translucent entries; 8 bits a pixel, or 1/2/4 for up to 2/4/16 colours) when there are at most
-// 256 colours, RGB (3 bytes) when every pixel is opaque, else RGBA. The palette is sorted by
-// colour, so on a grey neighbouring pixels keep neighbouring indices and "Up" still pays. Those
-// with many colours (elevation and slope tiles: over 256 colours of noise-like residuals) take
-// Paeth rows in literal-only deflate blocks (maps/literal_deflate.hpp) instead of libdeflate's
-// match search, unless one byte value is over 3/4 of the rows (runs, transparent areas: at 0.5, 2 in 27 slope tiles and 6 in 27 elevation ones fell back, for 0-15 % fewer bytes at 2-3× the time). Measured
-// on 4000² generated terrain, 128 native tiles a layer plus zooms 0-2, one thread
-// (tests/bench/tile_stages.cpp), against RGBA + Up + libdeflate 1: elevation 1.25 → 0.95 ms and
-// 72.5 → 59.7 KiB, slope 1.28 → 1.02 ms and 88.2 → 84.6 KiB, hillshade 0.95 → 0.48 ms and
-// 35.1 → 21.5 KiB, traversability 0.85 → 0.35 ms and 5.8 → 3.1 KiB a tile. (Huffman-only on "Up"
-// rows is 4-16 % larger than on Paeth ones; libdeflate on Paeth rows no faster than on "Up".)
+// encodePng: an Image as PNG bytes, written directly (issue 24: cold tile latency). Why this shape
+// (figures in .decisions/0004-map-storage-codecs.md):
+// - every row takes the "Up" filter (one subtraction a byte): libpng's per-row choice of the best
+//   of five filters cost as much as the compression, for files within a few percent;
+// - deflate is libdeflate's at level 1 (what GDAL's CPLZLibDeflate calls on Debian), one
+//   compressor kept per thread: 2.1-2.3× faster than zlib's and 6-12 % smaller;
+// - PngColours::Smallest (tiles) writes the fewest bytes a pixel that still decode to exactly the
+//   image's RGBA: grey when every pixel is opaque grey, a palette (PLTE, tRNS; 8 bits a pixel, or
+//   1/2/4 for up to 2/4/16 colours) for at most 256 colours, RGB when opaque, else RGBA. The
+//   palette is sorted by colour, so neighbouring pixels of a grey keep neighbouring indices;
+// - many-colour tiles (elevation, slope: noise-like residuals) take Paeth rows in literal-only
+//   deflate blocks (maps/literal_deflate.hpp) instead of libdeflate's match search, unless one
+//   byte value is over 3/4 of the rows (runs, transparent areas), where matches pay.
 #include <libdeflate.h>
 
 #include <algorithm>
