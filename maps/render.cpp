@@ -88,6 +88,16 @@ const Raster<T>& required(RenderLayer layer, const Raster<T>* r, const char* wha
 // Rounded to the nearest byte, half away from zero as lround; NaN and below 0 → 0.
 std::uint8_t toByte(double v) { return v > 0 ? static_cast<std::uint8_t>(std::min(v, 255.0) + 0.5) : 0; }
 
+// Each layer's colour of a value, written once for its legend and its pixels (a tile and the
+// legend beside it must agree). Elevation: the hypsometric tint over [lo, lo + span].
+Rgba elevationTint(double v, double lo, double span) { return rampColour(kHypsometric, (v - lo) / span); }
+Rgba hillshadeGrey(double v) {
+  const auto g = toByte(v);
+  return Rgba{g, g, g, 255};
+}
+Rgba slopeColour(double degrees) { return rampColour(kSlope, degrees); }
+Rgba massColour(double v, double hi) { return rampColour(kPerceptual, v / hi); }
+
 }  // namespace
 
 // Percentiles from at most ~1M cells: a fixed stride through the grid, so deterministic; a colour
@@ -234,25 +244,20 @@ Image renderLayer(RenderLayer layer, const RenderInput& input, const RenderOptio
       // The ramp spans the 2nd to 98th percentile: the title says so, since the map's own
       // range (its info) is wider.
       scale = {"elevation (m), 2-98 %", lo, hi, {(lo + hi) / 2}, [](double v, const RampLegend& l) {
-                return rampColour(kHypsometric, (v - l.lo) / (l.hi - l.lo));
+                return elevationTint(v, l.lo, l.hi - l.lo);
               }};
       break;
     }
     case RenderLayer::Hillshade:
-      scale = {"hillshade", 1, 255, {}, [](double v, const RampLegend&) {
-                const auto g = toByte(v);
-                return Rgba{g, g, g, 255};
-              }};
+      scale = {"hillshade", 1, 255, {}, [](double v, const RampLegend&) { return hillshadeGrey(v); }};
       break;
     case RenderLayer::Slope:
       scale = {"slope (deg)", 0, 45, {10, 15, 30},
-              [](double v, const RampLegend&) { return rampColour(kSlope, v); }};
+              [](double v, const RampLegend&) { return slopeColour(v); }};
       break;
     case RenderLayer::Pdm: {
       const ColourRange cr = options.range ? *options.range : pdmRange(grid.data(), grid.size());
-      scale = {"probability mass", 0, cr.hi, {}, [](double v, const RampLegend& l) {
-                return rampColour(kPerceptual, v / l.hi);
-              }};
+      scale = {"probability mass", 0, cr.hi, {}, [](double v, const RampLegend& l) { return massColour(v, l.hi); }};
       break;
     }
     case RenderLayer::Traversability:
@@ -297,7 +302,7 @@ Image renderLayer(RenderLayer layer, const RenderInput& input, const RenderOptio
       const double lo = scale.lo, span = scale.hi - scale.lo;
       paint([&](float v, int r, int c) {
         if (!std::isfinite(v)) return kTransparent;
-        const Rgba tint = rampColour(kHypsometric, (v - lo) / span);
+        const Rgba tint = elevationTint(v, lo, span);
         const float s = shade.empty() ? kNaN : shade.at(r, c);
         // Relief: tint × shade, softened so shadowed slopes keep some colour.
         const double f = std::isfinite(s) ? 0.3 + 0.7 * s / kNeutralShade : 1.0;
@@ -306,14 +311,10 @@ Image renderLayer(RenderLayer layer, const RenderInput& input, const RenderOptio
       break;
     }
     case RenderLayer::Hillshade:
-      paint([](float v, int, int) {
-        if (!std::isfinite(v)) return kTransparent;
-        const auto g = toByte(v);
-        return Rgba{g, g, g, 255};
-      });
+      paint([](float v, int, int) { return std::isfinite(v) ? hillshadeGrey(v) : kTransparent; });
       break;
     case RenderLayer::Slope:
-      paint([](float v, int, int) { return std::isfinite(v) ? rampColour(kSlope, v) : kTransparent; });
+      paint([](float v, int, int) { return std::isfinite(v) ? slopeColour(v) : kTransparent; });
       break;
     case RenderLayer::Pdm: {
       const double hi = scale.hi;
@@ -321,7 +322,7 @@ Image renderLayer(RenderLayer layer, const RenderInput& input, const RenderOptio
         // Opacity grows with the mass (√ so the tails still show): a PDM is drawn over the
         // map, and an opaque ramp down to ~0 tinted the whole map one colour.
         if (!(std::isfinite(v) && v > 0)) return kTransparent;
-        Rgba px = rampColour(kPerceptual, v / hi);
+        Rgba px = massColour(v, hi);
         px.a = toByte(255.0 * std::sqrt(std::min(1.0, v / hi)));
         return px;
       });
