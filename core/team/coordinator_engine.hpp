@@ -134,6 +134,9 @@ class Coordinator {
   // max_waits × wait_step and skipped all its 5 legs without moving). Rovers free to leave at
   // once keep the policy's delays.
   std::vector<int> startDelays(int k) const;
+  // Start delays for rover k after `after` ticks, one wait step apart, until the traffic table
+  // ends: a rover that waits that long meets no team mate still moving.
+  std::vector<int> delaysUntilTrafficEnds(int k, int after) const;
 
   // The steepest |roll| or |pitch| of a try (rad) and which of the two it was: what a leg's note
   // reports beside the attitude check it was refused against (issue 27: a note that named "the

@@ -170,15 +170,12 @@ Coordinator::Outcome Coordinator::runPiece(int k, int i, int piece, const Eigen:
   // wall 3 m wide, and the third one's leg met the first or the second there at every delay up
   // to 30 s (issue 25). max_waits = 0 still means no waiting.
   if (policy_.recovers() && p_.maxWaits > 0) {
-    const std::vector<int> delays = startDelays(k);
-    const int step = std::max(1, static_cast<int>(std::lround(p_.waitStep / period_)));
     const std::size_t now = out_.trajectories[k].samples.size();
-    for (std::size_t t = static_cast<std::size_t>(delays.back()) + step; now + t < traffic_.end() + step; t += step) {
+    for (const int ticks : delaysUntilTrafficEnds(k, startDelays(k).back())) {
       if (cancelled()) return Outcome::Cancelled;
-      const int ticks = static_cast<int>(t);
       const std::optional<Conflict> late = firstConflict(k, firstTry->samples, ticks, dwellTicks());
       // Standing still already conflicts: so does every longer wait.
-      if (late && late->index < now + t) break;
+      if (late && late->index < now + static_cast<std::size_t>(ticks)) break;
       if (late) continue;
       ++rec.waits;
       ++out_.waits;

@@ -218,9 +218,16 @@ std::vector<int> Coordinator::startDelays(int k) const {
   if (!policy_.recovers() || rank_[static_cast<std::size_t>(k)] < firstRound_ ||
       stops_[static_cast<std::size_t>(k)].size() > 1)
     return delays;
+  const std::vector<int> more = delaysUntilTrafficEnds(k, delays.back());
+  delays.insert(delays.end(), more.begin(), more.end());
+  return delays;
+}
+
+std::vector<int> Coordinator::delaysUntilTrafficEnds(int k, int after) const {
   const int step = std::max(1, static_cast<int>(std::lround(p_.waitStep / period_)));
   const std::size_t now = out_.trajectories[k].samples.size();
-  for (std::size_t t = static_cast<std::size_t>(delays.back()) + step; now + t < traffic_.end() + step; t += step)
+  std::vector<int> delays;
+  for (std::size_t t = static_cast<std::size_t>(after) + step; now + t < traffic_.end() + step; t += step)
     delays.push_back(static_cast<int>(t));
   return delays;
 }
