@@ -91,6 +91,9 @@ describe('a map with non-square cells', { skip: missing || false, timeout: 18000
     const { page, errors, context } = await openPage(browser, `${server.url}/#map=${map.id}`);
     await waitForMap(page);
     await page.waitForFunction((n) => document.getElementById('map-title').textContent.includes(n), 'oblong');
+    // The title gives both sides of a cell.
+    const title = await page.textContent('#map-title');
+    assert.ok(title.includes(`${DX} × ${DY} m`), `the title names both cell sides: ${title}`);
     await page.waitForFunction(() => window.__roverplanApp.layers.rasters.elevation);  // the read-out's heights
 
     // Zoomed in to 8 px a cell across (16 px/m; the view goes on to 32), centred on a cell corner:

@@ -16,9 +16,17 @@ function scaleWarnings(m) {
     '⚠ ', w.message, w.field ? el('span', { class: 'muted' }, ` (${w.field})`) : ''));
 }
 
+// A cell's size: "0.5 m", or "0.5 × 1 m" when its sides differ (a projected map with non-square
+// pixels, an equirectangular one away from its standard parallel).
+export function cellSizeText(map) {
+  const w = Number(map.cell_size_m.toPrecision(4));
+  const h = Number.isFinite(map.cell_height_m) ? Number(map.cell_height_m.toPrecision(4)) : w;
+  return h === w ? `${w} m` : `${w} × ${h} m`;
+}
+
 // The title over the map: its name, size and cell size.
 export function showMapTitle(map) {
-  $('map-title').textContent = map ? `${map.name} — ${map.cols}×${map.rows} × ${Number(map.cell_size_m.toPrecision(4))} m` : 'no map';
+  $('map-title').textContent = map ? `${map.name} — ${map.cols}×${map.rows} × ${cellSizeText(map)}` : 'no map';
   $('map-title').title = map ? `map ${map.id}` : 'The selected map';
 }
 
