@@ -58,7 +58,10 @@ std::vector<Eigen::Vector2d> goalSlots(int rovers, double footprint, double spac
 // five rovers sweep five lanes 1.05 m apart, a 5.3 m strip. The lattice is square, so turning by
 // a quarter turn more gives the same lanes; of h ± atan(1/m) the result is the one within 45° of
 // 22.5° (a leg east and a leg north-east then differ by 8°, so the rovers barely move round the
-// centre between them). 0 for one rover.
+// centre between them). 0 for one rover. Measured (`sweep --preset swinton --runs 20`, same 20
+// PDMs, orienteering against LHC_GW_CONV): p at 300 m per rover x1.17 -> x1.23 paired on the
+// synthetic Mars site (19/20 PDMs better), x1.24 on HiRISE; the team's swept strip, not the route,
+// was what held it back.
 double laneTurn(int rovers, double heading);
 // `slots` turned by `angle` radians counter-clockwise about the centre (distances kept).
 std::vector<Eigen::Vector2d> turnedSlots(const std::vector<Eigen::Vector2d>& slots, double angle);
