@@ -109,6 +109,24 @@ std::vector<Eigen::Vector2d> goalSlots(int rovers, double footprint, double spac
   return spread(formationSlots(rovers, footprint), spacing);
 }
 
+double laneTurn(int rovers, double heading) {
+  const int m = static_cast<int>(std::ceil(std::sqrt(static_cast<double>(std::max(rovers, 1))) - 1e-9));
+  if (m < 2) return 0.0;
+  const double quarter = M_PI / 2, ref = M_PI / 8, tilt = std::atan(1.0 / m);
+  // The representative of `a` modulo a quarter turn in [ref - 45°, ref + 45°).
+  const auto near = [&](double a) { return a - quarter * std::floor((a - (ref - quarter / 2)) / quarter); };
+  const double plus = near(heading + tilt), minus = near(heading - tilt);
+  return std::abs(plus - ref) <= std::abs(minus - ref) ? plus : minus;
+}
+
+std::vector<Eigen::Vector2d> turnedSlots(const std::vector<Eigen::Vector2d>& slots, double angle) {
+  const double c = std::cos(angle), s = std::sin(angle);
+  std::vector<Eigen::Vector2d> out;
+  out.reserve(slots.size());
+  for (const auto& p : slots) out.emplace_back(c * p.x() - s * p.y(), s * p.x() + c * p.y());
+  return out;
+}
+
 TerrainEdgeModel wholeMapModel(const terrain::Dem& dem, const Raster<std::uint8_t>& classes,
                                const RrtParams& rrt) {
   const GridGeometry& g = dem.geometry();

@@ -48,6 +48,24 @@ inline double goalSpacing(const CoordinationParams& c) {
 // goals may be, and most of their slots had no ground.
 std::vector<Eigen::Vector2d> goalSlots(int rovers, double footprint, double spacing);
 
+// ours (issue 25, orienteering route only): the angle (radians, counter-clockwise) to turn the
+// goal slots of a `rovers`-rover formation by at a target reached on a leg of `heading` (radians,
+// counter-clockwise from east), so that every rover drives its own lane along the leg. Paper
+// 001's slots are a ⌈√n⌉ = m lattice laid square to the map: on a leg along a lattice axis or
+// diagonal its points share lanes (five rovers sweep three 1 m lanes, a 3 m strip of the 5 m
+// footprint). Turned by atan(1/m) against the leg, lattice point (i, j) lies i + m·j lattice
+// steps / √(m² + 1) to the side of the leg, distinct for every point (the rotated-grid trick):
+// five rovers sweep five lanes 1.05 m apart, a 5.3 m strip. The lattice is square, so turning by
+// a quarter turn more gives the same lanes; of h ± atan(1/m) the result is the one within 45° of
+// 22.5° (a leg east and a leg north-east then differ by 8°, so the rovers barely move round the
+// centre between them). 0 for one rover. Measured (`sweep --preset swinton --runs 20`, same 20
+// PDMs, orienteering against LHC_GW_CONV): p at 300 m per rover x1.17 -> x1.23 paired on the
+// synthetic Mars site (19/20 PDMs better), x1.24 on HiRISE; the team's swept strip, not the route,
+// was what held it back.
+double laneTurn(int rovers, double heading);
+// `slots` turned by `angle` radians counter-clockwise about the centre (distances kept).
+std::vector<Eigen::Vector2d> turnedSlots(const std::vector<Eigen::Vector2d>& slots, double angle);
+
 // The rover's validity rules on the whole map (the RRT*'s attitude limit and edge resolution).
 TerrainEdgeModel wholeMapModel(const terrain::Dem& dem, const Raster<std::uint8_t>& classes,
                                const RrtParams& rrt);

@@ -58,6 +58,21 @@ std::vector<std::vector<std::optional<Eigen::Vector2d>>> slotGoals(
                                             : planning::departureOrder(at, safety);
     for (std::size_t r = 0; r < d.order.size(); ++r) rank[static_cast<std::size_t>(d.order[r])] = static_cast<int>(r);
   }
+  // ours (issue 25), the orienteering route in timed mode only: each target's slots turned to the
+  // heading of the leg that reaches it (laneTurn, formation.hpp), so the rovers sweep distinct
+  // lanes along it; LHC_GW_CONV, LHC, the lawnmower and the paper mode keep paper 001's square
+  // slots. The heading is that of the step from the sub-team's previous target (from its starts'
+  // centroid for its first one); a repeated target keeps the last heading.
+  const bool laneSlots = params.routeMethod == RouteMethod::Orienteering &&
+                         params.coordination.mode == CoordinationMode::Timed;
+  const int groups = teams ? teams->count() : 1;
+  std::vector<Eigen::Vector2d> lastAt(static_cast<std::size_t>(groups), Eigen::Vector2d::Zero());
+  std::vector<double> heading(static_cast<std::size_t>(groups), 0.0);
+  for (int g = 0; g < groups; ++g) {
+    const std::vector<int>& members = teams ? teams->rovers[static_cast<std::size_t>(g)] : everyone;
+    for (int k : members) lastAt[static_cast<std::size_t>(g)] += Eigen::Vector2d(starts[k].x, starts[k].y);
+    if (!members.empty()) lastAt[static_cast<std::size_t>(g)] /= static_cast<double>(members.size());
+  }
   std::vector<std::vector<std::optional<Eigen::Vector2d>>> out;
   for (std::size_t t = 0; t < route.centres.size(); ++t) {
     // Cancelled: the targets left get no goals (64 rovers × 10 000 targets are 640 000 searches).
@@ -67,6 +82,15 @@ std::vector<std::vector<std::optional<Eigen::Vector2d>>> slotGoals(
         teams ? teams->rovers[static_cast<std::size_t>(teams->ofTarget[t])] : everyone;
     auto& slots = slotsOfSize[members.size()];
     if (slots.empty()) slots = goalSlots(static_cast<int>(members.size()), params.footprint, spacing);
+    std::vector<Eigen::Vector2d> turned;
+    if (laneSlots) {
+      const auto g = static_cast<std::size_t>(teams ? teams->ofTarget[t] : 0);
+      const Eigen::Vector2d step = centre - lastAt[g];
+      if (step.norm() > 1e-9) heading[g] = std::atan2(step.y(), step.x());
+      lastAt[g] = centre;
+      turned = turnedSlots(slots, laneTurn(static_cast<int>(members.size()), heading[g]));
+    }
+    const std::vector<Eigen::Vector2d>& here = laneSlots ? turned : slots;
     std::vector<std::optional<Eigen::Vector2d>> goals(static_cast<std::size_t>(rovers));
     std::vector<Eigen::Vector2d> taken;
     for (std::size_t j = 0; j < members.size(); ++j) {
@@ -80,7 +104,7 @@ std::vector<std::vector<std::optional<Eigen::Vector2d>>> slotGoals(
       };
       const auto accept = teams ? std::function<bool(const Eigen::Vector2d&)>(clearOfStarts)
                                 : std::function<bool(const Eigen::Vector2d&)>();
-      auto g = nearestValid(model, centre + slots[j], params.footprint / 2, spacing, taken,
+      auto g = nearestValid(model, centre + here[j], params.footprint / 2, spacing, taken,
                             reachable, stopCircle, accept);
       // A slot whose own half footprint holds no free ground (it lies in a wall beside the
       // target, and its team mates took the ground on this side) takes the free ground nearest

@@ -6,7 +6,9 @@
 //   nearest the target in its search cell, and with sub-teams, when the cell's free ground all
 //   lies among the starts of rovers that leave later, the nearest outside them up to 1.5
 //   footprints from the target (task_builder.cpp); a target with no such point gives that rover
-//   no leg there.
+//   no leg there. With the orienteering route in timed mode (ours), the slots are first turned
+//   to the heading of the leg reaching the target (laneTurn, formation.hpp) so each rover sweeps
+//   its own lane.
 // - HybridTasks (SPEC §4): the slot leg above and then the rover's moves of a myopic coverage run
 //   (Laîné & Yoshida / Santra et al., SPEC §1, frontier mode, heights for β) over the footprint
 //   from the slots, as fixed points.

@@ -48,7 +48,9 @@ struct TeamMissionResult {
   ReachabilityReport reachability;
   std::vector<std::pair<int, int>> noSlot;  // (rover, target) given no leg: no valid slot
   Route route;
-  std::vector<Eigen::Vector2d> slots;  // the formation of the largest sub-team
+  // The formation of the largest sub-team, square to the map (the orienteering route in timed mode
+  // turns it at each target to the leg's heading: laneTurn, formation.hpp).
+  std::vector<Eigen::Vector2d> slots;
   SubTeams subTeams;  // who visits which target (one team: every rover, every target)
   CoordinationResult plan;
   ProbabilityCurves curves;

@@ -1072,3 +1072,86 @@ TEST_CASE("team incidents: notes name the limit and the value reached; causes gr
   CHECK(s.note == "target 4: " + leg.note);
   CHECK(s.time == 12.5);
 }
+
+TEST_CASE("stages: laneTurn gives every rover of a formation its own lane along a leg of any heading") {
+  // The lattice turned by atan(1/m) against the leg: point (i, j) lies (i + m·j) lattice steps
+  // / √(m² + 1) to the side, distinct for every point; distances between slots are kept.
+  for (int n : {2, 4, 5, 9, 16}) {
+    const std::vector<Eigen::Vector2d> slots = goalSlots(n, 5.0, 1.5);
+    const int m = static_cast<int>(std::ceil(std::sqrt(n) - 1e-9));
+    // The lattice step after goalSlots' spread, and the lane step it gives.
+    const double scale = slots[1].norm() / formationSlots(n, 5.0)[1].norm();
+    const double step = 5.0 / m * scale / std::sqrt(m * m + 1.0);
+    for (int k = 0; k < 16; ++k) {
+      CAPTURE(n);
+      CAPTURE(k);
+      const double h = k * std::numbers::pi / 8;
+      const std::vector<Eigen::Vector2d> turned = turnedSlots(slots, laneTurn(n, h));
+      const Eigen::Vector2d side(-std::sin(h), std::cos(h));
+      std::vector<double> lanes;
+      for (const auto& s : turned) lanes.push_back(s.dot(side));
+      std::sort(lanes.begin(), lanes.end());
+      for (std::size_t i = 1; i < lanes.size(); ++i) CHECK(lanes[i] - lanes[i - 1] >= step - 1e-9);
+      for (std::size_t a = 0; a < slots.size(); ++a)
+        for (std::size_t b = a + 1; b < slots.size(); ++b)
+          CHECK(std::abs((turned[a] - turned[b]).norm() - (slots[a] - slots[b]).norm()) < 1e-9);
+    }
+  }
+  CHECK(laneTurn(1, 0.3) == 0.0);
+  // Five rovers: east and north-east legs turn the slots by 18.4° and 26.6°, lanes 1.05 m apart.
+  CHECK(laneTurn(5, 0.0) == doctest::Approx(std::atan(1.0 / 3)));
+  CHECK(laneTurn(5, std::numbers::pi / 4) == doctest::Approx(std::numbers::pi / 4 - std::atan(1.0 / 3)));
+}
+
+TEST_CASE("stages: on the orienteering route the formation's five rovers drive five distinct lanes on every heading") {
+  // A 60 m flat map, a route of two targets 5 m (7.07 m on diagonals) apart on each of the eight
+  // headings round an octagon. On the leg between the two targets of a pair, every rover's goal
+  // at both ends lies the same distance to the side of the leg (it drives its own lane), and the
+  // five lanes are at least the sensing diameter (1 m) apart: the swept strip is the whole
+  // footprint. LHC_GW_CONV keeps paper 001's square slots: three lanes on each such leg.
+  const terrain::Dem dem = demFromPicture(std::vector<std::string>(60, std::string(60, '.')));
+  const auto classes = terrain::traversability(dem).classes;
+  const std::vector<Eigen::Vector2d> centres{{25, 15}, {30, 15}, {35, 20}, {40, 25}, {40, 30}, {40, 35},
+                                             {35, 40}, {30, 45}, {25, 45}, {20, 45}, {15, 40}, {10, 35},
+                                             {10, 30}, {10, 25}, {15, 20}, {20, 15}};
+  const std::vector<Pose> starts{{15, 15, 0}, {15, 12.5, 0}, {15, 17.5, 0}, {12.5, 15, 0}, {17.5, 15, 0}};  // centroid (15, 15): due west
+  const auto lanesOn = [&](const TeamMissionParams& p) {
+    const std::vector<RoverTask> tasks = SlotTasks(dem, classes, p, nullptr).build(starts, routeThrough(centres), nullptr);
+    std::vector<std::vector<double>> out;  // per pair, the lanes of the five rovers (nan: moved)
+    for (std::size_t t = 1; t < centres.size(); t += 2) {
+      const Eigen::Vector2d d = (centres[t] - centres[t - 1]).normalized(), side(-d.y(), d.x());
+      std::vector<double> lanes;
+      for (const RoverTask& task : tasks) {
+        REQUIRE(task.legs.size() == centres.size());
+        const double from = (task.legs[t - 1].goal - centres[t - 1]).dot(side);
+        const double to = (task.legs[t].goal - centres[t]).dot(side);
+        lanes.push_back(std::abs(from - to) < 1e-9 ? to : std::nan(""));
+      }
+      std::sort(lanes.begin(), lanes.end());
+      out.push_back(lanes);
+    }
+    return out;
+  };
+  TeamMissionParams ours;
+  ours.routeMethod = RouteMethod::Orienteering;
+  const auto lanes = lanesOn(ours);
+  REQUIRE(lanes.size() == 8);
+  for (std::size_t leg = 0; leg < lanes.size(); ++leg) {
+    CAPTURE(leg);
+    for (std::size_t i = 1; i < 5; ++i) CHECK(lanes[leg][i] - lanes[leg][i - 1] >= 1.0);
+    CHECK(lanes[leg][4] - lanes[leg][0] > 4.0);  // a 5 m strip (plus each rover's 1 m disc)
+  }
+  for (const auto& legLanes : lanesOn(TeamMissionParams{})) {
+    int distinct = 1;
+    for (std::size_t i = 1; i < 5; ++i) distinct += legLanes[i] - legLanes[i - 1] > 0.5 ? 1 : 0;
+    CHECK(distinct == 3);
+  }
+  // The paper mode keeps paper 001's slots on the orienteering route too.
+  TeamMissionParams paper = ours;
+  paper.coordination.mode = CoordinationMode::Paper;
+  for (const auto& legLanes : lanesOn(paper)) {
+    int distinct = 1;
+    for (std::size_t i = 1; i < 5; ++i) distinct += legLanes[i] - legLanes[i - 1] > 0.5 ? 1 : 0;
+    CHECK(distinct == 3);
+  }
+}
