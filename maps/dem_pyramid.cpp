@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <limits>
 #include <list>
@@ -262,21 +263,40 @@ void writeCog(const std::string& path, GDALDatasetH src, const GridGeometry& g, 
   moveIntoPlace(tmp, path);
 }
 
+// The cells of `r` as they are, through a MEM band over the raster's own memory: no second copy.
+Dataset memoryDataset(const Raster<float>& r, const std::string& path) {
+  const GridGeometry& g = r.geometry;
+  Dataset src(GDALCreate(GDALGetDriverByName("MEM"), "", g.cols, g.rows, 0, GDT_Float32, nullptr));
+  if (!src) throw std::runtime_error("cannot make the in-memory dataset for " + path);
+  char pointer[64];
+  std::snprintf(pointer, sizeof pointer, "DATAPOINTER=%p", static_cast<const void*>(r.values.data()));
+  const char* bandOptions[] = {pointer, nullptr};
+  if (GDALAddBand(src.get(), GDT_Float32, const_cast<char**>(bandOptions)) != CE_None)
+    throw std::runtime_error("cannot wrap the grid for " + path);
+  return src;
+}
+
+// The metadata item of a mass COG that holds its ramp's top (GDAL keeps it in the TIFF's
+// GDAL_METADATA tag).
+constexpr const char* kRampTopItem = "ROVERPLAN_RAMP_TOP";
+
 }  // namespace
 
 void writeDemCog(const std::string& path, const Raster<float>& dem) {
   ensureGdal();
   GdalErrorLog errors;
-  const GridGeometry& g = dem.geometry;
-  // The cells as they are, through a MEM band over the raster's own memory: no second copy.
-  Dataset src(GDALCreate(GDALGetDriverByName("MEM"), "", g.cols, g.rows, 0, GDT_Float32, nullptr));
-  if (!src) throw std::runtime_error("cannot make the in-memory dataset for " + path);
-  char pointer[64];
-  std::snprintf(pointer, sizeof pointer, "DATAPOINTER=%p", static_cast<const void*>(dem.values.data()));
-  const char* bandOptions[] = {pointer, nullptr};
-  if (GDALAddBand(src.get(), GDT_Float32, const_cast<char**>(bandOptions)) != CE_None)
-    throw std::runtime_error("cannot wrap the grid for " + path);
-  writeCog(path, src.get(), g, dem.geo);
+  Dataset src = memoryDataset(dem, path);
+  writeCog(path, src.get(), dem.geometry, dem.geo);
+}
+
+void writeMassCog(const std::string& path, const Raster<float>& mass, const ColourRange& range) {
+  ensureGdal();
+  GdalErrorLog errors;
+  Dataset src = memoryDataset(mass, path);
+  char top[40];
+  std::snprintf(top, sizeof top, "%.17g", range.hi);  // round-trips the double exactly
+  GDALSetMetadataItem(src.get(), kRampTopItem, top, nullptr);
+  writeCog(path, src.get(), mass.geometry, mass.geo);
 }
 
 void writeDemCog(const std::string& path, const std::string& gridFile, const GridGeometry& g, const GeoReference& geo) {
@@ -405,6 +425,33 @@ Raster<std::uint8_t> PyramidBlocks::classes(int step, const BlockSpan& span) con
 
 Raster<float> PyramidBlocks::pdm(int, const BlockSpan&) const {
   throw Error(ErrorCode::InvalidInput, "layer", "a stored map's pyramid holds no PDM");
+}
+
+MassPyramidBlocks::MassPyramidBlocks(std::string path, const GridGeometry& geometry) : path_(std::move(path)) {
+  header_.geometry = geometry;
+  GdalErrorLog errors;
+  StoredLease ds(path_);
+  const char* top = GDALGetMetadataItem(ds.get(), kRampTopItem, nullptr);
+  char* end = nullptr;
+  const double hi = top ? std::strtod(top, &end) : 0;
+  if (!top || end == top || !(hi > 0))
+    throw std::runtime_error("the stored PDM mass " + path_ + " carries no colour ramp");
+  if (GDALGetRasterXSize(ds.get()) != geometry.cols || GDALGetRasterYSize(ds.get()) != geometry.rows)
+    throw std::runtime_error("the stored PDM mass " + path_ + " is not on its map's grid");
+  range_ = {0, hi};
+  ds.keep();
+}
+
+terrain::Dem MassPyramidBlocks::dem(int, const BlockSpan&) const {
+  throw Error(ErrorCode::InvalidInput, "layer", "a PDM's pyramid holds no DEM");
+}
+
+Raster<std::uint8_t> MassPyramidBlocks::classes(int, const BlockSpan&) const {
+  throw Error(ErrorCode::InvalidInput, "layer", "a PDM's pyramid holds no classes");
+}
+
+Raster<float> MassPyramidBlocks::pdm(int step, const BlockSpan& span) const {
+  return readDemBlocks(path_, header_, step, span).z;
 }
 
 PyramidInfo pyramidInfo(const std::string& path) {

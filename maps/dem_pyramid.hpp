@@ -35,6 +35,13 @@ void writeDemCog(const std::string& path, const Raster<float>& dem);
 // GDAL as a raw band: memory is GDAL's block cache and the driver's buffers, not the grid.
 void writeDemCog(const std::string& path, const std::string& gridFile, const GridGeometry& g, const GeoReference& geo);
 
+// A PDM's probability mass on its map's grid as the same kind of COG (its overviews are each
+// block's mean mass, what a pdm tile below the native zoom shows), with the top of its colour ramp
+// (the largest mass of the full-resolution grid, colourRange(Pdm, mass)) in the file's metadata:
+// a pdm tile then reads its window and the ramp, never the whole mass. Memory and disk as
+// writeDemCog's.
+void writeMassCog(const std::string& path, const Raster<float>& mass, const ColourRange& range);
+
 // Writes the class pyramid, atomically. Memory: the levels below full resolution (a third of
 // `classes`' bytes). A full disk throws DiskFull.
 void writeClassPyramid(const std::string& path, const Raster<std::uint8_t>& classes);
@@ -71,6 +78,25 @@ class PyramidBlocks final : public TileBlocks {
  private:
   std::string dem_, classes_;
   std::shared_ptr<const DemHeader> header_;
+  ColourRange range_;
+};
+
+// A PDM's tiles drawn from its mass COG (writeMassCog) on a map of `geometry` (the map's grid,
+// from its stored header): pdm() reads the level of the tile's zoom, range() is the ramp stored
+// with it (read when constructed). No DEM or classes: dem() and classes() throw rover::Error
+// (InvalidInput, "layer"). Throws std::runtime_error when the file does not read or carries no
+// ramp (the server's file, not a request's fault).
+class MassPyramidBlocks final : public TileBlocks {
+ public:
+  MassPyramidBlocks(std::string path, const GridGeometry& geometry);
+  terrain::Dem dem(int step, const BlockSpan& span) const override;
+  Raster<std::uint8_t> classes(int step, const BlockSpan& span) const override;
+  Raster<float> pdm(int step, const BlockSpan& span) const override;
+  ColourRange range() const override { return range_; }
+
+ private:
+  std::string path_;
+  DemHeader header_;
   ColourRange range_;
 };
 

@@ -20,8 +20,7 @@ Response getLayer(ApiContext& ctx, const Request& req) {
   std::string path = ctx.maps.layerFile(req.params.at("id"), layer, format, max, queryString(req, "pdm"));
   Response r = fileResponse(path, format == "png" ? "image/png" : format == "tif" ? "image/tiff" : "application/octet-stream");
   if (format == "f32") {
-    auto map = ctx.maps.get(req.params.at("id"));
-    const GridGeometry& g = map->dem.geometry();
+    const GridGeometry g = ctx.maps.header(req.params.at("id")).geometry;  // the map itself is not loaded
     r.headers = {{"X-Rows", std::to_string(g.rows)}, {"X-Cols", std::to_string(g.cols)},
                  {"X-Cell-Width-M", std::to_string(g.cellWidth)}, {"X-Cell-Height-M", std::to_string(g.cellHeight)},
                  {"X-Nodata", "NaN"}, {"X-Byte-Order", "little-endian"}};
@@ -93,7 +92,8 @@ Response getTile(ApiContext& ctx, const Request& req) {
 void addLayerRoutes(http::Router& router, ApiContext& ctx) {
   router.add("GET", "/api/maps/{id}/layers/{file}", handler(ctx, getLayer),
              routeDoc("A layer (elevation|hillshade|slope|traversability|pdm) as .png (?max= overview), "
-                      ".tif (GeoTIFF) or .f32 (raw little-endian float32, size in X-Rows/X-Cols); ?pdm=ID for pdm.",
+                      ".tif (GeoTIFF) or .f32 (raw little-endian float32, size in X-Rows/X-Cols); ?pdm=ID for pdm. "
+                      "Full-size files other than elevation.tif and traversability.tif of a map over 25 M cells → 413.",
                       openapi::Operation()
                           .query("max", {{"type", "integer"}, {"minimum", 0}, {"maximum", 16384}},
                                  "PNG overview: longest side rounded up to 256, 512, 1024, 2048 or 4096.")
@@ -101,7 +101,7 @@ void addLayerRoutes(http::Router& router, ApiContext& ctx) {
                           .returns(200, "The layer file.", nullptr, "image/png")
                           .returns(200, "The layer file.", nullptr, "image/tiff")
                           .returns(200, "The layer file.", nullptr, "application/octet-stream")
-                          .errors({400, 404, 503, 507}),
+                          .errors({400, 404, 413, 503, 507}),
                       onPool));
   router.add("GET", "/api/maps/{id}/tiles/{layer}/{z}/{x}/{y}", handler(ctx, getTile),
              routeDoc("A 256-px tile of a layer on the map's tile grid (the map's tiles: size, zmax, "

@@ -11,6 +11,7 @@
 #include "maps/dem_io.hpp"
 #include "maps/dem_pyramid.hpp"
 #include "maps/georef.hpp"
+#include "maps/layer_overview.hpp"
 #include "maps/gdal_env.hpp"
 #include "server/api/map_files.hpp"
 #include "server/http/http_types.hpp"
@@ -138,7 +139,8 @@ std::string MapCatalog::layerFile(const std::string& id, const std::string& laye
   if (format != "png" && format != "tif" && format != "f32")
     throw ApiError(404, "not_found", "no format '" + rover::json::shown(format) + "' (png, tif, f32)", "format");
   if (max < 0 || max > 16384) throw ApiError(400, "invalid_parameter", "max must be in [0, 16384]", "max");
-  auto map = get(id);
+  auto rec = db_.getMap(id);
+  if (!rec) throw ApiError(404, "not_found", "no map '" + rover::json::shown(id) + "'", "id");
   std::string pdm = pdmId;
   if (layer == "pdm" && pdm.empty()) {
     auto list = db_.listPdms(id);
@@ -147,13 +149,30 @@ std::string MapCatalog::layerFile(const std::string& id, const std::string& laye
   }
   std::string pdmVersion;  // an edited PDM's layers are new files (issue 26)
   if (layer == "pdm") {
-    auto rec = db_.getPdm(pdm);
-    if (!rec || rec->mapId != id) throw ApiError(404, "not_found", "no PDM '" + rover::json::shown(pdm) + "' on this map", "pdm");
-    pdmVersion = pdmVersionTag(rec->version);
+    auto p = db_.getPdm(pdm);
+    if (!p || p->mapId != id) throw ApiError(404, "not_found", "no PDM '" + rover::json::shown(pdm) + "' on this map", "pdm");
+    pdmVersion = pdmVersionTag(p->version);
   }
-  const fs::path dir = fs::path(dir_.mapDir(id)) / "layers";
-  const GridGeometry& geom = map->dem.geometry();
+  const fs::path mapDir = dir_.mapDir(id);
+  // A map stored as its pyramid answers from its files; one stored before is loaded whole.
+  const bool pyramid = storedAsPyramid(*rec, mapDir.string());
+  const GridGeometry geom = pyramid ? storedHeader(id)->geometry : get(id)->dem.geometry();
   const int side = format == "png" ? overviewSide(max, std::max(geom.rows, geom.cols)) : 0;
+  if (pyramid && side == 0 && geom.cellCount() > kMaxWholeLayerCells) {
+    // Full size on a big map: the elevation and class GeoTIFFs are the stored files themselves
+    // (the COG and the class pyramid); anything else is computed on the whole map in memory, which
+    // a big map refuses rather than load gigabytes for one file.
+    if (format == "tif" && layer == "elevation") return (mapDir / kDemFile).string();
+    if (format == "tif" && layer == "traversability") return (mapDir / kClassFile).string();
+    throw ApiError(413, "too_large",
+                     "a full-size " + layer + "." + format + " of this map (" + std::to_string(geom.rows) + " x " +
+                         std::to_string(geom.cols) + " cells) would load the whole map; full-size layers are made up to " +
+                         std::to_string(kMaxWholeLayerCells / 1'000'000) +
+                         " M cells (elevation.tif and traversability.tif at any size): ask for a ?max= overview, "
+                         "or its tiles",
+                     "layer");
+  }
+  const fs::path dir = mapDir / "layers";
   std::string file = layer;
   if (layer == "pdm") file += "-" + pdm + pdmVersion;
   if (side > 0) {
@@ -166,6 +185,25 @@ std::string MapCatalog::layerFile(const std::string& id, const std::string& laye
   return layers_.get((dir / file).string(), [&](const std::string& path) {
     std::error_code ec;
     fs::create_directories(dir, ec);
+    if (pyramid && side > 0) {
+      // From the pyramid's level that fits the overview: the map is never loaded.
+      const auto l = maps::renderLayerFromName(layer);
+      maps::Image pic;
+      if (layer == "pdm") {
+        pic = maps::renderOverview(l, maps::MassPyramidBlocks(pdmPyramidFile(id, pdm, pdmVersion), geom), geom.rows,
+                                   geom.cols, side);
+      } else {
+        const auto& ramp = rec->meta["colour_range"];
+        pic = maps::renderOverview(l,
+                                   maps::PyramidBlocks((mapDir / kDemFile).string(), (mapDir / kClassFile).string(),
+                                                       storedHeader(id), {ramp[0].get<double>(), ramp[1].get<double>()}),
+                                   geom.rows, geom.cols, side);
+      }
+      const auto png = maps::encodePng(pic);
+      store::DataDir::writeFileAtomic(path, std::string(png.begin(), png.end()));
+      return;
+    }
+    auto map = get(id);
     const auto mass = layer == "pdm" ? pdmMass(pdm) : nullptr;
     renderLayerFile(*map, layer, format, side, mass.get(), path);
   });

@@ -94,8 +94,18 @@ class MapCatalog {
   // A layer file (elevation|hillshade|slope|traversability|pdm) as png/tif/f32, created on first
   // use; `max` > 0 for a downsampled PNG overview, its size rounded up to the ladder 256, 512,
   // 1024, 2048, 4096 (or the full size when that is smaller). Returns the file path.
+  // A map stored as its pyramid (issue 24) draws its overviews from the pyramid's level that fits
+  // (maps/layer_overview.hpp) and a pdm overview from the PDM's mass pyramid, never loading the
+  // map. Its full-size files (png without max, tif, f32) need the whole map in memory: beyond
+  // kMaxWholeLayerCells, elevation.tif and traversability.tif are its stored COG and class
+  // pyramid, and the others are refused (ApiError 413 too_large, naming the size). A map stored before
+  // the pyramid is loaded whole (get()) for every layer file.
   std::string layerFile(const std::string& id, const std::string& layer, const std::string& format,
                         int max, const std::string& pdmId);
+  // The largest map whose full-size layer files are computed in memory: the map loaded with its
+  // traversability (get(): a 49 M-cell map's elevation overview peaked at 728 MiB that way, about
+  // 15 bytes a cell) plus the layer's own grid, about 0.5 GB at this size.
+  static constexpr std::int64_t kMaxWholeLayerCells = 25'000'000;
 
   // A tile of a layer (maps/tile_grid.hpp, maps/map_tiles.hpp) as png (any layer) or f32
   // (elevation, slope: kTileSize² little-endian float32), created on first use in the layer cache
@@ -120,6 +130,8 @@ class MapCatalog {
                              const std::string& by = "");
   store::PdmRecord createPdmFromRaster(const std::string& mapId, const std::string& name,
                                        const std::string& rasterPath, const std::string& by = "");
+  // Each is discretised on the map's grid and cells with data without loading the map (header(),
+  // validCells), and its mass pyramid (pdmPyramidFile) made before the call returns.
   // A PDM's new name and (Gaussian PDMs only) components as version expected+1 (issue 26):
   // discretised first (400 when they put no mass on the map), then its components.json and row
   // written in the row's transaction once the version matches. Returns the row's outcome (Stale:
@@ -129,12 +141,25 @@ class MapCatalog {
                        const std::string& by, store::PdmRecord& out);
   // The file-name part that names a PDM's version in layer and tile files ("" for version 1).
   static std::string pdmVersionTag(long long version);
-  // The PDM's probability mass on its map's grid. The last few are kept in memory (at most
+  // The PDM's probability mass on its map's grid: a raster PDM's pdm.tif as it is, a Gaussian
+  // one discretised on the map's grid and cells with data (from the map in memory when it is
+  // loaded, else its stored header and validCells): the map is not loaded for it. Memory: 4 bytes
+  // a cell for the mass, and for a Gaussian PDM 9 more while it is discretised (pdm::discretise's
+  // double sums and the cells with data). The last few are kept in memory (at most
   // kMassCacheCells cells together: one PDM of a 50 M-cell map), so launching missions with a PDM
   // just made or viewed costs no second discretisation.
   std::shared_ptr<const Raster<float>> pdmMass(const std::string& pdmId);
   static constexpr std::int64_t kMassCacheCells = 64'000'000;
   std::string pdmFile(const std::string& pdmId) const;
+  // The PDM's mass pyramid (maps::writeMassCog: its mass on the map's grid with overviews and its
+  // ramp) for version `versionTag` (pdmVersionTag), a file of the layer cache
+  // (layers/pdm-ID[-vN]-mass.tif) made from pdmMass on first use and again after an eviction. An
+  // edited PDM is a new version, so a new file: the tiles and ETags of each version stay its own.
+  // Memory while it is made: pdmMass's (below), then GDAL's COG writer over that grid in place.
+  std::string pdmPyramidFile(const std::string& mapId, const std::string& pdmId, const std::string& versionTag);
+  // Makes the pyramid of a PDM just created or changed, while its mass is in memory, so its first
+  // tile reads a window (a failure is left to that tile: the PDM itself is stored).
+  void keepPyramid(const std::string& mapId, const std::string& pdmId, const std::string& versionTag);
 
   // How client files are parsed: DEM and PDM-raster uploads run GDAL in an import worker
   // (server/jail/import_jail.hpp) with these limits, never in this process. Tests swap the worker.
@@ -153,6 +178,10 @@ class MapCatalog {
   maps::LoadedDem importJailed(const std::string& inDir, jail::ImportRequest req, std::string& rasterName,
                                ImportStages* stages = nullptr, const GridRows* rows = nullptr);
   std::shared_ptr<const MapData> loadFromDisk(const store::MapRecord& r);
+  // The map's cells with data (1 where its height is not NaN), one byte a cell: the loaded map's,
+  // else read from the stored DEM kValidBandRows rows at a time (the heights of one band in memory).
+  std::vector<std::uint8_t> validCells(const std::string& mapId, const GridGeometry& g);
+  static constexpr int kValidBandRows = 512;
   // The stored DEM's header (grid, per-row widths), read once per map for its tiles
   // (map_tile_files.cpp); a few maps are kept.
   std::shared_ptr<const maps::DemHeader> storedHeader(const std::string& id);

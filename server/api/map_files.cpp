@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cstring>
+#include <filesystem>
 #include <iterator>
 #include <stdexcept>
 
@@ -37,6 +38,13 @@ namespace {
 constexpr int kOverviewLadder[] = {256, 512, 1024, 2048, 4096};
 
 }  // namespace
+
+bool storedAsPyramid(const store::MapRecord& r, const std::string& mapDir) {
+  const auto it = r.meta.find("colour_range");
+  std::error_code ec;
+  return it != r.meta.end() && it->is_array() && it->size() == 2 && (*it)[0].is_number() && (*it)[1].is_number() &&
+         std::filesystem::exists(std::filesystem::path(mapDir) / kClassFile, ec);
+}
 
 int overviewSide(int max, int nativeSide) {
   if (max <= 0) return 0;

@@ -18,6 +18,10 @@ struct MapData;
 inline constexpr const char* kDemFile = "dem.tif";
 inline constexpr const char* kClassFile = "classes.tif";
 
+// A map stored as its pyramid (issue 24): its class pyramid in `mapDir` and its elevation ramp in
+// its record. Its tiles and overviews are read from the pyramid; a map stored before is loaded.
+bool storedAsPyramid(const store::MapRecord& record, const std::string& mapDir);
+
 // The longest side of the PNG overview for ?max= on a map whose longest side is `nativeSide`: the
 // next rung of the ladder 256, 512, 1024, 2048, 4096; 0 (full size) for max 0 or a rung at least
 // the map's own size.

@@ -2,12 +2,15 @@
 
 // MapCatalog's PDMs: made from Gaussian components or a raster upload (read in the import jail),
 // stored in the data dir charged to their map, and their mass on the map's grid kept in memory.
+#include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <optional>
 
 #include "core/common/error.hpp"
 #include "maps/dem_io.hpp"
+#include "maps/dem_pyramid.hpp"
 #include "server/api/map_files.hpp"
 #include "server/http/http_types.hpp"
 #include "server/json/json_edge.hpp"
@@ -25,23 +28,24 @@ std::string MapCatalog::pdmFile(const std::string& pdmId) const {
 store::PdmRecord MapCatalog::createPdm(const std::string& mapId, const std::string& name,
                                        const std::vector<pdm::Gaussian>& components,
                                        const nlohmann::json& meta, const std::string& by) {
-  auto map = get(mapId);
+  const MapHeader map = header(mapId);  // the map is not loaded: its header and cells with data
   dir_.budget().requireRoom(store::DiskUse::Pdm, mapId, "body");
   // Discretised now to refuse components that put no mass on the map (400), as every later use
   // would; what is stored is the components (the mass is kept in memory for a while).
   Raster<float> mass;
   try {
-    mass = pdm::discretise(components, map->dem.geometry(), map->valid);
+    mass = pdm::discretise(components, map.geometry, validCells(mapId, map.geometry));
   } catch (const Error& e) {
     throw ApiError(400, "invalid_parameter", e.what(), e.field());
   }
-  mass.geo = map->dem.z.geo;
+  mass.geo = map.geo;
   const std::string stored = rover::json::toStoredJson(components).dump();
   const store::PdmRecord rec =
       storePdm(mapId, name.empty() ? "PDM " + store::nowIso() : name, meta, [&](const std::string& staging) {
         store::DataDir::writeFileAtomic((fs::path(staging) / "components.json").string(), stored);
       }, by);
   keepMass(rec.id, std::make_shared<const Raster<float>>(std::move(mass)));  // a mission often follows
+  keepPyramid(mapId, rec.id, "");
   return rec;
 }
 
@@ -106,9 +110,13 @@ store::PdmRecord MapCatalog::createPdmFromRaster(const std::string& mapId, const
     throw ApiError(400, "invalid_pdm", e.what(), "file");
   }
   mass.geo = map->dem.z.geo;
-  return storePdm(mapId, name.empty() ? "raster PDM" : name, {{"kind", "raster"}}, [&](const std::string& staging) {
-    storingGeoTiff([&] { maps::writeGeoTiff((fs::path(staging) / "pdm.tif").string(), mass); });
-  }, by);
+  const store::PdmRecord rec =
+      storePdm(mapId, name.empty() ? "raster PDM" : name, {{"kind", "raster"}}, [&](const std::string& staging) {
+        storingGeoTiff([&] { maps::writeGeoTiff((fs::path(staging) / "pdm.tif").string(), mass); });
+      }, by);
+  keepMass(rec.id, std::make_shared<const Raster<float>>(std::move(mass)));
+  keepPyramid(mapId, rec.id, "");
+  return rec;
 }
 
 std::string MapCatalog::pdmVersionTag(long long version) {
@@ -123,14 +131,14 @@ store::Cas MapCatalog::changePdm(const store::PdmRecord& current, const std::str
   std::shared_ptr<const Raster<float>> mass;
   std::string stored;
   if (components) {
-    auto map = get(current.mapId);
+    const MapHeader map = header(current.mapId);
     Raster<float> m;
     try {
-      m = pdm::discretise(*components, map->dem.geometry(), map->valid);
+      m = pdm::discretise(*components, map.geometry, validCells(current.mapId, map.geometry));
     } catch (const Error& e) {
       throw ApiError(400, "invalid_parameter", e.what(), e.field().empty() ? "components" : e.field());
     }
-    m.geo = map->dem.z.geo;
+    m.geo = map.geo;
     mass = std::make_shared<const Raster<float>>(std::move(m));
     stored = rover::json::toStoredJson(*components).dump();
     // An edited random PDM is a Gaussian one from now on (its seed no longer makes it).
@@ -156,7 +164,10 @@ store::Cas MapCatalog::changePdm(const store::PdmRecord& current, const std::str
   }
   if (done == store::Cas::Done) {
     out.version = expected + 1;
-    if (mass) keepMass(current.id, mass);
+    if (mass) {
+      keepMass(current.id, mass);
+      keepPyramid(current.mapId, current.id, pdmVersionTag(out.version));
+    }  // (a rename's pyramid, the same mass under the new version, is made by its first tile)
   }
   return done;
 }
@@ -193,13 +204,58 @@ std::shared_ptr<const Raster<float>> MapCatalog::pdmMass(const std::string& pdmI
     std::ifstream in(fs::path(dir_.pdmDir(pdmId)) / "components.json");
     if (!in) throw std::runtime_error("PDM " + pdmId + ": neither pdm.tif nor components.json is stored");
     const auto components = rover::json::gaussiansFromStoredJson(nlohmann::json::parse(in));
-    auto map = get(rec->mapId);
-    Raster<float> m = pdm::discretise(components, map->dem.geometry(), map->valid);
-    m.geo = map->dem.z.geo;
+    const MapHeader map = header(rec->mapId);  // the loaded map's, or the stored DEM's header
+    Raster<float> m = pdm::discretise(components, map.geometry, validCells(rec->mapId, map.geometry));
+    m.geo = map.geo;
     mass = std::make_shared<const Raster<float>>(std::move(m));
   }
   keepMass(pdmId, mass);
   return mass;
+}
+
+std::vector<std::uint8_t> MapCatalog::validCells(const std::string& mapId, const GridGeometry& g) {
+  {
+    std::lock_guard lock(mutex_);
+    for (const auto& m : cache_)
+      if (m->record.id == mapId) return m->valid;
+  }
+  std::vector<std::uint8_t> valid(static_cast<std::size_t>(g.cellCount()));
+  const std::string stored = (fs::path(dir_.mapDir(mapId)) / kDemFile).string();
+  for (int r0 = 0; r0 < g.rows; r0 += kValidBandRows) {
+    const int rows = std::min(kValidBandRows, g.rows - r0);
+    terrain::Dem band;
+    try {
+      band = maps::loadDemWindow(stored, r0, 0, rows, g.cols).dem;
+    } catch (const Error& e) {
+      throw std::runtime_error(e.what());  // the stored file is the server's: 500, its path in the log only
+    }
+    const float* z = band.z.values.data();
+    std::uint8_t* out = valid.data() + std::size_t(r0) * g.cols;
+    for (std::size_t i = 0, n = std::size_t(rows) * g.cols; i < n; ++i) out[i] = !std::isnan(z[i]);
+  }
+  return valid;
+}
+
+void MapCatalog::keepPyramid(const std::string& mapId, const std::string& pdmId, const std::string& versionTag) {
+  try {
+    pdmPyramidFile(mapId, pdmId, versionTag);
+  } catch (const std::exception&) {
+    // The PDM is stored; its pyramid is a cache file that its first tile makes again (and whose
+    // failure, a full disk, that tile then reports).
+  }
+}
+
+std::string MapCatalog::pdmPyramidFile(const std::string& mapId, const std::string& pdmId,
+                                       const std::string& versionTag) {
+  const fs::path dir = fs::path(dir_.mapDir(mapId)) / "layers";
+  return layers_.get((dir / ("pdm-" + pdmId + versionTag + "-mass.tif")).string(), [&](const std::string& path) {
+    std::error_code ec;
+    fs::create_directories(dir, ec);
+    const auto mass = pdmMass(pdmId);
+    // The ramp of the whole mass, once per version: what every tile of the version is drawn with.
+    const maps::ColourRange range = maps::colourRange(maps::RenderLayer::Pdm, *mass);
+    storingGeoTiff([&] { maps::writeMassCog(path, *mass, range); });
+  });
 }
 
 }  // namespace rover::api

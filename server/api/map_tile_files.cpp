@@ -28,14 +28,6 @@ maps::TileGrid storedGrid(const store::MapRecord& r, MapCatalog& catalog) {
   return maps::tileGridOf(g.rows, g.cols);
 }
 
-// A map stored as its pyramid: its class pyramid on disk and its ramp in the record.
-bool storedAsPyramid(const store::MapRecord& r, const fs::path& dir) {
-  const auto it = r.meta.find("colour_range");
-  std::error_code ec;
-  return it != r.meta.end() && it->is_array() && it->size() == 2 && (*it)[0].is_number() && (*it)[1].is_number() &&
-         fs::exists(dir / kClassFile, ec);
-}
-
 // A tile's bytes: f32 values or an encoded PNG, from the stored pyramid (maps::TileBlocks) or the
 // map in memory (maps::TileSource).
 template <class Source>
@@ -111,7 +103,14 @@ std::string MapCatalog::tileFile(const std::string& id, const std::string& layer
     fs::create_directories(dir, ec);
     const auto l = maps::renderLayerFromName(layer);
     const fs::path mapDir = dir_.mapDir(id);
-    if (layer != "pdm" && storedAsPyramid(*rec, mapDir)) {
+    if (layer == "pdm") {
+      // The PDM's mass pyramid (made once per PDM version): the tile's window at its zoom and the
+      // ramp stored with it, never the whole mass or the map.
+      const maps::MassPyramidBlocks blocks(pdmPyramidFile(id, pdmId, pdmVersion), storedHeader(id)->geometry);
+      store::DataDir::writeFileAtomic(path, tileBytes(blocks, l, format, *window), false);  // a cache file
+      return;
+    }
+    if (storedAsPyramid(*rec, mapDir.string())) {
       // The level of the tile's zoom, about (256 + 2)² cells: the map is never loaded.
       const auto& ramp = rec->meta["colour_range"];
       const maps::PyramidBlocks blocks((mapDir / kDemFile).string(), (mapDir / kClassFile).string(), storedHeader(id),
@@ -119,17 +118,11 @@ std::string MapCatalog::tileFile(const std::string& id, const std::string& layer
       store::DataDir::writeFileAtomic(path, tileBytes(blocks, l, format, *window), false);  // a cache file
       return;
     }
-    auto map = get(id);  // a PDM, or a map stored before the pyramid: the whole map in memory
+    auto map = get(id);  // a map stored before the pyramid: the whole map in memory
     maps::TileSource src;
     src.dem = &map->dem;
     src.classes = &map->traversability.classes;
     src.range = map->elevationRange;
-    std::shared_ptr<const Raster<float>> mass;
-    if (layer == "pdm") {
-      mass = pdmMass(pdmId);
-      src.pdm = mass.get();
-      src.range = maps::colourRange(maps::RenderLayer::Pdm, *mass);  // one pass over the mass
-    }
     const std::string bytes = tileBytes(src, l, format, *window);
     store::DataDir::writeFileAtomic(path, bytes, false);
   });

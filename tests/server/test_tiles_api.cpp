@@ -7,12 +7,17 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <limits>
+#include <utility>
 #include <vector>
 
 #include <gdal.h>
 
 #include "api_server.hpp"
+#include "core/pdm/pdm.hpp"
+#include "maps/dem_io.hpp"
 #include "maps/dem_pyramid.hpp"
+#include "maps/map_tiles.hpp"
 #include "maps/gdal_env.hpp"
 
 using namespace rover;
@@ -188,4 +193,156 @@ TEST_CASE("tiles api: the cell budget is 300 M cells, checked from the file's he
   const auto r = s.post("/api/maps?name=big&filename=big.tif", bytes, "image/tiff");
   checkError(r, 400, "too_large", "file");
   CHECK(r.json()["error"]["message"].get<std::string>().find("300000000") != std::string::npos);
+}
+
+namespace {
+
+// A PNG's width and height (its IHDR chunk).
+std::pair<int, int> pngSize(const std::string& png) {
+  auto be = [&](std::size_t at) {
+    return (int(std::uint8_t(png[at])) << 24) | (int(std::uint8_t(png[at + 1])) << 16) |
+           (int(std::uint8_t(png[at + 2])) << 8) | int(std::uint8_t(png[at + 3]));
+  };
+  REQUIRE(png.size() > 24);
+  return {be(16), be(20)};
+}
+
+// The pdm tile z/x/y as the whole mass in memory draws it (what every pdm tile was before the
+// mass pyramid): the mass discretised on the loaded map's grid and cells with data, its ramp
+// over the whole mass.
+// `components`: {x, y, sigma_x, sigma_y} each, unrotated, of weight 1.
+std::string pdmTileInMemory(ApiServer& s, const std::string& map, const json& components, int z, int x, int y) {
+  std::vector<pdm::Gaussian> gs;
+  for (const auto& c : components) {
+    pdm::Gaussian g;
+    g.mean = {c["x"].get<double>(), c["y"].get<double>()};
+    g.sigmaX = c["sigma_x"].get<double>();
+    g.sigmaY = c["sigma_y"].get<double>();
+    gs.push_back(g);
+  }
+  const auto m = s.maps.get(map);
+  const Raster<float> mass = pdm::discretise(gs, m->dem.geometry(), m->valid);
+  maps::TileSource src;
+  src.pdm = &mass;
+  src.range = maps::colourRange(maps::RenderLayer::Pdm, mass);
+  const GridGeometry& g = m->dem.geometry();
+  const auto window = maps::tileWindow(maps::tileGridOf(g.rows, g.cols), z, x, y);
+  REQUIRE(window);
+  const auto png = maps::encodePng(maps::renderTile(maps::RenderLayer::Pdm, src, *window), maps::PngColours::Smallest);
+  return std::string(png.begin(), png.end());
+}
+
+}  // namespace
+
+TEST_CASE("tiles api: pdm tiles come from the PDM's mass pyramid, one per version, at the native zoom byte for byte the in-memory tiles") {
+  TempDir tmp;
+  // A 300 × 200 map of 1 m cells with a hole of nodata (rows 50..79, columns 100..159): its cells
+  // get no mass. Native zoom 1 (2 × 1 tiles), zmax 3.
+  Raster<float> dem(GridGeometry{200, 300, 1.0, 1.0}, 0.0f);
+  for (int r = 0; r < 200; ++r)
+    for (int c = 0; c < 300; ++c)
+      dem(r, c) = (r >= 50 && r < 80 && c >= 100 && c < 160) ? std::numeric_limits<float>::quiet_NaN()
+                                                            : static_cast<float>(0.05 * c + 0.02 * r);
+  maps::writeGeoTiff(tmp.str("hole.tif"), dem);
+  std::ifstream in(tmp.str("hole.tif"), std::ios::binary);
+  const std::string bytes((std::istreambuf_iterator<char>(in)), {});
+  const json first = json::array({{{"x", 120}, {"y", 100}, {"sigma_x", 30}, {"sigma_y", 20}},
+                                  {{"x", 250}, {"y", 40}, {"sigma_x", 8}, {"sigma_y", 8}}});
+  std::string map, pdm;
+  {
+    ApiServer s(tmp.str("data"));
+    const auto up = s.post("/api/maps?name=hole&filename=hole.tif", bytes, "image/tiff");
+    REQUIRE(up.status == 201);
+    map = up.json()["id"];
+    const auto made = s.postJson("/api/maps/" + map + "/pdms", {{"name", "two"}, {"components", first}});
+    REQUIRE(made.status == 201);
+    pdm = made.json()["id"];
+    // Made with the PDM; removed here (as an evicted cache file would be) so that the fresh
+    // server below, with neither the map nor the PDM's mass in memory, makes it again from the
+    // stored DEM's cells with data.
+    const std::string massFile = s.dir.mapDir(map) + "/layers/pdm-" + pdm + "-mass.tif";
+    REQUIRE(std::filesystem::exists(massFile));
+    std::filesystem::remove(massFile);
+  }
+  ApiServer s(tmp.str("data"));
+  const std::string base = "/api/maps/" + map + "/tiles/pdm/";
+  std::vector<std::string> native;
+  for (int x = 0; x < 2; ++x) {
+    auto r = s.get(base + "1/" + std::to_string(x) + "/0.png?pdm=" + pdm);
+    REQUIRE(r.status == 200);
+    CHECK(r.headers["Cache-Control"] == "no-cache");
+    native.push_back(r.body);
+  }
+  const std::string layers = s.dir.mapDir(map) + "/layers/";
+  REQUIRE(std::filesystem::exists(layers + "pdm-" + pdm + "-mass.tif"));
+  const maps::PyramidInfo info = maps::pyramidInfo(layers + "pdm-" + pdm + "-mass.tif");
+  CHECK(info.layout == "COG");
+  CHECK(info.rows == 200);
+  CHECK(info.cols == 300);
+  CHECK(info.overviews.size() == 1u);  // zoom 0
+  for (int x = 0; x < 2; ++x) CHECK(native[x] == pdmTileInMemory(s, map, first, 1, x, 0));
+  // Every zoom answers; the overview comes from the same pyramid, at the ladder's size.
+  for (const std::string t : {"0/0/0", "2/2/1", "3/4/2"}) {
+    CAPTURE(t);
+    const auto r = s.get(base + t + ".png?pdm=" + pdm);
+    CAPTURE(r.body);
+    CHECK(r.status == 200);
+  }
+  const auto overview = s.get("/api/maps/" + map + "/layers/pdm.png?max=256&pdm=" + pdm);
+  REQUIRE(overview.status == 200);
+  CHECK(pngSize(overview.body).first == 256);
+
+  // An edited PDM is a new version: new tiles, ETags and mass pyramid, drawn from its new mass.
+  const json second = json::array({{{"x", 60}, {"y", 150}, {"sigma_x", 12}, {"sigma_y", 12}}});
+  const auto edited = request(s.port(), "PUT", "/api/maps/" + map + "/pdms/" + pdm, json{{"components", second}}.dump(),
+                              "application/json", {{"If-Match", "\"v1\""}});
+  REQUIRE(edited.status == 200);
+  auto v2 = s.get(base + "1/0/0.png?pdm=" + pdm);
+  REQUIRE(v2.status == 200);
+  CHECK(v2.headers["ETag"].find(pdm + "-v2-") != std::string::npos);
+  CHECK(std::filesystem::exists(layers + "pdm-" + pdm + "-v2-mass.tif"));
+  CHECK(v2.body != native[0]);
+  CHECK(v2.body == pdmTileInMemory(s, map, second, 1, 0, 0));
+  CHECK(s.get(base + "1/1/0.png?pdm=" + pdm).body == pdmTileInMemory(s, map, second, 1, 1, 0));
+}
+
+TEST_CASE("layers api: a pyramid-stored map's overviews come from its pyramid, full-size files of a big map are its stored files or 413") {
+  TempDir tmp;
+  ApiServer s(tmp.str("data"));
+  const std::string id = s.defaultMap();  // 600 × 600, stored as its pyramid
+  for (const char* layer : {"elevation", "hillshade", "slope", "traversability"}) {
+    CAPTURE(layer);
+    const auto r = s.get("/api/maps/" + id + "/layers/" + layer + ".png?max=256");
+    REQUIRE(r.status == 200);
+    CHECK(pngSize(r.body).first == 256);  // the map's 256 px and the legend below
+    CHECK(pngSize(r.body).second > 256);
+  }
+  // The same map's DEM header made 5001 × 5001 cells (a sparse file: nothing to read): over the
+  // 25 M cells whole-map layers are computed for, a full-size hillshade is refused from the header
+  // alone, naming the size; elevation.tif and traversability.tif are the stored files.
+  maps::ensureGdal();
+  const std::string dem = s.dir.mapDir(id) + "/dem.tif";
+  std::filesystem::remove(dem);
+  {
+    const char* options[] = {"TILED=YES", "SPARSE_OK=YES", "COMPRESS=DEFLATE", nullptr};
+    GDALDatasetH ds = GDALCreate(GDALGetDriverByName("GTiff"), dem.c_str(), 5001, 5001, 1, GDT_Float32,
+                                 const_cast<char**>(options));
+    REQUIRE(ds != nullptr);
+    GDALClose(ds);
+  }
+  // A second catalog on the data dir: the first one keeps the 600² header it read.
+  api::MapCatalog catalog(s.db, s.dir);
+  for (const std::string f : {"hillshade.tif", "slope.f32", "elevation.f32", "traversability.png"}) {
+    CAPTURE(f);
+    try {
+      catalog.layerFile(id, f.substr(0, f.find('.')), f.substr(f.find('.') + 1), 0, "");
+      FAIL("no 413");
+    } catch (const http::ApiError& e) {
+      CHECK(e.status() == 413);
+      CHECK(e.field() == "layer");
+      CHECK(std::string(e.what()).find("5001 x 5001") != std::string::npos);
+    }
+  }
+  CHECK(catalog.layerFile(id, "elevation", "tif", 0, "") == dem);
+  CHECK(catalog.layerFile(id, "traversability", "tif", 0, "") == s.dir.mapDir(id) + "/classes.tif");
 }
