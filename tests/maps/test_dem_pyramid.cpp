@@ -316,3 +316,43 @@ TEST_CASE("pyramid: a map imported from a grid file (no float copy in memory) gi
     CHECK(ab == bb);  // byte for byte
   }
 }
+
+TEST_CASE("pyramid: the overview levels computed on every core are GDAL's AVERAGE, bit for bit") {
+  // maps/average_levels.hpp against the COG driver's own levels (the in-memory writer lets GDAL
+  // compute them): shapes whose levels halve evenly, oddly on one side or both (weighted cut
+  // cells), a strip whose short side reaches one row, scattered NaN cells and a whole NaN block
+  // (a level pixel with no data), heights of mixed magnitudes (the sums' rounding).
+  const int shapes[][2] = {{1024, 1536}, {533, 1101}, {777, 1031}, {3, 1500}, {1300, 5}};
+  for (const auto& shape : shapes) {
+    const int rows = shape[0], cols = shape[1];
+    CAPTURE(rows);
+    CAPTURE(cols);
+    Raster<float> z(GridGeometry{rows, cols, 1.0, 1.0}, 0.0f);
+    std::uint32_t seed = 24;
+    float* cells = z.values.data();
+    for (std::size_t i = 0, n = static_cast<std::size_t>(z.values.size()); i < n; ++i) {
+      float& v = cells[i];
+      seed = seed * 1664525u + 1013904223u;
+      const float u = static_cast<float>(seed >> 8) / 16777216.0f;
+      v = (seed & 3u) == 0 ? u * 0.001f : (u - 0.5f) * 4000.0f;
+      if ((seed >> 4) % 97 == 0) v = kNaN;
+    }
+    for (int r = 0; r < std::min(rows, 40); ++r)
+      for (int c = 0; c < std::min(cols, 40); ++c) z(r, c) = kNaN;
+    TempDir dir;
+    const std::string grid = dir.file("grid.f32");
+    {
+      GridFileWriter w(grid, z.geometry);
+      w.append(z.values.data(), static_cast<std::size_t>(z.values.size()));
+      w.close();
+    }
+    writeDemCog(dir.file("memory.tif"), z);
+    writeDemCog(dir.file("file.tif"), grid, z.geometry, z.geo);
+    CHECK(pyramidInfo(dir.file("file.tif")).overviews == pyramidInfo(dir.file("memory.tif")).overviews);
+    std::ifstream a(dir.file("memory.tif"), std::ios::binary), b(dir.file("file.tif"), std::ios::binary);
+    const std::string ab((std::istreambuf_iterator<char>(a)), {}), bb((std::istreambuf_iterator<char>(b)), {});
+    CHECK(ab == bb);  // byte for byte
+    // The levels' files are gone with the import's scratch: only the two COGs and the grid remain.
+    CHECK(std::distance(fs::directory_iterator(dir.path), fs::directory_iterator()) == 3);
+  }
+}
