@@ -10,6 +10,7 @@
 #include <cmath>
 #include <cstring>
 #include <filesystem>
+#include <future>
 #include <fstream>
 #include <iterator>
 #include <limits>
@@ -354,5 +355,41 @@ TEST_CASE("pyramid: the overview levels computed on every core are GDAL's AVERAG
     CHECK(ab == bb);  // byte for byte
     // The levels' files are gone with the import's scratch: only the two COGs and the grid remain.
     CHECK(std::distance(fs::directory_iterator(dir.path), fs::directory_iterator()) == 3);
+  }
+}
+
+TEST_CASE("grid file: classes computed while the rows are written wait for them, and stop when the stream fails") {
+  terrain::Dem dem = wavyDem(533, 401, 0.5);
+  const terrain::Traversability whole = terrain::traversability(dem);
+  TempDir dir;
+  const std::string grid = dir.file("grid.f32");
+  SUBCASE("the rows arrive in chunks: the same classes and shares as the whole grid's") {
+    GridRowsGate gate;
+    GridFileWriter w(grid, dem.geometry());
+    auto classes = std::async(std::launch::async, [&] {
+      return traversabilityOfGridFile(grid, dem.geometry(), {}, 64, {}, &gate);
+    });
+    for (int r0 = 0; r0 < 533; r0 += 100) {
+      const int n = std::min(100, 533 - r0);
+      w.append(&dem.z(r0, 0), static_cast<std::size_t>(n) * 401);
+      w.flush();
+      gate.publish(r0 + n);
+    }
+    w.close();
+    const terrain::Traversability t = classes.get();
+    CHECK(t.classes.values == whole.classes.values);
+    CHECK(t.shares.counts == whole.shares.counts);
+  }
+  SUBCASE("the stream fails half way: the waiting thread ends with GridFileError") {
+    GridRowsGate gate;
+    GridFileWriter w(grid, dem.geometry());
+    auto classes = std::async(std::launch::async, [&] {
+      return traversabilityOfGridFile(grid, dem.geometry(), {}, 64, {}, &gate);
+    });
+    w.append(&dem.z(0, 0), 200u * 401);
+    w.flush();
+    gate.publish(200);
+    gate.abort();
+    CHECK_THROWS_AS(classes.get(), GridFileError);
   }
 }
