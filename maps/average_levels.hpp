@@ -1,8 +1,7 @@
 #pragma once
 // The overview levels of a map's COG (maps/dem_pyramid.hpp), computed here on every core instead of
-// by GDAL's COG driver, which computes them on one thread (issue 24: on a 300 M-cell map that was
-// the longest single-threaded stretch between upload and first tiles). The values are GDAL 3.6's
-// AVERAGE with NaN as nodata, bit for bit, so a tile is the same whichever wrote the file:
+// by GDAL's COG driver, which computes them on one thread (issue 24). GDAL 3.6's AVERAGE with NaN
+// as nodata, in its arithmetic (GDALResampleChunk32R_AverageT's nodata-mask path):
 // - level k + 1 from level k (GDAL cascades AVERAGE levels), level 1 from the grid;
 // - a level is floor(size / 2) of the one above along each side (at least 1), as the COG driver
 //   sizes them;
@@ -10,7 +9,10 @@
 //   cut cells at its two ends weighted by the part inside (exactly 2 × 2 cells when the size is
 //   even), NaN cells left out, NaN when none is left; sums and weights in double, in GDAL's order
 //   (row by row: left cell, middle cells, right cell), then rounded to float.
-// tests/maps/test_dem_pyramid.cpp checks the bytes against GDAL's own levels on odd sizes.
+// Bit for bit GDAL's where every level halves the one above exactly. Where a size is odd, GDAL
+// also clips a window at the end of each chunk of rows it reads (a rule not reproduced here), so
+// the map's writer uses these levels only for even shapes (writeDemCog).
+// tests/maps/test_dem_pyramid.cpp checks the bytes against GDAL's own levels.
 #include <string>
 #include <vector>
 

@@ -291,7 +291,17 @@ void writeDemCog(const std::string& path, const std::string& gridFile, const Gri
   // and only compresses them (OVERVIEWS=AUTO uses a source's own), instead of computing them on
   // one thread into its temporary file. Disk while writing: the levels (4·N/3 bytes), no longer
   // the driver's temporary file; memory: a band of rows per thread.
-  const std::vector<LevelFile> levels = writeAverageLevels(gridFile, g.rows, g.cols, overviewLevels(g), gridFile + "~level");
+  //
+  // Only when every level halves the one above exactly (even sizes all the way down): there each
+  // level pixel averages its own 2 × 2 cells and GDAL's result does not depend on how it cuts the
+  // grid into chunks. Where a level's size is odd, GDAL's windows are fractional and it clips a
+  // window at the end of each chunk of rows it reads (a 20000 × 15000 grid: chunks of 8192 rows,
+  // so level 4's row 511 weights its last source row 1.55, not 0.55), a rule we do not reproduce;
+  // such a map keeps GDAL's own (one-core) overviews, so its tiles stay what they were.
+  const int count = overviewLevels(g);
+  const bool exact = count > 0 && g.rows % (1 << count) == 0 && g.cols % (1 << count) == 0;
+  const std::vector<LevelFile> levels =
+      exact ? writeAverageLevels(gridFile, g.rows, g.cols, count, gridFile + "~level") : std::vector<LevelFile>{};
   struct RemoveLevels {
     const std::vector<LevelFile>& levels;
     ~RemoveLevels() {
