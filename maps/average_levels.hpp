@@ -9,10 +9,16 @@
 //   cut cells at its two ends weighted by the part inside (exactly 2 × 2 cells when the size is
 //   even), NaN cells left out, NaN when none is left; sums and weights in double, in GDAL's order
 //   (row by row: left cell, middle cells, right cell), then rounded to float.
-// Bit for bit GDAL's where every level halves the one above exactly. Where a size is odd, GDAL
-// also clips a window at the end of each chunk of rows it reads (a rule not reproduced here), so
-// the map's writer uses these levels only for even shapes (writeDemCog).
-// tests/maps/test_dem_pyramid.cpp checks the bytes against GDAL's own levels.
+// Deterministic: the same bytes on every run and thread count (each level pixel is computed from
+// its whole window, whatever band it falls in).
+// GDAL's own levels differ in one respect, on large maps only: where a level's size is odd, GDAL
+// also clips a window at the end of each chunk of rows it reads and weights the clipped row above
+// 1 (20000 columns: chunks of 8192 grid rows, so level 4's row 511 weights its last source row
+// 1.55, not 0.55) — an artifact of its chunking, not a better average. Not reproduced: a map's
+// dem.tif is written once at import and never changes (maps are immutable), so a map's tiles are
+// always from one set of levels.
+// tests/maps/test_dem_pyramid.cpp checks the bytes against GDAL's own levels where it cuts no
+// window (small maps, even shapes), and every level against a plain weighted average elsewhere.
 #include <string>
 #include <vector>
 

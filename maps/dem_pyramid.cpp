@@ -286,22 +286,21 @@ void writeDemCog(const std::string& path, const Raster<float>& dem) {
 void writeDemCog(const std::string& path, const std::string& gridFile, const GridGeometry& g, const GeoReference& geo) {
   ensureGdal();
   GdalErrorLog errors;
-  // The overview levels first, on every core (maps/average_levels.hpp: GDAL's AVERAGE, bit for
-  // bit), as raw files next to the grid; the COG driver then finds them as the source's overviews
-  // and only compresses them (OVERVIEWS=AUTO uses a source's own), instead of computing them on
-  // one thread into its temporary file. Disk while writing: the levels (4·N/3 bytes), no longer
-  // the driver's temporary file; memory: a band of rows per thread.
+  // The overview levels first, on every core (maps/average_levels.hpp: GDAL's AVERAGE with NaN as
+  // nodata), as raw files next to the grid; the COG driver then finds them as the source's
+  // overviews and only compresses them (OVERVIEWS=AUTO uses a source's own), instead of computing
+  // them on one thread into its temporary file. Disk while writing: the levels (4·N/3 bytes), no
+  // longer the driver's temporary file; memory: a band of rows per thread.
   //
-  // Only when every level halves the one above exactly (even sizes all the way down): there each
-  // level pixel averages its own 2 × 2 cells and GDAL's result does not depend on how it cuts the
-  // grid into chunks. Where a level's size is odd, GDAL's windows are fractional and it clips a
-  // window at the end of each chunk of rows it reads (a 20000 × 15000 grid: chunks of 8192 rows,
-  // so level 4's row 511 weights its last source row 1.55, not 0.55), a rule we do not reproduce;
-  // such a map keeps GDAL's own (one-core) overviews, so its tiles stay what they were.
-  const int count = overviewLevels(g);
-  const bool exact = count > 0 && g.rows % (1 << count) == 0 && g.cols % (1 << count) == 0;
+  // Where every window is whole or no chunk of GDAL's cuts one (even shapes, small maps) the bytes
+  // are GDAL's own. Where a level's size is odd on a large map they differ from GDAL's in the level
+  // rows at the ends of GDAL's chunks of rows (8192 grid rows at 20000 columns): GDAL clips the
+  // fractional window there and gives the clipped row a weight above 1, an artifact of its
+  // chunking; ours are the whole windows, the same on every run and thread count. That is fine
+  // because a map's dem.tif never changes after its import (maps are immutable; a new import gets
+  // a new id, new tile ETags), so no tile of one map ever mixes the two.
   const std::vector<LevelFile> levels =
-      exact ? writeAverageLevels(gridFile, g.rows, g.cols, count, gridFile + "~level") : std::vector<LevelFile>{};
+      writeAverageLevels(gridFile, g.rows, g.cols, overviewLevels(g), gridFile + "~level");
   struct RemoveLevels {
     const std::vector<LevelFile>& levels;
     ~RemoveLevels() {

@@ -217,7 +217,7 @@ store::MapRecord MapCatalog::importDem(const std::vector<UploadedFile>& files, c
     // still change), sampled for the colour ramp on the way, while a second thread computes the
     // classes from it in bands of rows as they arrive, writes classes.tif and the class shares.
     // dem.tif is then written from that file through GDAL (a raw band, its overview levels
-    // computed on both cores for an even shape: maps/average_levels.hpp). Memory: the chunk,
+    // computed on both cores: maps/average_levels.hpp). Memory: the chunk,
     // the classes (a byte a cell, from the first chunk on, plus a third for the pyramid's
     // levels), a band of 256 rows, GDAL's block cache and write buffers; the file's pages are the
     // kernel's page cache.
