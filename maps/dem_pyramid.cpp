@@ -2,6 +2,7 @@
 
 #include <cpl_conv.h>
 #include <cpl_error.h>
+#include <cpl_string.h>
 #include <gdal.h>
 #include <sys/stat.h>
 
@@ -12,6 +13,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <limits>
 #include <list>
 #include <mutex>
@@ -20,7 +22,9 @@
 #include <vector>
 
 #include "core/terrain/layers.hpp"
+#include "maps/average_levels.hpp"
 #include "maps/dem_error.hpp"
+#include "maps/grid_file.hpp"
 #include "maps/gdal_env.hpp"
 #include "maps/tile_grid.hpp"
 
@@ -302,17 +306,60 @@ void writeMassCog(const std::string& path, const Raster<float>& mass, const Colo
 void writeDemCog(const std::string& path, const std::string& gridFile, const GridGeometry& g, const GeoReference& geo) {
   ensureGdal();
   GdalErrorLog errors;
-  // The file as a raw band of a VRT made here (the server's own file, never a client's): GDAL
-  // reads its rows through the page cache, so the heights are never in this process's heap.
-  Dataset src(GDALCreate(GDALGetDriverByName("VRT"), "", g.cols, g.rows, 0, GDT_Float32, nullptr));
-  if (!src) throw std::runtime_error("cannot make the raw dataset for " + path);
-  const std::string file = "SourceFilename=" + gridFile;
-  const std::string line = "LineOffset=" + std::to_string(4ll * g.cols);
-  const char* bandOptions[] = {"subClass=VRTRawRasterBand", file.c_str(), "relativeToVRT=0", "ImageOffset=0",
-                               "PixelOffset=4", line.c_str(), "ByteOrder=LSB", nullptr};
-  if (GDALAddBand(src.get(), GDT_Float32, const_cast<char**>(bandOptions)) != CE_None)
-    throw std::runtime_error("cannot open the grid file for " + path + " (" + CPLGetLastErrorMsg() + ")");
-  // Rows straight from the file into the driver's buffers (RawRasterBand's direct reads), not
+  // The overview levels first, on every core (maps/average_levels.hpp: GDAL's AVERAGE with NaN as
+  // nodata), as raw files next to the grid; the COG driver then finds them as the source's
+  // overviews and only compresses them (OVERVIEWS=AUTO uses a source's own), instead of computing
+  // them on one thread into its temporary file. Disk while writing: the levels (4·N/3 bytes), no
+  // longer the driver's temporary file; memory: a band of rows per thread.
+  //
+  // Where every window is whole or no chunk of GDAL's cuts one (even shapes, small maps) the bytes
+  // are GDAL's own. Where a level's size is odd on a large map they differ from GDAL's in the level
+  // rows at the ends of GDAL's chunks of rows (8192 grid rows at 20000 columns): GDAL clips the
+  // fractional window there and gives the clipped row a weight above 1, an artifact of its
+  // chunking; ours are the whole windows, the same on every run and thread count. That is fine
+  // because a map's dem.tif never changes after its import (maps are immutable; a new import gets
+  // a new id, new tile ETags), so no tile of one map ever mixes the two.
+  const std::vector<LevelFile> levels =
+      writeAverageLevels(gridFile, g.rows, g.cols, overviewLevels(g), gridFile + "~level");
+  struct RemoveLevels {
+    const std::vector<LevelFile>& levels;
+    ~RemoveLevels() {
+      std::error_code ec;
+      for (const LevelFile& l : levels) fs::remove(l.path, ec), fs::remove(l.path + ".vrt", ec);
+    }
+  } removeLevels{levels};
+  // Each file as a raw band of a VRT (the server's own files, never a client's): GDAL reads their
+  // rows through the page cache, so the heights are never in this process's heap.
+  auto rawBand = [](const std::string& file, int cols, const std::string& inner) {
+    char* escaped = CPLEscapeString(file.c_str(), -1, CPLES_XML);
+    std::string xml = "<VRTRasterBand dataType=\"Float32\" band=\"1\" subClass=\"VRTRawRasterBand\">"
+                      "<NoDataValue>nan</NoDataValue><SourceFilename relativeToVRT=\"0\">" +
+                      std::string(escaped) + "</SourceFilename><ImageOffset>0</ImageOffset><PixelOffset>4</PixelOffset>"
+                      "<LineOffset>" + std::to_string(4ll * cols) + "</LineOffset><ByteOrder>LSB</ByteOrder>" + inner +
+                      "</VRTRasterBand>";
+    CPLFree(escaped);
+    return xml;
+  };
+  auto dataset = [](int rows, int cols, const std::string& band) {
+    return "<VRTDataset rasterXSize=\"" + std::to_string(cols) + "\" rasterYSize=\"" + std::to_string(rows) + "\">" +
+           band + "</VRTDataset>";
+  };
+  std::string overviews;
+  for (const LevelFile& l : levels) {
+    const std::string vrt = l.path + ".vrt";
+    std::ofstream out(vrt, std::ios::binary | std::ios::trunc);
+    out << dataset(l.rows, l.cols, rawBand(l.path, l.cols, ""));
+    out.close();
+    if (!out) throw GridFileError("cannot write " + vrt);
+    char* escaped = CPLEscapeString(vrt.c_str(), -1, CPLES_XML);
+    overviews += "<Overview><SourceFilename relativeToVRT=\"0\">" + std::string(escaped) +
+                 "</SourceFilename><SourceBand>1</SourceBand></Overview>";
+    CPLFree(escaped);
+  }
+  const std::string xml = dataset(g.rows, g.cols, rawBand(gridFile, g.cols, overviews));
+  Dataset src(GDALOpenEx(xml.c_str(), GDAL_OF_RASTER | GDAL_OF_UPDATE, nullptr, nullptr, nullptr));
+  if (!src) throw std::runtime_error("cannot open the grid file for " + path + " (" + CPLGetLastErrorMsg() + ")");
+  // Rows straight from the files into the driver's buffers (RawRasterBand's direct reads), not
   // through GDAL's block cache, which the rows read once would fill to its cap.
   const ThreadConfig directReads("GDAL_ONE_BIG_READ", "YES");
   writeCog(path, src.get(), g, geo);

@@ -31,8 +31,13 @@ namespace rover::maps {
 // writes, a temporary uncompressed overview file next to it (4·N/3 bytes for N cells: a third of
 // the float grid). A full disk throws DiskFull.
 void writeDemCog(const std::string& path, const Raster<float>& dem);
-// The same COG (byte for byte) from a grid file (maps/grid_file.hpp) of `g`'s shape, read through
-// GDAL as a raw band: memory is GDAL's block cache and the driver's buffers, not the grid.
+// The same COG from a grid file (maps/grid_file.hpp) of `g`'s shape, read through
+// GDAL as a raw band, its overview levels computed on every core (maps/average_levels.hpp) and
+// handed to the driver as the source's own: memory is a band of rows per thread, GDAL's block
+// cache and the driver's buffers, not the grid; disk while it writes, the levels' raw files next
+// to the grid (4·N/3 bytes, removed before it returns). Byte for byte the in-memory writer's COG
+// except, on large maps with odd level sizes, in the level rows where GDAL's own chunking clips a
+// window (maps/average_levels.hpp).
 void writeDemCog(const std::string& path, const std::string& gridFile, const GridGeometry& g, const GeoReference& geo);
 
 // A PDM's probability mass on its map's grid as the same kind of COG (its overviews are each

@@ -42,6 +42,33 @@ void GridFileWriter::close() {
   if (failed != 0) failWrite(path_, errno, bytes_);
 }
 
+void GridFileWriter::flush() {
+  errno = 0;
+  if (std::fflush(f_) != 0) failWrite(path_, errno, bytes_);
+}
+
+void GridRowsGate::publish(int rows) {
+  {
+    std::lock_guard lock(mutex_);
+    rows_ = std::max(rows_, rows);
+  }
+  changed_.notify_all();
+}
+
+void GridRowsGate::abort() {
+  {
+    std::lock_guard lock(mutex_);
+    aborted_ = true;
+  }
+  changed_.notify_all();
+}
+
+void GridRowsGate::waitFor(int rows) const {
+  std::unique_lock lock(mutex_);
+  changed_.wait(lock, [&] { return aborted_ || rows_ >= rows; });
+  if (aborted_) throw GridFileError("the grid file's stream ended early");
+}
+
 void readGridRows(const std::string& path, int cols, int row0, int rows, float* out) {
   std::FILE* f = std::fopen(path.c_str(), "rb");
   const std::size_t n = static_cast<std::size_t>(rows) * cols;
@@ -53,7 +80,8 @@ void readGridRows(const std::string& path, int cols, int row0, int rows, float* 
 
 terrain::Traversability traversabilityOfGridFile(const std::string& path, const GridGeometry& g,
                                                  const std::vector<double>& rowCellWidth, int bandRows,
-                                                 const std::function<void(const float*, std::size_t)>& eachBand) {
+                                                 const std::function<void(const float*, std::size_t)>& eachBand,
+                                                 const GridRowsGate* gate) {
   terrain::Traversability out;
   out.classes = Raster<std::uint8_t>(g, 0);
   bandRows = std::max(1, bandRows);
@@ -62,6 +90,7 @@ terrain::Traversability traversabilityOfGridFile(const std::string& path, const 
     const int r1 = std::min(g.rows, r0 + bandRows);
     const int top = std::max(0, r0 - 1), bottom = std::min(g.rows, r1 + 1);  // the halo rows
     if (band.z.geometry.rows != bottom - top) band.z = Raster<float>(GridGeometry{bottom - top, g.cols, g.cellWidth, g.cellHeight}, 0.0f);
+    if (gate) gate->waitFor(bottom);
     readGridRows(path, g.cols, top, bottom - top, band.z.values.data());
     if (eachBand) eachBand(&band.z(r0 - top, 0), static_cast<std::size_t>(r1 - r0) * g.cols);
     if (!rowCellWidth.empty()) band.rowCellWidth.assign(rowCellWidth.begin() + top, rowCellWidth.begin() + bottom);

@@ -5,8 +5,10 @@
 // which a process the worker left behind could still change). Read back in bands of rows for the
 // traversability classes, and through GDAL (a raw band, no copy) for the map's COG; the file's
 // pages are the kernel's page cache, not the server's heap.
+#include <condition_variable>
 #include <cstdio>
 #include <functional>
+#include <mutex>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -32,6 +34,7 @@ class GridFileWriter {
   GridFileWriter(const GridFileWriter&) = delete;
   GridFileWriter& operator=(const GridFileWriter&) = delete;
   void append(const float* values, std::size_t n);  // the next n cells in row order
+  void flush();  // what was appended, readable by readGridRows (throws as the constructor)
   void close();                                       // flushes; throws as the constructor
 
  private:
@@ -40,16 +43,35 @@ class GridFileWriter {
   std::FILE* f_ = nullptr;
 };
 
+// The rows of a grid file while it is written, for a reader on another thread (issue 24: the
+// import's classes are computed as the heights stream in, on the core the stream leaves idle):
+// the writer publishes how many rows the file holds (after GridFileWriter::flush), a reader waits
+// for the rows it needs; abort() (the stream failed) wakes it with GridFileError.
+class GridRowsGate {
+ public:
+  void publish(int rows);
+  void abort();
+  void waitFor(int rows) const;  // throws GridFileError once aborted
+
+ private:
+  mutable std::mutex mutex_;
+  mutable std::condition_variable changed_;
+  int rows_ = 0;
+  bool aborted_ = false;
+};
+
 // Cells [row0 · cols, (row0 + rows) · cols) of the grid file into `out`; throws std::runtime_error.
 void readGridRows(const std::string& path, int cols, int row0, int rows, float* out);
 
 // terrain::traversability of the grid file (one thread), computed in bands of `bandRows` rows each
 // read with one row of halo above and below: the same classes and shares as on the whole grid
 // (every cell's 8 neighbours are in its band), holding bandRows + 2 rows of heights at a time.
+// With `gate`, each band waits for its rows (the file still being written).
 // `eachBand(values, n)`, when given, sees each band's own cells (halo rows left out) in row order
 // (the import digests the heights there, off the critical path).
 terrain::Traversability traversabilityOfGridFile(const std::string& path, const GridGeometry& g,
                                                  const std::vector<double>& rowCellWidth, int bandRows,
-                                                 const std::function<void(const float*, std::size_t)>& eachBand = {});
+                                                 const std::function<void(const float*, std::size_t)>& eachBand = {},
+                                                 const GridRowsGate* gate = nullptr);
 
 }  // namespace rover::maps

@@ -214,27 +214,57 @@ store::MapRecord MapCatalog::importDem(const std::vector<UploadedFile>& files, c
     // float copy; the worker's grid is the only one, and it has ended). They stream from the
     // worker's output in checked chunks of 4 MiB into the server's own grid file (in the staging
     // folder, never the worker's file, which a process the worker left behind could
-    // still change), sampled for the colour ramp on the way. dem.tif is then written
-    // from that file through GDAL (a raw band) while a second thread computes the classes from it
-    // in bands of rows (GDAL computes the COG's overviews on one core, so the other was idle),
-    // writes classes.tif and the class shares. Memory: the chunk, the classes (a byte a cell,
-    // plus a third for the pyramid's levels), a band of 256 rows, GDAL's block cache and write
-    // buffers; the file's pages are the kernel's page cache.
+    // still change), sampled for the colour ramp on the way, while a second thread computes the
+    // classes from it in bands of rows as they arrive, writes classes.tif and the class shares.
+    // dem.tif is then written from that file through GDAL (a raw band, its overview levels
+    // computed on both cores: maps/average_levels.hpp). Memory: the chunk,
+    // the classes (a byte a cell, from the first chunk on, plus a third for the pyramid's
+    // levels), a band of 256 rows, GDAL's block cache and write buffers; the file's pages are the
+    // kernel's page cache.
     // "~" is outside every staged upload's name (safeName), so no client file is overwritten.
     const std::string gridFile = (fs::path(staging) / "import~grid.f32").string();
     std::optional<maps::DemDigest> digester;
     std::optional<maps::ElevationSample> sample;
     std::optional<maps::GridFileWriter> writer;
+    terrain::ClassShares shares;
+    double classSeconds = 0, pyramidSeconds = 0;
+    // The classes, classes.tif and the digest, on a second thread from the stream's first chunk:
+    // its bands wait for their rows (GridRowsGate), so they run on the core the stream leaves
+    // idle, then alongside dem.tif. The future is declared before the gate's guard, so a failed
+    // stream first wakes the thread (abort), then waits for it to end.
+    std::future<void> alongside;
+    maps::GridRowsGate gate;
+    struct AbortGate {
+      maps::GridRowsGate& gate;
+      ~AbortGate() { gate.abort(); }
+    } abortGate{gate};
+    auto classesAlongside = [&](GridGeometry g, std::vector<double> rowCellWidth, GeoReference geo) {
+      auto since = [](auto from) { return std::chrono::duration<double>(std::chrono::steady_clock::now() - from).count(); };
+      auto from = std::chrono::steady_clock::now();
+      // The digest reads the bands' rows as they pass (0.2 s of CPU on 49 M cells, off the path
+      // to the first tiles).
+      terrain::Traversability t = maps::traversabilityOfGridFile(
+          gridFile, g, rowCellWidth, 256, [&](const float* v, std::size_t n) { digester->add(v, n); }, &gate);
+      t.classes.geo = geo;
+      classSeconds = since(from);
+      from = std::chrono::steady_clock::now();
+      storingGeoTiff([&] { maps::writeClassPyramid((fs::path(staging) / kClassFile).string(), t.classes); });
+      pyramidSeconds = since(from);
+      shares = t.shares;  // only the shares are kept (the record's classes)
+    };
     const GridRows streamed = [&](const terrain::Dem& header, int r0, int n, const float* v) {
       const GridGeometry& g = header.geometry();
       if (!writer) {
         writer.emplace(gridFile, g);
         digester.emplace(g, header.rowCellWidth);
         sample.emplace(static_cast<std::size_t>(g.cellCount()));
+        alongside = std::async(std::launch::async, classesAlongside, g, header.rowCellWidth, header.z.geo);
       }
       const std::size_t first = static_cast<std::size_t>(r0) * g.cols, cells = static_cast<std::size_t>(n) * g.cols;
       writer->append(v, cells);
+      writer->flush();
       sample->add(first, v, cells);
+      gate.publish(r0 + n);
     };
     maps::LoadedDem d;
     storingGeoTiff([&] {
@@ -259,22 +289,6 @@ store::MapRecord MapCatalog::importDem(const std::vector<UploadedFile>& files, c
     // Every tile's ramp, fixed at import (the full-size picture's: maps::colourRange).
     const maps::ColourRange ramp = sample->range();
     stages.done("grid");
-    terrain::ClassShares shares;
-    double classSeconds = 0, pyramidSeconds = 0;
-    auto alongside = std::async(std::launch::async, [&] {
-      auto since = [](auto from) { return std::chrono::duration<double>(std::chrono::steady_clock::now() - from).count(); };
-      auto from = std::chrono::steady_clock::now();
-      // The digest reads the bands' rows as they pass (0.2 s of CPU on 49 M cells, off the path
-      // to the first tiles: this thread ends before dem.tif's).
-      terrain::Traversability t = maps::traversabilityOfGridFile(
-          gridFile, g, d.dem.rowCellWidth, 256, [&](const float* v, std::size_t n) { digester->add(v, n); });
-      t.classes.geo = d.dem.z.geo;
-      classSeconds = since(from);
-      from = std::chrono::steady_clock::now();
-      storingGeoTiff([&] { maps::writeClassPyramid((fs::path(staging) / kClassFile).string(), t.classes); });
-      pyramidSeconds = since(from);
-      shares = t.shares;  // only the shares are kept (the record's classes)
-    });
     {
       // The future's destructor waits, so the grid file outlives the thread when the COG throws.
       storingGeoTiff([&] { maps::writeDemCog((fs::path(staging) / kDemFile).string(), gridFile, g, d.dem.z.geo); });

@@ -347,3 +347,32 @@ TEST_CASE("dem digest: the SHA-256 of the grid as defined, whatever the NaN payl
   e.rowCellWidth = {1.0, 1.0};  // per-row widths are part of the ground
   CHECK(maps::demSha256(e) != maps::demSha256(d));
 }
+
+TEST_CASE("heights read in bands on every core: nodata, scale and figures over the whole grid, an infinity in a late band") {
+  // 2100 x 2100 cells: two bands of readHeights' 4 Mi cells, the second one cut.
+  TempDir tmp;
+  const int n = 2100;
+  const std::string path = tmp.file("big.tif");
+  writeTiff(path, n, n, GDT_Float32, {0, 1, 0, double(n), 0, -1}, 32633, [&](int r, int c) {
+    if ((r * 31 + c) % 101 == 0) return -9999.0;  // nodata in both bands
+    if (r == 2 && c == 3) return -40.0;            // the lowest, in the first band
+    if (r == n - 1 && c == n - 2) return 900.0;    // the highest, in the second
+    return 10.0 + (r + c) % 50;
+  }, -9999);
+  std::int64_t nodata = 0;
+  for (int r = 0; r < n; ++r)
+    for (int c = 0; c < n; ++c) nodata += (r * 31 + c) % 101 == 0 ? 1 : 0;
+  maps::LoadOptions o;
+  o.verticalScale = 2;
+  const maps::LoadedDem d = maps::loadDem(path, o);
+  CHECK(d.info.nodataCells == nodata);
+  CHECK(d.info.minHeight == -80.0);
+  CHECK(d.info.maxHeight == 1800.0);
+  CHECK(std::isnan(d.dem.z(0, 0)));
+  CHECK(d.dem.z(n - 1, n - 2) == 1800.0f);
+
+  const std::string inf = tmp.file("inf-late.tif");
+  writeTiff(inf, n, n, GDT_Float32, {0, 1, 0, double(n), 0, -1}, 32633,
+            [&](int r, int c) { return r == n - 3 && c == 7 ? INFINITY : 1.0; });
+  CHECK(errorOf(inf) == inf + ": the raster holds infinite values");
+}

@@ -10,6 +10,7 @@
 #include <cmath>
 #include <cstring>
 #include <filesystem>
+#include <future>
 #include <fstream>
 #include <iterator>
 #include <limits>
@@ -18,6 +19,7 @@
 
 #include "core/common/error.hpp"
 #include "core/terrain/layers.hpp"
+#include "maps/average_levels.hpp"
 #include "maps/dem_io.hpp"
 #include "maps/dem_pyramid.hpp"
 #include "maps/grid_file.hpp"
@@ -314,5 +316,172 @@ TEST_CASE("pyramid: a map imported from a grid file (no float copy in memory) gi
     const std::string ab((std::istreambuf_iterator<char>(a)), {}), bb((std::istreambuf_iterator<char>(b)), {});
     CHECK(ab.size() > 100000u);
     CHECK(ab == bb);  // byte for byte
+  }
+}
+
+namespace {
+
+// Heights of mixed magnitudes (the sums' rounding), scattered NaN cells and a whole NaN block in
+// the corner (a level pixel with no data).
+Raster<float> noisyHeights(int rows, int cols) {
+  Raster<float> z(GridGeometry{rows, cols, 1.0, 1.0}, 0.0f);
+  std::uint32_t seed = 24;
+  float* cells = z.values.data();
+  for (std::size_t i = 0, n = static_cast<std::size_t>(z.values.size()); i < n; ++i) {
+    float& v = cells[i];
+    seed = seed * 1664525u + 1013904223u;
+    const float u = static_cast<float>(seed >> 8) / 16777216.0f;
+    v = (seed & 3u) == 0 ? u * 0.001f : (u - 0.5f) * 4000.0f;
+    if ((seed >> 4) % 97 == 0) v = kNaN;
+  }
+  for (int r = 0; r < std::min(rows, 40); ++r)
+    for (int c = 0; c < std::min(cols, 40); ++c) z(r, c) = kNaN;
+  return z;
+}
+
+// The reference for a level, written from the definition rather than from GDAL's loops: pixel
+// (i, j) of an outRows × outCols level covers [j·cols/outCols, (j + 1)·cols/outCols) ×
+// [i·rows/outRows, …) of the level above; each cell weighs the area it shares with that window,
+// NaN cells weigh nothing, NaN where nothing is left.
+std::vector<float> referenceLevel(const std::vector<float>& src, int rows, int cols, int outRows, int outCols) {
+  auto overlap = [](double lo, double hi, int cell) { return std::max(0.0, std::min(hi, cell + 1.0) - std::max(lo, double(cell))); };
+  const double ry = double(rows) / outRows, rx = double(cols) / outCols;
+  std::vector<float> out(static_cast<std::size_t>(outRows) * outCols);
+  for (int i = 0; i < outRows; ++i)
+    for (int j = 0; j < outCols; ++j) {
+      double sum = 0, weight = 0;
+      for (int r = static_cast<int>(i * ry); r < std::min(rows, static_cast<int>(std::ceil((i + 1) * ry))); ++r)
+        for (int c = static_cast<int>(j * rx); c < std::min(cols, static_cast<int>(std::ceil((j + 1) * rx))); ++c) {
+          const float v = src[static_cast<std::size_t>(r) * cols + c];
+          const double w = overlap(i * ry, (i + 1) * ry, r) * overlap(j * rx, (j + 1) * rx, c);
+          if (std::isnan(v) || w <= 0) continue;
+          sum += w * v;
+          weight += w;
+        }
+      out[static_cast<std::size_t>(i) * outCols + j] = weight > 0 ? static_cast<float>(sum / weight) : kNaN;
+    }
+  return out;
+}
+
+std::string fileBytes(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string((std::istreambuf_iterator<char>(in)), {});
+}
+
+}  // namespace
+
+TEST_CASE("pyramid: every overview level is the nodata-aware average of the level above, on 1 and 2 threads") {
+  // maps/average_levels.hpp on any shape against the reference above: levels that halve evenly,
+  // oddly on one side or both (cut cells at the raster's own edge weighted by the part inside),
+  // strips whose short side reaches one row, more rows than one band of 64 level rows. On large
+  // maps with odd level sizes these are the levels dem.tif gets even where GDAL's own differ (at
+  // the ends of its chunks of rows), so they are checked here against the definition, not GDAL.
+  const int shapes[][2] = {{533, 1101}, {777, 1031}, {1001, 999}, {3, 1500}, {1300, 5}, {256, 384}};
+  for (const auto& shape : shapes) {
+    const int rows = shape[0], cols = shape[1];
+    CAPTURE(rows);
+    CAPTURE(cols);
+    const Raster<float> z = noisyHeights(rows, cols);
+    TempDir dir;
+    const std::string grid = dir.file("grid.f32");
+    {
+      GridFileWriter w(grid, z.geometry);
+      w.append(z.values.data(), static_cast<std::size_t>(z.values.size()));
+      w.close();
+    }
+    const std::vector<LevelFile> one = writeAverageLevels(grid, rows, cols, 5, dir.file("one-"), 1);
+    const std::vector<LevelFile> two = writeAverageLevels(grid, rows, cols, 5, dir.file("two-"), 2);
+    REQUIRE(one.size() == 5u);
+    REQUIRE(two.size() == 5u);
+    std::vector<float> above(z.values.data(), z.values.data() + z.values.size());
+    int aboveRows = rows, aboveCols = cols;
+    for (std::size_t k = 0; k < one.size(); ++k) {
+      CAPTURE(k + 1);
+      CHECK(one[k].rows == std::max(1, aboveRows / 2));
+      CHECK(one[k].cols == std::max(1, aboveCols / 2));
+      CHECK(fileBytes(one[k].path) == fileBytes(two[k].path));  // the same bytes on any thread count
+      std::vector<float> level(static_cast<std::size_t>(one[k].rows) * one[k].cols);
+      readGridRows(one[k].path, one[k].cols, 0, one[k].rows, level.data());
+      const std::vector<float> expected = referenceLevel(above, aboveRows, aboveCols, one[k].rows, one[k].cols);
+      std::size_t wrong = 0, nans = 0;
+      for (std::size_t i = 0; i < level.size(); ++i) {
+        nans += std::isnan(expected[i]);
+        // The reference sums in another order: equal up to the float's last bits.
+        const bool same = std::isnan(expected[i]) ? std::isnan(level[i])
+                                                  : std::fabs(level[i] - expected[i]) <= 1e-5f * std::max(1.0f, std::fabs(expected[i]));
+        wrong += !same;
+      }
+      CHECK(wrong == 0u);
+      if (k == 0 && rows >= 80 && cols >= 80) CHECK(nans > 0u);  // the NaN block reached the level
+      above = std::move(level);
+      aboveRows = one[k].rows;
+      aboveCols = one[k].cols;
+    }
+  }
+}
+
+TEST_CASE("pyramid: where GDAL cuts no averaging window, the COG's levels are GDAL's own, bit for bit") {
+  // maps/average_levels.hpp inside the COG against the COG driver's own levels (the in-memory
+  // writer lets GDAL compute them), on maps small enough that GDAL reads each level in one chunk of
+  // rows (so no window is clipped at a chunk's end), and on even shapes, whose every window is its
+  // own 2 × 2 cells: shapes whose levels halve evenly, oddly on one side or both (weighted cut
+  // cells), a strip whose short side reaches one row, the NaN cells and block of noisyHeights.
+  const int shapes[][2] = {{1024, 1536}, {2048, 512}, {533, 1101}, {777, 1031}, {3, 1500}, {1300, 5}};
+  for (const auto& shape : shapes) {
+    const int rows = shape[0], cols = shape[1];
+    CAPTURE(rows);
+    CAPTURE(cols);
+    const Raster<float> z = noisyHeights(rows, cols);
+    TempDir dir;
+    const std::string grid = dir.file("grid.f32");
+    {
+      GridFileWriter w(grid, z.geometry);
+      w.append(z.values.data(), static_cast<std::size_t>(z.values.size()));
+      w.close();
+    }
+    writeDemCog(dir.file("memory.tif"), z);
+    writeDemCog(dir.file("file.tif"), grid, z.geometry, z.geo);
+    CHECK(pyramidInfo(dir.file("file.tif")).overviews == pyramidInfo(dir.file("memory.tif")).overviews);
+    std::ifstream a(dir.file("memory.tif"), std::ios::binary), b(dir.file("file.tif"), std::ios::binary);
+    const std::string ab((std::istreambuf_iterator<char>(a)), {}), bb((std::istreambuf_iterator<char>(b)), {});
+    CHECK(ab == bb);  // byte for byte
+    // The levels' files are gone with the import's scratch: only the two COGs and the grid remain.
+    CHECK(std::distance(fs::directory_iterator(dir.path), fs::directory_iterator()) == 3);
+  }
+}
+
+TEST_CASE("grid file: classes computed while the rows are written wait for them, and stop when the stream fails") {
+  terrain::Dem dem = wavyDem(533, 401, 0.5);
+  const terrain::Traversability whole = terrain::traversability(dem);
+  TempDir dir;
+  const std::string grid = dir.file("grid.f32");
+  SUBCASE("the rows arrive in chunks: the same classes and shares as the whole grid's") {
+    GridRowsGate gate;
+    GridFileWriter w(grid, dem.geometry());
+    auto classes = std::async(std::launch::async, [&] {
+      return traversabilityOfGridFile(grid, dem.geometry(), {}, 64, {}, &gate);
+    });
+    for (int r0 = 0; r0 < 533; r0 += 100) {
+      const int n = std::min(100, 533 - r0);
+      w.append(&dem.z(r0, 0), static_cast<std::size_t>(n) * 401);
+      w.flush();
+      gate.publish(r0 + n);
+    }
+    w.close();
+    const terrain::Traversability t = classes.get();
+    CHECK(t.classes.values == whole.classes.values);
+    CHECK(t.shares.counts == whole.shares.counts);
+  }
+  SUBCASE("the stream fails half way: the waiting thread ends with GridFileError") {
+    GridRowsGate gate;
+    GridFileWriter w(grid, dem.geometry());
+    auto classes = std::async(std::launch::async, [&] {
+      return traversabilityOfGridFile(grid, dem.geometry(), {}, 64, {}, &gate);
+    });
+    w.append(&dem.z(0, 0), 200u * 401);
+    w.flush();
+    gate.publish(200);
+    gate.abort();
+    CHECK_THROWS_AS(classes.get(), GridFileError);
   }
 }

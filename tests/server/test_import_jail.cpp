@@ -12,12 +12,14 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 
 #include "api_server.hpp"
 #include "maps/dem_io.hpp"
 #include "maps/gdal_env.hpp"
 #include "maps/synthetic_terrain.hpp"
 #include "server/jail/import_jail.hpp"
+#include "server/jail/worker_output.hpp"
 
 using namespace rover;
 using rover::test::request;
@@ -213,5 +215,34 @@ TEST_CASE("import jail: a netCDF-4 (HDF5) upload is read when the worker runs un
   } else {
     MESSAGE("no bubblewrap here: netCDF-4 stays refused (" << jail::isolationInWords(jail::isolation()) << ")");
     test::checkError(r, 400, "refused_file", "file");
+  }
+}
+
+TEST_CASE("import jail: the server's figures of the worker's grid (NaN count, lowest, highest) and its infinities") {
+  // rover::jail::readWorkerGrid checks every value four at a time: the lowest, highest, NaNs and
+  // an infinity in the vector part and in the tail a row of 4k + 3 cells leaves.
+  TempDir t;
+  const std::string out = t.path.string();
+  for (const int at : {0, 5, 41 * 23 - 1, 17 * 23 + 22}) {
+    CAPTURE(at);
+    maps::LoadedDem d;
+    d.dem.z = Raster<float>(GridGeometry{41, 23, 1.0, 1.0}, 0.0f);
+    for (int i = 0; i < 41 * 23; ++i) d.dem.z.values.data()[i] = 100.0f + static_cast<float>(i % 37);
+    float* v = d.dem.z.values.data();
+    v[at] = -7.5f;                       // the lowest
+    v[(at + 11) % (41 * 23)] = 512.25f;  // the highest
+    for (int i = 3; i < 41 * 23; i += 97) v[(at + i) % (41 * 23)] = std::numeric_limits<float>::quiet_NaN();
+    std::int64_t nans = 0;
+    for (int i = 0; i < 41 * 23; ++i) nans += std::isnan(v[i]) ? 1 : 0;
+    jail::writeWorkerResult(out, d, "x.tif");
+    const jail::WorkerResult r = jail::readWorkerResult(out, 1 << 20);
+    CHECK(r.dem.info.minHeight == -7.5);
+    CHECK(r.dem.info.maxHeight == 512.25);
+    CHECK(r.dem.info.nodataCells == nans);
+    for (const float inf : {std::numeric_limits<float>::infinity(), -std::numeric_limits<float>::infinity()}) {
+      v[at] = inf;
+      jail::writeWorkerResult(out, d, "x.tif");
+      CHECK_THROWS_WITH(jail::readWorkerResult(out, 1 << 20), doctest::Contains("infinite"));
+    }
   }
 }
