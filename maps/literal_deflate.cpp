@@ -86,9 +86,9 @@ class BitWriter {
     acc_ |= std::uint64_t(bits) << count_;
     count_ += n;
     std::memcpy(out_, &acc_, 8);  // little-endian: the oldest bits first
-    const int whole = count_ >> 3;
+    const int whole = count_ >> 3;  // at most 4: fewer than 8 bits were pending, n ≤ 32 came
     out_ += whole;
-    acc_ = whole == 8 ? 0 : acc_ >> (8 * whole);
+    acc_ >>= 8 * whole;
     count_ &= 7;
   }
   std::uint8_t* finish() {  // pads the last byte with zeros

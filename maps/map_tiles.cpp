@@ -58,6 +58,15 @@ void placeBlocks(const TileWindow& w, const Span& span, const T* blocks, int cha
   }
 }
 
+// The tile of a picture of `span` (one pixel a block).
+Image placed(const TileWindow& w, const Span& span, const Image& pic) {
+  Image tile;
+  tile.width = tile.height = kTileSize;
+  tile.rgba.assign(std::size_t(kTileSize) * kTileSize * 4, 0);  // transparent beyond the map
+  placeBlocks(w, span, pic.rgba.data(), 4, tile.rgba.data());
+  return tile;
+}
+
 }  // namespace
 
 Raster<float> blockMean(const Raster<float>& src, int step, const Span& s) {
@@ -144,19 +153,20 @@ Image renderTile(RenderLayer layer, const TileBlocks& source, const TileWindow& 
   const bool kernel = layer == RenderLayer::Elevation || layer == RenderLayer::Hillshade || layer == RenderLayer::Slope;
   const Span span = spanOf(w, kernel ? 1 : 0);
   terrain::Dem blocks;
-  Raster<float> shade, slope, mass;
+  Raster<float> shade, mass;
   Raster<std::uint8_t> classes;
   RenderInput in;
   if (kernel) {
     blocks = source.dem(w.step, span);
     in.dem = &blocks;
   }
-  if (layer == RenderLayer::Elevation || layer == RenderLayer::Hillshade) {
+  if (layer == RenderLayer::Elevation) {
+    return placed(w, span, renderShadedElevation(blocks, source.range()));  // no hillshade raster
+  } else if (layer == RenderLayer::Hillshade) {
     shade = terrain::hillshade(blocks);
     in.hillshade = &shade;
   } else if (layer == RenderLayer::Slope) {
-    slope = terrain::slopeHorn(blocks);
-    in.slopeDeg = &slope;
+    return placed(w, span, renderSlope(blocks));  // no slope raster, few arctangents
   } else if (layer == RenderLayer::Traversability) {
     classes = source.classes(w.step, span);
     in.classes = &classes;
@@ -168,12 +178,7 @@ Image renderTile(RenderLayer layer, const TileBlocks& source, const TileWindow& 
   options.legend = false;
   const ColourRange range = source.range();
   options.range = &range;
-  const Image pic = renderLayer(layer, in, options);  // span.cols × span.rows, one pixel a block
-  Image tile;
-  tile.width = tile.height = kTileSize;
-  tile.rgba.assign(std::size_t(kTileSize) * kTileSize * 4, 0);  // transparent beyond the map
-  placeBlocks(w, span, pic.rgba.data(), 4, tile.rgba.data());
-  return tile;
+  return placed(w, span, renderLayer(layer, in, options));
 }
 
 Image renderTile(RenderLayer layer, const TileSource& source, const TileWindow& w) {

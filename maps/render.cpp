@@ -1,12 +1,16 @@
 #include "maps/render.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <iterator>
+#include <numbers>
 #include <limits>
 #include <stdexcept>
 #include <string>
 
 #include "core/common/error.hpp"
+#include "core/terrain/hillshade_light.hpp"
 #include "core/terrain/layers.hpp"
 #include "maps/display_grid.hpp"
 #include "maps/layer_legend.hpp"
@@ -95,10 +99,127 @@ Rgba hillshadeGrey(double v) {
   const auto g = toByte(v);
   return Rgba{g, g, g, 255};
 }
+// An elevation pixel: the tint of height v shaded by s (hillshade 1..255, NaN: unshaded). Relief is
+// tint × shade, softened so shadowed slopes keep some colour.
+Rgba shadedTint(float v, float s, double lo, double span) {
+  if (!std::isfinite(v)) return kTransparent;
+  const Rgba tint = elevationTint(v, lo, span);
+  const double f = std::isfinite(s) ? 0.3 + 0.7 * s / kNeutralShade : 1.0;
+  return Rgba{toByte(tint.r * f), toByte(tint.g * f), toByte(tint.b * f), 255};
+}
 Rgba slopeColour(double degrees) { return rampColour(kSlope, degrees); }
 Rgba massColour(double v, double hi) { return rampColour(kPerceptual, v / hi); }
 
+// slopeColour(float(terrain::slopeDegrees(x, y))) of Horn's sums without the arctangent for all but
+// a few cells in a hundred (issue 24: the arctangent was a sixth of a cold slope tile's CPU). The
+// colour depends on the gradient's magnitude g = √(x² + y²) only, and g ≥ 1 (45°, where the ramp
+// ends) is the last stop's. Below, a table of kBins bins of g: a bin holds its colour when the
+// exact computation gives the same colour at both ends of the bin widened by kMargin and no stop of
+// the ramp falls inside it. Then every g in the bin has that colour: between two stops each channel
+// is a monotone function of the degrees (a ramp mixes linearly, then rounds), the degrees a
+// monotone one of g up to the last bits of the arctangent, and the widening — a relative 1e-6 of g²,
+// at least 3e-7 of the degrees — exceeds both those bits and the rounding of the degrees to float
+// (6e-8), as it does the error of g² computed by multiplying by 1/(8·res)² instead of dividing.
+// Other bins (each channel's change points, ~660 over 0..45°: 2-3 % of the bins) take the exact
+// path, as do NaN and the first millionth above g = 1. Pixels are byte for byte those of
+// renderLayer over slopeHorn (test_maps checks the two on every cell of sweeps and tiles).
+class SlopeTable {
+ public:
+  SlopeTable() {
+    const std::size_t n = std::size(kSlope);
+    for (int k = 0; k < kBins; ++k) {
+      const double lo = double(k) / kBins, hi = double(k + 1) / kBins;
+      const double g2lo = lo * lo * (1 - kMargin), g2hi = hi * hi * (1 + kMargin);
+      const Rgba a = exact(g2lo), b = exact(g2hi);
+      bool same = a.r == b.r && a.g == b.g && a.b == b.b && a.a == b.a;
+      for (std::size_t i = 1; i < n; ++i) {  // stop 0 is the lowest slope: no ramp below it
+        const double t = std::tan(kSlope[i].at * std::numbers::pi / 180);
+        if (t * t >= g2lo && t * t <= g2hi) same = false;
+      }
+      bins_[k] = same ? a : kTransparent;  // alpha 0: look closer (every slope colour is opaque)
+    }
+    last_ = exact(2.0);
+  }
+
+  // ex = 8·dx(r), ny = 8·nsres as slopeHorn divides by them; kx = 1/ex², ky = 1/ny².
+  Rgba colour(float sx, float sy, double ex, double ny, double kx, double ky) const {
+    const double g2 = double(sx) * sx * kx + double(sy) * sy * ky;
+    if (g2 < 1.0) {
+      const Rgba c = bins_[std::min(static_cast<int>(std::sqrt(g2) * kBins), kBins - 1)];
+      if (c.a != 0) return c;
+    } else if (g2 >= 1.0 + kMargin) {  // also +inf: 90°
+      return last_;
+    }
+    const float v = static_cast<float>(terrain::slopeDegrees(sx / ex, sy / ny));  // NaN: gradients of ±inf
+    return std::isfinite(v) ? slopeColour(v) : kTransparent;
+  }
+
+ private:
+  static constexpr int kBins = 1 << 16;
+  static constexpr double kMargin = 1e-6;
+  static Rgba exact(double g2) {
+    return slopeColour(static_cast<float>(std::atan(std::sqrt(g2)) * (180.0 / std::numbers::pi)));
+  }
+  std::array<Rgba, kBins> bins_;
+  Rgba last_;
+};
+
 }  // namespace
+
+Image renderSlope(const terrain::Dem& dem) {
+  const auto& z = required(RenderLayer::Slope, &dem.z, "DEM");
+  static const SlopeTable table;  // 256 KiB, built once (~130 000 arctangents)
+  const int rows = z.geometry.rows, cols = z.geometry.cols;
+  Image img;
+  img.width = cols;
+  img.height = rows;
+  img.rgba.assign(std::size_t(rows) * cols * 4, 0);  // transparent: borders, nodata windows
+  for (int r = 1; r < rows - 1; ++r) {
+    const double ex = 8.0 * dem.dx(r), ny = 8.0 * -dem.dy();
+    const double kx = 1 / (ex * ex), ky = 1 / (ny * ny);
+    std::uint8_t* out = &img.rgba[std::size_t(r) * cols * 4];
+    terrain::hornRow(dem, r, [&](int c, float sx, float sy) {
+      const Rgba px = table.colour(sx, sy, ex, ny, kx, ky);
+      std::uint8_t* p = out + std::size_t(c) * 4;
+      p[0] = px.r;
+      p[1] = px.g;
+      p[2] = px.b;
+      p[3] = px.a;
+    });
+  }
+  return img;
+}
+
+Image renderShadedElevation(const terrain::Dem& dem, const ColourRange& range) {
+  const auto& z = required(RenderLayer::Elevation, &dem.z, "DEM");
+  static const terrain::HillshadeLight light;  // terrain::hillshade's default sun
+  const int rows = z.geometry.rows, cols = z.geometry.cols;
+  const double lo = range.lo, span = range.hi - range.lo;
+  Image img;
+  img.width = cols;
+  img.height = rows;
+  img.rgba.assign(std::size_t(rows) * cols * 4, 0);
+  std::vector<float> shade(cols);  // this row's hillshade: NaN on the border and nodata windows
+  for (int r = 0; r < rows; ++r) {
+    std::fill(shade.begin(), shade.end(), kNaN);
+    if (r > 0 && r < rows - 1) {
+      const double ewres = dem.dx(r), nsres = -dem.dy();
+      terrain::hornRow(dem, r, [&](int c, float sx, float sy) {
+        shade[c] = static_cast<float>(light(sx / (8.0 * ewres), sy / (8.0 * nsres)));  // as hillshade()
+      });
+    }
+    const float* v = &z(r, 0);
+    std::uint8_t* p = &img.rgba[std::size_t(r) * cols * 4];
+    for (int c = 0; c < cols; ++c, p += 4) {
+      const Rgba px = shadedTint(v[c], shade[c], lo, span);
+      p[0] = px.r;
+      p[1] = px.g;
+      p[2] = px.b;
+      p[3] = px.a;
+    }
+  }
+  return img;
+}
 
 // Percentiles from at most ~1M cells: a fixed stride through the grid, so deterministic; a colour
 // scale needs no more precision, and a full-size 4096² DEM stays fast.
@@ -300,14 +421,7 @@ Image renderLayer(RenderLayer layer, const RenderInput& input, const RenderOptio
   switch (layer) {
     case RenderLayer::Elevation: {
       const double lo = scale.lo, span = scale.hi - scale.lo;
-      paint([&](float v, int r, int c) {
-        if (!std::isfinite(v)) return kTransparent;
-        const Rgba tint = elevationTint(v, lo, span);
-        const float s = shade.empty() ? kNaN : shade.at(r, c);
-        // Relief: tint × shade, softened so shadowed slopes keep some colour.
-        const double f = std::isfinite(s) ? 0.3 + 0.7 * s / kNeutralShade : 1.0;
-        return Rgba{toByte(tint.r * f), toByte(tint.g * f), toByte(tint.b * f), 255};
-      });
+      paint([&](float v, int r, int c) { return shadedTint(v, shade.empty() ? kNaN : shade.at(r, c), lo, span); });
       break;
     }
     case RenderLayer::Hillshade:

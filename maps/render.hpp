@@ -77,6 +77,13 @@ struct Image {
 // Throws rover::Error (InvalidInput, field "layer") when the raster the layer needs is missing or
 // empty, (InvalidInput, field "hillshade") when the shading raster does not match the DEM.
 Image renderLayer(RenderLayer layer, const RenderInput& input, const RenderOptions& options = {});
+// renderLayer(Slope, {slopeDeg = terrain::slopeHorn(dem)}, {legend = false}), pixel for pixel, drawn
+// from Horn's sums without the slope raster and, for most cells, without an arctangent (a tile's
+// slope: map_tiles.cpp). Throws as renderLayer when the DEM is empty.
+Image renderSlope(const terrain::Dem& dem);
+// renderLayer(Elevation, {dem, hillshade = terrain::hillshade(dem)}, {legend = false, range}), pixel
+// for pixel, in one pass without the hillshade raster (a tile's elevation: map_tiles.cpp).
+Image renderShadedElevation(const terrain::Dem& dem, const ColourRange& range);
 // PNG bytes (every row filtered "Up", deflate level 1: maps/png_encode.cpp): 8-bit RGBA, or with
 // Smallest the fewest bytes a pixel that decode to the same RGBA (grey, a palette, RGB, RGBA; what
 // tiles use). Throws rover::Error (InvalidInput, field "image") for an image whose buffer does not

@@ -6,6 +6,7 @@
 
 #include "core/common/error.hpp"
 #include "core/common/parallel.hpp"
+#include "core/terrain/hillshade_light.hpp"
 
 namespace rover::terrain {
 
@@ -14,27 +15,7 @@ namespace {
 constexpr double kRadToDeg = 180.0 / std::numbers::pi;
 constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
 
-// The 3×3 window around (r, c), named as in Horn (1981) and gdaldem:
-//   a b c
-//   d e f
-//   g h i
-// Kept in float and summed in float, as gdaldem does (its window type is the band's float): on
-// near-flat cells the aspect is sensitive to that rounding, and we want gdaldem's numbers.
-struct Window {
-  float a, b, c, d, f, g, h, i;
-  bool valid;
-};
-
-Window windowAt(const Dem& dem, int r, int c) {
-  const auto& z = dem.z;
-  Window w{z(r - 1, c - 1), z(r - 1, c), z(r - 1, c + 1), z(r, c - 1),
-           z(r, c + 1),     z(r + 1, c - 1), z(r + 1, c), z(r + 1, c + 1), true};
-  w.valid = !std::isnan(double(w.a) + w.b + w.c + w.d + w.f + w.g + w.h + w.i + z(r, c));
-  return w;
-}
-
-// Horn's gradient with gdaldem's signs: x = ((a+2d+g) − (c+2f+i)) / 8·ewres, which is −∂z/∂x, and
-// y = ((g+2h+i) − (a+2b+c)) / 8·nsres with nsres = −dy on a north-up grid, which is +∂z/∂y.
+// fn(x, y) of Horn's gradient (hornRow) at every interior cell whose window holds no nodata.
 template <class Fn>
 Raster<float> mapInterior(const Dem& dem, Fn&& fn) {
   const GridGeometry& g = dem.geometry();
@@ -48,15 +29,12 @@ Raster<float> mapInterior(const Dem& dem, Fn&& fn) {
   parallelFor(std::max(0, g.rows - 2), threads, [&](std::size_t k) {
     const int r = static_cast<int>(k) + 1;
     const double ewres = dem.dx(r), nsres = -dem.dy();
-    for (int c = 1; c < g.cols - 1; ++c) {
-      Window w = windowAt(dem, r, c);
-      if (!w.valid) continue;
-      const float sx = (w.a + w.d + w.d + w.g) - (w.c + w.f + w.f + w.i);
-      const float sy = (w.g + w.h + w.h + w.i) - (w.a + w.b + w.b + w.c);
+    float* o = &out(r, 0);
+    hornRow(dem, r, [&](int c, float sx, float sy) {
       double x = sx / (8.0 * ewres);
       double y = sy / (8.0 * nsres);
-      out(r, c) = static_cast<float>(fn(x, y));
-    }
+      o[c] = static_cast<float>(fn(x, y));
+    });
   });
   return out;
 }
@@ -66,7 +44,7 @@ Raster<float> mapInterior(const Dem& dem, Fn&& fn) {
 Raster<float> slopeHorn(const Dem& dem) {
   // sqrt(x² + y²) as gdaldem computes it; hypot's overflow guard costs a tenth of a slope tile and
   // Horn's gradients of a DEM are nowhere near overflow.
-  return mapInterior(dem, [](double x, double y) { return std::atan(std::sqrt(x * x + y * y)) * kRadToDeg; });
+  return mapInterior(dem, [](double x, double y) { return slopeDegrees(x, y); });
 }
 
 Raster<float> aspectHorn(const Dem& dem) {
@@ -83,14 +61,7 @@ Raster<float> aspectHorn(const Dem& dem) {
 }
 
 Raster<float> hillshade(const Dem& dem, double azimuthDeg, double altitudeDeg, double zFactor) {
-  const double az = azimuthDeg / kRadToDeg, alt = altitudeDeg / kRadToDeg;
-  const double sinAlt = std::sin(alt), zCosAlt = zFactor * std::cos(alt);
-  const double cosAz = std::cos(az), sinAz = std::sin(az), z2 = zFactor * zFactor;
-  return mapInterior(dem, [=](double x, double y) {
-    // gdaldem: cang = (sin alt − z·cos alt·(y·cos az − x·sin az)) / sqrt(1 + z²(x² + y²)).
-    double cang = (sinAlt - zCosAlt * (y * cosAz - x * sinAz)) / std::sqrt(1 + z2 * (x * x + y * y));
-    return cang <= 0.0 ? 1.0 : 1.0 + 254.0 * cang;
-  });
+  return mapInterior(dem, HillshadeLight(azimuthDeg, altitudeDeg, zFactor));
 }
 
 const char* terrainClassName(TerrainClass c) {

@@ -8,11 +8,40 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <numbers>
 #include <optional>
 
 #include "core/terrain/dem.hpp"
 
 namespace rover::terrain {
+
+// Horn's 3×3 sums at the interior cells of row r (1 ≤ r ≤ rows − 2), named as in Horn (1981) and
+// gdaldem with the window
+//   a b c
+//   d e f
+//   g h i
+// sx = (a + 2d + g) − (c + 2f + i) and sy = (g + 2h + i) − (a + 2b + c), kept and summed in float as
+// gdaldem does (its window type is the band's float: on near-flat cells the aspect is sensitive to
+// that rounding, and we want gdaldem's numbers). fn(c, sx, sy) for each column 1 ≤ c ≤ cols − 2
+// whose window has no NaN. The gradient of slopeHorn, aspectHorn and hillshade is then
+// x = sx / (8·dem.dx(r)), which is −∂z/∂x, and y = sy / (8·nsres) with nsres = −dem.dy(), +∂z/∂y.
+// Shared, so a renderer that draws straight from the sums (maps/render.cpp) has the layers' numbers.
+template <class Fn>
+void hornRow(const Dem& dem, int r, Fn&& fn) {
+  const int cols = dem.z.geometry.cols;
+  const float* up = &dem.z(r - 1, 0);
+  const float* row = &dem.z(r, 0);
+  const float* down = &dem.z(r + 1, 0);
+  for (int c = 1; c < cols - 1; ++c) {
+    const float a = up[c - 1], b = up[c], cc = up[c + 1], d = row[c - 1], f = row[c + 1], g = down[c - 1],
+                h = down[c], i = down[c + 1];
+    if (std::isnan(double(a) + b + cc + d + f + g + h + i + row[c])) continue;
+    fn(c, (a + d + d + g) - (cc + f + f + i), (g + h + h + i) - (a + b + b + cc));
+  }
+}
+
+// Slope in degrees of Horn's gradient (x, y) as slopeHorn computes it, before its rounding to float.
+inline double slopeDegrees(double x, double y) { return std::atan(std::sqrt(x * x + y * y)) * (180.0 / std::numbers::pi); }
 
 // Horn slope in degrees (gdaldem slope).
 Raster<float> slopeHorn(const Dem& dem);

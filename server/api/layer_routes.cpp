@@ -57,7 +57,7 @@ Response getTile(ApiContext& ctx, const Request& req) {
   const long long z = tileNumber(req.params.at("z"), "zoom"), x = tileNumber(req.params.at("x"), "column"),
                   y = tileNumber(last.substr(0, dot), "row");
   const std::string pdm = queryString(req, "pdm");
-  const std::string path = ctx.maps.tileFile(id, layer, format, z, x, y, pdm);  // 404s checked first
+  MapCatalog::Tile tile = ctx.maps.tileFile(id, layer, format, z, x, y, pdm);  // 404s checked first
   // A PDM can be edited (issue 26): its tiles name its version, and are revalidated (ETag) rather
   // than kept a year.
   std::string pdmTag;
@@ -77,7 +77,15 @@ Response getTile(ApiContext& ctx, const Request& req) {
   etag += '"';
   Response r;
   if (etagMatches(req.header("if-none-match"), etag)) r.status = 304;
-  else r = fileResponse(path, format == "png" ? "image/png" : "application/octet-stream");
+  else {
+    const char* type = format == "png" ? "image/png" : "application/octet-stream";
+    if (tile.made.empty()) {
+      r = fileResponse(tile.path, type);
+    } else {  // just rendered: the bytes in hand, not the file read back
+      r.contentType = type;
+      r.body = std::move(tile.made);
+    }
+  }
   r.headers.emplace_back("ETag", etag);
   r.headers.emplace_back("Cache-Control", layer == "pdm" ? "no-cache" : "public, max-age=31536000, immutable");
   if (format == "f32")

@@ -95,6 +95,8 @@ void MapCatalog::remove(const std::string& id) {
     cache_.remove_if([&](const auto& m) { return m->record.id == id; });
     cellCache_.remove_if([&](const auto& e) { return e.first.rfind(id + "@", 0) == 0; });
     headerCache_.remove_if([&](const auto& e) { return e.first == id; });
+    tilesCache_.remove_if([&](const auto& t) { return t->id == id; });
+    ++removals_;
   }
   for (const auto& p : pdms) dir_.remove(dir_.pdmDir(p.id));
   layers_.forgetUnder(dir_.mapDir(id));

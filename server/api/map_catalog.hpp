@@ -18,6 +18,7 @@
 #include "maps/dem_import_options.hpp"
 #include "maps/dem_io.hpp"
 #include "maps/render.hpp"
+#include "maps/tile_grid.hpp"
 #include "server/api/layer_cache.hpp"
 #include "server/jail/import_jail.hpp"
 #include "server/jail/worker_output.hpp"
@@ -115,8 +116,14 @@ class MapCatalog {
   // the map in memory (get()). The address is checked against the map's stored
   // size before anything is loaded: z/x/y outside the grid, an unknown layer or format → ApiError
   // 404; a pdm tile names its PDM (`pdmId` required: a tile never changes, "the newest" would).
-  std::string tileFile(const std::string& id, const std::string& layer, const std::string& format,
-                       long long z, long long x, long long y, const std::string& pdmId);
+  // The tile's file, and its bytes when this call made it (empty when the file was there): a fresh
+  // tile is answered from memory, not read back from the disk it was just written to.
+  struct Tile {
+    std::string path;
+    std::string made;
+  };
+  Tile tileFile(const std::string& id, const std::string& layer, const std::string& format, long long z, long long x,
+                long long y, const std::string& pdmId);
 
   // PDMs: from JSON ({"components":[...]} or {"random": G, "seed": S}) or a raster upload.
   // Stored compactly (issue 22: a random 3-component PDM on a 49 M-cell map was a 164 MB GeoTIFF):
@@ -185,6 +192,18 @@ class MapCatalog {
   // The stored DEM's header (grid, per-row widths), read once per map for its tiles
   // (map_tile_files.cpp); a few maps are kept.
   std::shared_ptr<const maps::DemHeader> storedHeader(const std::string& id);
+  // What a map's tiles need of its record and folder, none of which changes after the import (a map
+  // is immutable; a rename changes neither): its tile grid and, for a map stored as its pyramid,
+  // its ramp. Read once per map (a SQLite read and a stat a tile were a twentieth of a cold tile's
+  // CPU); the last 16 maps are kept (about 100 bytes each), a removed map's dropped. Throws
+  // ApiError 404 (field "id") for an unknown map.
+  struct StoredTiles {
+    std::string id;
+    maps::TileGrid grid;
+    bool pyramid = false;     // dem.tif is the COG and classes.tif the class pyramid
+    maps::ColourRange ramp;   // the pyramid's elevation ramp (the record's colour_range)
+  };
+  std::shared_ptr<const StoredTiles> storedTiles(const std::string& id);
   // Writes the PDM's files (`write` fills the staging folder) and its row, charged to the map.
   store::PdmRecord storePdm(const std::string& mapId, const std::string& name, const nlohmann::json& meta,
                             const std::function<void(const std::string& staging)>& write, const std::string& by);
@@ -198,6 +217,8 @@ class MapCatalog {
   std::list<std::shared_ptr<const MapData>> cache_;  // most recent first, a few maps
   std::list<std::pair<std::string, std::shared_ptr<const terrain::Dem>>> cellCache_;
   std::list<std::pair<std::string, std::shared_ptr<const maps::DemHeader>>> headerCache_;  // most recent first
+  std::list<std::shared_ptr<const StoredTiles>> tilesCache_;  // most recent first
+  std::uint64_t removals_ = 0;  // maps removed: a record read before a removal is not cached
   std::list<std::pair<std::string, std::shared_ptr<const Raster<float>>>> massCache_;  // most recent first
   void keepMass(const std::string& pdmId, std::shared_ptr<const Raster<float>> mass);
 };

@@ -70,15 +70,39 @@ std::shared_ptr<const maps::DemHeader> MapCatalog::storedHeader(const std::strin
   return h;
 }
 
-std::string MapCatalog::tileFile(const std::string& id, const std::string& layer, const std::string& format,
+std::shared_ptr<const MapCatalog::StoredTiles> MapCatalog::storedTiles(const std::string& id) {
+  std::uint64_t removals = 0;
+  {
+    std::lock_guard lock(mutex_);
+    for (auto it = tilesCache_.begin(); it != tilesCache_.end(); ++it)
+      if ((*it)->id == id) {
+        tilesCache_.splice(tilesCache_.begin(), tilesCache_, it);
+        return *it;
+      }
+    removals = removals_;
+  }
+  auto rec = db_.getMap(id);
+  if (!rec) throw ApiError(404, "not_found", "no map '" + rover::json::shown(id) + "'", "id");
+  auto t = std::make_shared<StoredTiles>();
+  t->id = id;
+  t->grid = storedGrid(*rec, *this);
+  t->pyramid = storedAsPyramid(*rec, dir_.mapDir(id));
+  if (t->pyramid) t->ramp = {rec->meta["colour_range"][0].get<double>(), rec->meta["colour_range"][1].get<double>()};
+  std::lock_guard lock(mutex_);
+  if (removals != removals_) return t;  // the map may be gone: this once, uncached
+  tilesCache_.emplace_front(t);
+  if (tilesCache_.size() > 16) tilesCache_.pop_back();
+  return t;
+}
+
+MapCatalog::Tile MapCatalog::tileFile(const std::string& id, const std::string& layer, const std::string& format,
                                  long long z, long long x, long long y, const std::string& pdmId) {
   static const char* const kLayers[] = {"elevation", "hillshade", "slope", "traversability", "pdm"};
   if (std::none_of(std::begin(kLayers), std::end(kLayers), [&](const char* l) { return layer == l; }))
     throw ApiError(404, "not_found", "no layer '" + rover::json::shown(layer) + "' (elevation, hillshade, slope, traversability, pdm)", "layer");
   if (format != "png" && !(format == "f32" && (layer == "elevation" || layer == "slope")))
     throw ApiError(404, "not_found", "tiles are .png for every layer, .f32 for elevation and slope", "format");
-  auto rec = db_.getMap(id);
-  if (!rec) throw ApiError(404, "not_found", "no map '" + rover::json::shown(id) + "'", "id");
+  const auto stored = storedTiles(id);
   std::string pdmVersion;  // an edited PDM's tiles are new files (issue 26)
   if (layer == "pdm") {
     if (pdmId.empty()) throw ApiError(400, "invalid_parameter", "a pdm tile names its PDM: ?pdm=ID", "pdm");
@@ -86,7 +110,7 @@ std::string MapCatalog::tileFile(const std::string& id, const std::string& layer
     if (!p || p->mapId != id) throw ApiError(404, "not_found", "no PDM '" + rover::json::shown(pdmId) + "' on this map", "pdm");
     pdmVersion = pdmVersionTag(p->version);
   }
-  const maps::TileGrid grid = storedGrid(*rec, *this);
+  const maps::TileGrid& grid = stored->grid;
   const auto window = maps::tileWindow(grid, z, x, y);
   if (!window)
     throw ApiError(404, "not_found",
@@ -98,7 +122,8 @@ std::string MapCatalog::tileFile(const std::string& id, const std::string& layer
   if (layer == "pdm") file += "-" + pdmId + pdmVersion;
   file += "-" + std::to_string(z) + "-" + std::to_string(x) + "-" + std::to_string(y) + "." + format;
   // Made once per file on the work pool, outside the catalog's lock.
-  return layers_.get((dir / file).string(), [&](const std::string& path) {
+  Tile tile;
+  tile.path = layers_.get((dir / file).string(), [&](const std::string& path) {
     std::error_code ec;
     fs::create_directories(dir, ec);
     const auto l = maps::renderLayerFromName(layer);
@@ -107,15 +132,16 @@ std::string MapCatalog::tileFile(const std::string& id, const std::string& layer
       // The PDM's mass pyramid (made once per PDM version): the tile's window at its zoom and the
       // ramp stored with it, never the whole mass or the map.
       const maps::MassPyramidBlocks blocks(pdmPyramidFile(id, pdmId, pdmVersion), storedHeader(id)->geometry);
-      store::DataDir::writeFileAtomic(path, tileBytes(blocks, l, format, *window), false);  // a cache file
+      tile.made = tileBytes(blocks, l, format, *window);
+      store::DataDir::writeFileAtomic(path, tile.made, false);  // a cache file: no fsync
       return;
     }
-    if (storedAsPyramid(*rec, mapDir.string())) {
+    if (stored->pyramid) {
       // The level of the tile's zoom, about (256 + 2)² cells: the map is never loaded.
-      const auto& ramp = rec->meta["colour_range"];
       const maps::PyramidBlocks blocks((mapDir / kDemFile).string(), (mapDir / kClassFile).string(), storedHeader(id),
-                                       {ramp[0].get<double>(), ramp[1].get<double>()});
-      store::DataDir::writeFileAtomic(path, tileBytes(blocks, l, format, *window), false);  // a cache file
+                                       stored->ramp);
+      tile.made = tileBytes(blocks, l, format, *window);
+      store::DataDir::writeFileAtomic(path, tile.made, false);  // a cache file: no fsync
       return;
     }
     auto map = get(id);  // a map stored before the pyramid: the whole map in memory
@@ -123,9 +149,10 @@ std::string MapCatalog::tileFile(const std::string& id, const std::string& layer
     src.dem = &map->dem;
     src.classes = &map->traversability.classes;
     src.range = map->elevationRange;
-    const std::string bytes = tileBytes(src, l, format, *window);
-    store::DataDir::writeFileAtomic(path, bytes, false);
+    tile.made = tileBytes(src, l, format, *window);
+    store::DataDir::writeFileAtomic(path, tile.made, false);
   });
+  return tile;
 }
 
 }  // namespace rover::api

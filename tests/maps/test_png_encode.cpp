@@ -5,6 +5,7 @@
 #include <doctest/doctest.h>
 #include <gdal.h>
 #include <libdeflate.h>
+#include <zlib.h>
 
 #include <algorithm>
 #include <cmath>
@@ -222,6 +223,13 @@ TEST_CASE("literal deflate: streams inflate to their input (empty, one value, sk
     REQUIRE(rc == LIBDEFLATE_SUCCESS);
     out.resize(got);
     CHECK(out == in);
+    // zlib's inflate too (the decoder browsers and most PNG readers descend from), which also
+    // checks the Adler-32.
+    std::vector<std::uint8_t> inflated(in.size() + 1);
+    uLongf inflatedSize = inflated.size();
+    REQUIRE(uncompress(inflated.data(), &inflatedSize, z.data() + 1, z.size() - 1) == Z_OK);
+    inflated.resize(inflatedSize);
+    CHECK(inflated == in);
     return z.size() - 1;
   };
   check({});
@@ -243,6 +251,18 @@ TEST_CASE("literal deflate: streams inflate to their input (empty, one value, sk
   std::mt19937 rng(11);
   for (auto& v : random) v = static_cast<std::uint8_t>(rng());
   CHECK(check(random) < random.size() + random.size() / 1000);  // incompressible: a header a block
+  // The 1 MiB block edge: one byte short of a block, exactly one (no empty block after it), one
+  // byte over (a last block of a single byte value and end-of-block), exactly two. The two blocks'
+  // bytes differ (values 0..15, then 200..255), so each block needs its own code.
+  constexpr std::size_t kMiB = std::size_t(1) << 20;
+  for (const std::size_t n : {kMiB - 1, kMiB, kMiB + 1, 2 * kMiB}) {
+    CAPTURE(n);
+    std::vector<std::uint8_t> edge(n);
+    for (std::size_t i = 0; i < n; ++i)
+      edge[i] = static_cast<std::uint8_t>(i < kMiB ? rng() % 16 : 200 + rng() % 56);
+    // Each block coded for its own bytes: about 4 bits a byte in the first, 6 in the second.
+    CHECK(check(edge) < std::min(n, kMiB) * 9 / 16 + (n > kMiB ? n - kMiB : 0) * 6 / 8 + 1000);
+  }
   // Too common a byte value: nothing written.
   std::vector<std::uint8_t> out = {1, 2};
   std::vector<std::uint8_t> runs(1000, 0);

@@ -467,3 +467,51 @@ TEST_CASE("render: an elevation ramp seen in pieces equals the whole grid's, als
   CHECK(whole.lo == doctest::Approx(0.02 * n).epsilon(0.01));
   CHECK(whole.hi == doctest::Approx(0.98 * n).epsilon(0.01));
 }
+
+TEST_CASE("render: renderSlope and renderShadedElevation draw renderLayer's pixels over slopeHorn and hillshade") {
+  // Slopes swept from 0° to ~60° along each row (a quadratic surface), tilted differently in each
+  // row, with noise, so every colour of the ramps and thousands of cells next to a change of
+  // colour are met; per-row cell widths (a geographic map); nodata, infinite and huge heights.
+  const int rows = 240, cols = 1400;
+  rover::terrain::Dem dem;
+  dem.z = Raster<float>(GridGeometry{rows, cols, 1.0, 0.75}, 0.0f);
+  std::uint32_t seed = 7;
+  auto noise = [&] {
+    seed = seed * 1664525u + 1013904223u;
+    return double(seed >> 8) / double(1u << 24) - 0.5;
+  };
+  for (int r = 0; r < rows; ++r) {
+    dem.rowCellWidth.push_back(1.0 + 0.002 * r);
+    for (int c = 0; c < cols; ++c)
+      dem.z(r, c) = static_cast<float>(0.0006 * c * c + 0.0004 * r * c + 0.02 * noise());
+  }
+  for (int k = 0; k < 60; ++k) dem.z(1 + (k * 37) % (rows - 2), 1 + (k * 91) % (cols - 2)) = kNaN;
+  dem.z(5, 5) = std::numeric_limits<float>::infinity();
+  dem.z(9, 9) = -std::numeric_limits<float>::infinity();
+  for (int c = 20; c < 40; c += 2) dem.z(12, c) = 3e38f;  // gradients of ±inf
+  const Raster<float> slope = rover::terrain::slopeHorn(dem);
+  const Raster<float> shade = rover::terrain::hillshade(dem);
+  RenderInput in;
+  in.slopeDeg = &slope;
+  const Image bySlope = renderLayer(RenderLayer::Slope, in, noLegend());
+  const Image fused = renderSlope(dem);
+  REQUIRE(fused.width == bySlope.width);
+  REQUIRE(fused.height == bySlope.height);
+  int different = 0, steep = 0;
+  for (std::size_t i = 0; i < fused.rgba.size(); ++i) different += fused.rgba[i] != bySlope.rgba[i];
+  for (int k = 0; k < rows * cols; ++k) steep += slope.at(k) > 45;
+  CHECK(different == 0);
+  CHECK(steep > 10000);  // the sweep went past the ramp's end
+  const ColourRange range{50, 900};
+  RenderOptions options = noLegend();
+  options.range = &range;
+  in = {};
+  in.dem = &dem;
+  in.hillshade = &shade;
+  const Image byShade = renderLayer(RenderLayer::Elevation, in, options);
+  const Image shaded = renderShadedElevation(dem, range);
+  REQUIRE(shaded.rgba.size() == byShade.rgba.size());
+  different = 0;
+  for (std::size_t i = 0; i < shaded.rgba.size(); ++i) different += shaded.rgba[i] != byShade.rgba[i];
+  CHECK(different == 0);
+}

@@ -63,6 +63,14 @@ TEST_CASE("tiles api: grid metadata, tiles equal to the whole layer's values, ET
   CHECK(png.headers["Cache-Control"] == "public, max-age=31536000, immutable");
   const std::string etag = png.headers["ETag"];
   CHECK(etag.find(id) != std::string::npos);
+  // The fresh tile was answered from memory; the next request is answered from its cache file:
+  // the same bytes and headers.
+  auto warm = s.get(base + "elevation/2/1/1.png");
+  CHECK(warm.status == 200);
+  CHECK(warm.body == png.body);
+  CHECK(warm.headers["ETag"] == etag);
+  CHECK(warm.headers["Content-Type"] == "image/png");
+  CHECK(warm.headers["Cache-Control"] == png.headers["Cache-Control"]);
   // The same tile again with its ETag: 304, no body; another tile's ETag does not match.
   auto again = request(s.port(), "GET", base + "elevation/2/1/1.png", "", "", {{"If-None-Match", etag}});
   CHECK(again.status == 304);
