@@ -10,10 +10,8 @@ binaries take turns N times (A B A B ...), for before/after figures on a shared 
 With several binaries (e.g. main's and a branch's), each size's DEM is made once and put through
 each binary in turn, on its own fresh server: a side-by-side from one sitting on the same input.
 
-For each size, a deterministic DEM (seed 24) is made with GDAL's command-line tools alone: three
-octaves of seeded random heights on small grids (Python's random, written as raw float32 with an
-EHdr header), summed at full size by a VRT's built-in "sum" pixel function with cubic-spline
-resampling, and written as a tiled DEFLATE GeoTIFF (1 m cells, a UTM CRS). Then, on a fresh
+For each size, a deterministic DEM (seed 24, generated_dem.py: GDAL's command-line tools alone,
+1 m cells, a UTM CRS) is made. Then, on a fresh
 `roverplan serve` (free loopback port, scratch data dir, default limits):
 - upload -> first tiles: seconds from the start of the upload until the z = 0 tile and a native
   tile (elevation, hillshade) have both been answered;
@@ -24,8 +22,11 @@ resampling, and written as a tiled DEFLATE GeoTIFF (1 m cells, a UTM CRS). Then,
 - warm: the same tiles again (files of the layer cache): requests/s;
 - the stored DEM's layout (gdalinfo: block size, overviews, compression) and its size on disk.
 The machine's load average is printed: on a shared machine compare runs made back to back."""
-import concurrent.futures as cf, http.client, json, os, random, shutil, socket, struct, subprocess, sys, tempfile
+import concurrent.futures as cf, http.client, json, os, random, shutil, socket, subprocess, sys, tempfile
 import threading, time, urllib.request
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from generated_dem import make_dem  # noqa: E402
 
 root = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 args = sys.argv[1:]
@@ -48,38 +49,6 @@ def free_port():
 def pct(xs, q):
     xs = sorted(xs)
     return xs[min(len(xs) - 1, int(round(q * (len(xs) - 1))))]
-
-
-def octave(path, cols, rows, amplitude, rng):
-    """A cols x rows grid of seeded random heights in [-amplitude, amplitude] as EHdr float32."""
-    with open(path + ".bil", "wb") as f:
-        for _ in range(rows):
-            f.write(struct.pack(f"<{cols}f", *(amplitude * (2 * rng.random() - 1) for _ in range(cols))))
-    with open(path + ".hdr", "w") as f:
-        f.write(f"NROWS {rows}\nNCOLS {cols}\nNBANDS 1\nNBITS 32\nPIXELTYPE FLOAT\nBYTEORDER I\n")
-
-
-def make_dem(work, cols, rows):
-    rng = random.Random(24)
-    sources = []
-    for i, (div, amp) in enumerate(((200, 60.0), (25, 6.0), (6, 0.4))):
-        w, h = max(2, cols // div), max(2, rows // div)
-        base = os.path.join(work, f"oct{i}")
-        octave(base, w, h, amp, rng)
-        sources.append(f"""<SimpleSource resampling="cubicspline"><SourceFilename relativeToVRT="1">oct{i}.bil</SourceFilename>
-<SourceBand>1</SourceBand><SrcRect xOff="0" yOff="0" xSize="{w}" ySize="{h}"/>
-<DstRect xOff="0" yOff="0" xSize="{cols}" ySize="{rows}"/></SimpleSource>""")
-    vrt = os.path.join(work, "dem.vrt")
-    with open(vrt, "w") as f:
-        f.write(f"""<VRTDataset rasterXSize="{cols}" rasterYSize="{rows}">
-<GeoTransform>500000, 1, 0, 4000000, 0, -1</GeoTransform>
-<VRTRasterBand dataType="Float32" band="1" subClass="VRTDerivedRasterBand">
-<PixelFunctionType>sum</PixelFunctionType>{''.join(sources)}</VRTRasterBand></VRTDataset>""")
-    out = os.path.join(work, f"dem-{cols}x{rows}.tif")
-    subprocess.run(["gdal_translate", "-q", "-a_srs", "EPSG:32633", "-co", "TILED=YES", "-co", "COMPRESS=DEFLATE",
-                    "-co", "PREDICTOR=3", "-co", "BIGTIFF=IF_SAFER", "-co", "NUM_THREADS=ALL_CPUS", vrt, out],
-                   check=True)
-    return out
 
 
 def cpu_of(pid, children=True):

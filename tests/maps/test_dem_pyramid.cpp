@@ -363,6 +363,14 @@ std::vector<float> referenceLevel(const std::vector<float>& src, int rows, int c
   return out;
 }
 
+// `z` as the server's grid file at `path` (what the import hands the COG writer); returns `path`.
+std::string writeGrid(const std::string& path, const Raster<float>& z) {
+  GridFileWriter w(path, z.geometry);
+  w.append(z.values.data(), static_cast<std::size_t>(z.values.size()));
+  w.close();
+  return path;
+}
+
 std::string fileBytes(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   return std::string((std::istreambuf_iterator<char>(in)), {});
@@ -383,12 +391,7 @@ TEST_CASE("pyramid: every overview level is the nodata-aware average of the leve
     CAPTURE(cols);
     const Raster<float> z = noisyHeights(rows, cols);
     TempDir dir;
-    const std::string grid = dir.file("grid.f32");
-    {
-      GridFileWriter w(grid, z.geometry);
-      w.append(z.values.data(), static_cast<std::size_t>(z.values.size()));
-      w.close();
-    }
+    const std::string grid = writeGrid(dir.file("grid.f32"), z);
     const std::vector<LevelFile> one = writeAverageLevels(grid, rows, cols, 5, dir.file("one-"), 1);
     const std::vector<LevelFile> two = writeAverageLevels(grid, rows, cols, 5, dir.file("two-"), 2);
     REQUIRE(one.size() == 5u);
@@ -433,12 +436,7 @@ TEST_CASE("pyramid: where GDAL cuts no averaging window, the COG's levels are GD
     CAPTURE(cols);
     const Raster<float> z = noisyHeights(rows, cols);
     TempDir dir;
-    const std::string grid = dir.file("grid.f32");
-    {
-      GridFileWriter w(grid, z.geometry);
-      w.append(z.values.data(), static_cast<std::size_t>(z.values.size()));
-      w.close();
-    }
+    const std::string grid = writeGrid(dir.file("grid.f32"), z);
     writeDemCog(dir.file("memory.tif"), z);
     writeDemCog(dir.file("file.tif"), grid, z.geometry, z.geo);
     CHECK(pyramidInfo(dir.file("file.tif")).overviews == pyramidInfo(dir.file("memory.tif")).overviews);
