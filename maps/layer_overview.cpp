@@ -16,6 +16,9 @@ int overviewStep(int rows, int cols, int side) {
   const int longest = std::max(rows, cols);
   int step = 1;
   while (side > 0 && ceilDiv(longest, step * 2) >= side) step *= 2;
+  // Never more cells than the largest overview's (4096²): a 4096-px overview of an 8000² map
+  // would otherwise read the full grid, 64 M cells.
+  while (static_cast<long long>(ceilDiv(rows, step)) * ceilDiv(cols, step) > kMaxOverviewLevelCells) step *= 2;
   return step;
 }
 

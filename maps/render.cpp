@@ -120,7 +120,7 @@ Rgba massColour(double v, double hi) { return rampColour(kPerceptual, v / hi); }
 // monotone one of g up to the last bits of the arctangent, and the widening — a relative 1e-6 of g²,
 // at least 3e-7 of the degrees — exceeds both those bits and the rounding of the degrees to float
 // (6e-8), as it does the error of g² computed by multiplying by 1/(8·res)² instead of dividing.
-// Other bins (each channel's change points, ~660 over 0..45°: 2-3 % of the bins) take the exact
+// Other bins (each channel's change points, ~660 over 0..45°: about 1 % of the bins) take the exact
 // path, as do NaN and the first millionth above g = 1. Pixels are byte for byte those of
 // renderLayer over slopeHorn (test_maps checks the two on every cell of sweeps and tiles).
 class SlopeTable {

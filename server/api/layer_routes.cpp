@@ -109,7 +109,7 @@ void addLayerRoutes(http::Router& router, ApiContext& ctx) {
                           .returns(200, "The layer file.", nullptr, "image/png")
                           .returns(200, "The layer file.", nullptr, "image/tiff")
                           .returns(200, "The layer file.", nullptr, "application/octet-stream")
-                          .errors({400, 404, 413, 503, 507}),
+                          .errors({400, 404, 409, 413, 503, 507}),
                       onPool));
   router.add("GET", "/api/maps/{id}/tiles/{layer}/{z}/{x}/{y}", handler(ctx, getTile),
              routeDoc("A 256-px tile of a layer on the map's tile grid (the map's tiles: size, zmax, "
@@ -123,7 +123,7 @@ void addLayerRoutes(http::Router& router, ApiContext& ctx) {
                           .header("Cache-Control", "string", "public, max-age=31536000, immutable")
                           .returns(200, "The tile.", nullptr, "application/octet-stream")
                           .returns(304, "Not modified: If-None-Match named the tile's ETag.")
-                          .errors({400, 404, 503, 507}),
+                          .errors({400, 404, 409, 503, 507}),
                       onPool));
 }
 

@@ -154,14 +154,19 @@ class MapCatalog {
   // a cell for the mass, and for a Gaussian PDM 9 more while it is discretised (pdm::discretise's
   // double sums and the cells with data). The last few are kept in memory (at most
   // kMassCacheCells cells together: one PDM of a 50 M-cell map), so launching missions with a PDM
-  // just made or viewed costs no second discretisation.
+  // just made or viewed costs no second discretisation. Kept by PDM and version, so an edit's
+  // commit and its new mass never mix (a tile of the new version drawn from the old mass).
   std::shared_ptr<const Raster<float>> pdmMass(const std::string& pdmId);
+  // The same for the version `rec` names: a Gaussian PDM's components from the record when it
+  // holds them (an edit commits them with its version), else from its components.json.
+  std::shared_ptr<const Raster<float>> pdmMassOf(const store::PdmRecord& rec);
   static constexpr std::int64_t kMassCacheCells = 64'000'000;
   std::string pdmFile(const std::string& pdmId) const;
   // The PDM's mass pyramid (maps::writeMassCog: its mass on the map's grid with overviews and its
   // ramp) for version `versionTag` (pdmVersionTag), a file of the layer cache
-  // (layers/pdm-ID[-vN]-mass.tif) made from pdmMass on first use and again after an eviction. An
-  // edited PDM is a new version, so a new file: the tiles and ETags of each version stay its own.
+  // (layers/pdm-ID[-vN]-mass.tif) made from that version's mass on first use and again after an
+  // eviction; a version edited since is a 409 (ask again), never a file of another version's mass.
+  // An edited PDM is a new version, so a new file: the tiles and ETags of each version stay its own.
   // Memory while it is made: pdmMass's (below), then GDAL's COG writer over that grid in place.
   std::string pdmPyramidFile(const std::string& mapId, const std::string& pdmId, const std::string& versionTag);
   // Makes the pyramid of a PDM just created or changed, while its mass is in memory, so its first
@@ -220,7 +225,8 @@ class MapCatalog {
   std::list<std::shared_ptr<const StoredTiles>> tilesCache_;  // most recent first
   std::uint64_t removals_ = 0;  // maps removed: a record read before a removal is not cached
   std::list<std::pair<std::string, std::shared_ptr<const Raster<float>>>> massCache_;  // most recent first
-  void keepMass(const std::string& pdmId, std::shared_ptr<const Raster<float>> mass);
+  // `key`: the PDM's id and version tag (pdmVersionTag).
+  void keepMass(const std::string& key, std::shared_ptr<const Raster<float>> mass);
 };
 
 }  // namespace rover::api

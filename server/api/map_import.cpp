@@ -230,10 +230,11 @@ store::MapRecord MapCatalog::importDem(const std::vector<UploadedFile>& files, c
     double classSeconds = 0, pyramidSeconds = 0;
     // The classes, classes.tif and the digest, on a second thread from the stream's first chunk:
     // its bands wait for their rows (GridRowsGate), so they run on the core the stream leaves
-    // idle, then alongside dem.tif. The future is declared before the gate's guard, so a failed
-    // stream first wakes the thread (abort), then waits for it to end.
-    std::future<void> alongside;
+    // idle, then alongside dem.tif. Destroyed in reverse order: on a failed stream the guard
+    // first wakes the thread (abort), the future then waits for it to end, and only then does
+    // the gate it waits on go — so the gate is declared first, the future, then the guard.
     maps::GridRowsGate gate;
+    std::future<void> alongside;
     struct AbortGate {
       maps::GridRowsGate& gate;
       ~AbortGate() { gate.abort(); }

@@ -44,7 +44,7 @@ store::PdmRecord MapCatalog::createPdm(const std::string& mapId, const std::stri
       storePdm(mapId, name.empty() ? "PDM " + store::nowIso() : name, meta, [&](const std::string& staging) {
         store::DataDir::writeFileAtomic((fs::path(staging) / "components.json").string(), stored);
       }, by);
-  keepMass(rec.id, std::make_shared<const Raster<float>>(std::move(mass)));  // a mission often follows
+  keepMass(rec.id + pdmVersionTag(rec.version), std::make_shared<const Raster<float>>(std::move(mass)));  // a mission often follows
   keepPyramid(mapId, rec.id, "");
   return rec;
 }
@@ -114,7 +114,7 @@ store::PdmRecord MapCatalog::createPdmFromRaster(const std::string& mapId, const
       storePdm(mapId, name.empty() ? "raster PDM" : name, {{"kind", "raster"}}, [&](const std::string& staging) {
         storingGeoTiff([&] { maps::writeGeoTiff((fs::path(staging) / "pdm.tif").string(), mass); });
       }, by);
-  keepMass(rec.id, std::make_shared<const Raster<float>>(std::move(mass)));
+  keepMass(rec.id + pdmVersionTag(rec.version), std::make_shared<const Raster<float>>(std::move(mass)));
   keepPyramid(mapId, rec.id, "");
   return rec;
 }
@@ -165,17 +165,17 @@ store::Cas MapCatalog::changePdm(const store::PdmRecord& current, const std::str
   if (done == store::Cas::Done) {
     out.version = expected + 1;
     if (mass) {
-      keepMass(current.id, mass);
+      keepMass(current.id + pdmVersionTag(out.version), mass);
       keepPyramid(current.mapId, current.id, pdmVersionTag(out.version));
     }  // (a rename's pyramid, the same mass under the new version, is made by its first tile)
   }
   return done;
 }
 
-void MapCatalog::keepMass(const std::string& pdmId, std::shared_ptr<const Raster<float>> mass) {
+void MapCatalog::keepMass(const std::string& key, std::shared_ptr<const Raster<float>> mass) {
   std::lock_guard lock(mutex_);
-  massCache_.remove_if([&](const auto& e) { return e.first == pdmId; });
-  massCache_.emplace_front(pdmId, std::move(mass));
+  massCache_.remove_if([&](const auto& e) { return e.first == key; });
+  massCache_.emplace_front(key, std::move(mass));
   std::int64_t cells = 0;
   for (auto it = massCache_.begin(); it != massCache_.end();) {
     cells += it->second->geometry.cellCount();
@@ -186,30 +186,40 @@ void MapCatalog::keepMass(const std::string& pdmId, std::shared_ptr<const Raster
 }
 
 std::shared_ptr<const Raster<float>> MapCatalog::pdmMass(const std::string& pdmId) {
+  const auto rec = db_.getPdm(pdmId);
+  if (!rec) throw ApiError(404, "not_found", "no PDM '" + rover::json::shown(pdmId) + "'", "pdm");
+  return pdmMassOf(*rec);
+}
+
+std::shared_ptr<const Raster<float>> MapCatalog::pdmMassOf(const store::PdmRecord& rec) {
+  const std::string key = rec.id + pdmVersionTag(rec.version);
   {
     std::lock_guard lock(mutex_);
     for (auto it = massCache_.begin(); it != massCache_.end(); ++it)
-      if (it->first == pdmId) {
+      if (it->first == key) {
         massCache_.splice(massCache_.begin(), massCache_, it);
         return massCache_.front().second;
       }
   }
   std::shared_ptr<const Raster<float>> mass;
   std::error_code ec;
-  if (fs::exists(pdmFile(pdmId), ec)) {
-    mass = std::make_shared<const Raster<float>>(maps::loadDem(pdmFile(pdmId)).dem.z);  // raster, or older
+  if (fs::exists(pdmFile(rec.id), ec)) {
+    mass = std::make_shared<const Raster<float>>(maps::loadDem(pdmFile(rec.id)).dem.z);  // raster, or older
   } else {
-    const auto rec = db_.getPdm(pdmId);
-    if (!rec) throw ApiError(404, "not_found", "no PDM '" + rover::json::shown(pdmId) + "'", "pdm");
-    std::ifstream in(fs::path(dir_.pdmDir(pdmId)) / "components.json");
-    if (!in) throw std::runtime_error("PDM " + pdmId + ": neither pdm.tif nor components.json is stored");
-    const auto components = rover::json::gaussiansFromStoredJson(nlohmann::json::parse(in));
-    const MapHeader map = header(rec->mapId);  // the loaded map's, or the stored DEM's header
-    Raster<float> m = pdm::discretise(components, map.geometry, validCells(rec->mapId, map.geometry));
+    std::vector<pdm::Gaussian> components;
+    if (rec.meta.contains("components")) {
+      components = rover::json::gaussiansFromJson({{"components", rec.meta["components"]}});
+    } else {
+      std::ifstream in(fs::path(dir_.pdmDir(rec.id)) / "components.json");
+      if (!in) throw std::runtime_error("PDM " + rec.id + ": neither pdm.tif nor components.json is stored");
+      components = rover::json::gaussiansFromStoredJson(nlohmann::json::parse(in));
+    }
+    const MapHeader map = header(rec.mapId);  // the loaded map's, or the stored DEM's header
+    Raster<float> m = pdm::discretise(components, map.geometry, validCells(rec.mapId, map.geometry));
     m.geo = map.geo;
     mass = std::make_shared<const Raster<float>>(std::move(m));
   }
-  keepMass(pdmId, mass);
+  keepMass(key, mass);
   return mass;
 }
 
@@ -251,7 +261,12 @@ std::string MapCatalog::pdmPyramidFile(const std::string& mapId, const std::stri
   return layers_.get((dir / ("pdm-" + pdmId + versionTag + "-mass.tif")).string(), [&](const std::string& path) {
     std::error_code ec;
     fs::create_directories(dir, ec);
-    const auto mass = pdmMass(pdmId);
+    // The mass of the version the file names: a tile that raced an edit asks again.
+    const auto rec = db_.getPdm(pdmId);
+    if (!rec) throw ApiError(404, "not_found", "no PDM '" + rover::json::shown(pdmId) + "'", "pdm");
+    if (pdmVersionTag(rec->version) != versionTag)
+      throw ApiError(409, "conflict", "the PDM was edited while this picture was made: ask again", "pdm");
+    const auto mass = pdmMassOf(*rec);
     // The ramp of the whole mass, once per version: what every tile of the version is drawn with.
     const maps::ColourRange range = maps::colourRange(maps::RenderLayer::Pdm, *mass);
     storingGeoTiff([&] { maps::writeMassCog(path, *mass, range); });

@@ -12,6 +12,7 @@
 #include "core/common/error.hpp"
 #include "core/terrain/layers.hpp"
 #include "maps/gdal_env.hpp"
+#include "maps/layer_overview.hpp"
 #include "maps/render.hpp"
 
 using rover::Error;
@@ -514,4 +515,21 @@ TEST_CASE("render: renderSlope and renderShadedElevation draw renderLayer's pixe
   different = 0;
   for (std::size_t i = 0; i < shaded.rgba.size(); ++i) different += shaded.rgba[i] != byShade.rgba[i];
   CHECK(different == 0);
+}
+
+TEST_CASE("overview: the level an overview is drawn from is just larger than it and never over 4096² cells") {
+  using rover::maps::overviewStep;
+  CHECK(overviewStep(600, 600, 1024) == 1);         // a map no larger than the overview: itself
+  CHECK(overviewStep(4000, 4000, 1024) == 2);       // 2000² blocks ≥ 1024 > 1000
+  CHECK(overviewStep(15000, 20000, 1024) == 16);    // 938 × 1250: the README's 300 M-cell figure
+  // A 4096-px overview of an 8000² map: the side rule alone keeps the full grid (64 M cells); the
+  // cell bound halves it to 4000² (16 M).
+  CHECK(overviewStep(8000, 8000, 4096) == 2);
+  CHECK(overviewStep(8190, 4097, 4096) == 2);
+  for (int side : {256, 512, 1024, 2048, 4096})
+    for (int n : {300, 4097, 8191, 20000, 100000}) {
+      const long long step = overviewStep(n, n, side);
+      const long long blocks = (n + step - 1) / step;
+      CHECK(blocks * blocks <= rover::maps::kMaxOverviewLevelCells);
+    }
 }
