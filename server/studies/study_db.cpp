@@ -144,9 +144,9 @@ void createWhole(const std::string& path) {
     throw std::runtime_error("cannot create the study database " + path + ": " + msg);
   }
   try {
-    exec(db, "PRAGMA journal_mode=WAL;");
-    exec(db, kSchema);
-    exec(db, ("PRAGMA user_version=" + std::to_string(kSchemaVersion)).c_str());
+    // One transaction, no sync until the close's checkpoint: nobody sees this file before the link.
+    exec(db, "PRAGMA journal_mode=WAL; PRAGMA synchronous=NORMAL;");
+    exec(db, (std::string("BEGIN;") + kSchema + "PRAGMA user_version=" + std::to_string(kSchemaVersion) + "; COMMIT;").c_str());
   } catch (...) {
     sqlite3_close(db);
     removeTemp();
