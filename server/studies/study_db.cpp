@@ -128,6 +128,8 @@ nlohmann::json num(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlo
 // openers making the same database, one wins and both open the winner's.
 void createWhole(const std::string& path) {
   namespace fs = std::filesystem;
+  // An in-memory database (a sweep without --out) or a URI is SQLite's to make.
+  if (path.empty() || path == ":memory:" || path.rfind("file:", 0) == 0) return;
   std::error_code ec;
   if (fs::exists(path, ec)) return;
   static std::atomic<unsigned> counter{0};
@@ -177,7 +179,8 @@ nlohmann::json toJson(const StudySummary& s) {
 StudyDb StudyDb::open(const std::string& path) {
   createWhole(path);
   sqlite3* db = nullptr;
-  if (sqlite3_open_v2(path.c_str(), &db, SQLITE_OPEN_READWRITE, nullptr) != SQLITE_OK) {
+  // Created above, or by SQLite when in memory.
+  if (sqlite3_open_v2(path.c_str(), &db, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE, nullptr) != SQLITE_OK) {
     std::string msg = db ? sqlite3_errmsg(db) : "out of memory";
     sqlite3_close(db);
     throw std::runtime_error("cannot open the study database " + path + ": " + msg);
