@@ -26,6 +26,7 @@ endfunction()
 
 # Measured over 10 s (ctest --test-dir build -j2 on the 2-core machine): regexes over CTest names.
 set(rover_slow_tests
+  "^server/a study database opened while another connection creates it"
   "^maps/team planners on every DEM"
   "^server/same origin: without a token"
   "^server/host allow-list"

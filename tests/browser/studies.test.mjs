@@ -127,4 +127,40 @@ describe('studies', { skip: missing || false, timeout: 240000 }, () => {
     assert.equal(stored.version, study.version + 2);
     assert.deepEqual(errors, []);
   });
+  test('a study stream dropped before the study ends is opened again: the page reads the end', async () => {
+    const { page, errors } = await openPage(browser, `${server.url}/`);
+    // The first stream of the study launched below closes at once, without a frame (a dropped
+    // connection); the later ones reach the server.
+    let dropped = null, blockerId = null;
+    await page.routeWebSocket(/\/api\/studies\/[0-9a-f]+\/stream/, (ws) => {
+      if (!dropped && blockerId && !ws.url().includes(blockerId)) {
+        dropped = ws.url();
+        ws.close({ code: 1011, reason: 'dropped by the test' });
+        return;
+      }
+      ws.connectToServer();
+    });
+    await waitForMap(page);
+    // A long study first: the one launched from the page waits queued behind it (one study runs
+    // at a time), so the page cannot have read its end before its stream is dropped.
+    const post = await fetch(`${server.url}/api/studies`, { method: 'POST', headers: { 'Content-Type': 'application/json' },
+      body: JSON.stringify({ preset: 'laine-fig6', runs: 1000 }) });
+    assert.equal(post.status, 202);
+    blockerId = (await post.json()).id;
+    await page.click('#tab-studies');
+    await page.waitForSelector('#st-source option[value="laine-fig6"]', { state: 'attached' });
+    await page.selectOption('#st-source', 'laine-fig6');
+    await page.fill('#st-runs', '1');
+    await page.click('#st-launch');
+    await page.waitForFunction(() => /^queued: 4 runs|^queued: 0 \/ 4/.test(document.querySelector('#st-launch-status')?.textContent || ''), null, { timeout: 60000 });
+    const launched = (await (await fetch(`${server.url}/api/studies`)).json()).find((s) => s.id !== blockerId);
+    await page.waitForFunction((id) => document.querySelector('#study-title')?.textContent.endsWith(id), launched.id, { timeout: 60000 });
+    assert.ok(dropped?.includes(launched.id), `the launched study's first stream was dropped (${dropped})`);
+    assert.equal(await page.textContent('#st-status'), 'queued');
+    // The blocker cancelled: the launched study runs, and the page follows it to its end.
+    assert.equal((await fetch(`${server.url}/api/studies/${blockerId}`, { method: 'DELETE' })).status, 202);
+    await page.waitForFunction(() => document.querySelector('#st-status')?.textContent === 'succeeded', null, { timeout: 60000 });
+    await page.waitForFunction(() => document.querySelector('#st-launch-status')?.textContent === 'succeeded: 4 / 4 runs', null, { timeout: 60000 });
+    assert.deepEqual(errors, []);
+  });
 });

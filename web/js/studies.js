@@ -31,6 +31,9 @@ const REFERENCE = {
   ],
 };
 
+// Backoff between reconnects of a study's stream that closed before its end, then every 4 s.
+const STREAM_RETRY_MS = [250, 500, 1000, 2000, 4000];
+
 function wsUrl(path) {
   const proto = location.protocol === 'https:' ? 'wss:' : 'ws:';
   const token = localStorage.getItem('roverplan.token');
@@ -283,7 +286,7 @@ export class StudiesPanel {
   }
 
   async show(id) {
-    if (this.ws) this.ws.close();
+    this.unsubscribe();
     this.lastPlotted = -1;
     this.current = await getJson(`/api/studies/${id}`);
     this.renderList();
@@ -292,19 +295,46 @@ export class StudiesPanel {
       el('button', { onclick: () => downloadWithToken(`/api/studies/${id}/runs.csv`, `study-${id}-runs.csv`) }, 'runs.csv'),
       el('button', { onclick: () => downloadWithToken(`/api/studies/${id}/study.sqlite`, `study-${id}.sqlite`) }, 'study.sqlite'));
     this.progress(this.current);
+    // The stream first: a runs.csv that fails (a busy server's 503) must not leave the page
+    // without the study's progress — the status would then stay "queued" for good.
+    this.subscribe(id);
     await this.loadRuns();
+  }
+
+  // Follows the study's stream (snapshot, progress, done). A stream that closes before its done
+  // frame (a dropped connection, a server restart) is opened again after a backoff: its snapshot
+  // brings the state missed meanwhile. Only the newest subscription counts (a show() of another
+  // study, or of this one again, replaces it).
+  subscribe(id, attempt = 0) {
     const ws = new WebSocket(wsUrl(`/api/studies/${id}/stream`));
     this.ws = ws;
+    let ended = false;
     ws.onmessage = (e) => {
       if (ws !== this.ws) return;
+      attempt = 0;
       const msg = JSON.parse(e.data);
       const s = msg.type === 'snapshot' ? msg.study : msg;
       this.progress(s);
       if (msg.summary) this.current.summary = msg.summary;
+      if (msg.type === 'done' || (msg.type === 'snapshot' && !isActive(s.status))) ended = true;
       // New runs: the plots follow while it runs (with the partial summary's rhythm) and at the end.
-      if (msg.type === 'done' || (msg.summary && s.runs_done !== this.lastPlotted)) this.loadRuns();
+      if (msg.type === 'done' || (msg.summary && s.runs_done !== this.lastPlotted)) this.loadRuns().catch(report);
       if (msg.type === 'done') this.reload();
     };
+    ws.onclose = () => {
+      if (ws !== this.ws || ended) return;
+      const wait = STREAM_RETRY_MS[Math.min(attempt, STREAM_RETRY_MS.length - 1)];
+      this.retry = setTimeout(() => {
+        if (ws === this.ws && this.current?.id === id) this.subscribe(id, attempt + 1);
+      }, wait);
+    };
+  }
+
+  unsubscribe() {
+    clearTimeout(this.retry);
+    const ws = this.ws;
+    this.ws = null;  // first: its onclose then sees it replaced and does not reconnect
+    if (ws) ws.close();
   }
 
   progress(s) {
