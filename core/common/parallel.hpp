@@ -2,10 +2,17 @@
 // Runs fn(i) for i in [0, count) on `threads` threads (0 = all cores). Work is handed out one
 // index at a time, so uneven runs balance; results must be written to per-index slots, which
 // keeps a sweep's output independent of the thread count. The first exception is rethrown.
+//
+// A thread the system refuses to start (std::system_error: EAGAIN under a thread or memory limit)
+// is not an error: the threads already started and the calling thread share the work, so a busy
+// server degrades to fewer cores instead of terminating (a joinable std::thread destroyed by the
+// unwinding would call std::terminate).
 #include <atomic>
 #include <cstddef>
 #include <exception>
 #include <mutex>
+#include <system_error>
+#include <utility>
 #include <thread>
 #include <vector>
 
@@ -16,8 +23,10 @@ inline unsigned hardwareThreads() {
   return n == 0 ? 1 : n;
 }
 
-template <class Fn>
-void parallelFor(std::size_t count, unsigned threads, Fn&& fn) {
+// `spawn(worker)` starts one thread running `worker` (std::thread's constructor; tests pass one
+// that refuses).
+template <class Fn, class Spawn>
+void parallelFor(std::size_t count, unsigned threads, Fn&& fn, Spawn&& spawn) {
   if (threads == 0) threads = hardwareThreads();
   std::atomic<std::size_t> next{0};
   std::exception_ptr error;
@@ -34,10 +43,22 @@ void parallelFor(std::size_t count, unsigned threads, Fn&& fn) {
     }
   };
   std::vector<std::thread> pool;
-  for (unsigned t = 1; t < threads && t < count; ++t) pool.emplace_back(worker);
+  pool.reserve(threads);
+  for (unsigned t = 1; t < threads && t < count; ++t) {
+    try {
+      pool.push_back(spawn(worker));
+    } catch (const std::system_error&) {
+      break;  // fewer threads: the ones started and this one do every index
+    }
+  }
   worker();
   for (auto& t : pool) t.join();
   if (error) std::rethrow_exception(error);
+}
+
+template <class Fn>
+void parallelFor(std::size_t count, unsigned threads, Fn&& fn) {
+  parallelFor(count, threads, std::forward<Fn>(fn), [](auto& worker) { return std::thread(worker); });
 }
 
 }  // namespace rover
