@@ -41,6 +41,8 @@ describe('studies', { skip: missing || false, timeout: 240000 }, () => {
     // The launch line and the list follow the study to its end (issue 27: they read "queued").
     await page.waitForFunction(() => document.querySelector('#st-launch-status')?.textContent === 'succeeded: 16 / 16 runs', null, { timeout: 60000 });
     assert.equal(await page.textContent('#st-list li.selected .badge'), 'succeeded');
+    // Its button deletes the ended study (it read "cancel" until the list reloaded).
+    assert.equal(await page.textContent('#st-list li.selected button.end'), 'delete');
     // Fig. 6: a line per variant and the band, as SVG paths; the box plot of the chosen metric.
     await page.waitForSelector('figure[data-plot="fig6"] svg [aria-label="line"] path', { state: 'attached' });
     const fig6Lines = await page.locator('figure[data-plot="fig6"] svg [aria-label="line"] path').count();

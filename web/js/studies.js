@@ -255,14 +255,19 @@ export class StudiesPanel {
   renderList() {
     // A rename being typed (or its conflict) is not swept away by a refresh: it comes after.
     if (this.renaming) return;
-    $('st-list').replaceChildren(...this.studies.map((s) => el('li', { class: this.current?.id === s.id ? 'selected' : '', 'data-study': s.id },
+    $('st-list').replaceChildren(...this.studies.map((s) => this.listItem(s)));
+  }
+
+  // One study's row: its button cancels a queued or running study and deletes an ended one.
+  listItem(s) {
+    return el('li', { class: this.current?.id === s.id ? 'selected' : '', 'data-study': s.id },
       el('button', { class: 'name', title: `show study ${s.id}`, onclick: () => this.show(s.id) }, `${s.name} · ${s.id.slice(0, 6)}`),
       el('button', { class: 'small rename', title: `rename ${s.name}`, 'aria-label': `rename study ${s.name}`, onclick: (e) => this.rename(s, e.currentTarget.closest('li')) }, '✎'),
       el('span', { class: `badge ${s.status}` }, s.status),
       el('span', { class: 'muted small' }, ` ${s.runs_done}/${s.runs_total}`),
-      el('button', { title: isActive(s.status) ? 'cancel' : 'delete the study and its database',
+      el('button', { class: 'end', title: isActive(s.status) ? 'cancel' : 'delete the study and its database',
         onclick: async () => { try { await sendJson('DELETE', `/api/studies/${s.id}`); } catch (err) { report(err); } this.reload(); } },
-      isActive(s.status) ? 'cancel' : 'delete'))));
+      isActive(s.status) ? 'cancel' : 'delete'));
   }
 
   // The study's name becomes an input (name_edit.js); saved with the version read.
@@ -354,12 +359,9 @@ export class StudiesPanel {
     const entry = this.studies?.find((x) => x.id === id);
     if (entry && s.status && (entry.status !== s.status || entry.runs_done !== done)) {
       Object.assign(entry, { status: s.status, runs_done: done });
+      // The whole row again, its button too: an ended study's reads "delete", not "cancel".
       const li = $('st-list').querySelector(`li[data-study="${id}"]`);
-      if (li) {
-        li.querySelector('.badge').className = `badge ${s.status}`;
-        li.querySelector('.badge').textContent = s.status;
-        li.querySelector('.muted').textContent = ` ${done}/${entry.runs_total}`;
-      }
+      if (li && !this.renaming) li.replaceWith(this.listItem(entry));
     }
   }
 
