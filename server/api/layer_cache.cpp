@@ -148,6 +148,26 @@ void LayerCache::forgetUnder(const std::string& dir) {
   }
 }
 
+void LayerCache::discardUnder(const std::string& dir,
+                              const std::function<bool(const std::string& fileName)>& unreachable) {
+  std::string prefix = dir;
+  if (!prefix.empty() && prefix.back() != '/') prefix += '/';
+  std::lock_guard lock(mutex_);
+  for (auto it = entries_.begin(); it != entries_.end();) {
+    const std::string& path = it->first;
+    if (path.rfind(prefix, 0) == 0 && path.find('/', prefix.size()) == std::string::npos &&
+        unreachable(path.substr(prefix.size()))) {
+      std::error_code ec;
+      fs::remove(path, ec);
+      if (budget_) budget_->release(path);
+      total_ -= it->second.size;
+      it = entries_.erase(it);
+    } else {
+      ++it;
+    }
+  }
+}
+
 std::uint64_t LayerCache::bytes() const {
   std::lock_guard lock(mutex_);
   return total_;

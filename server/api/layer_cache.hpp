@@ -31,6 +31,10 @@ class LayerCache {
   std::string get(const std::string& path, const std::function<void(const std::string&)>& make);
   // Forgets the files under `dir` (a deleted map's folder).
   void forgetUnder(const std::string& dir);
+  // Deletes the cached files under `dir` whose file name `unreachable` accepts (e.g. an edited or
+  // deleted PDM's old versions, which no request can name any more) and releases their charge.
+  // A file being made meanwhile is added after; it is evicted in its turn like any other.
+  void discardUnder(const std::string& dir, const std::function<bool(const std::string& fileName)>& unreachable);
 
   std::uint64_t bytes() const;
   std::uint64_t capBytes() const { return cap_; }

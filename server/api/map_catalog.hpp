@@ -9,6 +9,7 @@
 #include <list>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -147,6 +148,10 @@ class MapCatalog {
                        const std::optional<std::vector<pdm::Gaussian>>& components, long long expected,
                        const std::string& by, store::PdmRecord& out);
   // The file-name part that names a PDM's version in layer and tile files ("" for version 1).
+  // Drops what is kept for PDM `pdmId` of map `mapId` but version `keepVersionTag` (all of it
+  // when nullopt: a deleted PDM): its cached masses, and its layer files (tiles, overviews, mass
+  // pyramids: layers/[t1-]pdm-ID[-vN]...), which no request names once the version has changed.
+  void forgetPdm(const std::string& mapId, const std::string& pdmId, const std::optional<std::string>& keepVersionTag);
   static std::string pdmVersionTag(long long version);
   // The PDM's probability mass on its map's grid: a raster PDM's pdm.tif as it is, a Gaussian
   // one discretised on the map's grid and cells with data (from the map in memory when it is

@@ -164,12 +164,41 @@ store::Cas MapCatalog::changePdm(const store::PdmRecord& current, const std::str
   }
   if (done == store::Cas::Done) {
     out.version = expected + 1;
+    forgetPdm(current.mapId, current.id, pdmVersionTag(out.version));  // the old version's files
     if (mass) {
       keepMass(current.id + pdmVersionTag(out.version), mass);
       keepPyramid(current.mapId, current.id, pdmVersionTag(out.version));
     }  // (a rename's pyramid, the same mass under the new version, is made by its first tile)
   }
   return done;
+}
+
+void MapCatalog::forgetPdm(const std::string& mapId, const std::string& pdmId,
+                           const std::optional<std::string>& keepVersionTag) {
+  // A name of this PDM's: "pdm-ID" or "t1-pdm-ID", then its version tag ("-vN", none for the
+  // first), then "-..." or ".ext". Ids are fixed-length hex, so no other PDM's name matches.
+  auto versionOf = [&](const std::string& name) -> std::optional<std::string> {
+    for (const std::string& head : {"pdm-" + pdmId, "t1-pdm-" + pdmId}) {
+      if (name.rfind(head, 0) != 0 || name.size() == head.size()) continue;
+      std::string rest = name.substr(head.size());
+      if (rest[0] == '.') return std::string();
+      if (rest.rfind("-v", 0) != 0) return rest[0] == '-' ? std::optional<std::string>(std::string()) : std::nullopt;
+      const std::size_t end = rest.find_first_not_of("0123456789", 2);
+      if (end == 2) return std::string();  // "-v" not followed by digits: not a tag
+      return rest.substr(0, end);
+    }
+    return std::nullopt;
+  };
+  layers_.discardUnder((fs::path(dir_.mapDir(mapId)) / "layers").string(), [&](const std::string& name) {
+    const auto v = versionOf(name);
+    return v && (!keepVersionTag || *v != *keepVersionTag);
+  });
+  std::lock_guard lock(mutex_);
+  massCache_.remove_if([&](const auto& e) {
+    if (e.first.rfind(pdmId, 0) != 0) return false;
+    const std::string tag = e.first.substr(pdmId.size());
+    return !keepVersionTag || tag != *keepVersionTag;
+  });
 }
 
 void MapCatalog::keepMass(const std::string& key, std::shared_ptr<const Raster<float>> mass) {

@@ -179,6 +179,7 @@ Response deletePdm(ApiContext& ctx, const Request& req) {
   InvalidateMapAfter after{ctx, p.mapId};
   ctx.db.deletePdm(p.id);
   ctx.dir.remove(ctx.dir.pdmDir(p.id));
+  ctx.maps.forgetPdm(p.mapId, p.id, std::nullopt);  // its tiles, overviews, mass pyramids, cached masses
   publishEvent(ctx, "deleted", "pdm", p.id, p.mapId, 0, req.operatorName);
   return Response::json(200, {{"deleted", p.id}});
 }

@@ -312,6 +312,24 @@ TEST_CASE("tiles api: pdm tiles come from the PDM's mass pyramid, one per versio
   CHECK(v2.body != native[0]);
   CHECK(v2.body == pdmTileInMemory(s, map, second, 1, 0, 0));
   CHECK(s.get(base + "1/1/0.png?pdm=" + pdm).body == pdmTileInMemory(s, map, second, 1, 1, 0));
+  // No request names version 1 any more: its tiles, overview and mass pyramid are gone, version
+  // 2's stay. A deleted PDM leaves none of its files.
+  auto filesOf = [&](const std::string& tag) {
+    std::vector<std::string> names;
+    for (const auto& e : std::filesystem::directory_iterator(layers)) {
+      const std::string n = e.path().filename().string();
+      for (const std::string& head : {"pdm-" + pdm, "t1-pdm-" + pdm})
+        if (n.rfind(head, 0) == 0 && (tag.empty() ? n.find("-v") == std::string::npos : n.find(tag) != std::string::npos))
+          names.push_back(n);
+    }
+    return names;
+  };
+  CHECK(filesOf("").empty());
+  CHECK(filesOf("-v2-").size() >= 3u);  // two tiles and the mass pyramid
+  const auto gone = request(s.port(), "DELETE", "/api/maps/" + map + "/pdms/" + pdm, "", "application/json", {});
+  REQUIRE(gone.status == 200);
+  CHECK(filesOf("-v2-").empty());
+  CHECK(s.get("/api/maps/" + map + "/tiles/elevation/0/0/0.png").status == 200);  // the map's own tiles stay
 }
 
 TEST_CASE("layers api: a pyramid-stored map's overviews come from its pyramid, full-size files of a big map are its stored files or 413") {
