@@ -127,6 +127,14 @@ std::vector<Eigen::Vector2d> turnedSlots(const std::vector<Eigen::Vector2d>& slo
   return out;
 }
 
+std::vector<Eigen::Vector2d> LaneHeading::slotsAt(const std::vector<Eigen::Vector2d>& slots,
+                                                  const Eigen::Vector2d& centre) {
+  const Eigen::Vector2d step = centre - last_;
+  if (step.norm() > 1e-9) heading_ = std::atan2(step.y(), step.x());
+  last_ = centre;
+  return turnedSlots(slots, laneTurn(static_cast<int>(slots.size()), heading_));
+}
+
 TerrainEdgeModel wholeMapModel(const terrain::Dem& dem, const Raster<std::uint8_t>& classes,
                                const RrtParams& rrt) {
   const GridGeometry& g = dem.geometry();

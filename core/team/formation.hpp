@@ -66,6 +66,21 @@ double laneTurn(int rovers, double heading);
 // `slots` turned by `angle` radians counter-clockwise about the centre (distances kept).
 std::vector<Eigen::Vector2d> turnedSlots(const std::vector<Eigen::Vector2d>& slots, double angle);
 
+// The heading rule of the turned slots along a route (one team): each target's slots turned by
+// laneTurn to the heading of the step from the team's previous target, from the starts' centroid
+// for its first one; a repeated target keeps the last heading. The task builder's goals and
+// `bench routes`' swept measure both use it, so the bench models the lanes the missions drive.
+class LaneHeading {
+ public:
+  explicit LaneHeading(const Eigen::Vector2d& from) : last_(from) {}
+  // `slots` (the team's formation, one per rover) as they stand round `centre`, the next target.
+  std::vector<Eigen::Vector2d> slotsAt(const std::vector<Eigen::Vector2d>& slots, const Eigen::Vector2d& centre);
+
+ private:
+  Eigen::Vector2d last_;
+  double heading_ = 0;
+};
+
 // The rover's validity rules on the whole map (the RRT*'s attitude limit and edge resolution).
 TerrainEdgeModel wholeMapModel(const terrain::Dem& dem, const Raster<std::uint8_t>& classes,
                                const RrtParams& rrt);

@@ -61,17 +61,17 @@ std::vector<std::vector<std::optional<Eigen::Vector2d>>> slotGoals(
   // ours (issue 25), the orienteering route in timed mode only: each target's slots turned to the
   // heading of the leg that reaches it (laneTurn, formation.hpp), so the rovers sweep distinct
   // lanes along it; LHC_GW_CONV, LHC, the lawnmower and the paper mode keep paper 001's square
-  // slots. The heading is that of the step from the sub-team's previous target (from its starts'
-  // centroid for its first one); a repeated target keeps the last heading.
+  // slots. The heading rule is LaneHeading's, one per sub-team.
   const bool laneSlots = params.routeMethod == RouteMethod::Orienteering &&
                          params.coordination.mode == CoordinationMode::Timed;
   const int groups = teams ? teams->count() : 1;
-  std::vector<Eigen::Vector2d> lastAt(static_cast<std::size_t>(groups), Eigen::Vector2d::Zero());
-  std::vector<double> heading(static_cast<std::size_t>(groups), 0.0);
+  std::vector<LaneHeading> lanes;
   for (int g = 0; g < groups; ++g) {
     const std::vector<int>& members = teams ? teams->rovers[static_cast<std::size_t>(g)] : everyone;
-    for (int k : members) lastAt[static_cast<std::size_t>(g)] += Eigen::Vector2d(starts[k].x, starts[k].y);
-    if (!members.empty()) lastAt[static_cast<std::size_t>(g)] /= static_cast<double>(members.size());
+    Eigen::Vector2d centroid = Eigen::Vector2d::Zero();
+    for (int k : members) centroid += Eigen::Vector2d(starts[k].x, starts[k].y);
+    if (!members.empty()) centroid /= static_cast<double>(members.size());
+    lanes.emplace_back(centroid);
   }
   std::vector<std::vector<std::optional<Eigen::Vector2d>>> out;
   for (std::size_t t = 0; t < route.centres.size(); ++t) {
@@ -83,13 +83,7 @@ std::vector<std::vector<std::optional<Eigen::Vector2d>>> slotGoals(
     auto& slots = slotsOfSize[members.size()];
     if (slots.empty()) slots = goalSlots(static_cast<int>(members.size()), params.footprint, spacing);
     std::vector<Eigen::Vector2d> turned;
-    if (laneSlots) {
-      const auto g = static_cast<std::size_t>(teams ? teams->ofTarget[t] : 0);
-      const Eigen::Vector2d step = centre - lastAt[g];
-      if (step.norm() > 1e-9) heading[g] = std::atan2(step.y(), step.x());
-      lastAt[g] = centre;
-      turned = turnedSlots(slots, laneTurn(static_cast<int>(members.size()), heading[g]));
-    }
+    if (laneSlots) turned = lanes[static_cast<std::size_t>(teams ? teams->ofTarget[t] : 0)].slotsAt(slots, centre);
     const std::vector<Eigen::Vector2d>& here = laneSlots ? turned : slots;
     std::vector<std::optional<Eigen::Vector2d>> goals(static_cast<std::size_t>(rovers));
     std::vector<Eigen::Vector2d> taken;

@@ -144,17 +144,23 @@ double seenBy(const team::SearchGrid& grid, const team::Route& route, double met
 // long legs: a route refined on it (issue 25; fewer, longer legs on the formation's widest 1:2
 // slope) read x1.34 over LHC_GW_CONV here on the synthetic map, but its missions (swinton, 20
 // PDMs) saw 5 % less by 300 m than the unrefined route's, as the rovers' paths wander off long legs.
-double sweptBy(const Raster<float>& pdm, const team::Route& route, double metres) {
+//
+// `lanes`: the slots turned per leg as the orienteering route's missions place them (timed mode:
+// team::LaneHeading, five lanes), else paper 001's square slots (LHC_GW_CONV: three lanes).
+double sweptBy(const Raster<float>& pdm, const team::Route& route, double metres, bool lanes) {
   const team::TeamMissionParams p;
-  const auto slots = team::goalSlots(5, p.footprint, team::goalSpacing(p.coordination));
+  const auto square = team::goalSlots(5, p.footprint, team::goalSpacing(p.coordination));
   std::vector<Eigen::Vector2d> stops{route.startCentre};
   stops.insert(stops.end(), route.centres.begin(), route.centres.end());
-  std::vector<team::Trajectory> rovers(slots.size());
-  for (std::size_t k = 0; k < slots.size(); ++k) {
+  std::vector<std::vector<Eigen::Vector2d>> slots{square};  // each stop's slots
+  team::LaneHeading heading(route.startCentre);
+  for (std::size_t i = 1; i < stops.size(); ++i) slots.push_back(lanes ? heading.slotsAt(square, stops[i]) : square);
+  std::vector<team::Trajectory> rovers(square.size());
+  for (std::size_t k = 0; k < square.size(); ++k) {
     double d = 0;
-    rovers[k].samples.push_back({0, stops[0].x() + slots[k].x(), stops[0].y() + slots[k].y()});
+    rovers[k].samples.push_back({0, stops[0].x() + slots[0][k].x(), stops[0].y() + slots[0][k].y()});
     for (std::size_t i = 1; i < stops.size() && d < metres; ++i) {
-      const Eigen::Vector2d a = stops[i - 1] + slots[k], b = stops[i] + slots[k];
+      const Eigen::Vector2d a = stops[i - 1] + slots[i - 1][k], b = stops[i] + slots[i][k];
       const double len = (b - a).norm();
       const int steps = std::max(1, static_cast<int>(std::ceil(len / 0.1)));
       for (int s = 1; s <= steps && d < metres; ++s) {
@@ -214,8 +220,9 @@ int benchRoutes(std::ostream& out, int runs, const std::vector<std::string>& dem
   for (const auto& path : dems) worlds.emplace_back(path, maps::loadDem(path).dem);
   out << "bench routes: " << runs << " random PDMs (G = 4, seeds 1.." << runs
       << ") per map, start at the centre, 64 targets, 5 m cells; p300 = mass seen by 300 m along the "
-         "route; swept p300 = mass under the 5 rovers' 1 m discs by 300 m per rover, driving straight in "
-         "formation between the targets (the mission's measure without RRT* detours); swept p250 = the same by "
+         "route; swept p300 = mass under the 5 rovers' 1 m discs by 300 m per rover, driving straight between "
+         "their slots at the targets (orienteering: turned per leg, five lanes; LHC_GW_CONV: paper 001's square "
+         "slots) (the mission's measure without RRT* detours); swept p250 = the same by "
          "250 m, where a mission's rovers, driving 1.2x the straight legs, have driven 300 m each (target: "
          "orienteering >= 1.2x LHC_GW_CONV, paired; route no longer)\n";
   for (const auto& [name, dem] : worlds) {
@@ -240,8 +247,8 @@ int benchRoutes(std::ostream& out, int runs, const std::vector<std::string>& dem
       const team::Route lhc = timed(team::RouteMethod::LhcGwConv, lhcS);
       const team::Route ours = timed(team::RouteMethod::Orienteering, oursS);
       p300.add(seenBy(grid, lhc, 300), seenBy(grid, ours, 300));
-      swept.add(sweptBy(pdm, lhc, 300), sweptBy(pdm, ours, 300));
-      swept250.add(sweptBy(pdm, lhc, 250), sweptBy(pdm, ours, 250));
+      swept.add(sweptBy(pdm, lhc, 300, false), sweptBy(pdm, ours, 300, true));
+      swept250.add(sweptBy(pdm, lhc, 250, false), sweptBy(pdm, ours, 250, true));
       lhcLen += routeLength(lhc);
       oursLen += routeLength(ours);
     }
