@@ -1,18 +1,16 @@
 #include "maps/average_levels.hpp"
 
 #include <fcntl.h>
-#include <unistd.h>
 
 #include <algorithm>
-#include <cerrno>
 #include <cmath>
 #include <cstddef>
+#include <cstdio>
+#include <exception>
 #include <limits>
 #include <utility>
 
 #include "core/common/parallel.hpp"
-#include "maps/dem_error.hpp"
-#include "maps/dem_io.hpp"
 #include "maps/grid_file.hpp"
 
 namespace rover::maps {
@@ -38,43 +36,6 @@ Window windowOf(int j, double ratio, int srcSize) {
   w.lastWeight = 1 - (w.last - to);
   return w;
 }
-
-class Fd {
- public:
-  Fd(const std::string& path, int flags) : path_(path), fd_(::open(path.c_str(), flags | O_CLOEXEC, 0644)) {
-    if (fd_ < 0) throw GridFileError("cannot open " + path);
-  }
-  ~Fd() {
-    if (fd_ >= 0) ::close(fd_);
-  }
-  Fd(const Fd&) = delete;
-  Fd& operator=(const Fd&) = delete;
-
-  void read(void* out, std::size_t bytes, off_t at) const {
-    auto* p = static_cast<char*>(out);
-    while (bytes > 0) {
-      const ssize_t n = ::pread(fd_, p, bytes, at);
-      if (n <= 0) throw GridFileError("cannot read rows of " + path_);
-      p += n, bytes -= static_cast<std::size_t>(n), at += n;
-    }
-  }
-  void write(const void* in, std::size_t bytes, off_t at, double fileBytes) const {
-    const auto* p = static_cast<const char*>(in);
-    while (bytes > 0) {
-      errno = 0;
-      const ssize_t n = ::pwrite(fd_, p, bytes, at);
-      if (n <= 0) {
-        if (lacksSpace(path_, errno, fileBytes)) throw DiskFull(path_.substr(path_.find_last_of('/') + 1));
-        throw GridFileError("cannot write " + path_);
-      }
-      p += n, bytes -= static_cast<std::size_t>(n), at += n;
-    }
-  }
-
- private:
-  std::string path_;
-  int fd_;
-};
 
 }  // namespace
 
@@ -130,22 +91,34 @@ std::vector<LevelFile> writeAverageLevels(const std::string& gridFile, int rows,
                                           const std::string& prefix, unsigned threads) {
   std::vector<LevelFile> out;
   LevelFile from{gridFile, rows, cols};
+  // A level that fails part-way (a full disk) takes the levels written before it along: none is
+  // left beside the grid for the caller to know of.
+  struct RemoveOnThrow {
+    std::vector<LevelFile>& written;
+    std::string current;
+    ~RemoveOnThrow() {
+      if (std::uncaught_exceptions() == 0) return;
+      for (const LevelFile& l : written) std::remove(l.path.c_str());
+      if (!current.empty()) std::remove(current.c_str());
+    }
+  } cleanup{out, {}};
   // Bands of 64 level rows (about 130 source rows): enough to hand both cores work on the small
   // levels' few bands, small enough that a band of a 20000-column grid is 10 MB.
   constexpr int kBandRows = 64;
   for (int k = 1; k <= levels; ++k) {
     LevelFile to{prefix + std::to_string(k) + ".f32", std::max(1, from.rows / 2), std::max(1, from.cols / 2)};
-    const Fd in(from.path, O_RDONLY);
-    const Fd dst(to.path, O_WRONLY | O_CREAT | O_TRUNC);
+    cleanup.current = to.path;
+    const GridFileHandle in(from.path, O_RDONLY);
+    const GridFileHandle dst(to.path, O_WRONLY | O_CREAT | O_TRUNC);
     const double bytes = 4.0 * to.rows * to.cols;
     const std::size_t bands = static_cast<std::size_t>((to.rows + kBandRows - 1) / kBandRows);
     parallelFor(bands, threads, [&](std::size_t b) {
       const int r0 = static_cast<int>(b) * kBandRows, n = std::min(kBandRows, to.rows - r0);
       const auto [s0, s1] = sourceRowsOf(from.rows, to.rows, r0, n);
       std::vector<float> src(static_cast<std::size_t>(s1 - s0) * from.cols), level(static_cast<std::size_t>(n) * to.cols);
-      in.read(src.data(), src.size() * sizeof(float), static_cast<off_t>(s0) * from.cols * 4);
+      in.read(src.data(), src.size() * sizeof(float), static_cast<std::int64_t>(s0) * from.cols * 4);
       averageLevelRows(src.data(), s0, s1 - s0, from.rows, from.cols, to.rows, to.cols, r0, n, level.data());
-      dst.write(level.data(), level.size() * sizeof(float), static_cast<off_t>(r0) * to.cols * 4, bytes);
+      dst.write(level.data(), level.size() * sizeof(float), static_cast<std::int64_t>(r0) * to.cols * 4, bytes);
     });
     out.push_back(to);
     from = to;

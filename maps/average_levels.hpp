@@ -33,7 +33,7 @@ struct LevelFile {
 // …, on `threads` threads (0: every core), in bands of rows: memory a band of source rows and one
 // of level rows per thread (about 130 source rows), never a level whole. Disk: a third of the
 // grid's bytes. Throws GridFileError (maps/grid_file.hpp) when a file fails, DiskFull when the
-// disk is full.
+// disk is full; then no level file is left.
 std::vector<LevelFile> writeAverageLevels(const std::string& gridFile, int rows, int cols, int levels,
                                           const std::string& prefix, unsigned threads = 0);
 

@@ -1,5 +1,8 @@
 #include "maps/grid_file.hpp"
 
+#include <fcntl.h>
+#include <unistd.h>
+
 #include <algorithm>
 #include <cerrno>
 #include <stdexcept>
@@ -18,6 +21,39 @@ namespace {
 }
 
 }  // namespace
+
+GridFileHandle::GridFileHandle(const std::string& path, int openFlags)
+    : path_(path), fd_(::open(path.c_str(), openFlags | O_CLOEXEC, 0644)) {
+  if (fd_ < 0) throw GridFileError("cannot open " + path);
+}
+
+GridFileHandle::~GridFileHandle() {
+  if (fd_ >= 0) ::close(fd_);
+}
+
+void GridFileHandle::read(void* out, std::size_t bytes, std::int64_t at) const {
+  auto* p = static_cast<char*>(out);
+  while (bytes > 0) {
+    const ssize_t n = ::pread(fd_, p, bytes, static_cast<off_t>(at));
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) throw GridFileError("cannot read rows of the grid file " + path_);
+    p += n, bytes -= static_cast<std::size_t>(n), at += n;
+  }
+}
+
+void GridFileHandle::write(const void* in, std::size_t bytes, std::int64_t at, double fileBytes) const {
+  const auto* p = static_cast<const char*>(in);
+  while (bytes > 0) {
+    errno = 0;
+    const ssize_t n = ::pwrite(fd_, p, bytes, static_cast<off_t>(at));
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) {
+      if (lacksSpace(path_, errno, fileBytes)) throw DiskFull(path_.substr(path_.find_last_of('/') + 1));
+      throw GridFileError("cannot write " + path_);
+    }
+    p += n, bytes -= static_cast<std::size_t>(n), at += n;
+  }
+}
 
 GridFileWriter::GridFileWriter(std::string path, const GridGeometry& g)
     : path_(std::move(path)), bytes_(static_cast<double>(g.cellCount()) * 4.0) {
@@ -70,12 +106,8 @@ void GridRowsGate::waitFor(int rows) const {
 }
 
 void readGridRows(const std::string& path, int cols, int row0, int rows, float* out) {
-  std::FILE* f = std::fopen(path.c_str(), "rb");
-  const std::size_t n = static_cast<std::size_t>(rows) * cols;
-  const bool ok = f && std::fseek(f, static_cast<long>(static_cast<std::size_t>(row0) * cols * sizeof(float)), SEEK_SET) == 0 &&
-                  std::fread(out, sizeof(float), n, f) == n;
-  if (f) std::fclose(f);
-  if (!ok) throw GridFileError("cannot read rows of the grid file " + path);
+  const GridFileHandle f(path, O_RDONLY);
+  f.read(out, static_cast<std::size_t>(rows) * cols * sizeof(float), static_cast<std::int64_t>(row0) * cols * 4);
 }
 
 terrain::Traversability traversabilityOfGridFile(const std::string& path, const GridGeometry& g,

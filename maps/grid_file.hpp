@@ -6,6 +6,7 @@
 // traversability classes, and through GDAL (a raw band, no copy) for the map's COG; the file's
 // pages are the kernel's page cache, not the server's heap.
 #include <condition_variable>
+#include <cstdint>
 #include <cstdio>
 #include <functional>
 #include <mutex>
@@ -23,6 +24,25 @@ namespace rover::maps {
 class GridFileError : public std::runtime_error {
  public:
   using std::runtime_error::runtime_error;
+};
+
+// A grid file opened for positional reads and writes (pread/pwrite) by several threads at once,
+// each call at its own offset: the overview levels' bands (maps/average_levels.hpp) and the rows
+// of readGridRows. Throws GridFileError when the file does not open, read or write; DiskFull when
+// a write lacks room (`fileBytes`: what the whole file will need, for the message's figure).
+class GridFileHandle {
+ public:
+  GridFileHandle(const std::string& path, int openFlags);  // open(2)'s flags (O_RDONLY, O_WRONLY | O_CREAT …)
+  ~GridFileHandle();
+  GridFileHandle(const GridFileHandle&) = delete;
+  GridFileHandle& operator=(const GridFileHandle&) = delete;
+
+  void read(void* out, std::size_t bytes, std::int64_t at) const;  // all of it, or throws
+  void write(const void* in, std::size_t bytes, std::int64_t at, double fileBytes) const;
+
+ private:
+  std::string path_;
+  int fd_;
 };
 
 class GridFileWriter {

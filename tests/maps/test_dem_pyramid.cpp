@@ -423,6 +423,22 @@ TEST_CASE("pyramid: every overview level is the nodata-aware average of the leve
   }
 }
 
+TEST_CASE("pyramid: overview levels that fail part-way leave no level file behind") {
+  // A grid file 100 rows short of the 600 its caller names: level 1's bands past the file's end
+  // fail to read after the first bands were written. Before, level files stayed beside the grid.
+  const Raster<float> z = noisyHeights(500, 700);
+  TempDir dir;
+  const std::string grid = writeGrid(dir.file("grid.f32"), z);
+  CHECK_THROWS_AS(writeAverageLevels(grid, 600, 700, 4, dir.file("level-"), 2), GridFileError);
+  int left = 0;
+  for (const auto& e : std::filesystem::directory_iterator(dir.path))
+    left += e.path().filename().string().rfind("level-", 0) == 0;
+  CHECK(left == 0);
+  // The grid itself is the caller's: still there, and a call on its true size makes every level.
+  CHECK(std::filesystem::exists(grid));
+  CHECK(writeAverageLevels(grid, 500, 700, 4, dir.file("level-"), 2).size() == 4u);
+}
+
 TEST_CASE("pyramid: where GDAL cuts no averaging window, the COG's levels are GDAL's own, bit for bit") {
   // maps/average_levels.hpp inside the COG against the COG driver's own levels (the in-memory
   // writer lets GDAL compute them), on maps small enough that GDAL reads each level in one chunk of
