@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstring>
+#include <bit>
 #include <iterator>
 #include <numbers>
 #include <limits>
@@ -190,7 +192,52 @@ Image renderSlope(const terrain::Dem& dem) {
   return img;
 }
 
+namespace {
+
+// The hypsometric ramp's stops are a quarter apart, so rampColour(kHypsometric, u)'s search for the
+// segment is i = 1 + [u > ¼] + [u > ½] + [u > ¾] for u > 0, and its division by the segment's
+// width 0.25 is an exact multiplication by 4. What is left is the same arithmetic without a
+// branch or a table look-up a pixel.
+static_assert(std::size(kHypsometric) == 5);
+constexpr bool quarterStops() {
+  for (std::size_t i = 0; i < std::size(kHypsometric); ++i)
+    if (kHypsometric[i].at != 0.25 * double(i)) return false;
+  return true;
+}
+static_assert(quarterStops(), "hypsometricTint assumes stops at 0, 0.25, 0.5, 0.75, 1");
+
+// rampColour(kHypsometric, u)'s channels, bit for bit (render tests compare the two).
+struct TintChannels {
+  int r, g, b;
+};
+inline TintChannels hypsometricTint(double u) {
+  // else (also NaN) the first stop's colour: segment 1 at t = 0
+  const double above = u > 0, past1 = u > 0.25, past2 = u > 0.5, past3 = u > 0.75;
+  // Stop i − 1 (x) and stop i (y) of a channel as sums of the steps passed: small integers, so exact.
+  auto pick = [&](double s0, double s1, double s2, double s3) {
+    return s0 + past1 * (s1 - s0) + past2 * (s2 - s1) + past3 * (s3 - s2);
+  };
+  constexpr const Stop* k = kHypsometric;
+  const double at = pick(k[0].at, k[1].at, k[2].at, k[3].at);  // quarters: exact
+  const double t = above * std::min(std::max((u - at) * 4.0, 0.0), 1.0);  // NaN u: max(NaN, 0) is 0
+  auto mix = [&](double a0, double a1, double a2, double a3, double a4) {
+    const double x = pick(a0, a1, a2, a3), y = pick(a1, a2, a3, a4);
+    return static_cast<int>(x + (y - x) * t + 0.5);  // in [0, 255.5]: truncation as rampColour's
+  };
+  return {mix(k[0].r, k[1].r, k[2].r, k[3].r, k[4].r), mix(k[0].g, k[1].g, k[2].g, k[3].g, k[4].g),
+          mix(k[0].b, k[1].b, k[2].b, k[3].b, k[4].b)};
+}
+
+}  // namespace
+
+// Two passes a row, each a plain loop over arrays that the compiler vectorises (issue 24: the
+// per-pixel call chain — hornRow's callback, HillshadeLight, shadedTint, rampColour's search — was
+// over half of a cold elevation tile's CPU): (1) the shading factor of every cell, the IEEE
+// operations of hillshade() and shadedTint in their order (no reassociation, no reciprocals: the
+// bytes are the old ones; render.cpp is built with -fno-math-errno so std::sqrt needs no errno
+// branch), (2) tint × factor, rounded as toByte.
 Image renderShadedElevation(const terrain::Dem& dem, const ColourRange& range) {
+  static_assert(std::endian::native == std::endian::little, "pixels are packed R, G, B, A from the low byte");
   const auto& z = required(RenderLayer::Elevation, &dem.z, "DEM");
   static const terrain::HillshadeLight light;  // terrain::hillshade's default sun
   const int rows = z.geometry.rows, cols = z.geometry.cols;
@@ -199,24 +246,42 @@ Image renderShadedElevation(const terrain::Dem& dem, const ColourRange& range) {
   img.width = cols;
   img.height = rows;
   img.rgba.assign(std::size_t(rows) * cols * 4, 0);
-  std::vector<float> shade(cols);  // this row's hillshade: NaN on the border and nodata windows
+  // This row's shading factor (shadedTint's f): 1 on the border and where the 3 × 3 window has no
+  // data or the light is NaN (an unshaded tint, as a NaN hillshade gives).
+  std::vector<double> factor(cols);
+  std::vector<std::uint32_t> rowPixels(cols);  // this row's RGBA, little-endian
   for (int r = 0; r < rows; ++r) {
-    std::fill(shade.begin(), shade.end(), kNaN);
+    std::fill(factor.begin(), factor.end(), 1.0);
     if (r > 0 && r < rows - 1) {
-      const double ewres = dem.dx(r), nsres = -dem.dy();
-      terrain::hornRow(dem, r, [&](int c, float sx, float sy) {
-        shade[c] = static_cast<float>(light(sx / (8.0 * ewres), sy / (8.0 * nsres)));  // as hillshade()
-      });
+      const double ex = 8.0 * dem.dx(r), ny = 8.0 * -dem.dy();
+      const float* up = &z(r - 1, 0);
+      const float* row = &z(r, 0);
+      const float* down = &z(r + 1, 0);
+      double* f = factor.data();
+      for (int c = 1; c < cols - 1; ++c) {  // terrain::hornRow's sums, then hillshade()'s light
+        const float a = up[c - 1], b = up[c], cc = up[c + 1], d = row[c - 1], e = row[c + 1], g = down[c - 1],
+                    h = down[c], i = down[c + 1];
+        const bool noData = std::isnan(double(a) + b + cc + d + e + g + h + i + row[c]);
+        const float sx = (a + d + d + g) - (cc + e + e + i), sy = (g + h + h + i) - (a + b + b + cc);
+        const float s = static_cast<float>(light(sx / ex, sy / ny));
+        const double shaded = 0.3 + 0.7 * double(s) / kNeutralShade;
+        f[c] = noData || !std::isfinite(s) ? 1.0 : shaded;
+      }
     }
+    // The cell's scale (a product, not a select, so the loop vectorises): the factor, or 0 for a
+    // cell without a height (then every channel is 0 × … = 0: transparent black).
     const float* v = &z(r, 0);
-    std::uint8_t* p = &img.rgba[std::size_t(r) * cols * 4];
-    for (int c = 0; c < cols; ++c, p += 4) {
-      const Rgba px = shadedTint(v[c], shade[c], lo, span);
-      p[0] = px.r;
-      p[1] = px.g;
-      p[2] = px.b;
-      p[3] = px.a;
+    double* f = factor.data();
+    for (int c = 0; c < cols; ++c) f[c] *= double(std::fabs(v[c]) <= std::numeric_limits<float>::max());
+    std::uint32_t* p = rowPixels.data();
+    for (int c = 0; c < cols; ++c) {
+      const TintChannels t = hypsometricTint((double(v[c]) - lo) / span);
+      // toByte(tint × f): the product is ≥ 0 (tints and factors are), so min(·, 255) + ½ truncated.
+      const double k = f[c];
+      auto byte = [k](int x) { return static_cast<std::uint32_t>(std::min(x * k, 255.0) + 0.5); };
+      p[c] = byte(t.r) | byte(t.g) << 8 | byte(t.b) << 16 | (k > 0 ? 0xff000000u : 0u);  // R, G, B, A in memory
     }
+    std::memcpy(&img.rgba[std::size_t(r) * cols * 4], p, std::size_t(cols) * 4);
   }
   return img;
 }
