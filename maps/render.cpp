@@ -143,11 +143,13 @@ class SlopeTable {
     last_ = exact(2.0);
   }
 
-  // ex = 8·dx(r), ny = 8·nsres as slopeHorn divides by them; kx = 1/ex², ky = 1/ny².
-  Rgba colour(float sx, float sy, double ex, double ny, double kx, double ky) const {
-    const double g2 = double(sx) * sx * kx + double(sy) * sy * ky;
+  // Horn's sums (sx, sy); ex = 8·dx(r), ny = 8·nsres as slopeHorn divides by them; kx = 1/ex²,
+  // ky = 1/ny²; g2 = squared(sx, sy, kx, ky) and root = √g2, computed by the caller (renderSlope:
+  // a row at a time, vectorised).
+  static double squared(float sx, float sy, double kx, double ky) { return double(sx) * sx * kx + double(sy) * sy * ky; }
+  Rgba colour(float sx, float sy, double g2, double root, double ex, double ny) const {
     if (g2 < 1.0) {
-      const Rgba c = bins_[std::min(static_cast<int>(std::sqrt(g2) * kBins), kBins - 1)];
+      const Rgba c = bins_[std::min(static_cast<int>(root * kBins), kBins - 1)];
       if (c.a != 0) return c;
     } else if (g2 >= 1.0 + kMargin) {  // also +inf: 90°
       return last_;
@@ -176,18 +178,37 @@ Image renderSlope(const terrain::Dem& dem) {
   img.width = cols;
   img.height = rows;
   img.rgba.assign(std::size_t(rows) * cols * 4, 0);  // transparent: borders, nodata windows
+  // This row's Horn sums and whether the 3 × 3 window has data, computed in a loop the compiler
+  // vectorises (terrain::hornRow's arithmetic, in its order); the colours then come from the table.
+  std::vector<float> sxs(cols), sys(cols);
+  std::vector<double> window(cols);  // the 3 × 3 window's sum: NaN where it has no data
+  std::vector<double> g2s(cols), roots(cols);  // the squared gradient (in tan² of the slope), its root
   for (int r = 1; r < rows - 1; ++r) {
     const double ex = 8.0 * dem.dx(r), ny = 8.0 * -dem.dy();
     const double kx = 1 / (ex * ex), ky = 1 / (ny * ny);
+    const float* up = &z(r - 1, 0);
+    const float* row = &z(r, 0);
+    const float* down = &z(r + 1, 0);
+    for (int c = 1; c < cols - 1; ++c) {
+      const float a = up[c - 1], b = up[c], cc = up[c + 1], d = row[c - 1], e = row[c + 1], g = down[c - 1],
+                  h = down[c], i = down[c + 1];
+      window[c] = double(a) + b + cc + d + e + g + h + i + row[c];
+      const float sx = (a + d + d + g) - (cc + e + e + i), sy = (g + h + h + i) - (a + b + b + cc);
+      sxs[c] = sx;
+      sys[c] = sy;
+      g2s[c] = SlopeTable::squared(sx, sy, kx, ky);
+      roots[c] = std::sqrt(g2s[c]);
+    }
     std::uint8_t* out = &img.rgba[std::size_t(r) * cols * 4];
-    terrain::hornRow(dem, r, [&](int c, float sx, float sy) {
-      const Rgba px = table.colour(sx, sy, ex, ny, kx, ky);
+    for (int c = 1; c < cols - 1; ++c) {
+      if (std::isnan(window[c])) continue;
+      const Rgba px = table.colour(sxs[c], sys[c], g2s[c], roots[c], ex, ny);
       std::uint8_t* p = out + std::size_t(c) * 4;
       p[0] = px.r;
       p[1] = px.g;
       p[2] = px.b;
       p[3] = px.a;
-    });
+    }
   }
   return img;
 }
