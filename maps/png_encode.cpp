@@ -194,12 +194,12 @@ std::vector<std::uint8_t> encodePng(const Image& image, PngColours colours) {
       raw = packed.get();
     } else if (colourType == 0 || colourType == 2) {
       const std::size_t channels = colourType == 0 ? 1 : 3;
-      packed = bytes(n * channels);
+      packed = bytes(n * channels + 1);  // + 1: RGB rows are copied 4 bytes a pixel (below)
       std::uint8_t* out = packed.get();
       if (channels == 1)
         for (std::size_t i = 0; i < n; ++i) out[i] = px[i * 4];
-      else
-        for (std::size_t i = 0; i < n; ++i) std::memcpy(out + i * 3, px + i * 4, 3);
+      else  // each pixel's 4 bytes, the next one's red overwriting its alpha: one store a pixel
+        for (std::size_t i = 0; i < n; ++i) std::memcpy(out + i * 3, px + i * 4, 4);
       raw = packed.get();
     }
   }
