@@ -187,9 +187,14 @@ std::vector<std::uint8_t> encodePng(const Image& image, PngColours colours) {
           for (std::size_t x = 0; x < w; ++x) out[x] = rank[in[x]];
           continue;
         }
-        std::memset(out, 0, rowBytes);  // the last byte's unused low bits are zero
-        for (std::size_t x = 0; x < w; ++x)  // leftmost pixel in the high bits
-          out[x / perByte] |= static_cast<std::uint8_t>(rank[in[x]] << (8 - bitDepth * (1 + int(x % perByte))));
+        // Leftmost pixel in the high bits; a byte at a time, in a register (a division and a
+        // read-modify-write of memory a pixel were a fifth of a traversability tile's encoding).
+        for (std::size_t at = 0, x = 0; at < rowBytes; ++at) {
+          unsigned v = 0;
+          for (int k = 0; k < perByte; ++k, ++x)  // past the row's end: zero bits
+            v = v << bitDepth | (x < w ? rank[in[x]] : 0u);
+          out[at] = static_cast<std::uint8_t>(v);
+        }
       }
       raw = packed.get();
     } else if (colourType == 0 || colourType == 2) {
