@@ -251,49 +251,63 @@ inline TintChannels hypsometricTint(double u) {
 
 }  // namespace
 
-// Two passes a row, each a plain loop over arrays that the compiler vectorises (issue 24: the
-// per-pixel call chain — hornRow's callback, HillshadeLight, shadedTint, rampColour's search — was
-// over half of a cold elevation tile's CPU): (1) the shading factor of every cell, the IEEE
-// operations of hillshade() and shadedTint in their order (no reassociation, no reciprocals: the
-// bytes are the old ones; render.cpp is built with -fno-math-errno so std::sqrt needs no errno
-// branch), (2) tint × factor, rounded as toByte.
+namespace {
+
+// Row r's hillshade as terrain::hillshade gives it (the default sun): shade[c] for the interior
+// columns, NaN where the 3 × 3 window has no data; the first and last column are NaN. One plain
+// loop the compiler vectorises (issue 24: the per-pixel call chain — hornRow's callback,
+// HillshadeLight, the ramp's search — was over half of a cold elevation tile's CPU), with the IEEE
+// operations of hornRow and hillshade() in their order: no reassociation, no reciprocals, so the
+// floats are the old ones (render.cpp is built with -fno-math-errno so std::sqrt needs no errno
+// branch, -fno-trapping-math so the select below needs no branch).
+void shadeRow(const terrain::Dem& dem, int r, float* shade) {
+  static const terrain::HillshadeLight light;  // terrain::hillshade's default sun
+  const auto& z = dem.z;
+  const int cols = z.geometry.cols;
+  const double ex = 8.0 * dem.dx(r), ny = 8.0 * -dem.dy();
+  const float* up = &z(r - 1, 0);
+  const float* row = &z(r, 0);
+  const float* down = &z(r + 1, 0);
+  shade[0] = shade[cols - 1] = kNaN;
+  for (int c = 1; c < cols - 1; ++c) {
+    const float a = up[c - 1], b = up[c], cc = up[c + 1], d = row[c - 1], e = row[c + 1], g = down[c - 1],
+                h = down[c], i = down[c + 1];
+    const bool noData = std::isnan(double(a) + b + cc + d + e + g + h + i + row[c]);
+    const float sx = (a + d + d + g) - (cc + e + e + i), sy = (g + h + h + i) - (a + b + b + cc);
+    const float s = static_cast<float>(light(sx / ex, sy / ny));
+    shade[c] = noData ? kNaN : s;
+  }
+}
+
+}  // namespace
+
+// Per row: the shade (shadeRow), the shading factor, then tint × factor rounded as toByte; each a
+// loop over arrays that the compiler vectorises.
 Image renderShadedElevation(const terrain::Dem& dem, const ColourRange& range) {
   static_assert(std::endian::native == std::endian::little, "pixels are packed R, G, B, A from the low byte");
   const auto& z = required(RenderLayer::Elevation, &dem.z, "DEM");
-  static const terrain::HillshadeLight light;  // terrain::hillshade's default sun
   const int rows = z.geometry.rows, cols = z.geometry.cols;
   const double lo = range.lo, span = range.hi - range.lo;
   Image img;
   img.width = cols;
   img.height = rows;
   img.rgba.assign(std::size_t(rows) * cols * 4, 0);
-  // This row's shading factor (shadedTint's f): 1 on the border and where the 3 × 3 window has no
-  // data or the light is NaN (an unshaded tint, as a NaN hillshade gives).
+  std::vector<float> shade(cols, kNaN);  // NaN on the first and last row
+  // This row's shading factor (shadedTint's f): 1 where the shade is NaN (an unshaded tint).
   std::vector<double> factor(cols);
   std::vector<std::uint32_t> rowPixels(cols);  // this row's RGBA, little-endian
   for (int r = 0; r < rows; ++r) {
-    std::fill(factor.begin(), factor.end(), 1.0);
-    if (r > 0 && r < rows - 1) {
-      const double ex = 8.0 * dem.dx(r), ny = 8.0 * -dem.dy();
-      const float* up = &z(r - 1, 0);
-      const float* row = &z(r, 0);
-      const float* down = &z(r + 1, 0);
-      double* f = factor.data();
-      for (int c = 1; c < cols - 1; ++c) {  // terrain::hornRow's sums, then hillshade()'s light
-        const float a = up[c - 1], b = up[c], cc = up[c + 1], d = row[c - 1], e = row[c + 1], g = down[c - 1],
-                    h = down[c], i = down[c + 1];
-        const bool noData = std::isnan(double(a) + b + cc + d + e + g + h + i + row[c]);
-        const float sx = (a + d + d + g) - (cc + e + e + i), sy = (g + h + h + i) - (a + b + b + cc);
-        const float s = static_cast<float>(light(sx / ex, sy / ny));
-        const double shaded = 0.3 + 0.7 * double(s) / kNeutralShade;
-        f[c] = noData || !std::isfinite(s) ? 1.0 : shaded;
-      }
-    }
+    if (r > 0 && r < rows - 1) shadeRow(dem, r, shade.data());
+    else std::fill(shade.begin(), shade.end(), kNaN);
     // The cell's scale (a product, not a select, so the loop vectorises): the factor, or 0 for a
     // cell without a height (then every channel is 0 × … = 0: transparent black).
     const float* v = &z(r, 0);
     double* f = factor.data();
-    for (int c = 0; c < cols; ++c) f[c] *= double(std::fabs(v[c]) <= std::numeric_limits<float>::max());
+    for (int c = 0; c < cols; ++c) {
+      const float s = shade[c];
+      const double shaded = 0.3 + 0.7 * double(s) / kNeutralShade;
+      f[c] = (std::isfinite(s) ? shaded : 1.0) * double(std::fabs(v[c]) <= std::numeric_limits<float>::max());
+    }
     std::uint32_t* p = rowPixels.data();
     for (int c = 0; c < cols; ++c) {
       const TintChannels t = hypsometricTint((double(v[c]) - lo) / span);
@@ -303,6 +317,27 @@ Image renderShadedElevation(const terrain::Dem& dem, const ColourRange& range) {
       p[c] = byte(t.r) | byte(t.g) << 8 | byte(t.b) << 16 | (k > 0 ? 0xff000000u : 0u);  // R, G, B, A in memory
     }
     std::memcpy(&img.rgba[std::size_t(r) * cols * 4], p, std::size_t(cols) * 4);
+  }
+  return img;
+}
+
+Image renderHillshade(const terrain::Dem& dem) {
+  const auto& z = required(RenderLayer::Hillshade, &dem.z, "DEM");
+  const int rows = z.geometry.rows, cols = z.geometry.cols;
+  Image img;
+  img.width = cols;
+  img.height = rows;
+  img.rgba.assign(std::size_t(rows) * cols * 4, 0);  // transparent: borders, nodata windows
+  std::vector<float> shade(cols);
+  std::vector<std::uint32_t> rowPixels(cols);  // this row's RGBA, little-endian
+  for (int r = 1; r < rows - 1; ++r) {
+    shadeRow(dem, r, shade.data());
+    for (int c = 0; c < cols; ++c) {  // hillshadeGrey: toByte of a shade in 1..255, grey, opaque
+      const float s = shade[c];
+      const auto g = static_cast<std::uint32_t>(std::min(double(s), 255.0) + 0.5);
+      rowPixels[c] = std::isfinite(s) ? g | g << 8 | g << 16 | 0xff000000u : 0u;
+    }
+    std::memcpy(&img.rgba[std::size_t(r) * cols * 4], rowPixels.data(), std::size_t(cols) * 4);
   }
   return img;
 }

@@ -469,7 +469,7 @@ TEST_CASE("render: an elevation ramp seen in pieces equals the whole grid's, als
   CHECK(whole.hi == doctest::Approx(0.98 * n).epsilon(0.01));
 }
 
-TEST_CASE("render: renderSlope and renderShadedElevation draw renderLayer's pixels over slopeHorn and hillshade") {
+TEST_CASE("render: renderSlope, renderShadedElevation and renderHillshade draw renderLayer's pixels over slopeHorn and hillshade") {
   // Slopes swept from 0° to ~60° along each row (a quadratic surface), tilted differently in each
   // row, with noise, so every colour of the ramps and thousands of cells next to a change of
   // colour are met; per-row cell widths (a geographic map); nodata, infinite and huge heights.
@@ -515,9 +515,13 @@ TEST_CASE("render: renderSlope and renderShadedElevation draw renderLayer's pixe
   different = 0;
   for (std::size_t i = 0; i < shaded.rgba.size(); ++i) different += shaded.rgba[i] != byShade.rgba[i];
   CHECK(different == 0);
+  const Image greys = renderLayer(RenderLayer::Hillshade, in, noLegend());
+  const Image fusedGreys = renderHillshade(dem);
+  REQUIRE(fusedGreys.rgba.size() == greys.rgba.size());
+  CHECK(fusedGreys.rgba == greys.rgba);
 }
 
-TEST_CASE("render: the vectorised elevation shading gives renderLayer's bytes on the ramp's stops and at the edges") {
+TEST_CASE("render: the vectorised elevation and hillshade give renderLayer's bytes on the ramp's stops and at the edges") {
   // renderShadedElevation computes the tint without rampColour's search and the shade without
   // hillshade()'s raster (maps/render.cpp); every byte must stay what renderLayer draws from
   // terrain::hillshade. Heights on each stop of the ramp (u = 0, ¼, ½, ¾, 1), one float either
@@ -570,6 +574,8 @@ TEST_CASE("render: the vectorised elevation shading gives renderLayer's bytes on
       CAPTURE(range.lo);
       CAPTURE(cell);
       CHECK(different == 0);
+      const Image greys = renderHillshade(dem);
+      CHECK(greys.rgba == renderLayer(RenderLayer::Hillshade, in, noLegend()).rgba);
     }
   }
 }
