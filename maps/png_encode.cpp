@@ -118,10 +118,15 @@ void filterRows(const std::uint8_t* raw, std::size_t h, std::size_t rowBytes, st
       continue;
     }
     for (std::size_t i = 0; i < bpp && i < rowBytes; ++i) o[i] = static_cast<std::uint8_t>(row[i] - up[i]);
+    // In 16-bit lanes (|a + b − 2c| ≤ 510 fits): twice the bytes a vector of 32-bit ones.
     for (std::size_t i = bpp; i < rowBytes; ++i) {
-      const int a = row[i - bpp], b = up[i], c = up[i - bpp];
-      const int pa = std::abs(b - c), pb = std::abs(a - c), pc = std::abs(a + b - 2 * c);
-      const int pred = pa <= pb && pa <= pc ? a : pb <= pc ? b : c;
+      const std::int16_t a = row[i - bpp], b = up[i], c = up[i - bpp];
+      const std::int16_t db = static_cast<std::int16_t>(b - c), da = static_cast<std::int16_t>(a - c);
+      const std::int16_t pa = static_cast<std::int16_t>(db < 0 ? -db : db);
+      const std::int16_t pb = static_cast<std::int16_t>(da < 0 ? -da : da);
+      const std::int16_t sum = static_cast<std::int16_t>(da + db);
+      const std::int16_t pc = static_cast<std::int16_t>(sum < 0 ? -sum : sum);
+      const std::int16_t pred = pa <= pb && pa <= pc ? a : pb <= pc ? b : c;
       o[i] = static_cast<std::uint8_t>(row[i] - pred);
     }
   }
