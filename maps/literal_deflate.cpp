@@ -82,11 +82,11 @@ class BitWriter {
 
  public:
   explicit BitWriter(std::uint8_t* out) : out_(out) {}
-  void put(std::uint32_t bits, int n) {  // n <= 32
-    acc_ |= std::uint64_t(bits) << count_;
+  void put(std::uint64_t bits, int n) {  // n <= 56
+    acc_ |= bits << count_;
     count_ += n;
     std::memcpy(out_, &acc_, 8);  // little-endian: the oldest bits first
-    const int whole = count_ >> 3;  // at most 4: fewer than 8 bits were pending, n ≤ 32 came
+    const int whole = count_ >> 3;  // at most 7: fewer than 8 bits were pending, n ≤ 56 came
     out_ += whole;
     acc_ >>= 8 * whole;
     count_ &= 7;
@@ -129,12 +129,31 @@ void literalBlock(BitWriter& w, const std::uint8_t* data, std::size_t n, const s
   for (int i = 0; i < sent; ++i) w.put(clLen[kOrder[i]], 3);
   for (auto l : len) w.put(clCode[l], clLen[l]);
   w.put(clCode[0], clLen[0]);  // the distance code's length: 0
-  std::size_t i = 0;
-  for (; i + 2 <= n; i += 2) {  // two codes of at most 15 bits a call
-    const std::uint8_t a = data[i], b = data[i + 1];
-    w.put(code[a] | std::uint32_t(code[b]) << len[a], len[a] + len[b]);
+  // Each byte's code and length in one word (one load a byte), then as many codes a put as fit
+  // its 56 bits: four when no code is longer than 14 bits (most residual tiles), else three. The
+  // bits are the same either way.
+  std::array<std::uint32_t, 256> entry;
+  int longest = 0;
+  for (int v = 0; v < 256; ++v) {
+    entry[v] = code[v] | std::uint32_t(len[v]) << 16;
+    longest = std::max<int>(longest, len[v]);
   }
-  if (i < n) w.put(code[data[i]], len[data[i]]);
+  auto bitsOf = [&](std::uint32_t e) { return std::uint64_t(e & 0xffffu); };
+  auto lenOf = [](std::uint32_t e) { return int(e >> 16); };
+  std::size_t i = 0;
+  if (longest <= 14) {
+    for (; i + 4 <= n; i += 4) {
+      const std::uint32_t a = entry[data[i]], b = entry[data[i + 1]], c = entry[data[i + 2]], d = entry[data[i + 3]];
+      const int la = lenOf(a), lb = lenOf(b), lc = lenOf(c), ld = lenOf(d);
+      w.put(bitsOf(a) | bitsOf(b) << la | bitsOf(c) << (la + lb) | bitsOf(d) << (la + lb + lc), la + lb + lc + ld);
+    }
+  }
+  for (; i + 3 <= n; i += 3) {  // three codes of at most 15 bits
+    const std::uint32_t a = entry[data[i]], b = entry[data[i + 1]], c = entry[data[i + 2]];
+    const int la = lenOf(a), lb = lenOf(b), lc = lenOf(c);
+    w.put(bitsOf(a) | bitsOf(b) << la | bitsOf(c) << (la + lb), la + lb + lc);
+  }
+  for (; i < n; ++i) w.put(bitsOf(entry[data[i]]), lenOf(entry[data[i]]));
   w.put(code[256], len[256]);
 }
 

@@ -153,7 +153,7 @@ Image renderTile(RenderLayer layer, const TileBlocks& source, const TileWindow& 
   const bool kernel = layer == RenderLayer::Elevation || layer == RenderLayer::Hillshade || layer == RenderLayer::Slope;
   const Span span = spanOf(w, kernel ? 1 : 0);
   terrain::Dem blocks;
-  Raster<float> shade, mass;
+  Raster<float> mass;
   Raster<std::uint8_t> classes;
   RenderInput in;
   if (kernel) {
@@ -163,8 +163,7 @@ Image renderTile(RenderLayer layer, const TileBlocks& source, const TileWindow& 
   if (layer == RenderLayer::Elevation) {
     return placed(w, span, renderShadedElevation(blocks, source.range()));  // no hillshade raster
   } else if (layer == RenderLayer::Hillshade) {
-    shade = terrain::hillshade(blocks);
-    in.hillshade = &shade;
+    return placed(w, span, renderHillshade(blocks));  // no hillshade raster
   } else if (layer == RenderLayer::Slope) {
     return placed(w, span, renderSlope(blocks));  // no slope raster, few arctangents
   } else if (layer == RenderLayer::Traversability) {

@@ -118,10 +118,15 @@ void filterRows(const std::uint8_t* raw, std::size_t h, std::size_t rowBytes, st
       continue;
     }
     for (std::size_t i = 0; i < bpp && i < rowBytes; ++i) o[i] = static_cast<std::uint8_t>(row[i] - up[i]);
+    // In 16-bit lanes (|a + b − 2c| ≤ 510 fits): twice the bytes a vector of 32-bit ones.
     for (std::size_t i = bpp; i < rowBytes; ++i) {
-      const int a = row[i - bpp], b = up[i], c = up[i - bpp];
-      const int pa = std::abs(b - c), pb = std::abs(a - c), pc = std::abs(a + b - 2 * c);
-      const int pred = pa <= pb && pa <= pc ? a : pb <= pc ? b : c;
+      const std::int16_t a = row[i - bpp], b = up[i], c = up[i - bpp];
+      const std::int16_t db = static_cast<std::int16_t>(b - c), da = static_cast<std::int16_t>(a - c);
+      const std::int16_t pa = static_cast<std::int16_t>(db < 0 ? -db : db);
+      const std::int16_t pb = static_cast<std::int16_t>(da < 0 ? -da : da);
+      const std::int16_t sum = static_cast<std::int16_t>(da + db);
+      const std::int16_t pc = static_cast<std::int16_t>(sum < 0 ? -sum : sum);
+      const std::int16_t pred = pa <= pb && pa <= pc ? a : pb <= pc ? b : c;
       o[i] = static_cast<std::uint8_t>(row[i] - pred);
     }
   }
@@ -187,19 +192,24 @@ std::vector<std::uint8_t> encodePng(const Image& image, PngColours colours) {
           for (std::size_t x = 0; x < w; ++x) out[x] = rank[in[x]];
           continue;
         }
-        std::memset(out, 0, rowBytes);  // the last byte's unused low bits are zero
-        for (std::size_t x = 0; x < w; ++x)  // leftmost pixel in the high bits
-          out[x / perByte] |= static_cast<std::uint8_t>(rank[in[x]] << (8 - bitDepth * (1 + int(x % perByte))));
+        // Leftmost pixel in the high bits; a byte at a time, in a register (a division and a
+        // read-modify-write of memory a pixel were a fifth of a traversability tile's encoding).
+        for (std::size_t at = 0, x = 0; at < rowBytes; ++at) {
+          unsigned v = 0;
+          for (int k = 0; k < perByte; ++k, ++x)  // past the row's end: zero bits
+            v = v << bitDepth | (x < w ? rank[in[x]] : 0u);
+          out[at] = static_cast<std::uint8_t>(v);
+        }
       }
       raw = packed.get();
     } else if (colourType == 0 || colourType == 2) {
       const std::size_t channels = colourType == 0 ? 1 : 3;
-      packed = bytes(n * channels);
+      packed = bytes(n * channels + 1);  // + 1: RGB rows are copied 4 bytes a pixel (below)
       std::uint8_t* out = packed.get();
       if (channels == 1)
         for (std::size_t i = 0; i < n; ++i) out[i] = px[i * 4];
-      else
-        for (std::size_t i = 0; i < n; ++i) std::memcpy(out + i * 3, px + i * 4, 3);
+      else  // each pixel's 4 bytes, the next one's red overwriting its alpha: one store a pixel
+        for (std::size_t i = 0; i < n; ++i) std::memcpy(out + i * 3, px + i * 4, 4);
       raw = packed.get();
     }
   }

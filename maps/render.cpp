@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstring>
+#include <bit>
 #include <iterator>
 #include <numbers>
 #include <limits>
@@ -141,11 +143,13 @@ class SlopeTable {
     last_ = exact(2.0);
   }
 
-  // ex = 8·dx(r), ny = 8·nsres as slopeHorn divides by them; kx = 1/ex², ky = 1/ny².
-  Rgba colour(float sx, float sy, double ex, double ny, double kx, double ky) const {
-    const double g2 = double(sx) * sx * kx + double(sy) * sy * ky;
+  // Horn's sums (sx, sy); ex = 8·dx(r), ny = 8·nsres as slopeHorn divides by them; kx = 1/ex²,
+  // ky = 1/ny²; g2 = squared(sx, sy, kx, ky) and root = √g2, computed by the caller (renderSlope:
+  // a row at a time, vectorised).
+  static double squared(float sx, float sy, double kx, double ky) { return double(sx) * sx * kx + double(sy) * sy * ky; }
+  Rgba colour(float sx, float sy, double g2, double root, double ex, double ny) const {
     if (g2 < 1.0) {
-      const Rgba c = bins_[std::min(static_cast<int>(std::sqrt(g2) * kBins), kBins - 1)];
+      const Rgba c = bins_[std::min(static_cast<int>(root * kBins), kBins - 1)];
       if (c.a != 0) return c;
     } else if (g2 >= 1.0 + kMargin) {  // also +inf: 90°
       return last_;
@@ -174,49 +178,166 @@ Image renderSlope(const terrain::Dem& dem) {
   img.width = cols;
   img.height = rows;
   img.rgba.assign(std::size_t(rows) * cols * 4, 0);  // transparent: borders, nodata windows
+  // This row's Horn sums and whether the 3 × 3 window has data, computed in a loop the compiler
+  // vectorises (terrain::hornRow's arithmetic, in its order); the colours then come from the table.
+  std::vector<float> sxs(cols), sys(cols);
+  std::vector<double> window(cols);  // the 3 × 3 window's sum: NaN where it has no data
+  std::vector<double> g2s(cols), roots(cols);  // the squared gradient (in tan² of the slope), its root
   for (int r = 1; r < rows - 1; ++r) {
     const double ex = 8.0 * dem.dx(r), ny = 8.0 * -dem.dy();
     const double kx = 1 / (ex * ex), ky = 1 / (ny * ny);
+    const float* up = &z(r - 1, 0);
+    const float* row = &z(r, 0);
+    const float* down = &z(r + 1, 0);
+    for (int c = 1; c < cols - 1; ++c) {
+      const float a = up[c - 1], b = up[c], cc = up[c + 1], d = row[c - 1], e = row[c + 1], g = down[c - 1],
+                  h = down[c], i = down[c + 1];
+      window[c] = double(a) + b + cc + d + e + g + h + i + row[c];
+      const float sx = (a + d + d + g) - (cc + e + e + i), sy = (g + h + h + i) - (a + b + b + cc);
+      sxs[c] = sx;
+      sys[c] = sy;
+      g2s[c] = SlopeTable::squared(sx, sy, kx, ky);
+      roots[c] = std::sqrt(g2s[c]);
+    }
     std::uint8_t* out = &img.rgba[std::size_t(r) * cols * 4];
-    terrain::hornRow(dem, r, [&](int c, float sx, float sy) {
-      const Rgba px = table.colour(sx, sy, ex, ny, kx, ky);
+    for (int c = 1; c < cols - 1; ++c) {
+      if (std::isnan(window[c])) continue;
+      const Rgba px = table.colour(sxs[c], sys[c], g2s[c], roots[c], ex, ny);
       std::uint8_t* p = out + std::size_t(c) * 4;
       p[0] = px.r;
       p[1] = px.g;
       p[2] = px.b;
       p[3] = px.a;
-    });
+    }
   }
   return img;
 }
 
-Image renderShadedElevation(const terrain::Dem& dem, const ColourRange& range) {
-  const auto& z = required(RenderLayer::Elevation, &dem.z, "DEM");
+namespace {
+
+// The hypsometric ramp's stops are a quarter apart, so rampColour(kHypsometric, u)'s search for the
+// segment is i = 1 + [u > ¼] + [u > ½] + [u > ¾] for u > 0, and its division by the segment's
+// width 0.25 is an exact multiplication by 4. What is left is the same arithmetic without a
+// branch or a table look-up a pixel.
+static_assert(std::size(kHypsometric) == 5);
+constexpr bool quarterStops() {
+  for (std::size_t i = 0; i < std::size(kHypsometric); ++i)
+    if (kHypsometric[i].at != 0.25 * double(i)) return false;
+  return true;
+}
+static_assert(quarterStops(), "hypsometricTint assumes stops at 0, 0.25, 0.5, 0.75, 1");
+
+// rampColour(kHypsometric, u)'s channels, bit for bit (render tests compare the two).
+struct TintChannels {
+  int r, g, b;
+};
+inline TintChannels hypsometricTint(double u) {
+  // else (also NaN) the first stop's colour: segment 1 at t = 0
+  const double above = u > 0, past1 = u > 0.25, past2 = u > 0.5, past3 = u > 0.75;
+  // Stop i − 1 (x) and stop i (y) of a channel as sums of the steps passed: small integers, so exact.
+  auto pick = [&](double s0, double s1, double s2, double s3) {
+    return s0 + past1 * (s1 - s0) + past2 * (s2 - s1) + past3 * (s3 - s2);
+  };
+  constexpr const Stop* k = kHypsometric;
+  const double at = pick(k[0].at, k[1].at, k[2].at, k[3].at);  // quarters: exact
+  const double t = above * std::min(std::max((u - at) * 4.0, 0.0), 1.0);  // NaN u: max(NaN, 0) is 0
+  auto mix = [&](double a0, double a1, double a2, double a3, double a4) {
+    const double x = pick(a0, a1, a2, a3), y = pick(a1, a2, a3, a4);
+    return static_cast<int>(x + (y - x) * t + 0.5);  // in [0, 255.5]: truncation as rampColour's
+  };
+  return {mix(k[0].r, k[1].r, k[2].r, k[3].r, k[4].r), mix(k[0].g, k[1].g, k[2].g, k[3].g, k[4].g),
+          mix(k[0].b, k[1].b, k[2].b, k[3].b, k[4].b)};
+}
+
+}  // namespace
+
+namespace {
+
+// Row r's hillshade as terrain::hillshade gives it (the default sun): shade[c] for the interior
+// columns, NaN where the 3 × 3 window has no data; the first and last column are NaN. One plain
+// loop the compiler vectorises (issue 24: the per-pixel call chain — hornRow's callback,
+// HillshadeLight, the ramp's search — was over half of a cold elevation tile's CPU), with the IEEE
+// operations of hornRow and hillshade() in their order: no reassociation, no reciprocals, so the
+// floats are the old ones (render.cpp is built with -fno-math-errno so std::sqrt needs no errno
+// branch, -fno-trapping-math so the select below needs no branch).
+void shadeRow(const terrain::Dem& dem, int r, float* shade) {
   static const terrain::HillshadeLight light;  // terrain::hillshade's default sun
+  const auto& z = dem.z;
+  const int cols = z.geometry.cols;
+  const double ex = 8.0 * dem.dx(r), ny = 8.0 * -dem.dy();
+  const float* up = &z(r - 1, 0);
+  const float* row = &z(r, 0);
+  const float* down = &z(r + 1, 0);
+  shade[0] = shade[cols - 1] = kNaN;
+  for (int c = 1; c < cols - 1; ++c) {
+    const float a = up[c - 1], b = up[c], cc = up[c + 1], d = row[c - 1], e = row[c + 1], g = down[c - 1],
+                h = down[c], i = down[c + 1];
+    const bool noData = std::isnan(double(a) + b + cc + d + e + g + h + i + row[c]);
+    const float sx = (a + d + d + g) - (cc + e + e + i), sy = (g + h + h + i) - (a + b + b + cc);
+    const float s = static_cast<float>(light(sx / ex, sy / ny));
+    shade[c] = noData ? kNaN : s;
+  }
+}
+
+}  // namespace
+
+// Per row: the shade (shadeRow), the shading factor, then tint × factor rounded as toByte; each a
+// loop over arrays that the compiler vectorises.
+Image renderShadedElevation(const terrain::Dem& dem, const ColourRange& range) {
+  static_assert(std::endian::native == std::endian::little, "pixels are packed R, G, B, A from the low byte");
+  const auto& z = required(RenderLayer::Elevation, &dem.z, "DEM");
   const int rows = z.geometry.rows, cols = z.geometry.cols;
   const double lo = range.lo, span = range.hi - range.lo;
   Image img;
   img.width = cols;
   img.height = rows;
   img.rgba.assign(std::size_t(rows) * cols * 4, 0);
-  std::vector<float> shade(cols);  // this row's hillshade: NaN on the border and nodata windows
+  std::vector<float> shade(cols, kNaN);  // NaN on the first and last row
+  // This row's shading factor (shadedTint's f): 1 where the shade is NaN (an unshaded tint).
+  std::vector<double> factor(cols);
+  std::vector<std::uint32_t> rowPixels(cols);  // this row's RGBA, little-endian
   for (int r = 0; r < rows; ++r) {
-    std::fill(shade.begin(), shade.end(), kNaN);
-    if (r > 0 && r < rows - 1) {
-      const double ewres = dem.dx(r), nsres = -dem.dy();
-      terrain::hornRow(dem, r, [&](int c, float sx, float sy) {
-        shade[c] = static_cast<float>(light(sx / (8.0 * ewres), sy / (8.0 * nsres)));  // as hillshade()
-      });
-    }
+    if (r > 0 && r < rows - 1) shadeRow(dem, r, shade.data());
+    else std::fill(shade.begin(), shade.end(), kNaN);
+    // The cell's scale (a product, not a select, so the loop vectorises): the factor, or 0 for a
+    // cell without a height (then every channel is 0 × … = 0: transparent black).
     const float* v = &z(r, 0);
-    std::uint8_t* p = &img.rgba[std::size_t(r) * cols * 4];
-    for (int c = 0; c < cols; ++c, p += 4) {
-      const Rgba px = shadedTint(v[c], shade[c], lo, span);
-      p[0] = px.r;
-      p[1] = px.g;
-      p[2] = px.b;
-      p[3] = px.a;
+    double* f = factor.data();
+    for (int c = 0; c < cols; ++c) {
+      const float s = shade[c];
+      const double shaded = 0.3 + 0.7 * double(s) / kNeutralShade;
+      f[c] = (std::isfinite(s) ? shaded : 1.0) * double(std::fabs(v[c]) <= std::numeric_limits<float>::max());
     }
+    std::uint32_t* p = rowPixels.data();
+    for (int c = 0; c < cols; ++c) {
+      const TintChannels t = hypsometricTint((double(v[c]) - lo) / span);
+      // toByte(tint × f): the product is ≥ 0 (tints and factors are), so min(·, 255) + ½ truncated.
+      const double k = f[c];
+      auto byte = [k](int x) { return static_cast<std::uint32_t>(std::min(x * k, 255.0) + 0.5); };
+      p[c] = byte(t.r) | byte(t.g) << 8 | byte(t.b) << 16 | (k > 0 ? 0xff000000u : 0u);  // R, G, B, A in memory
+    }
+    std::memcpy(&img.rgba[std::size_t(r) * cols * 4], p, std::size_t(cols) * 4);
+  }
+  return img;
+}
+
+Image renderHillshade(const terrain::Dem& dem) {
+  const auto& z = required(RenderLayer::Hillshade, &dem.z, "DEM");
+  const int rows = z.geometry.rows, cols = z.geometry.cols;
+  Image img;
+  img.width = cols;
+  img.height = rows;
+  img.rgba.assign(std::size_t(rows) * cols * 4, 0);  // transparent: borders, nodata windows
+  std::vector<float> shade(cols);
+  std::vector<std::uint32_t> rowPixels(cols);  // this row's RGBA, little-endian
+  for (int r = 1; r < rows - 1; ++r) {
+    shadeRow(dem, r, shade.data());
+    for (int c = 0; c < cols; ++c) {  // hillshadeGrey: toByte of a shade in 1..255, grey, opaque
+      const float s = shade[c];
+      const auto g = static_cast<std::uint32_t>(std::min(double(s), 255.0) + 0.5);
+      rowPixels[c] = std::isfinite(s) ? g | g << 8 | g << 16 | 0xff000000u : 0u;
+    }
+    std::memcpy(&img.rgba[std::size_t(r) * cols * 4], rowPixels.data(), std::size_t(cols) * 4);
   }
   return img;
 }

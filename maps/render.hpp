@@ -84,6 +84,9 @@ Image renderSlope(const terrain::Dem& dem);
 // renderLayer(Elevation, {dem, hillshade = terrain::hillshade(dem)}, {legend = false, range}), pixel
 // for pixel, in one pass without the hillshade raster (a tile's elevation: map_tiles.cpp).
 Image renderShadedElevation(const terrain::Dem& dem, const ColourRange& range);
+// renderLayer(Hillshade, {hillshade = terrain::hillshade(dem)}, {legend = false}), pixel for pixel,
+// without the hillshade raster (a tile's hillshade: map_tiles.cpp).
+Image renderHillshade(const terrain::Dem& dem);
 // PNG bytes (every row filtered "Up", deflate level 1: maps/png_encode.cpp): 8-bit RGBA, or with
 // Smallest the fewest bytes a pixel that decode to the same RGBA (grey, a palette, RGB, RGBA; what
 // tiles use). Throws rover::Error (InvalidInput, field "image") for an image whose buffer does not

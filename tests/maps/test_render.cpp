@@ -469,7 +469,7 @@ TEST_CASE("render: an elevation ramp seen in pieces equals the whole grid's, als
   CHECK(whole.hi == doctest::Approx(0.98 * n).epsilon(0.01));
 }
 
-TEST_CASE("render: renderSlope and renderShadedElevation draw renderLayer's pixels over slopeHorn and hillshade") {
+TEST_CASE("render: renderSlope, renderShadedElevation and renderHillshade draw renderLayer's pixels over slopeHorn and hillshade") {
   // Slopes swept from 0° to ~60° along each row (a quadratic surface), tilted differently in each
   // row, with noise, so every colour of the ramps and thousands of cells next to a change of
   // colour are met; per-row cell widths (a geographic map); nodata, infinite and huge heights.
@@ -515,6 +515,69 @@ TEST_CASE("render: renderSlope and renderShadedElevation draw renderLayer's pixe
   different = 0;
   for (std::size_t i = 0; i < shaded.rgba.size(); ++i) different += shaded.rgba[i] != byShade.rgba[i];
   CHECK(different == 0);
+  const Image greys = renderLayer(RenderLayer::Hillshade, in, noLegend());
+  const Image fusedGreys = renderHillshade(dem);
+  REQUIRE(fusedGreys.rgba.size() == greys.rgba.size());
+  CHECK(fusedGreys.rgba == greys.rgba);
+}
+
+TEST_CASE("render: the vectorised elevation and hillshade give renderLayer's bytes on the ramp's stops and at the edges") {
+  // renderShadedElevation computes the tint without rampColour's search and the shade without
+  // hillshade()'s raster (maps/render.cpp); every byte must stay what renderLayer draws from
+  // terrain::hillshade. Heights on each stop of the ramp (u = 0, ¼, ½, ¾, 1), one float either
+  // side of it, below and above the range; flat ground; cliffs (the shade's cosine ≤ 0, and
+  // gradients so large x² + y² overflows); NaN and ±inf neighbours; a zero-width cell and a
+  // denormal one; in ranges whose stops are exact in float and in ones whose are not.
+  const float inf = std::numeric_limits<float>::infinity();
+  for (const ColourRange range : {ColourRange{0, 1}, ColourRange{50, 900}, ColourRange{-3.3, 7.1},
+                                  ColourRange{1e-7, 3e-7}}) {
+    std::vector<float> heights;
+    for (int k = 0; k <= 4; ++k) {
+      const float h = static_cast<float>(range.lo + (range.hi - range.lo) * 0.25 * k);
+      heights.insert(heights.end(), {h, std::nextafter(h, -inf), std::nextafter(h, inf)});
+    }
+    heights.insert(heights.end(), {static_cast<float>(range.lo - 1e6), static_cast<float>(range.hi + 1e6), 0.0f,
+                                   -0.0f, 3e38f, -3e38f, 1e-40f});
+    for (const double cell : {1.0, 0.001, 1e6, 0.0, 1e-310}) {
+      const int rows = 40, cols = 3 * int(heights.size()) + 6;
+      rover::terrain::Dem dem;
+      dem.z = Raster<float>(GridGeometry{rows, cols, cell, cell}, 0.0f);
+      std::uint32_t seed = 11;
+      auto next = [&] {
+        seed = seed * 1664525u + 1013904223u;
+        return seed >> 8;
+      };
+      for (int r = 0; r < rows; ++r)
+        for (int c = 0; c < cols; ++c) {
+          const float h = heights[(c / 3) % heights.size()];
+          // rows 0-9 flat runs of each height; 10-19 gentle noise; 20-29 cliffs between
+          // neighbouring heights (a mix of everything); 30-39 random picks
+          dem.z(r, c) = r < 10   ? h
+                        : r < 20 ? static_cast<float>(h + 1e-3 * double(next() % 7))
+                        : r < 30 ? heights[(c + r) % heights.size()]
+                                 : heights[next() % heights.size()];
+        }
+      for (int k = 0; k < 25; ++k)
+        dem.z(1 + int(next() % (rows - 2)), 1 + int(next() % (cols - 2))) =
+            k % 3 == 0 ? kNaN : k % 3 == 1 ? inf : -inf;
+      const Raster<float> shade = rover::terrain::hillshade(dem);
+      RenderOptions options = noLegend();
+      options.range = &range;
+      RenderInput in;
+      in.dem = &dem;
+      in.hillshade = &shade;
+      const Image expected = renderLayer(RenderLayer::Elevation, in, options);
+      const Image fused = renderShadedElevation(dem, range);
+      REQUIRE(fused.rgba.size() == expected.rgba.size());
+      int different = 0;
+      for (std::size_t i = 0; i < fused.rgba.size(); ++i) different += fused.rgba[i] != expected.rgba[i];
+      CAPTURE(range.lo);
+      CAPTURE(cell);
+      CHECK(different == 0);
+      const Image greys = renderHillshade(dem);
+      CHECK(greys.rgba == renderLayer(RenderLayer::Hillshade, in, noLegend()).rgba);
+    }
+  }
 }
 
 TEST_CASE("overview: the level an overview is drawn from is just larger than it and never over 4096² cells") {
