@@ -204,6 +204,7 @@ int serveCommand(const std::vector<std::string>& argv, std::ostream& out) {
                        static_cast<std::uint64_t>(a.integer("layer-cache-mb", 1024, 1, 1ll << 40)) << 20);
   const int orphans = maps.sweepOrphans();
   store::recountDiskUse(dir, db);  // the layer files were counted by the catalog
+  const int raw = maps.resumeCompressions();  // maps whose COG was not written before the stop
   try {
     maps.ensureDefaultMap();
   } catch (const store::StorageFull& e) {
@@ -250,12 +251,14 @@ int serveCommand(const std::vector<std::string>& argv, std::ostream& out) {
     out << "warning: no web page found (pass --web DIR); serving the API only" << std::endl;
   if (!fullDisk.empty()) out << "warning: " << fullDisk << std::endl;
   if (orphans > 0) out << "removed " << orphans << " half-stored map/PDM folder(s) left by a crash" << std::endl;
+  if (raw > 0) out << raw << " map(s) still stored raw: compressing their elevation again" << std::endl;
   if (interrupted > 0) out << interrupted << " mission(s) were running at the last stop: marked interrupted" << std::endl;
 
   int sig = 0;
   sigwait(&stopSignals, &sig);
   out << "stopping (" << (sig == SIGINT ? "SIGINT" : "SIGTERM") << ")..." << std::endl;
   server.stop();
+  maps.compressor().stop();  // its callback uses the API's context; a raw map resumes at the next start
   studyManager.stop();  // an unfinished study resumes at the next start
   manager.stop();
   out << "stopped" << std::endl;
