@@ -308,7 +308,13 @@ store::MapRecord MapCatalog::importDem(const std::vector<UploadedFile>& files, c
       }
       alongside.get();
     }
-    if (!background) store::DataDir::removeTree(rawDir.string());
+    if (!background) {
+      store::DataDir::removeTree(rawDir.string());
+    } else {
+      // A client's file staged as dem.tif (an upload named so) is not kept: the map's folder
+      // names its COG so, and every reader would take it for one (the COG used to overwrite it).
+      fs::remove(fs::path(staging) / kDemFile);
+    }
     stages.done("then waiting for classes.tif");
     const std::string digest = digester->hex();
     char alongsideLine[128];

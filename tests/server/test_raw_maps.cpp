@@ -100,7 +100,8 @@ TEST_CASE("raw maps: tiles of a map stored raw are byte for byte those of its CO
 
   Hold hold;
   hold.on(s);
-  const auto upB = s.post("/api/maps?name=b&filename=odd.tif", bytes, "image/tiff");
+  // Uploaded as dem.tif: the client's file is not kept under the name the map gives its COG.
+  const auto upB = s.post("/api/maps?name=b&filename=dem.tif", bytes, "image/tiff");
   REQUIRE(upB.status == 201);
   const std::string b = upB.json()["id"];
   rover::test::waitUntil([&] { return hold.held.load() == 1; }, rover::test::kHangDeadline, "B's job to start");
