@@ -204,7 +204,6 @@ int serveCommand(const std::vector<std::string>& argv, std::ostream& out) {
                        static_cast<std::uint64_t>(a.integer("layer-cache-mb", 1024, 1, 1ll << 40)) << 20);
   const int orphans = maps.sweepOrphans();
   store::recountDiskUse(dir, db);  // the layer files were counted by the catalog
-  const int raw = maps.resumeCompressions();  // maps whose COG was not written before the stop
   try {
     maps.ensureDefaultMap();
   } catch (const store::StorageFull& e) {
@@ -228,6 +227,9 @@ int serveCommand(const std::vector<std::string>& argv, std::ostream& out) {
   api::ApiContext ctx{db, dir, maps, manager, planners};
   ctx.studies = &studyManager;
   api::addApiRoutes(router, ctx);
+  // Maps whose COG was not written before the last stop; after the routes, which set the
+  // catalog's callback its jobs call.
+  const int raw = maps.resumeCompressions();
   // Probed before the first request can arrive (it starts a few test jails), so the lines below
   // follow the URL at once.
   const jail::Isolation isolation = jail::isolation();

@@ -85,9 +85,9 @@ struct ApiServer {
     maps.setBackgroundCells(o.backgroundCells);
     interrupted = db.markUnfinishedInterrupted();
     orphans = maps.sweepOrphans();
-    maps.resumeCompressions();
     if (o.defaultMap) maps.ensureDefaultMap();
     api::addApiRoutes(router, ctx);
+    maps.resumeCompressions();  // after the routes, which set the callback its jobs call
     if (o.start) start(config);
   }
   ~ApiServer() {

@@ -85,6 +85,7 @@ struct Hold {
 
 TEST_CASE("raw maps: tiles of a map stored raw are byte for byte those of its COG; storage goes raw -> cog") {
   TempDir tmp;
+  Hold hold;  // declared first: it outlives the server whose jobs it holds
   ApiServer s(tmp.str("data"), rawFirst());
   const std::string bytes = oddDem(tmp);
   // Map A compressed at once; map B, the same cells, held raw.
@@ -98,7 +99,6 @@ TEST_CASE("raw maps: tiles of a map stored raw are byte for byte those of its CO
   CHECK_FALSE(std::filesystem::exists(s.dir.mapDir(a) + "/dem~raw"));
   CHECK(maps::pyramidInfo(s.dir.mapDir(a) + "/dem.tif").layout == "COG");
 
-  Hold hold;
   hold.on(s);
   // Uploaded as dem.tif: the client's file is not kept under the name the map gives its COG.
   const auto upB = s.post("/api/maps?name=b&filename=dem.tif", bytes, "image/tiff");
@@ -148,10 +148,12 @@ TEST_CASE("raw maps: tiles of a map stored raw are byte for byte those of its CO
 
 TEST_CASE("raw maps: deleting a map while its COG is written leaves no folder, no job and no crash") {
   TempDir tmp;
+  Hold hold;  // declared first: it outlives the server whose jobs it holds
+  std::future<int> deleting;
+  std::atomic<bool> started{false};
   ApiServer s(tmp.str("data"), rawFirst());
   const std::string bytes = oddDem(tmp);
   SUBCASE("deleted before its job writes: the job finds no record and leaves") {
-    Hold hold;
     hold.on(s);
     const auto up = s.post("/api/maps?name=gone&filename=odd.tif", bytes, "image/tiff");
     REQUIRE(up.status == 201);
@@ -171,8 +173,6 @@ TEST_CASE("raw maps: deleting a map while its COG is written leaves no folder, n
   }
   SUBCASE("deleted while the COG is written: cancelled or finished, the folder goes") {
     std::string id;
-    std::future<int> deleting;
-    std::atomic<bool> started{false};
     s.maps.compressor().setBeforeJob([&](const std::string& job, const std::function<bool()>&) {
       // The DELETE starts as the write does; whichever wins, nothing of the map stays.
       deleting = std::async(std::launch::async,
@@ -197,8 +197,8 @@ TEST_CASE("raw maps: a server stopped with a map still raw compresses it at its 
   const std::string bytes = oddDem(tmp);
   std::string id, tileBefore;
   {
+    Hold hold;  // never released: the server stops with the map raw (declared first: it outlives it)
     ApiServer s(tmp.str("data"), rawFirst());
-    Hold hold;  // never released: the server stops with the map raw
     hold.on(s);
     const auto up = s.post("/api/maps?name=raw&filename=odd.tif", bytes, "image/tiff");
     REQUIRE(up.status == 201);
