@@ -14,6 +14,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <limits>
 #include <list>
 #include <mutex>
@@ -167,7 +168,12 @@ class StoredLease {
  public:
   explicit StoredLease(std::string path) : path_(std::move(path)), ds_(OpenRasters::instance().take(path_, id_)) {}
   GDALDatasetH get() const { return ds_.get(); }
-  void keep() { OpenRasters::instance().give(path_, id_, std::move(ds_)); }
+  // A raw DEM's VRT (writeRawDem) is never kept: it lives until its COG replaces it, and an idle
+  // handle would hold its removed files' disk space; opening it parses a few lines of XML.
+  void keep() {
+    if (path_.size() < 4 || path_.compare(path_.size() - 4, 4, ".vrt") != 0)
+      OpenRasters::instance().give(path_, id_, std::move(ds_));
+  }
 
  private:
   std::string path_;
@@ -231,9 +237,14 @@ BlockSpan cellsOf(const BlockSpan& s, int step, int rows, int cols) {
 namespace {
 
 // Writes the COG of `src` (band 1: the heights, NaN as nodata) at `path`.
-void writeCog(const std::string& path, GDALDatasetH src, const GridGeometry& g, const GeoReference& geo) {
-  georeference(src, g, geo);
-  GDALSetRasterNoDataValue(GDALGetRasterBand(src, 1), std::numeric_limits<double>::quiet_NaN());
+// `geo` null: `src` carries its georeferencing and nodata already (a raw DEM's VRT). `cancelled`,
+// polled as the driver goes, ends the write early (nothing left behind, std::runtime_error).
+void writeCog(const std::string& path, GDALDatasetH src, const GridGeometry& g, const GeoReference* geo,
+              const std::function<bool()>& cancelled = {}) {
+  if (geo) {
+    georeference(src, g, *geo);
+    GDALSetRasterNoDataValue(GDALGetRasterBand(src, 1), std::numeric_limits<double>::quiet_NaN());
+  }
   // ZSTD level 1 with horizontal differencing of the values' 32-bit patterns (PREDICTOR=2):
   // lossless, and read by every GDAL since 2.3. A cold tile decompresses up to 9 blocks (its halo
   // crosses block edges), and undoing the floating-point predictor (3) was 30 % of a cold tile's
@@ -257,8 +268,14 @@ void writeCog(const std::string& path, GDALDatasetH src, const GridGeometry& g, 
   // COG is byte for byte the same. The price is disk while writing: 4·N/3 bytes instead of about
   // half that (COG_TMP_COMPRESSION is read on this thread, when the driver starts).
   const ThreadConfig uncompressedOverviews("COG_TMP_COMPRESSION", "NONE");
+  GDALProgressFunc progress = nullptr;
+  void* progressData = nullptr;
+  if (cancelled) {
+    progress = [](double, const char*, void* data) -> int { return !(*static_cast<const std::function<bool()>*>(data))(); };
+    progressData = const_cast<std::function<bool()>*>(&cancelled);
+  }
   Dataset out(GDALCreateCopy(GDALGetDriverByName("COG"), tmp.c_str(), src, FALSE,
-                             const_cast<char**>(options), nullptr, nullptr));
+                             const_cast<char**>(options), progress, progressData));
   const int err = errno;
   const bool failed = !out || CPLGetLastErrorType() >= CE_Failure;
   out.reset();  // flushes and closes
@@ -290,7 +307,7 @@ void writeDemCog(const std::string& path, const Raster<float>& dem) {
   ensureGdal();
   GdalErrorLog errors;
   Dataset src = memoryDataset(dem, path);
-  writeCog(path, src.get(), dem.geometry, dem.geo);
+  writeCog(path, src.get(), dem.geometry, &dem.geo);
 }
 
 void writeMassCog(const std::string& path, const Raster<float>& mass, const ColourRange& range) {
@@ -300,69 +317,126 @@ void writeMassCog(const std::string& path, const Raster<float>& mass, const Colo
   char top[40];
   std::snprintf(top, sizeof top, "%.17g", range.hi);  // round-trips the double exactly
   GDALSetMetadataItem(src.get(), kRampTopItem, top, nullptr);
-  writeCog(path, src.get(), mass.geometry, mass.geo);
+  writeCog(path, src.get(), mass.geometry, &mass.geo);
 }
 
-void writeDemCog(const std::string& path, const std::string& gridFile, const GridGeometry& g, const GeoReference& geo) {
+namespace {
+
+std::string escapedXml(const std::string& text) {
+  char* escaped = CPLEscapeString(text.c_str(), -1, CPLES_XML);
+  std::string out(escaped);
+  CPLFree(escaped);
+  return out;
+}
+
+// A VRT of one float32 raw band over `file` (rows × cols, little-endian, maps/grid_file.hpp), its
+// path relative to the VRT's folder, NaN as nodata; `inner` goes inside the band (overviews),
+// `georef` inside the dataset.
+std::string rawVrtXml(const std::string& file, int rows, int cols, const std::string& inner, const std::string& georef) {
+  return "<VRTDataset rasterXSize=\"" + std::to_string(cols) + "\" rasterYSize=\"" + std::to_string(rows) + "\">" +
+         georef +
+         "<VRTRasterBand dataType=\"Float32\" band=\"1\" subClass=\"VRTRawRasterBand\">"
+         "<NoDataValue>nan</NoDataValue><SourceFilename relativeToVRT=\"1\">" +
+         escapedXml(file) + "</SourceFilename><ImageOffset>0</ImageOffset><PixelOffset>4</PixelOffset>"
+         "<LineOffset>" + std::to_string(4ll * cols) + "</LineOffset><ByteOrder>LSB</ByteOrder>" + inner +
+         "</VRTRasterBand></VRTDataset>";
+}
+
+void writeText(const std::string& path, const std::string& text) {
+  std::ofstream out(path, std::ios::binary | std::ios::trunc);
+  out << text;
+  out.close();
+  if (!out) throw GridFileError("cannot write " + path);
+}
+
+// The geotransform and CRS writeCog gives the COG (georeference), as VRT elements.
+std::string georefXml(const GridGeometry& g, const GeoReference& geo) {
+  double gt[6] = {0, g.cellWidth, 0, g.rows * g.cellHeight, 0, -g.cellHeight};
+  if (geo.valid) std::copy(geo.geotransform.begin(), geo.geotransform.end(), gt);
+  char text[200];
+  std::snprintf(text, sizeof text, "<GeoTransform>%.17g, %.17g, %.17g, %.17g, %.17g, %.17g</GeoTransform>", gt[0],
+                gt[1], gt[2], gt[3], gt[4], gt[5]);
+  return (geo.crsWkt.empty() ? std::string() : "<SRS>" + escapedXml(geo.crsWkt) + "</SRS>") + text;
+}
+
+}  // namespace
+
+std::vector<std::string> writeRawDem(const std::string& vrtPath, const std::string& gridFile, const GridGeometry& g,
+                                     const GeoReference& geo) {
   ensureGdal();
-  GdalErrorLog errors;
   // The overview levels first, on every core (maps/average_levels.hpp: GDAL's AVERAGE with NaN as
-  // nodata), as raw files next to the grid; the COG driver then finds them as the source's
-  // overviews and only compresses them (OVERVIEWS=AUTO uses a source's own), instead of computing
-  // them on one thread into its temporary file. Disk while writing: the levels (4·N/3 bytes), no
-  // longer the driver's temporary file; memory: a band of rows per thread.
+  // nodata), as raw files next to the grid; memory: a band of rows per thread.
   //
   // Where every window is whole or no chunk of GDAL's cuts one (even shapes, small maps) the bytes
   // are GDAL's own. Where a level's size is odd on a large map they differ from GDAL's in the level
   // rows at the ends of GDAL's chunks of rows (8192 grid rows at 20000 columns): GDAL clips the
   // fractional window there and gives the clipped row a weight above 1, an artifact of its
   // chunking; ours are the whole windows, the same on every run and thread count. That is fine
-  // because a map's dem.tif never changes after its import (maps are immutable; a new import gets
-  // a new id, new tile ETags), so no tile of one map ever mixes the two.
+  // because a map's levels never change after its import (maps are immutable; a new import gets
+  // a new id, new tile ETags), so no tile of one map ever mixes the two; and the COG made later
+  // (writeDemCogFromRaw) carries these very levels.
+  const fs::path dir = fs::path(vrtPath).parent_path();
+  const std::string stem = fs::path(vrtPath).stem().string();
   const std::vector<LevelFile> levels =
-      writeAverageLevels(gridFile, g.rows, g.cols, overviewLevels(g), gridFile + "~level");
-  struct RemoveLevels {
+      writeAverageLevels(gridFile, g.rows, g.cols, overviewLevels(g), (dir / (stem + "-")).string());
+  std::vector<std::string> files;
+  struct RemoveOnThrow {
+    std::vector<std::string>& files;
     const std::vector<LevelFile>& levels;
-    ~RemoveLevels() {
+    bool done = false;
+    ~RemoveOnThrow() {
+      if (done) return;
       std::error_code ec;
-      for (const LevelFile& l : levels) fs::remove(l.path, ec), fs::remove(l.path + ".vrt", ec);
+      for (const LevelFile& l : levels) fs::remove(l.path, ec);
+      for (const std::string& f : files) fs::remove(f, ec);
     }
-  } removeLevels{levels};
-  // Each file as a raw band of a VRT (the server's own files, never a client's): GDAL reads their
-  // rows through the page cache, so the heights are never in this process's heap.
-  auto rawBand = [](const std::string& file, int cols, const std::string& inner) {
-    char* escaped = CPLEscapeString(file.c_str(), -1, CPLES_XML);
-    std::string xml = "<VRTRasterBand dataType=\"Float32\" band=\"1\" subClass=\"VRTRawRasterBand\">"
-                      "<NoDataValue>nan</NoDataValue><SourceFilename relativeToVRT=\"0\">" +
-                      std::string(escaped) + "</SourceFilename><ImageOffset>0</ImageOffset><PixelOffset>4</PixelOffset>"
-                      "<LineOffset>" + std::to_string(4ll * cols) + "</LineOffset><ByteOrder>LSB</ByteOrder>" + inner +
-                      "</VRTRasterBand>";
-    CPLFree(escaped);
-    return xml;
-  };
-  auto dataset = [](int rows, int cols, const std::string& band) {
-    return "<VRTDataset rasterXSize=\"" + std::to_string(cols) + "\" rasterYSize=\"" + std::to_string(rows) + "\">" +
-           band + "</VRTDataset>";
-  };
+  } removeOnThrow{files, levels};
+  // Each level a raw band of its own VRT (GDAL's <Overview> names a dataset); every path relative
+  // to its VRT, so the folder can move (staging -> the map's folder) and still read.
   std::string overviews;
   for (const LevelFile& l : levels) {
     const std::string vrt = l.path + ".vrt";
-    std::ofstream out(vrt, std::ios::binary | std::ios::trunc);
-    out << dataset(l.rows, l.cols, rawBand(l.path, l.cols, ""));
-    out.close();
-    if (!out) throw GridFileError("cannot write " + vrt);
-    char* escaped = CPLEscapeString(vrt.c_str(), -1, CPLES_XML);
-    overviews += "<Overview><SourceFilename relativeToVRT=\"0\">" + std::string(escaped) +
+    writeText(vrt, rawVrtXml(fs::path(l.path).filename().string(), l.rows, l.cols, "", ""));
+    files.push_back(l.path);
+    files.push_back(vrt);
+    overviews += "<Overview><SourceFilename relativeToVRT=\"1\">" + escapedXml(fs::path(vrt).filename().string()) +
                  "</SourceFilename><SourceBand>1</SourceBand></Overview>";
-    CPLFree(escaped);
   }
-  const std::string xml = dataset(g.rows, g.cols, rawBand(gridFile, g.cols, overviews));
-  Dataset src(GDALOpenEx(xml.c_str(), GDAL_OF_RASTER | GDAL_OF_UPDATE, nullptr, nullptr, nullptr));
-  if (!src) throw std::runtime_error("cannot open the grid file for " + path + " (" + CPLGetLastErrorMsg() + ")");
+  const std::string grid = fs::relative(gridFile, dir).string();
+  writeText(vrtPath, rawVrtXml(grid, g.rows, g.cols, overviews, georefXml(g, geo)));
+  files.push_back(vrtPath);
+  removeOnThrow.done = true;
+  return files;
+}
+
+void writeDemCogFromRaw(const std::string& path, const std::string& vrtPath, const std::function<bool()>& cancelled) {
+  ensureGdal();
+  GdalErrorLog errors;
+  // The VRT carries the georeferencing and nodata writeCog would set: opened read-only, as is.
+  Dataset src(GDALOpenEx(vrtPath.c_str(), GDAL_OF_RASTER | GDAL_OF_READONLY, nullptr, nullptr, nullptr));
+  if (!src) throw std::runtime_error("cannot open " + vrtPath + " (" + CPLGetLastErrorMsg() + ")");
+  GridGeometry g;
+  g.rows = GDALGetRasterYSize(src.get());
+  g.cols = GDALGetRasterXSize(src.get());
   // Rows straight from the files into the driver's buffers (RawRasterBand's direct reads), not
   // through GDAL's block cache, which the rows read once would fill to its cap.
   const ThreadConfig directReads("GDAL_ONE_BIG_READ", "YES");
-  writeCog(path, src.get(), g, geo);
+  writeCog(path, src.get(), g, nullptr, cancelled);
+}
+
+void writeDemCog(const std::string& path, const std::string& gridFile, const GridGeometry& g, const GeoReference& geo) {
+  // The levels and their VRT next to the grid (4·N/3 bytes, removed before it returns); the COG
+  // driver finds the levels as the source's overviews and only compresses them (OVERVIEWS=AUTO
+  // uses a source's own) instead of computing them on one thread into its temporary file.
+  const std::vector<std::string> files = writeRawDem(gridFile + "~raw.vrt", gridFile, g, geo);
+  struct RemoveFiles {
+    const std::vector<std::string>& files;
+    ~RemoveFiles() {
+      std::error_code ec;
+      for (const std::string& f : files) fs::remove(f, ec);
+    }
+  } removeFiles{files};
+  writeDemCogFromRaw(path, files.back());
 }
 
 void writeClassPyramid(const std::string& path, const Raster<std::uint8_t>& classes) {

@@ -15,6 +15,7 @@
 // read at full resolution over the blocks' cells and reduced the way the in-memory tiles are
 // (blockMean, blockWorstClass), so old maps keep giving the same tiles, only slower.
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <string>
 #include <utility>
@@ -39,6 +40,25 @@ void writeDemCog(const std::string& path, const Raster<float>& dem);
 // except, on large maps with odd level sizes, in the level rows where GDAL's own chunking clips a
 // window (maps/average_levels.hpp).
 void writeDemCog(const std::string& path, const std::string& gridFile, const GridGeometry& g, const GeoReference& geo);
+
+// A map's elevation stored raw, readable before its COG is written (issue 24: the first tiles of a
+// 300 M-cell map within 20 s): the overview levels of `gridFile` (the float32 grid of `g`'s
+// shape, maps/grid_file.hpp) computed on every core as raw files next to `vrtPath`
+// (STEM-1.f32, STEM-1.f32.vrt, …), and `vrtPath`, a GDAL VRT with a raw band over the grid, the
+// levels as its overviews, the georeferencing and NaN nodata writeDemCog gives the COG. Every
+// GDAL reader opens it as it opens that COG: the same sizes, values and overviews (the COG is
+// written from it, writeDemCogFromRaw), so a tile is the same bytes from either. Paths inside
+// are relative to the VRT's folder, which may move. Returns the files it wrote, `vrtPath` last
+// (the grid is the caller's). Memory: a band of rows per thread; disk: a third of the grid's
+// bytes. Throws GridFileError, DiskFull.
+std::vector<std::string> writeRawDem(const std::string& vrtPath, const std::string& gridFile, const GridGeometry& g,
+                                     const GeoReference& geo);
+// The COG at `path` (atomically, as writeDemCog) from a raw DEM's VRT (writeRawDem), its levels
+// compressed as they are. `cancelled`, polled while the driver writes, stops it: nothing is left
+// behind and std::runtime_error is thrown. Memory: GDAL's block cache and the driver's buffers;
+// disk: the COG as it grows (the driver uses the levels, it writes no overview file of its own).
+void writeDemCogFromRaw(const std::string& path, const std::string& vrtPath,
+                        const std::function<bool()>& cancelled = {});
 
 // A PDM's probability mass on its map's grid as the same kind of COG (its overviews are each
 // block's mean mass, what a pdm tile below the native zoom shows), with the top of its colour ramp

@@ -27,6 +27,8 @@ MapCatalog::MapCatalog(store::Database& db, store::DataDir& dir, std::int64_t ma
     : db_(db), dir_(dir), maxCells_(maxCells),
       layers_(fs::path(dir.mapDir("x")).parent_path().string(), layerCacheBytes, offLadderOverview, &dir.budget()) {
   jail_.limits = defaultImportLimits(maxCells);
+  compressor_ = std::make_unique<ElevationCompressor>(
+      [this](const std::string& id, const std::function<bool()>& cancelled) { compressElevation(id, cancelled); });
 }
 
 int MapCatalog::sweepOrphans() {
@@ -60,7 +62,7 @@ terrain::Body mapBody(const store::MapRecord& r, const std::string& crsWkt) {
 std::shared_ptr<const MapData> MapCatalog::loadFromDisk(const store::MapRecord& r) {
   auto data = std::make_shared<MapData>();
   data->record = r;
-  data->dem = maps::loadDem((fs::path(dir_.mapDir(r.id)) / kDemFile).string()).dem;
+  data->dem = readElevation(dir_.mapDir(r.id), [](const std::string& path) { return maps::loadDem(path).dem; });
   data->traversability = terrain::traversability(data->dem);
   data->elevationRange = maps::colourRange(maps::RenderLayer::Elevation, data->dem.z);
   data->body = mapBody(r, data->dem.z.geo.crsWkt);
@@ -98,6 +100,8 @@ void MapCatalog::remove(const std::string& id) {
     tilesCache_.remove_if([&](const auto& t) { return t->id == id; });
     ++removals_;
   }
+  // Its COG job, if any, ends before the folder goes (it never makes the folder again).
+  compressor_->cancel(id);
   for (const auto& p : pdms) dir_.remove(dir_.pdmDir(p.id));
   layers_.forgetUnder(dir_.mapDir(id));
   maps::forgetStoredRasters(dir_.mapDir(id));  // open tile readers (maps/dem_pyramid.hpp)
@@ -118,15 +122,16 @@ std::shared_ptr<const terrain::Dem> MapCatalog::demAtCell(const std::string& id,
   o.cellSize = cellSize;
   o.maxCells = maxCells_;
   std::shared_ptr<const terrain::Dem> dem;
-  const std::string stored = (fs::path(dir_.mapDir(id)) / kDemFile).string();
-  try {
-    dem = std::make_shared<terrain::Dem>(maps::loadDem(stored, o).dem);
-  } catch (const Error& e) {
-    // Name the map, never the file the server keeps it in.
-    std::string msg = e.what();
-    if (msg.rfind(stored, 0) == 0) msg = "the map" + msg.substr(stored.size());
-    throw ApiError(400, "invalid_parameter", "coverage_cell: " + maps::withoutPaths(msg), "params.coverage_cell");
-  }
+  dem = readElevation(dir_.mapDir(id), [&](const std::string& stored) {
+    try {
+      return std::make_shared<terrain::Dem>(maps::loadDem(stored, o).dem);
+    } catch (const Error& e) {
+      // Name the map, never the file the server keeps it in.
+      std::string msg = e.what();
+      if (msg.rfind(stored, 0) == 0) msg = "the map" + msg.substr(stored.size());
+      throw ApiError(400, "invalid_parameter", "coverage_cell: " + maps::withoutPaths(msg), "params.coverage_cell");
+    }
+  });
   std::lock_guard lock(mutex_);
   cellCache_.emplace_front(key, dem);
   if (cellCache_.size() > 4) cellCache_.pop_back();
@@ -164,7 +169,15 @@ std::string MapCatalog::layerFile(const std::string& id, const std::string& laye
     // Full size on a big map: the elevation and class GeoTIFFs are the stored files themselves
     // (the COG and the class pyramid); anything else is computed on the whole map in memory, which
     // a big map refuses rather than load gigabytes for one file.
-    if (format == "tif" && layer == "elevation") return (mapDir / kDemFile).string();
+    if (format == "tif" && layer == "elevation") {
+      // The stored COG itself; a map whose COG is still being written is waited for (its job is
+      // queued or running: seconds), then asked again later.
+      if (!fs::exists(mapDir / kDemFile)) compressor_->waitIdle(id, std::chrono::seconds(60));
+      if (!fs::exists(mapDir / kDemFile))
+        throw ApiError(503, "not_ready", "the map's elevation is still being compressed: ask again shortly", "layer")
+            .withHeader("Retry-After", "10");
+      return (mapDir / kDemFile).string();
+    }
     if (format == "tif" && layer == "traversability") return (mapDir / kClassFile).string();
     throw ApiError(413, "too_large",
                      "a full-size " + layer + "." + format + " of this map (" + std::to_string(geom.rows) + " x " +
@@ -196,10 +209,13 @@ std::string MapCatalog::layerFile(const std::string& id, const std::string& laye
                                    geom.cols, side);
       } else {
         const auto& ramp = rec->meta["colour_range"];
-        pic = maps::renderOverview(l,
-                                   maps::PyramidBlocks((mapDir / kDemFile).string(), (mapDir / kClassFile).string(),
-                                                       storedHeader(id), {ramp[0].get<double>(), ramp[1].get<double>()}),
-                                   geom.rows, geom.cols, side);
+        const auto header = storedHeader(id);
+        pic = readElevation(mapDir.string(), [&](const std::string& dem) {
+          return maps::renderOverview(l,
+                                      maps::PyramidBlocks(dem, (mapDir / kClassFile).string(), header,
+                                                          {ramp[0].get<double>(), ramp[1].get<double>()}),
+                                      geom.rows, geom.cols, side);
+        });
       }
       const auto png = maps::encodePng(pic);
       store::DataDir::writeFileAtomic(path, std::string(png.begin(), png.end()));

@@ -5,6 +5,7 @@
 // user-supplied raster is read through maps::openUpload inside its own staging folder.
 // Its parts: map_catalog.cpp (the maps in memory, layer files: map_files.hpp), map_import.cpp
 // (imports), map_pdms.cpp (PDMs).
+#include <atomic>
 #include <functional>
 #include <list>
 #include <memory>
@@ -20,6 +21,7 @@
 #include "maps/dem_io.hpp"
 #include "maps/render.hpp"
 #include "maps/tile_grid.hpp"
+#include "server/api/elevation_compressor.hpp"
 #include "server/api/layer_cache.hpp"
 #include "server/jail/import_jail.hpp"
 #include "server/jail/worker_output.hpp"
@@ -67,6 +69,19 @@ class MapCatalog {
   // `options`: cell size, crop window (CRS or pixels), vertical scale, declared body.
   store::MapRecord importDem(const std::vector<UploadedFile>& files, const std::string& name,
                              const maps::DemImport& options = {});
+  // Start-up: queues the COG of every map still stored raw (the server stopped before its
+  // compressor finished); it stays readable raw meanwhile. Returns how many were queued.
+  int resumeCompressions();
+  // Maps of at least this many cells are committed with their elevation raw and compressed in the
+  // background (issue 24); smaller ones get their COG before the upload answers (under a second at
+  // 4 M cells), so most maps are never seen raw. Tests lower it to see small maps raw.
+  static constexpr std::int64_t kDefaultBackgroundCells = 4'000'000;
+  void setBackgroundCells(std::int64_t cells) { backgroundCells_ = cells; }
+  // The compressor of raw maps (tests wait on it, and hold a job with its hook).
+  ElevationCompressor& compressor() { return *compressor_; }
+  // Called on the compressor's thread after a map's storage changed (raw -> cog), so the API's
+  // cached map bodies are dropped and clients told.
+  std::function<void(const std::string& mapId)> onStorageChanged;
   // Start-up: removes map and PDM folders that have no database row (a crash between committing
   // the files and inserting the row leaves one behind). Returns how many were removed.
   int sweepOrphans();
@@ -195,6 +210,9 @@ class MapCatalog {
   maps::LoadedDem importJailed(const std::string& inDir, jail::ImportRequest req, std::string& rasterName,
                                ImportStages* stages = nullptr, const GridRows* rows = nullptr);
   std::shared_ptr<const MapData> loadFromDisk(const store::MapRecord& r);
+  // The compressor's job (map_compress.cpp): the map's dem.tif from its raw files, then its
+  // record's storage, its disk charge and the raw files' removal.
+  void compressElevation(const std::string& id, const std::function<bool()>& cancelled);
   // The map's cells with data (1 where its height is not NaN), one byte a cell: the loaded map's,
   // else read from the stored DEM kValidBandRows rows at a time (the heights of one band in memory).
   std::vector<std::uint8_t> validCells(const std::string& mapId, const GridGeometry& g);
@@ -221,6 +239,7 @@ class MapCatalog {
   store::Database& db_;
   store::DataDir& dir_;
   std::int64_t maxCells_;
+  std::atomic<std::int64_t> backgroundCells_{kDefaultBackgroundCells};
   mutable std::mutex mutex_;  // guards the map caches and jail_
   jail::JailConfig jail_;
   LayerCache layers_;
@@ -232,6 +251,8 @@ class MapCatalog {
   std::list<std::pair<std::string, std::shared_ptr<const Raster<float>>>> massCache_;  // most recent first
   // `key`: the PDM's id and version tag (pdmVersionTag).
   void keepMass(const std::string& key, std::shared_ptr<const Raster<float>> mass);
+  // Last: destroyed first, so its thread ends before anything it uses.
+  std::unique_ptr<ElevationCompressor> compressor_;
 };
 
 }  // namespace rover::api

@@ -39,6 +39,22 @@ constexpr int kOverviewLadder[] = {256, 512, 1024, 2048, 4096};
 
 }  // namespace
 
+nlohmann::json rawStorage(int overviews) {
+  return {{"elevation", "raw"}, {"codec", "none"}, {"overviews", overviews}};
+}
+
+nlohmann::json cogStorage(int overviews) {
+  return {{"elevation", "cog"}, {"codec", "zstd"}, {"overviews", overviews}};
+}
+
+std::string elevationFile(const std::string& mapDir) {
+  const std::filesystem::path dir(mapDir);
+  std::error_code ec;
+  if (std::filesystem::exists(dir / kDemFile, ec)) return (dir / kDemFile).string();
+  if (std::filesystem::exists(dir / kRawDemDir / kRawDemVrt, ec)) return (dir / kRawDemDir / kRawDemVrt).string();
+  return (dir / kDemFile).string();  // neither: the reader's error names the file a map keeps
+}
+
 bool storedAsPyramid(const store::MapRecord& r, const std::string& mapDir) {
   const auto it = r.meta.find("colour_range");
   std::error_code ec;

@@ -17,6 +17,34 @@ struct MapData;
 // overviews before) and the class pyramid (maps/dem_pyramid.hpp; absent for a map stored before).
 inline constexpr const char* kDemFile = "dem.tif";
 inline constexpr const char* kClassFile = "classes.tif";
+// A map whose COG is still being written (issue 24: a map is announced before its elevation is
+// compressed) keeps its elevation raw in this folder: the server's float32 grid, its overview
+// levels and dem.vrt over them (maps::writeRawDem), which every reader opens as it opens dem.tif.
+// The folder goes once dem.tif is in place (MapCatalog's compressor).
+inline constexpr const char* kRawDemDir = "dem~raw";  // "~": never an upload's name (safeName)
+inline constexpr const char* kRawDemVrt = "dem.vrt";
+
+// The record's meta.storage for a map whose elevation is raw (its COG being written) and once it
+// is the COG: {"elevation": "raw" | "cog", "codec": "none" | "zstd", "overviews": N}.
+nlohmann::json rawStorage(int overviews);
+nlohmann::json cogStorage(int overviews);
+
+// The map's elevation file, the one every reader opens: dem.tif when it is there, else the raw
+// DEM's VRT (kRawDemDir/kRawDemVrt).
+std::string elevationFile(const std::string& mapDir);
+// `read(elevationFile(mapDir))`. A read of the raw VRT that fails because the COG replaced it
+// meanwhile (its files removed under the reader) is done again from dem.tif, so a read racing
+// the swap never fails. `read` must only read.
+template <class Read>
+auto readElevation(const std::string& mapDir, Read&& read) -> decltype(read(std::string())) {
+  const std::string path = elevationFile(mapDir);
+  try {
+    return read(path);
+  } catch (...) {
+    if (path == elevationFile(mapDir)) throw;  // not the swap: the read's own failure
+  }
+  return read(elevationFile(mapDir));
+}
 
 // A map stored as its pyramid (issue 24): its class pyramid in `mapDir` and its elevation ramp in
 // its record. Its tiles and overviews are read from the pyramid; a map stored before is loaded.

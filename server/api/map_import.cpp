@@ -216,13 +216,18 @@ store::MapRecord MapCatalog::importDem(const std::vector<UploadedFile>& files, c
     // folder, never the worker's file, which a process the worker left behind could
     // still change), sampled for the colour ramp on the way, while a second thread computes the
     // classes from it in bands of rows as they arrive, writes classes.tif and the class shares.
-    // dem.tif is then written from that file through GDAL (a raw band, its overview levels
-    // computed on both cores: maps/average_levels.hpp). Memory: the chunk,
+    // The grid file then stays as the map's elevation, raw: its overview levels computed on both
+    // cores (maps/average_levels.hpp) and a VRT over them (maps::writeRawDem) that every reader
+    // opens as it opens dem.tif. The map is committed so, and its dem.tif (the ZSTD COG, ~10 s of
+    // CPU on 300 M cells) is written afterwards by the catalog's compressor (issue 24: the first
+    // tiles of a 300 M-cell map within 20 s on 2 cores). Memory: the chunk,
     // the classes (a byte a cell, from the first chunk on, plus a third for the pyramid's
     // levels), a band of 256 rows, GDAL's block cache and write buffers; the file's pages are the
     // kernel's page cache.
     // "~" is outside every staged upload's name (safeName), so no client file is overwritten.
-    const std::string gridFile = (fs::path(staging) / "import~grid.f32").string();
+    const fs::path rawDir = fs::path(staging) / kRawDemDir;
+    fs::create_directory(rawDir);
+    const std::string gridFile = (rawDir / "grid.f32").string();
     std::optional<maps::DemDigest> digester;
     std::optional<maps::ElevationSample> sample;
     std::optional<maps::GridFileWriter> writer;
@@ -273,6 +278,7 @@ store::MapRecord MapCatalog::importDem(const std::vector<UploadedFile>& files, c
       writer->close();
     });
     const GridGeometry& g = d.dem.geometry();
+    const bool background = g.cellCount() >= backgroundCells_.load();
     if (sample->needsEveryCell()) {  // a sparse grid: its finite heights counted, then sampled, read back by rows
       std::vector<float> rows(static_cast<std::size_t>(std::max(1, (4 << 20) / (4 * g.cols))) * g.cols);
       const int step = static_cast<int>(rows.size() / g.cols);
@@ -291,16 +297,28 @@ store::MapRecord MapCatalog::importDem(const std::vector<UploadedFile>& files, c
     const maps::ColourRange ramp = sample->range();
     stages.done("grid");
     {
-      // The future's destructor waits, so the grid file outlives the thread when the COG throws.
-      storingGeoTiff([&] { maps::writeDemCog((fs::path(staging) / kDemFile).string(), gridFile, g, d.dem.z.geo); });
-      stages.done("dem.tif");
+      // The future's destructor waits, so the grid file outlives the thread when the levels throw.
+      storingGeoTiff([&] { maps::writeRawDem((rawDir / kRawDemVrt).string(), gridFile, g, d.dem.z.geo); });
+      stages.done("levels");
+      if (!background) {
+        storingGeoTiff([&] {
+          maps::writeDemCogFromRaw((fs::path(staging) / kDemFile).string(), (rawDir / kRawDemVrt).string());
+        });
+        stages.done("dem.tif");
+      }
       alongside.get();
+    }
+    if (!background) {
+      store::DataDir::removeTree(rawDir.string());
+    } else {
+      // A client's file staged as dem.tif (an upload named so) is not kept: the map's folder
+      // names its COG so, and every reader would take it for one (the COG used to overwrite it).
+      fs::remove(fs::path(staging) / kDemFile);
     }
     stages.done("then waiting for classes.tif");
     const std::string digest = digester->hex();
-    fs::remove(gridFile);  // not part of the map's folder
     char alongsideLine[128];
-    std::snprintf(alongsideLine, sizeof alongsideLine, "alongside dem.tif: classes %.2f s, classes.tif %.2f s",
+    std::snprintf(alongsideLine, sizeof alongsideLine, "alongside the levels: classes %.2f s, classes.tif %.2f s",
                   classSeconds, pyramidSeconds);
     stages.note(alongsideLine);
     store::MapRecord rec;
@@ -316,9 +334,8 @@ store::MapRecord MapCatalog::importDem(const std::vector<UploadedFile>& files, c
     rec.createdAt = store::nowIso();
     rec.meta = metaFor(d, shares, sources, digest);
     rec.meta["colour_range"] = {ramp.lo, ramp.hi};
-    rec.meta["storage"] = {{"elevation", "cog"},
-                           {"codec", "zstd"},
-                           {"overviews", maps::tileGridOf(d.dem.geometry().rows, d.dem.geometry().cols).nativeZoom}};
+    const int overviews = maps::tileGridOf(g.rows, g.cols).nativeZoom;
+    rec.meta["storage"] = background ? rawStorage(overviews) : cogStorage(overviews);
     // The body the planners assume: declared with the upload, else read from the CRS.
     const terrain::Body body = options.body ? *options.body : maps::bodyOfCrs(d.dem.z.geo.crsWkt);
     rec.meta["body"] = terrain::bodyName(body);
@@ -330,6 +347,7 @@ store::MapRecord MapCatalog::importDem(const std::vector<UploadedFile>& files, c
     // Files first, then the row: a crash in between leaves an orphan folder nobody lists.
     dir_.commitDir(staging, dir_.mapDir(rec.id), store::DiskCharge{store::DiskUse::Map, rec.id, "file"});
     db_.insertMap(rec);
+    if (background) compressor_->enqueue(rec.id);  // dem.tif from the raw files
     stages.done("commit");
     std::cerr << "import " << d.dem.geometry().cols << "x" << d.dem.geometry().rows << ": " << stages.line() << std::endl;
     return rec;

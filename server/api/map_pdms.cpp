@@ -259,15 +259,15 @@ std::vector<std::uint8_t> MapCatalog::validCells(const std::string& mapId, const
       if (m->record.id == mapId) return m->valid;
   }
   std::vector<std::uint8_t> valid(static_cast<std::size_t>(g.cellCount()));
-  const std::string stored = (fs::path(dir_.mapDir(mapId)) / kDemFile).string();
   for (int r0 = 0; r0 < g.rows; r0 += kValidBandRows) {
     const int rows = std::min(kValidBandRows, g.rows - r0);
-    terrain::Dem band;
-    try {
-      band = maps::loadDemWindow(stored, r0, 0, rows, g.cols).dem;
-    } catch (const Error& e) {
-      throw std::runtime_error(e.what());  // the stored file is the server's: 500, its path in the log only
-    }
+    const terrain::Dem band = readElevation(dir_.mapDir(mapId), [&](const std::string& stored) {
+      try {
+        return maps::loadDemWindow(stored, r0, 0, rows, g.cols).dem;
+      } catch (const Error& e) {
+        throw std::runtime_error(e.what());  // the stored file is the server's: 500, its path in the log only
+      }
+    });
     const float* z = band.z.values.data();
     std::uint8_t* out = valid.data() + std::size_t(r0) * g.cols;
     for (std::size_t i = 0, n = std::size_t(rows) * g.cols; i < n; ++i) out[i] = !std::isnan(z[i]);

@@ -60,7 +60,8 @@ std::shared_ptr<const maps::DemHeader> MapCatalog::storedHeader(const std::strin
   }
   std::shared_ptr<const maps::DemHeader> h;
   try {
-    h = std::make_shared<const maps::DemHeader>(maps::readDemHeader((fs::path(dir_.mapDir(id)) / kDemFile).string()));
+    h = std::make_shared<const maps::DemHeader>(
+        readElevation(dir_.mapDir(id), [](const std::string& path) { return maps::readDemHeader(path); }));
   } catch (const Error& e) {
     throw std::runtime_error(e.what());  // the stored file is the server's: 500, its path in the log only
   }
@@ -138,9 +139,11 @@ MapCatalog::Tile MapCatalog::tileFile(const std::string& id, const std::string& 
     }
     if (stored->pyramid) {
       // The level of the tile's zoom, about (256 + 2)² cells: the map is never loaded.
-      const maps::PyramidBlocks blocks((mapDir / kDemFile).string(), (mapDir / kClassFile).string(), storedHeader(id),
-                                       stored->ramp);
-      tile.made = tileBytes(blocks, l, format, *window);
+      const auto header = storedHeader(id);
+      tile.made = readElevation(mapDir.string(), [&](const std::string& dem) {
+        return tileBytes(maps::PyramidBlocks(dem, (mapDir / kClassFile).string(), header, stored->ramp), l, format,
+                         *window);
+      });
       store::DataDir::writeFileAtomic(path, tile.made, false);  // a cache file: no fsync
       return;
     }

@@ -38,25 +38,26 @@ MapHeader MapCatalog::header(const std::string& id) {
   }
   auto rec = db_.getMap(id);
   if (!rec) throw ApiError(404, "not_found", "no map '" + rover::json::shown(id) + "'", "id");
-  const std::string stored = (fs::path(dir_.mapDir(id)) / kDemFile).string();
-  maps::DemHeader h;
-  try {
-    h = maps::readDemHeader(stored);
-  } catch (const Error& e) {
-    rethrowAboutMap(e, stored, "map");
-  }
+  const maps::DemHeader h = readElevation(dir_.mapDir(id), [&](const std::string& stored) -> maps::DemHeader {
+    try {
+      return maps::readDemHeader(stored);
+    } catch (const Error& e) {
+      rethrowAboutMap(e, stored, "map");
+    }
+  });
   return {h.geometry, h.geo, mapBody(*rec, h.geo.crsWkt)};
 }
 
 std::shared_ptr<const terrain::Dem> MapCatalog::demWindow(const std::string& id, const PlanningWindow& w) {
   if (!db_.getMap(id)) throw ApiError(404, "not_found", "no map '" + rover::json::shown(id) + "'", "id");
-  const std::string stored = (fs::path(dir_.mapDir(id)) / kDemFile).string();
-  try {
-    return std::make_shared<const terrain::Dem>(
-        maps::loadDemWindow(stored, w.row0, w.col0, w.grid.rows, w.grid.cols).dem);
-  } catch (const Error& e) {
-    rethrowAboutMap(e, stored, "area");
-  }
+  return readElevation(dir_.mapDir(id), [&](const std::string& stored) -> std::shared_ptr<const terrain::Dem> {
+    try {
+      return std::make_shared<const terrain::Dem>(
+          maps::loadDemWindow(stored, w.row0, w.col0, w.grid.rows, w.grid.cols).dem);
+    } catch (const Error& e) {
+      rethrowAboutMap(e, stored, "area");
+    }
+  });
 }
 
 std::shared_ptr<const Raster<float>> MapCatalog::pdmMassIn(const std::string& pdmId, const PlanningWindow& w,

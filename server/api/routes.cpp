@@ -36,6 +36,16 @@ void addApiRoutes(http::Router& router, ApiContext& ctx) {
       // An event lost to a failing database: the row is what clients reload.
     }
   };
+  // A map's elevation compressed in the background (raw -> cog): its cached body goes, and
+  // clients hear that the map changed (its version stays: its content is the same).
+  ctx.maps.onStorageChanged = [&ctx](const std::string& id) {
+    ctx.invalidateMap(id);
+    try {
+      if (auto m = ctx.db.getMap(id)) publishEvent(ctx, "changed", "map", id, id, m->version, "");
+    } catch (const std::exception&) {
+      // An event lost to a failing database: the row is what clients reload.
+    }
+  };
   http::RouteOptions open;
   open.requireAuth = false;
   open.summary = "Liveness and a few counters (no token needed).";

@@ -227,6 +227,9 @@ int serveCommand(const std::vector<std::string>& argv, std::ostream& out) {
   api::ApiContext ctx{db, dir, maps, manager, planners};
   ctx.studies = &studyManager;
   api::addApiRoutes(router, ctx);
+  // Maps whose COG was not written before the last stop; after the routes, which set the
+  // catalog's callback its jobs call.
+  const int raw = maps.resumeCompressions();
   // Probed before the first request can arrive (it starts a few test jails), so the lines below
   // follow the URL at once.
   const jail::Isolation isolation = jail::isolation();
@@ -250,12 +253,14 @@ int serveCommand(const std::vector<std::string>& argv, std::ostream& out) {
     out << "warning: no web page found (pass --web DIR); serving the API only" << std::endl;
   if (!fullDisk.empty()) out << "warning: " << fullDisk << std::endl;
   if (orphans > 0) out << "removed " << orphans << " half-stored map/PDM folder(s) left by a crash" << std::endl;
+  if (raw > 0) out << raw << " map(s) still stored raw: compressing their elevation again" << std::endl;
   if (interrupted > 0) out << interrupted << " mission(s) were running at the last stop: marked interrupted" << std::endl;
 
   int sig = 0;
   sigwait(&stopSignals, &sig);
   out << "stopping (" << (sig == SIGINT ? "SIGINT" : "SIGTERM") << ")..." << std::endl;
   server.stop();
+  maps.compressor().stop();  // its callback uses the API's context; a raw map resumes at the next start
   studyManager.stop();  // an unfinished study resumes at the next start
   manager.stop();
   out << "stopped" << std::endl;

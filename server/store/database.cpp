@@ -228,6 +228,23 @@ long long Database::countMaps() {
   return s.step() ? s.integer(0) : 0;
 }
 
+bool Database::setMapStorage(const std::string& id, const nlohmann::json& storage) {
+  std::lock_guard lock(mutex_);
+  ensureReserves();
+  // Read and written under the one connection's lock: nothing changes the row in between.
+  nlohmann::json meta;
+  {
+    Stmt s(db_, "SELECT meta FROM maps WHERE id = ?1");
+    s.bind(1, id);
+    if (!s.step()) return false;
+    meta = parseJson(s, 0, "meta");
+  }
+  meta["storage"] = storage;
+  Stmt s(db_, "UPDATE maps SET meta = ?2 WHERE id = ?1");
+  s.bind(1, id).bind(2, dumpJson(meta, "meta")).run();
+  return sqlite3_changes(db_) > 0;
+}
+
 bool Database::deleteMap(const std::string& id) {
   std::lock_guard lock(mutex_);
   // The PDMs go with it through ON DELETE CASCADE, in the same statement (one transaction).

@@ -107,6 +107,9 @@ class Database {
   // Listings page in SQL (LIMIT/OFFSET): `limit` < 0 means all, `offset` rows are skipped.
   std::vector<MapRecord> listMaps(long long limit = -1, long long offset = 0);  // oldest first
   long long countMaps();
+  // Sets the map's meta.storage (how its elevation is stored: raw while its COG is written, issue
+  // 24), its version unchanged (the map's content is the same); false when the map is gone.
+  bool setMapStorage(const std::string& id, const nlohmann::json& storage);
   bool deleteMap(const std::string& id);  // also deletes its PDMs' rows; returns false if absent
   // The rename of a client that read version `expected` (issue 26): the name stays unique in the
   // catalog (as insertMap keeps it), so a name another map has is refused, not suffixed: the

@@ -15,6 +15,8 @@ For each size, a deterministic DEM (seed 24, generated_dem.py: GDAL's command-li
 `roverplan serve` (free loopback port, scratch data dir, default limits):
 - upload -> first tiles: seconds from the start of the upload until the z = 0 tile and a native
   tile (elevation, hillshade) have both been answered;
+- upload -> storage cog: until the map's record says its elevation is the COG (a large map is
+  announced raw and compressed in the background);
 - peak RSS of the server process during the import (VmHWM from /proc, reset is not possible, so
   each size runs on its own server), and of the import worker (the jail's child, sampled);
 - cold tiles: T distinct tiles over every zoom (native and below, elevation/hillshade/slope/
@@ -178,13 +180,25 @@ def serve(work, dem, binary):
         done.set()
         sampler.join()
         st = status_of(server.pid)
+        # A large map is announced with its elevation raw and compressed afterwards (storage
+        # "raw" -> "cog"): when its dem.tif is there, counted from the start of the upload.
+        while True:
+            with urllib.request.urlopen(base + f"/api/maps/{m['id']}") as resp:
+                elevation = json.loads(resp.read()).get("storage", {}).get("elevation")
+            if elevation != "raw":
+                break
+            time.sleep(0.2)
+        t_cog = time.perf_counter() - t0
+        rss_cog = kib(status_of(server.pid), "VmHWM")
         cpu_worker = sum(worker_cpu.values())
         print(f"upload + import: {t_import:.1f} s; upload -> first tiles (z=0 and native, elevation and hillshade): "
               f"{t_first:.1f} s (cpu {cpu_first + cpu_worker:.1f} s: server {cpu_first:.1f} s, import worker "
               f"{cpu_worker:.1f} s sampled); statuses {[x[1] for x in firsts]}")
         for line in log:
-            if line.startswith("import "):
+            if line.startswith("import ") or line.startswith("compressed "):
                 print("  stages: " + line)
+        print(f"upload -> storage cog: {t_cog:.1f} s (announced {m.get('storage', {}).get('elevation')}); "
+              f"server peak RSS by then {rss_cog / 1024:.0f} MiB")
         print(f"server peak RSS {kib(st, 'VmHWM') / 1024:.0f} MiB (before the upload {rss_before / 1024:.0f} MiB); "
               f"import worker peak RSS (sampled) {worker_peak[0] / 1024:.0f} MiB")
         stored = os.path.join(data, "maps", m["id"], "dem.tif")

@@ -54,6 +54,8 @@ struct ApiServerOptions {
   std::uint64_t memoryBudget = missions::defaultMissionMemoryBudget();
   bool defaultMap = true;      // create the synthetic default map, as serve does
   bool start = true;           // false: add test routes to `router`, then call start()
+  // Maps of at least this many cells are stored raw first, their COG written in the background.
+  std::int64_t backgroundCells = api::MapCatalog::kDefaultBackgroundCells;
   http::ServerConfig http{};
 };
 
@@ -80,14 +82,17 @@ struct ApiServer {
         manager(db, dir, planners, o.workers, o.queue, o.memoryBudget),
         ctx{db, dir, maps, manager, planners},
         config(o.http) {
+    maps.setBackgroundCells(o.backgroundCells);
     interrupted = db.markUnfinishedInterrupted();
     orphans = maps.sweepOrphans();
     if (o.defaultMap) maps.ensureDefaultMap();
     api::addApiRoutes(router, ctx);
+    maps.resumeCompressions();  // after the routes, which set the callback its jobs call
     if (o.start) start(config);
   }
   ~ApiServer() {
     if (server) server->stop();
+    maps.compressor().stop();  // before ctx, which its callback uses
     manager.stop();
   }
   ApiServer(const ApiServer&) = delete;

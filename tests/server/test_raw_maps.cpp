@@ -1,0 +1,215 @@
+// Maps announced before their COG (issue 24): an upload at or above the catalog's background size
+// is committed with its elevation raw (the grid, its levels and a VRT) and its dem.tif written
+// afterwards by the compressor. Its tiles, exports and missions work meanwhile; its record says
+// storage.elevation "raw", then "cog"; deleting it mid-compression and restarting with it raw
+// lose nothing and leave nothing behind.
+#include <doctest/doctest.h>
+
+#include <atomic>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <future>
+#include <iterator>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "api_server.hpp"
+#include "maps/dem_io.hpp"
+#include "maps/dem_pyramid.hpp"
+#include "tests/wait_until.hpp"
+
+using namespace rover;
+using rover::test::ApiServer;
+using rover::test::ApiServerOptions;
+using rover::test::TempDir;
+using nlohmann::json;
+
+namespace {
+
+// A 331 × 517 map of 1 m cells (odd sizes: every level's last block is cut) with a block of
+// nodata (rows 40..119, columns 200..299).
+std::string oddDem(const TempDir& tmp) {
+  Raster<float> dem(GridGeometry{331, 517, 1.0, 1.0}, 0.0f);
+  for (int r = 0; r < 331; ++r)
+    for (int c = 0; c < 517; ++c)
+      dem(r, c) = (r >= 40 && r < 120 && c >= 200 && c < 300)
+                      ? std::numeric_limits<float>::quiet_NaN()
+                      : static_cast<float>(20 * std::sin(0.031 * c) * std::cos(0.027 * r) + 0.01 * c * r / 50.0);
+  maps::writeGeoTiff(tmp.str("odd.tif"), dem);
+  std::ifstream in(tmp.str("odd.tif"), std::ios::binary);
+  return std::string((std::istreambuf_iterator<char>(in)), {});
+}
+
+ApiServerOptions rawFirst() {
+  ApiServerOptions o;
+  o.backgroundCells = 0;  // every upload is stored raw first
+  o.defaultMap = false;
+  return o;
+}
+
+std::string storage(ApiServer& s, const std::string& id) {
+  return s.get("/api/maps/" + id).json()["storage"]["elevation"];
+}
+
+// Every tile address of the map: each zoom up to the native one and one above it.
+std::vector<std::string> tileAddresses(ApiServer& s, const std::string& id) {
+  const json tiles = s.get("/api/maps/" + id).json()["tiles"];
+  std::vector<std::string> out;
+  const int native = tiles["native_zoom"];
+  for (int z = 0; z <= native + 1; ++z) {
+    const int nx = tiles["tile_counts"][z][0], ny = tiles["tile_counts"][z][1];
+    for (int x = 0; x < nx; ++x)
+      for (int y = 0; y < ny; ++y)
+        for (const char* layer : {"elevation/", "hillshade/", "slope/", "traversability/"})
+          out.push_back(std::string(layer) + std::to_string(z) + "/" + std::to_string(x) + "/" + std::to_string(y) + ".png");
+    out.push_back("elevation/" + std::to_string(z) + "/0/0.f32");
+  }
+  return out;
+}
+
+// Holds each compression job at its start until `release` (or the compressor stops).
+struct Hold {
+  std::atomic<bool> release{false};
+  std::atomic<int> held{0};
+  void on(ApiServer& s) {
+    s.maps.compressor().setBeforeJob([this](const std::string&, const std::function<bool()>& cancelled) {
+      ++held;
+      rover::test::pollUntil([&] { return release.load() || cancelled(); });
+    });
+  }
+};
+
+}  // namespace
+
+TEST_CASE("raw maps: tiles of a map stored raw are byte for byte those of its COG; storage goes raw -> cog") {
+  TempDir tmp;
+  Hold hold;  // declared first: it outlives the server whose jobs it holds
+  ApiServer s(tmp.str("data"), rawFirst());
+  const std::string bytes = oddDem(tmp);
+  // Map A compressed at once; map B, the same cells, held raw.
+  const auto upA = s.post("/api/maps?name=a&filename=odd.tif", bytes, "image/tiff");
+  REQUIRE(upA.status == 201);
+  const std::string a = upA.json()["id"];
+  CHECK(upA.json()["storage"]["elevation"] == "raw");
+  s.maps.compressor().waitIdle(a, rover::test::kHangDeadline);
+  CHECK(storage(s, a) == "cog");
+  CHECK(std::filesystem::exists(s.dir.mapDir(a) + "/dem.tif"));
+  CHECK_FALSE(std::filesystem::exists(s.dir.mapDir(a) + "/dem~raw"));
+  CHECK(maps::pyramidInfo(s.dir.mapDir(a) + "/dem.tif").layout == "COG");
+
+  hold.on(s);
+  // Uploaded as dem.tif: the client's file is not kept under the name the map gives its COG.
+  const auto upB = s.post("/api/maps?name=b&filename=dem.tif", bytes, "image/tiff");
+  REQUIRE(upB.status == 201);
+  const std::string b = upB.json()["id"];
+  rover::test::waitUntil([&] { return hold.held.load() == 1; }, rover::test::kHangDeadline, "B's job to start");
+  CHECK(storage(s, b) == "raw");
+  CHECK(s.get("/api/maps/" + b).json()["storage"]["codec"] == "none");
+  CHECK_FALSE(std::filesystem::exists(s.dir.mapDir(b) + "/dem.tif"));
+  // The raw VRT reads as the COG does: the same header, sizes and overview sizes.
+  const std::string vrt = s.dir.mapDir(b) + "/dem~raw/dem.vrt";
+  const maps::PyramidInfo cog = maps::pyramidInfo(s.dir.mapDir(a) + "/dem.tif"), raw = maps::pyramidInfo(vrt);
+  CHECK(raw.rows == cog.rows);
+  CHECK(raw.cols == cog.cols);
+  CHECK(raw.overviews == cog.overviews);
+  const maps::DemHeader ha = maps::readDemHeader(s.dir.mapDir(a) + "/dem.tif"), hb = maps::readDemHeader(vrt);
+  CHECK(hb.geometry.rows == ha.geometry.rows);
+  CHECK(hb.geometry.cellWidth == ha.geometry.cellWidth);
+  CHECK(hb.geo.geotransform == ha.geo.geotransform);
+  for (const std::string& tile : tileAddresses(s, a)) {
+    CAPTURE(tile);
+    const auto fromCog = s.get("/api/maps/" + a + "/tiles/" + tile);
+    const auto fromRaw = s.get("/api/maps/" + b + "/tiles/" + tile);
+    REQUIRE(fromCog.status == 200);
+    REQUIRE(fromRaw.status == 200);
+    CHECK(fromCog.body == fromRaw.body);
+  }
+  // The rest of the map works raw: a PNG overview, the full-size elevation export (waits for
+  // nothing on a map this small: made from the map in memory), a mission area's header.
+  CHECK(s.get("/api/maps/" + b + "/layers/hillshade.png?max=256").status == 200);
+  const auto exported = s.get("/api/maps/" + b + "/layers/elevation.tif");
+  CHECK(exported.status == 200);
+  CHECK(exported.body == s.get("/api/maps/" + a + "/layers/elevation.tif").body);
+
+  hold.release = true;
+  rover::test::waitUntil([&] { return storage(s, b) == "cog"; }, rover::test::kHangDeadline, "B's storage to be cog");
+  CHECK(s.get("/api/maps/" + b).json()["storage"]["codec"] == "zstd");
+  CHECK(std::filesystem::exists(s.dir.mapDir(b) + "/dem.tif"));
+  CHECK_FALSE(std::filesystem::exists(s.dir.mapDir(b) + "/dem~raw"));
+  // The same COG as A's: the same levels compressed the same way.
+  std::ifstream fa(s.dir.mapDir(a) + "/dem.tif", std::ios::binary), fb(s.dir.mapDir(b) + "/dem.tif", std::ios::binary);
+  CHECK(std::string((std::istreambuf_iterator<char>(fa)), {}) == std::string((std::istreambuf_iterator<char>(fb)), {}));
+  // Tiles not asked for while raw, now from the COG: still A's bytes.
+  for (const char* tile : {"slope/3/1/1.png", "elevation/2/1/0.f32"})
+    CHECK(s.get("/api/maps/" + b + "/tiles/" + tile).body == s.get("/api/maps/" + a + "/tiles/" + tile).body);
+}
+
+TEST_CASE("raw maps: deleting a map while its COG is written leaves no folder, no job and no crash") {
+  TempDir tmp;
+  Hold hold;  // declared first: it outlives the server whose jobs it holds
+  std::future<int> deleting;
+  std::atomic<bool> started{false};
+  ApiServer s(tmp.str("data"), rawFirst());
+  const std::string bytes = oddDem(tmp);
+  SUBCASE("deleted before its job writes: the job finds no record and leaves") {
+    hold.on(s);
+    const auto up = s.post("/api/maps?name=gone&filename=odd.tif", bytes, "image/tiff");
+    REQUIRE(up.status == 201);
+    const std::string id = up.json()["id"];
+    rover::test::waitUntil([&] { return hold.held.load() == 1; }, rover::test::kHangDeadline, "the job to start");
+    // The DELETE waits for the job, which is released once the row is gone.
+    std::thread releaser([&] {
+      rover::test::pollUntil([&] { return !s.db.getMap(id); });
+      hold.release = true;
+    });
+    const auto r = rover::test::request(s.port(), "DELETE", "/api/maps/" + id);
+    releaser.join();
+    CHECK(r.status == 200);
+    CHECK(s.maps.compressor().waitIdle(id, rover::test::kHangDeadline));
+    CHECK_FALSE(std::filesystem::exists(s.dir.mapDir(id)));
+    CHECK(s.get("/api/maps/" + id).status == 404);
+  }
+  SUBCASE("deleted while the COG is written: cancelled or finished, the folder goes") {
+    std::string id;
+    s.maps.compressor().setBeforeJob([&](const std::string& job, const std::function<bool()>&) {
+      // The DELETE starts as the write does; whichever wins, nothing of the map stays.
+      deleting = std::async(std::launch::async,
+                            [&, job] { return rover::test::request(s.port(), "DELETE", "/api/maps/" + job).status; });
+      started = true;
+    });
+    const auto up = s.post("/api/maps?name=gone&filename=odd.tif", bytes, "image/tiff");
+    REQUIRE(up.status == 201);
+    id = up.json()["id"];
+    rover::test::waitUntil([&] { return started.load(); }, rover::test::kHangDeadline, "the job to start");
+    CHECK(deleting.get() == 200);
+    CHECK(s.maps.compressor().waitIdle(id, rover::test::kHangDeadline));
+    CHECK_FALSE(std::filesystem::exists(s.dir.mapDir(id)));
+    CHECK(s.get("/api/maps/" + id).status == 404);
+  }
+  // Nothing of the map is charged to the disk any more (no tile was made: no layer file either).
+  CHECK(s.dir.budget().used() == 0);
+}
+
+TEST_CASE("raw maps: a server stopped with a map still raw compresses it at its next start; it reads meanwhile") {
+  TempDir tmp;
+  const std::string bytes = oddDem(tmp);
+  std::string id, tileBefore;
+  {
+    Hold hold;  // never released: the server stops with the map raw (declared first: it outlives it)
+    ApiServer s(tmp.str("data"), rawFirst());
+    hold.on(s);
+    const auto up = s.post("/api/maps?name=raw&filename=odd.tif", bytes, "image/tiff");
+    REQUIRE(up.status == 201);
+    id = up.json()["id"];
+    rover::test::waitUntil([&] { return hold.held.load() == 1; }, rover::test::kHangDeadline, "the job to start");
+    tileBefore = s.get("/api/maps/" + id + "/tiles/hillshade/2/1/1.png").body;
+    REQUIRE(!tileBefore.empty());
+  }
+  ApiServer s(tmp.str("data"), rawFirst());
+  rover::test::waitUntil([&] { return storage(s, id) == "cog"; }, rover::test::kHangDeadline, "the map's storage to be cog");
+  CHECK_FALSE(std::filesystem::exists(s.dir.mapDir(id) + "/dem~raw"));
+  CHECK(s.get("/api/maps/" + id + "/tiles/elevation/0/0/0.png").status == 200);
+  CHECK(s.get("/api/maps/" + id + "/tiles/hillshade/2/1/1.png").body == tileBefore);
+}
