@@ -443,8 +443,9 @@ void writeClassPyramid(const std::string& path, const Raster<std::uint8_t>& clas
   ensureGdal();
   GdalErrorLog errors;
   const GridGeometry& g = classes.geometry;
+  // Blocks compressed on every core (the import waits for this file before it announces a map).
   const char* options[] = {"TILED=YES", "BLOCKXSIZE=256", "BLOCKYSIZE=256", "COMPRESS=ZSTD", "ZSTD_LEVEL=1",
-                           "BIGTIFF=IF_SAFER", nullptr};
+                           "BIGTIFF=IF_SAFER", "NUM_THREADS=ALL_CPUS", nullptr};
   const std::string tmp = path + ".tmp";
   CPLErrorReset();
   errno = 0;

@@ -4,9 +4,13 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
+#include <condition_variable>
+#include <mutex>
 #include <cerrno>
 #include <stdexcept>
 
+#include "core/common/parallel.hpp"
 #include "maps/dem_error.hpp"
 #include "maps/dem_io.hpp"
 
@@ -113,18 +117,40 @@ void readGridRows(const std::string& path, int cols, int row0, int rows, float* 
 terrain::Traversability traversabilityOfGridFile(const std::string& path, const GridGeometry& g,
                                                  const std::vector<double>& rowCellWidth, int bandRows,
                                                  const std::function<void(const float*, std::size_t)>& eachBand,
-                                                 const GridRowsGate* gate) {
+                                                 const GridRowsGate* gate, unsigned threads) {
   terrain::Traversability out;
   out.classes = Raster<std::uint8_t>(g, 0);
   bandRows = std::max(1, bandRows);
-  terrain::Dem band;
-  for (int r0 = 0; r0 < g.rows; r0 += bandRows) {
-    const int r1 = std::min(g.rows, r0 + bandRows);
+  const std::size_t bands = static_cast<std::size_t>((g.rows + bandRows - 1) / bandRows);
+  // Each band's class counts in its own slot (summed after, in band order): the shares do not
+  // depend on the thread count. `eachBand` takes turns in row order (`turn`: the next band's).
+  std::vector<std::array<std::int64_t, 4>> counts(bands, std::array<std::int64_t, 4>{});
+  std::mutex turnMutex;
+  std::condition_variable turnChanged;
+  std::size_t turn = 0;
+  bool failed = false;  // a band threw: the bands waiting for their turn stop too
+  const auto oneBand = [&](std::size_t b) {
+    const int r0 = static_cast<int>(b) * bandRows, r1 = std::min(g.rows, r0 + bandRows);
     const int top = std::max(0, r0 - 1), bottom = std::min(g.rows, r1 + 1);  // the halo rows
-    if (band.z.geometry.rows != bottom - top) band.z = Raster<float>(GridGeometry{bottom - top, g.cols, g.cellWidth, g.cellHeight}, 0.0f);
+    terrain::Dem band;
+    band.z = Raster<float>(GridGeometry{bottom - top, g.cols, g.cellWidth, g.cellHeight}, 0.0f);
     if (gate) gate->waitFor(bottom);
     readGridRows(path, g.cols, top, bottom - top, band.z.values.data());
-    if (eachBand) eachBand(&band.z(r0 - top, 0), static_cast<std::size_t>(r1 - r0) * g.cols);
+    if (eachBand) {
+      std::unique_lock lock(turnMutex);
+      turnChanged.wait(lock, [&] { return turn == b || failed; });
+      if (failed) throw GridFileError("the grid file's classes stopped at another band's failure");
+      // The turn passes on even if eachBand throws, so no later band waits for ever.
+      struct Pass {
+        std::size_t& turn;
+        std::condition_variable& changed;
+        ~Pass() {
+          ++turn;
+          changed.notify_all();
+        }
+      } pass{turn, turnChanged};
+      eachBand(&band.z(r0 - top, 0), static_cast<std::size_t>(r1 - r0) * g.cols);
+    }
     if (!rowCellWidth.empty()) band.rowCellWidth.assign(rowCellWidth.begin() + top, rowCellWidth.begin() + bottom);
     // A halo row alone (the band's first or last row off the map's edge) would miss its own
     // neighbours, so only the band's own rows are kept.
@@ -132,9 +158,23 @@ terrain::Traversability traversabilityOfGridFile(const std::string& path, const 
     for (int r = r0; r < r1; ++r) {
       const std::uint8_t* from = &t.classes(r - top, 0);
       std::copy(from, from + g.cols, &out.classes(r, 0));
-      for (int c = 0; c < g.cols; ++c) ++out.shares.counts[from[c]];
+      for (int c = 0; c < g.cols; ++c) ++counts[b][from[c]];
     }
-  }
+  };
+  parallelFor(bands, threads, [&](std::size_t b) {
+    try {
+      oneBand(b);
+    } catch (...) {
+      {
+        std::lock_guard lock(turnMutex);
+        failed = true;
+      }
+      turnChanged.notify_all();
+      throw;
+    }
+  });
+  for (const auto& c : counts)
+    for (std::size_t k = 0; k < c.size(); ++k) out.shares.counts[k] += c[k];
   return out;
 }
 

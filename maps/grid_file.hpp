@@ -83,15 +83,16 @@ class GridRowsGate {
 // Cells [row0 · cols, (row0 + rows) · cols) of the grid file into `out`; throws std::runtime_error.
 void readGridRows(const std::string& path, int cols, int row0, int rows, float* out);
 
-// terrain::traversability of the grid file (one thread), computed in bands of `bandRows` rows each
-// read with one row of halo above and below: the same classes and shares as on the whole grid
-// (every cell's 8 neighbours are in its band), holding bandRows + 2 rows of heights at a time.
+// terrain::traversability of the grid file, computed in bands of `bandRows` rows each read with
+// one row of halo above and below, on `threads` threads (0: every core; bands handed out in row
+// order): the same classes and shares as on the whole grid (every cell's 8 neighbours are in its
+// band) on any thread count, holding bandRows + 2 rows of heights a thread.
 // With `gate`, each band waits for its rows (the file still being written).
-// `eachBand(values, n)`, when given, sees each band's own cells (halo rows left out) in row order
-// (the import digests the heights there, off the critical path).
+// `eachBand(values, n)`, when given, sees each band's own cells (halo rows left out) in row order,
+// one band at a time (the import digests the heights there, off the critical path).
 terrain::Traversability traversabilityOfGridFile(const std::string& path, const GridGeometry& g,
                                                  const std::vector<double>& rowCellWidth, int bandRows,
                                                  const std::function<void(const float*, std::size_t)>& eachBand = {},
-                                                 const GridRowsGate* gate = nullptr);
+                                                 const GridRowsGate* gate = nullptr, unsigned threads = 1);
 
 }  // namespace rover::maps
