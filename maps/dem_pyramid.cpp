@@ -166,16 +166,26 @@ class OpenRasters {
 // otherwise (a handle that failed once is not trusted again).
 class StoredLease {
  public:
-  explicit StoredLease(std::string path) : path_(std::move(path)), ds_(OpenRasters::instance().take(path_, id_)) {}
+  explicit StoredLease(std::string path) : path_(std::move(path)), ds_(OpenRasters::instance().take(path_, id_)) {
+    // A VRT opens its overviews' files when first asked for them: all of them now, while its
+    // grid is open, so that a COG replacing the raw files (which are then removed) cannot leave
+    // this read without its levels, falling back to the full-size cells unnoticed. A level gone
+    // already is an error (the caller reads dem.tif instead: server/api/map_files.hpp).
+    if (isVrt()) {
+      GDALRasterBandH band = GDALGetRasterBand(ds_.get(), 1);
+      for (int i = 0; band && i < GDALGetOverviewCount(band); ++i)
+        if (!GDALGetOverview(band, i)) throw std::runtime_error("an overview level of " + path_ + " does not open");
+    }
+  }
   GDALDatasetH get() const { return ds_.get(); }
   // A raw DEM's VRT (writeRawDem) is never kept: it lives until its COG replaces it, and an idle
   // handle would hold its removed files' disk space; opening it parses a few lines of XML.
   void keep() {
-    if (path_.size() < 4 || path_.compare(path_.size() - 4, 4, ".vrt") != 0)
-      OpenRasters::instance().give(path_, id_, std::move(ds_));
+    if (!isVrt()) OpenRasters::instance().give(path_, id_, std::move(ds_));
   }
 
  private:
+  bool isVrt() const { return path_.size() >= 4 && path_.compare(path_.size() - 4, 4, ".vrt") == 0; }
   std::string path_;
   struct stat id_ {};
   Dataset ds_;

@@ -139,7 +139,7 @@ terrain::Traversability traversabilityOfGridFile(const std::string& path, const 
     if (eachBand) {
       std::unique_lock lock(turnMutex);
       turnChanged.wait(lock, [&] { return turn == b || failed; });
-      if (failed) throw GridFileError("the grid file's classes stopped at another band's failure");
+      if (failed) return;  // another band failed: parallelFor rethrows its error, not a second one
       // The turn passes on even if eachBand throws, so no later band waits for ever.
       struct Pass {
         std::size_t& turn;

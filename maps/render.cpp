@@ -240,7 +240,9 @@ inline TintChannels hypsometricTint(double u) {
   };
   constexpr const Stop* k = kHypsometric;
   const double at = pick(k[0].at, k[1].at, k[2].at, k[3].at);  // quarters: exact
-  const double t = above * std::min(std::max((u - at) * 4.0, 0.0), 1.0);  // NaN u: max(NaN, 0) is 0
+  // A NaN u (nodata, or a zero span) gives 0: std::max(a, b) is a unless a < b, so 0 comes first
+  // (max(NaN, 0) would be NaN, and casting it to int in mix undefined).
+  const double t = above * std::min(1.0, std::max(0.0, (u - at) * 4.0));
   auto mix = [&](double a0, double a1, double a2, double a3, double a4) {
     const double x = pick(a0, a1, a2, a3), y = pick(a1, a2, a3, a4);
     return static_cast<int>(x + (y - x) * t + 0.5);  // in [0, 255.5]: truncation as rampColour's
@@ -334,7 +336,8 @@ Image renderHillshade(const terrain::Dem& dem) {
     shadeRow(dem, r, shade.data());
     for (int c = 0; c < cols; ++c) {  // hillshadeGrey: toByte of a shade in 1..255, grey, opaque
       const float s = shade[c];
-      const auto g = static_cast<std::uint32_t>(std::min(double(s), 255.0) + 0.5);
+      // min(255, NaN) is 255 (NaN in the first and last columns): the cast stays defined.
+      const auto g = static_cast<std::uint32_t>(std::min(255.0, double(s)) + 0.5);
       rowPixels[c] = std::isfinite(s) ? g | g << 8 | g << 16 | 0xff000000u : 0u;
     }
     std::memcpy(&img.rgba[std::size_t(r) * cols * 4], rowPixels.data(), std::size_t(cols) * 4);

@@ -3,7 +3,8 @@
 // index at a time, so uneven runs balance; results must be written to per-index slots, which
 // keeps a sweep's output independent of the thread count. The first exception is rethrown.
 //
-// A thread the system refuses to start (std::system_error: EAGAIN under a thread or memory limit)
+// A thread the system refuses to start (std::system_error: EAGAIN under a thread or memory limit;
+// std::bad_alloc)
 // is not an error: the threads already started and the calling thread share the work, so a busy
 // server degrades to fewer cores instead of terminating (a joinable std::thread destroyed by the
 // unwinding would call std::terminate).
@@ -11,9 +12,8 @@
 #include <cstddef>
 #include <exception>
 #include <mutex>
-#include <system_error>
-#include <utility>
 #include <thread>
+#include <utility>
 #include <vector>
 
 namespace rover {
@@ -47,8 +47,8 @@ void parallelFor(std::size_t count, unsigned threads, Fn&& fn, Spawn&& spawn) {
   for (unsigned t = 1; t < threads && t < count; ++t) {
     try {
       pool.push_back(spawn(worker));
-    } catch (const std::system_error&) {
-      break;  // fewer threads: the ones started and this one do every index
+    } catch (...) {
+      break;  // fewer threads (EAGAIN, or no memory for one): those started and this one do every index
     }
   }
   worker();

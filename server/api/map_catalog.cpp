@@ -62,7 +62,13 @@ terrain::Body mapBody(const store::MapRecord& r, const std::string& crsWkt) {
 std::shared_ptr<const MapData> MapCatalog::loadFromDisk(const store::MapRecord& r) {
   auto data = std::make_shared<MapData>();
   data->record = r;
-  data->dem = readElevation(dir_.mapDir(r.id), [](const std::string& path) { return maps::loadDem(path).dem; });
+  data->dem = readElevation(dir_.mapDir(r.id), [](const std::string& path) {
+    try {
+      return maps::loadDem(path).dem;
+    } catch (const Error& e) {
+      throw std::runtime_error(e.what());  // the stored file is the server's: 500, its path in the log only
+    }
+  });
   data->traversability = terrain::traversability(data->dem);
   data->elevationRange = maps::colourRange(maps::RenderLayer::Elevation, data->dem.z);
   data->body = mapBody(r, data->dem.z.geo.crsWkt);
@@ -170,10 +176,9 @@ std::string MapCatalog::layerFile(const std::string& id, const std::string& laye
     // (the COG and the class pyramid); anything else is computed on the whole map in memory, which
     // a big map refuses rather than load gigabytes for one file.
     if (format == "tif" && layer == "elevation") {
-      // The stored COG itself; a map whose COG is still being written is waited for (its job is
-      // queued or running: seconds), then asked again later.
-      if (!fs::exists(mapDir / kDemFile)) compressor_->waitIdle(id, std::chrono::seconds(60));
-      if (!fs::exists(mapDir / kDemFile))
+      // The stored COG itself. A map whose COG is still being written (storage "raw": seconds)
+      // is asked again later: a wait here would hold one of the work pool's few threads.
+      if (!fs::exists(mapDir / kDemFile) || fs::exists(mapDir / kRawDemDir / kRawDemVrt))
         throw ApiError(503, "not_ready", "the map's elevation is still being compressed: ask again shortly", "layer")
             .withHeader("Retry-After", "10");
       return (mapDir / kDemFile).string();

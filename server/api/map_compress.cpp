@@ -2,9 +2,6 @@
 // elevation as the server's float32 grid, its levels and a VRT (server/api/map_files.hpp
 // kRawDemDir), so its first tiles come before the COG's ~10 s of CPU; the compressor
 // (server/api/elevation_compressor.hpp) then writes dem.tif here, one map at a time.
-#include <fcntl.h>
-#include <unistd.h>
-
 #include <chrono>
 #include <stdexcept>
 #include <exception>
@@ -33,16 +30,6 @@ std::uint64_t mapBytes(const fs::path& mapDir) {
   return bytes;
 }
 
-// Flushes `path` (a file or folder) to the disk: the COG must be durable before the raw files,
-// the map's only other copy, go (as commitDir makes an import's files durable).
-void flush(const fs::path& path) {
-  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-  if (fd < 0) throw std::runtime_error("cannot open " + path.string() + " to flush it");
-  const int rc = ::fsync(fd);
-  ::close(fd);
-  if (rc != 0) throw std::runtime_error("cannot flush " + path.string());
-}
-
 }  // namespace
 
 void MapCatalog::compressElevation(const std::string& id, const std::function<bool()>& cancelled) {
@@ -53,15 +40,16 @@ void MapCatalog::compressElevation(const std::string& id, const std::function<bo
   if (!rec || cancelled()) return;
   std::error_code ec;
   const auto from = std::chrono::steady_clock::now();
-  if (!fs::exists(mapDir / kDemFile, ec)) {
-    if (!fs::exists(raw / kRawDemVrt, ec)) return;  // neither: not a map of ours to mend
-    // Written as dem.tif.tmp in the map's folder and renamed into place (maps::writeDemCog's
-    // atomic write): a reader sees the raw VRT or the whole COG, never a part. No folder is
-    // created: if the map's folder went meanwhile, the write fails and nothing is left.
-    storingGeoTiff([&] { maps::writeDemCogFromRaw((mapDir / kDemFile).string(), (raw / kRawDemVrt).string(), cancelled); });
-  }
-  flush(mapDir / kDemFile);
-  flush(mapDir);
+  // While the raw files are there they are the map's elevation: the COG is (re)written from them
+  // whatever dem.tif holds (a dem.tif renamed into place before a power cut may hold nothing).
+  if (!fs::exists(raw / kRawDemVrt, ec)) return;  // compressed already (or not a map of ours)
+  // Written as dem.tif.tmp in the map's folder and renamed into place (maps::writeDemCog's
+  // atomic write): a reader sees the raw VRT or the whole COG, never a part. No folder is
+  // created: if the map's folder went meanwhile, the write fails and nothing is left.
+  storingGeoTiff([&] { maps::writeDemCogFromRaw((mapDir / kDemFile).string(), (raw / kRawDemVrt).string(), cancelled); });
+  // On the disk before the raw files, the map's only other copy, go.
+  store::DataDir::flushFile((mapDir / kDemFile).string());
+  store::DataDir::flushDir(mapDir.string());
   // Both are on disk now: charged as they are until the raw files go.
   dir_.budget().record(mapDir.string(), store::DiskUse::Map, id, mapBytes(mapDir));
   const auto& m = rec->meta;
@@ -86,8 +74,18 @@ void MapCatalog::compressElevation(const std::string& id, const std::function<bo
 int MapCatalog::resumeCompressions() {
   int queued = 0;
   for (const auto& m : db_.listMaps()) {
+    const fs::path mapDir = dir_.mapDir(m.id);
+    std::error_code ec;
     const auto it = m.meta.find("storage");
-    if (it == m.meta.end() || !it->is_object() || it->value("elevation", std::string()) != "raw") continue;
+    if (it == m.meta.end() || !it->is_object() || it->value("elevation", std::string()) != "raw") {
+      // A COG map whose raw files outlived a crash between its record and their removal.
+      if (fs::exists(mapDir / kRawDemDir, ec) && fs::exists(mapDir / kDemFile, ec))
+        store::DataDir::removeTree((mapDir / kRawDemDir).string());
+      continue;
+    }
+    // A dem.tif beside the raw files is from a job that did not finish (renamed, maybe not yet
+    // on disk): readers go back to the raw VRT until the job writes it again.
+    if (fs::exists(mapDir / kRawDemDir / kRawDemVrt, ec)) fs::remove(mapDir / kDemFile, ec);
     compressor_->enqueue(m.id);
     ++queued;
   }

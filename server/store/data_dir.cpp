@@ -224,6 +224,13 @@ void DataDir::remove(const std::string& path) const {
   budget_->release(path);
 }
 
+void DataDir::flushFile(const std::string& path) {
+  if (const int err = fsyncPath(path, false); err != 0)
+    throwWriteError(err, fs::path(path).filename().string(), "cannot flush '" + path + "'");
+}
+
+void DataDir::flushDir(const std::string& dir) { fsyncDirBestEffort(dir); }
+
 void DataDir::removeTree(const std::string& path) {
   std::error_code ec;
   fs::remove_all(path, ec);

@@ -91,6 +91,10 @@ class DataDir {
   static void writeFileAtomic(const std::string& path, const std::string& bytes, bool durable = true);
   // Removes a folder and everything in it (no error if absent).
   static void removeTree(const std::string& path);
+  // fsyncs the file `path` (throws StorageFull or std::runtime_error naming it, for the log), and
+  // the folder `dir` best effort (some filesystems refuse fsync on a directory).
+  static void flushFile(const std::string& path);
+  static void flushDir(const std::string& dir);
   // Empties tmp/ (start-up: whatever was in flight when the server died is discarded).
   void cleanTmp() const;
 
