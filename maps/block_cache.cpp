@@ -39,7 +39,16 @@ struct BlockKeyHash {
   }
 };
 
-using Bytes = std::vector<unsigned char>;
+// A decoded block's bytes, left uninitialised until the decoder writes them (a zero fill first
+// was a pass over fresh pages for nothing).
+struct Bytes {
+  explicit Bytes(std::size_t n) : bytes(new unsigned char[n]), n(n) {}
+  unsigned char* data() { return bytes.get(); }
+  const unsigned char* data() const { return bytes.get(); }
+  std::size_t size() const { return n; }
+  std::unique_ptr<unsigned char[]> bytes;
+  std::size_t n;
+};
 
 class DecodedBlocks {
  public:
