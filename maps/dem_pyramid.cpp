@@ -259,8 +259,11 @@ void writeCog(const std::string& path, GDALDatasetH src, const GridGeometry& g, 
   // 128² blocks, the COG driver's smallest: a tile reads its 256² cells and a one-cell halo, which
   // with 256² blocks aligned on the tile grid meant decoding 3 × 3 blocks (2.3 MiB) for one; with
   // 128² blocks 4 × 4 (1 MiB). Decoding was half a cold tile's CPU on a 7000² map (ZSTD and the
-  // predictor: 3.9 unique blocks a tile over big_map.py's 128 cold tiles); 4.0 -> 3.4 ms of CPU a
-  // tile. The file was 1 % smaller on that map, and written in the same CPU (gdal_translate).
+  // predictor: 3.9 unique blocks a tile over big_map.py's 128 cold tiles). With the shared decoded
+  // blocks (maps/block_cache.hpp) 3.5-4.1 -> 2.3-2.7 ms of server CPU a cold tile (big_map.py,
+  // alternating with the 256² build, load 6). The price is in the background compression: the
+  // driver compresses each block as a job of its own, and four times as many took the 7000² map's
+  // COG from 1.6-2.0 s to 2.2-2.9 s (gdal_translate: 5 % more CPU); the file was 1 % smaller.
   // ZSTD level 1 with horizontal differencing of the values' 32-bit patterns (PREDICTOR=2):
   // lossless, and read by every GDAL since 2.3. A cold tile decompresses up to 16 blocks (its halo
   // crosses block edges), and undoing the floating-point predictor (3) was 30 % of a cold tile's
