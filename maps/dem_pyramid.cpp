@@ -24,6 +24,7 @@
 
 #include "core/terrain/layers.hpp"
 #include "maps/average_levels.hpp"
+#include "maps/block_cache.hpp"
 #include "maps/dem_error.hpp"
 #include "maps/grid_file.hpp"
 #include "maps/gdal_env.hpp"
@@ -178,6 +179,8 @@ class StoredLease {
     }
   }
   GDALDatasetH get() const { return ds_.get(); }
+  const std::string& path() const { return path_; }
+  const struct stat& id() const { return id_; }
   // A raw DEM's VRT (writeRawDem) is never kept: it lives until its COG replaces it, and an idle
   // handle would hold its removed files' disk space; opening it parses a few lines of XML.
   void keep() {
@@ -215,19 +218,27 @@ void readWindow(GDALRasterBandH band, int c0, int r0, int cols, int rows, void* 
     throw std::runtime_error("cannot read a window of the stored raster " + path + " (" + CPLGetLastErrorMsg() + ")");
 }
 
-// `span`'s blocks from `level`: a block past the level's last row or column (the cut block a
-// rounded-down overview lacks) takes its nearest neighbour's value.
+// A window of a level of `ds`'s file: through the decoded blocks its handles share
+// (maps/block_cache.hpp), or GDAL's own reading where that cache does not apply.
+void readLevelWindow(const StoredLease& ds, GDALRasterBandH level, int c0, int r0, int cols, int rows, void* out,
+                     GDALDataType type) {
+  if (!readThroughBlocks(ds.get(), level, ds.path(), ds.id(), c0, r0, cols, rows, out, type))
+    readWindow(level, c0, r0, cols, rows, out, type, ds.path());
+}
+
+// `span`'s blocks from `level` of `ds`: a block past the level's last row or column (the cut
+// block a rounded-down overview lacks) takes its nearest neighbour's value.
 template <class T>
-void readLevel(GDALRasterBandH level, const BlockSpan& s, T* out, GDALDataType type, const std::string& path) {
+void readLevel(const StoredLease& ds, GDALRasterBandH level, const BlockSpan& s, T* out, GDALDataType type) {
   const int rows = GDALGetRasterBandYSize(level), cols = GDALGetRasterBandXSize(level);
   if (s.r0 + s.rows <= rows && s.c0 + s.cols <= cols) {
-    readWindow(level, s.c0, s.r0, s.cols, s.rows, out, type, path);
+    readLevelWindow(ds, level, s.c0, s.r0, s.cols, s.rows, out, type);
     return;
   }
   const int r0 = std::min(s.r0, rows - 1), r1 = std::min(s.r0 + s.rows, rows);
   const int c0 = std::min(s.c0, cols - 1), c1 = std::min(s.c0 + s.cols, cols);
   std::vector<T> got(std::size_t(r1 - r0) * (c1 - c0));
-  readWindow(level, c0, r0, c1 - c0, r1 - r0, got.data(), type, path);
+  readLevelWindow(ds, level, c0, r0, c1 - c0, r1 - r0, got.data(), type);
   for (int i = 0; i < s.rows; ++i) {
     const int r = std::min(s.r0 + i, rows - 1) - r0;
     for (int j = 0; j < s.cols; ++j)
@@ -255,8 +266,16 @@ void writeCog(const std::string& path, GDALDatasetH src, const GridGeometry& g, 
     georeference(src, g, *geo);
     GDALSetRasterNoDataValue(GDALGetRasterBand(src, 1), std::numeric_limits<double>::quiet_NaN());
   }
+  // 128² blocks, the COG driver's smallest: a tile reads its 256² cells and a one-cell halo, which
+  // with 256² blocks aligned on the tile grid meant decoding 3 × 3 blocks (2.3 MiB) for one; with
+  // 128² blocks 4 × 4 (1 MiB). Decoding was half a cold tile's CPU on a 7000² map (ZSTD and the
+  // predictor: 3.9 unique blocks a tile over big_map.py's 128 cold tiles). With the shared decoded
+  // blocks (maps/block_cache.hpp) 3.5-4.1 -> 2.3-2.7 ms of server CPU a cold tile (big_map.py,
+  // alternating with the 256² build, load 6). The price is in the background compression: the
+  // driver compresses each block as a job of its own, and four times as many took the 7000² map's
+  // COG from 1.6-2.0 s to 2.2-2.9 s (gdal_translate: 5 % more CPU); the file was 1 % smaller.
   // ZSTD level 1 with horizontal differencing of the values' 32-bit patterns (PREDICTOR=2):
-  // lossless, and read by every GDAL since 2.3. A cold tile decompresses up to 9 blocks (its halo
+  // lossless, and read by every GDAL since 2.3. A cold tile decompresses up to 16 blocks (its halo
   // crosses block edges), and undoing the floating-point predictor (3) was 30 % of a cold tile's
   // CPU. Measured with gdal_translate -of COG on a 3000² generated DEM (big_map.py's terrain), one
   // thread, without overviews: ZSTD+2 writes in 0.17 s of CPU, reads back in 0.14 s, 27.7 MB;
@@ -264,7 +283,7 @@ void writeCog(const std::string& path, GDALDatasetH src, const GridGeometry& g, 
   // 0.63 s, 0.20 s, 31.9 MB. With overviews, DEFLATE level 1 + 3 (stored before) took 0.83 s to
   // write against ZSTD+3's 0.62 s, LZW + 3 0.96 s and 30 % more disk.
   const std::string count = "OVERVIEW_COUNT=" + std::to_string(overviewLevels(g));
-  const char* options[] = {"BLOCKSIZE=256",        "COMPRESS=ZSTD",     "LEVEL=1",
+  const char* options[] = {"BLOCKSIZE=128",        "COMPRESS=ZSTD",     "LEVEL=1",
                            "PREDICTOR=2",        "OVERVIEW_RESAMPLING=AVERAGE",
                            count.c_str(),          "NUM_THREADS=ALL_CPUS", "BIGTIFF=IF_SAFER",
                            overviewLevels(g) == 0 ? "OVERVIEWS=NONE" : "OVERVIEWS=AUTO", nullptr};
@@ -509,7 +528,7 @@ terrain::Dem readDemBlocks(const std::string& path, const DemHeader& header, int
   out.rowCellWidth = blockRowWidths(header.rowCellWidth, g.rows, step, s);
   if (GDALRasterBandH level = levelBand(ds.get(), step)) {
     out.z = Raster<float>(GridGeometry{s.rows, s.cols, g.cellWidth * step, g.cellHeight * step}, kNaN);
-    readLevel(level, s, out.z.values.data(), GDT_Float32, path);
+    readLevel(ds, level, s, out.z.values.data(), GDT_Float32);
     toNaN(out.z);
   } else {
     const BlockSpan c = cellsOf(s, step, g.rows, g.cols);
@@ -530,7 +549,7 @@ Raster<std::uint8_t> readClassBlocks(const std::string& path, int step, const Bl
   const int rows = GDALGetRasterYSize(ds.get()), cols = GDALGetRasterXSize(ds.get());
   if (GDALRasterBandH level = levelBand(ds.get(), step)) {
     Raster<std::uint8_t> out(GridGeometry{s.rows, s.cols, std::fabs(gt[1]) * step, std::fabs(gt[5]) * step}, 0);
-    readLevel(level, s, out.values.data(), GDT_Byte, path);
+    readLevel(ds, level, s, out.values.data(), GDT_Byte);
     ds.keep();
     return out;
   }
@@ -545,6 +564,7 @@ void forgetStoredRasters(const std::string& dir) {
   std::string prefix = dir;
   if (!prefix.empty() && prefix.back() != '/') prefix += '/';
   OpenRasters::instance().forget(prefix);
+  forgetDecodedBlocks(prefix);
 }
 
 terrain::Dem PyramidBlocks::dem(int step, const BlockSpan& span) const {

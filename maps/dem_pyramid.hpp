@@ -1,7 +1,9 @@
 #pragma once
 // A stored map as tiled, overviewed rasters (issue 24), so a tile at any zoom reads about 256²
 // cells (plus its halo) whatever the map's size:
-// - dem.tif, the elevation as a Cloud-Optimised GeoTIFF (GDAL's COG driver): 256² internal tiles,
+// - dem.tif, the elevation as a Cloud-Optimised GeoTIFF (GDAL's COG driver): 128² internal tiles
+//   (a tile's 258² window with its halo decodes 16 of them, 1 MiB, where 256² tiles made it 9,
+//   2.3 MiB; maps stored with 256² tiles read the same),
 //   ZSTD with horizontal differencing (lossless), NaN as nodata, and one overview per
 //   zoom below the tile grid's native zoom, each GDAL's AVERAGE over 2^k × 2^k cells: the blocks
 //   of zoom native − k (maps/tile_grid.hpp), except that the driver rounds a level's size down

@@ -88,13 +88,13 @@ struct StoredMap {
 
 }  // namespace
 
-TEST_CASE("pyramid: the elevation is a COG of 256² tiles, ZSTD, one overview per zoom below native, values unchanged") {
+TEST_CASE("pyramid: the elevation is a COG of 128² tiles, ZSTD, one overview per zoom below native, values unchanged") {
   StoredMap m(wavyDem(700, 530, 0.5));
   const PyramidInfo info = pyramidInfo(m.dir.file("dem.tif"));
   CHECK(info.layout == "COG");
   CHECK(info.compression == "ZSTD");
-  CHECK(info.blockWidth == 256);
-  CHECK(info.blockHeight == 256);
+  CHECK(info.blockWidth == 128);
+  CHECK(info.blockHeight == 128);
   // 700 rows → native zoom 2: overviews of 2 × 2 and 4 × 4 cells, the blocks of zooms 1 and 0
   // (the COG driver rounds 530 / 4 down: 132 where the tile grid has 133 blocks).
   REQUIRE(tileGridOf(700, 530).nativeZoom == 2);

@@ -149,7 +149,7 @@ TEST_CASE("tiles api: a map is stored as its pyramid; a map stored before (no ov
   REQUIRE(map["colour_range"].size() == 2);
   const maps::PyramidInfo cog = maps::pyramidInfo(s.dir.mapDir(a) + "/dem.tif");
   CHECK(cog.layout == "COG");
-  CHECK(cog.blockWidth == 256);
+  CHECK(cog.blockWidth == 128);
   CHECK(cog.overviews.size() == 2u);
   // The same cells uploaded again as a plain GeoTIFF (the elevation export), then turned back into
   // a map as stored before the pyramid: the old writer's dem.tif, no classes.tif.
