@@ -102,7 +102,7 @@ void addLayerRoutes(http::Router& router, ApiContext& ctx) {
              routeDoc("A layer (elevation|hillshade|slope|traversability|pdm) as .png (?max= overview), "
                       ".tif (GeoTIFF) or .f32 (raw little-endian float32, size in X-Rows/X-Cols); ?pdm=ID for pdm. "
                       "Full-size files other than elevation.tif and traversability.tif of a map over 25 M cells → 413. "
-                      "elevation.tif of such a map still stored raw waits for its COG (up to 60 s), else 503 with Retry-After.",
+                      "elevation.tif of such a map still stored raw (its COG being written) → 503 with Retry-After.",
                       openapi::Operation()
                           .query("max", {{"type", "integer"}, {"minimum", 0}, {"maximum", 16384}},
                                  "PNG overview: longest side rounded up to 256, 512, 1024, 2048 or 4096.")
