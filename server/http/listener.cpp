@@ -59,6 +59,11 @@ void Listener::onAccept(beast::error_code ec, tcp::socket socket) {
     backoff_.async_wait([self = shared_from_this()](beast::error_code) { self->accept(); });
     return;
   }
+  // A response goes out as soon as it is written (nginx's tcp_nodelay): with Nagle's algorithm a
+  // response written in pieces (a header, then a file body's 4 KiB chunks) waits for the client's
+  // delayed ACK, up to 40 ms on Linux, before its second piece leaves.
+  beast::error_code nodelay;
+  socket.set_option(tcp::no_delay(true), nodelay);  // best effort: a refusal only costs latency
   try {
     std::make_shared<HttpSession>(std::move(socket), state_)->run();
   } catch (const std::exception& e) {
