@@ -85,6 +85,14 @@ void LayerCache::chargeLocked(const std::string& path, std::uint64_t size) {
   }
 }
 
+bool LayerCache::find(const std::string& path) {
+  std::lock_guard lock(mutex_);
+  auto it = entries_.find(path);
+  if (it == entries_.end()) return false;
+  it->second.lastUse = ++clock_;
+  return true;
+}
+
 std::string LayerCache::get(const std::string& path, const std::function<void(const std::string&)>& make) {
   std::shared_ptr<std::mutex> once;
   {

@@ -29,6 +29,8 @@ class LayerCache {
   // `path`, made by `make(path)` (which writes it atomically) unless it is there already. A file
   // larger than the cap on its own is still kept until the next one arrives.
   std::string get(const std::string& path, const std::function<void(const std::string&)>& make);
+  // Whether `path` is cached (counted as a use); never makes it. Only the cache's map is read.
+  bool find(const std::string& path);
   // Forgets the files under `dir` (a deleted map's folder).
   void forgetUnder(const std::string& dir);
   // Deletes the cached files under `dir` whose file name `unreachable` accepts (e.g. an edited or

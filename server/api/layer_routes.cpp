@@ -1,9 +1,11 @@
 // GET /api/maps/{id}/layers/{file}: a map's layers as PNG overviews, GeoTIFFs or raw float32.
 #include <algorithm>
 #include <cctype>
+#include <optional>
 
 #include "maps/tile_grid.hpp"
 #include "server/api/route_kit.hpp"
+#include "server/store/data_dir.hpp"
 
 namespace rover::api {
 
@@ -47,52 +49,97 @@ bool etagMatches(const std::string& ifNoneMatch, const std::string& etag) {
   return ifNoneMatch.find(etag) != std::string::npos;  // one tag or a list, weak or strong
 }
 
-Response getTile(ApiContext& ctx, const Request& req) {
-  const std::string& id = req.params.at("id");
-  const std::string& layer = req.params.at("layer");
+// A tile's address as the request names it: /tiles/{layer}/{z}/{x}/{y}.{format}[?pdm=ID].
+struct TileAddress {
+  std::string id, layer, format, pdm;
+  long long z = 0, x = 0, y = 0;
+};
+
+TileAddress tileAddress(const Request& req) {
+  TileAddress a;
+  a.id = req.params.at("id");
+  a.layer = req.params.at("layer");
   const std::string& last = req.params.at("y");
   const auto dot = last.find('.');
   if (dot == std::string::npos) throw ApiError(404, "not_found", "a tile is Y.png or Y.f32", "tile");
-  const std::string format = last.substr(dot + 1);
-  const long long z = tileNumber(req.params.at("z"), "zoom"), x = tileNumber(req.params.at("x"), "column"),
-                  y = tileNumber(last.substr(0, dot), "row");
-  const std::string pdm = queryString(req, "pdm");
-  MapCatalog::Tile tile = ctx.maps.tileFile(id, layer, format, z, x, y, pdm);  // 404s checked first
-  // A PDM can be edited (issue 26): its tiles name its version, and are revalidated (ETag) rather
-  // than kept a year.
-  std::string pdmTag;
-  if (layer == "pdm")
-    if (auto p = ctx.db.getPdm(pdm)) pdmTag = pdm + MapCatalog::pdmVersionTag(p->version);
+  a.format = last.substr(dot + 1);
+  a.z = tileNumber(req.params.at("z"), "zoom");
+  a.x = tileNumber(req.params.at("x"), "column");
+  a.y = tileNumber(last.substr(0, dot), "row");
+  a.pdm = queryString(req, "pdm");
+  return a;
+}
+
+// `pdmTag`: a pdm tile's PDM and version ("" for the map's own layers).
+std::string tileEtag(const TileAddress& a, const std::string& pdmTag) {
   // Appended piece by piece: GCC 12's -Wrestrict misreads a chain of operator+ here.
   std::string etag = "\"";
-  for (const std::string& part : {std::string(kTileVersion), id, layer, pdmTag,
-                                  std::to_string(z), std::to_string(x)}) {
+  for (const std::string& part : {std::string(kTileVersion), a.id, a.layer, pdmTag,
+                                  std::to_string(a.z), std::to_string(a.x)}) {
     if (part.empty()) continue;
     etag += part;
     etag += '-';
   }
-  etag += std::to_string(y);
+  etag += std::to_string(a.y);
   etag += '.';
-  etag += format;
+  etag += a.format;
   etag += '"';
-  Response r;
-  if (etagMatches(req.header("if-none-match"), etag)) r.status = 304;
-  else {
-    const char* type = format == "png" ? "image/png" : "application/octet-stream";
-    if (tile.made.empty()) {
-      r = fileResponse(tile.path, type);
-    } else {  // just rendered: the bytes in hand, not the file read back
-      r.contentType = type;
-      r.body = std::move(tile.made);
-    }
-  }
+  return etag;
+}
+
+const char* tileType(const TileAddress& a) { return a.format == "png" ? "image/png" : "application/octet-stream"; }
+
+// A tile's answer from its body (set by the caller unless 304): status, validators and caching.
+Response tileResponse(Response r, const TileAddress& a, const std::string& etag) {
   r.headers.emplace_back("ETag", etag);
-  r.headers.emplace_back("Cache-Control", layer == "pdm" ? "no-cache" : "public, max-age=31536000, immutable");
-  if (format == "f32")
+  r.headers.emplace_back("Cache-Control", a.layer == "pdm" ? "no-cache" : "public, max-age=31536000, immutable");
+  if (a.format == "f32")
     r.headers.insert(r.headers.end(), {{"X-Rows", std::to_string(maps::kTileSize)},
                                        {"X-Cols", std::to_string(maps::kTileSize)},
                                        {"X-Nodata", "NaN"}, {"X-Byte-Order", "little-endian"}});
   return r;
+}
+
+// A tile file is at most a 256² float32 tile (256 KiB) or an RGBA PNG a little over it.
+constexpr std::uint64_t kMaxTileBytes = 1 << 20;
+
+// The io thread's answer for a tile already made (RouteOptions::quick): 304 or the file's bytes,
+// read whole so header and body leave in one write. Anything else (not made, a pdm tile, the file
+// evicted meanwhile) goes to the pool's getTile.
+std::optional<Response> madeTile(ApiContext& ctx, const Request& req) {
+  const TileAddress a = tileAddress(req);
+  const auto path = ctx.maps.madeTile(a.id, a.layer, a.format, a.z, a.x, a.y);
+  if (!path) return std::nullopt;
+  const std::string etag = tileEtag(a, "");
+  Response r;
+  if (etagMatches(req.header("if-none-match"), etag)) {
+    r.status = 304;
+  } else {
+    auto bytes = store::DataDir::readFileUpTo(*path, kMaxTileBytes);
+    if (!bytes) return std::nullopt;
+    r.contentType = tileType(a);
+    r.body = std::move(*bytes);
+  }
+  return tileResponse(std::move(r), a, etag);
+}
+
+Response getTile(ApiContext& ctx, const Request& req) {
+  const TileAddress a = tileAddress(req);
+  MapCatalog::Tile tile = ctx.maps.tileFile(a.id, a.layer, a.format, a.z, a.x, a.y, a.pdm);  // 404s checked first
+  // A PDM can be edited (issue 26): its tiles name its version, and are revalidated (ETag) rather
+  // than kept a year.
+  std::string pdmTag;
+  if (a.layer == "pdm")
+    if (auto p = ctx.db.getPdm(a.pdm)) pdmTag = a.pdm + MapCatalog::pdmVersionTag(p->version);
+  const std::string etag = tileEtag(a, pdmTag);
+  Response r;
+  if (etagMatches(req.header("if-none-match"), etag)) r.status = 304;
+  else if (tile.made.empty()) r = fileResponse(tile.path, tileType(a));
+  else {  // just rendered: the bytes in hand, not the file read back
+    r.contentType = tileType(a);
+    r.body = std::move(tile.made);
+  }
+  return tileResponse(std::move(r), a, etag);
 }
 
 }  // namespace
@@ -112,7 +159,7 @@ void addLayerRoutes(http::Router& router, ApiContext& ctx) {
                           .returns(200, "The layer file.", nullptr, "application/octet-stream")
                           .errors({400, 404, 409, 413, 503, 507}),
                       onPool));
-  router.add("GET", "/api/maps/{id}/tiles/{layer}/{z}/{x}/{y}", handler(ctx, getTile),
+  http::RouteOptions tiles =
              routeDoc("A 256-px tile of a layer on the map's tile grid (the map's tiles: size, zmax, "
                       "resolutions, extent): .png for every layer, .f32 (256×256 little-endian float32, NaN "
                       "for no data and beyond the map) for elevation and slope; ?pdm=ID for pdm. Tiles never "
@@ -125,7 +172,10 @@ void addLayerRoutes(http::Router& router, ApiContext& ctx) {
                           .returns(200, "The tile.", nullptr, "application/octet-stream")
                           .returns(304, "Not modified: If-None-Match named the tile's ETag.")
                           .errors({400, 404, 409, 503, 507}),
-                      onPool));
+                      onPool);
+  // A tile already made is answered on the io thread; the pool only renders.
+  tiles.quick = [&ctx](const Request& req) { return madeTile(ctx, req); };
+  router.add("GET", "/api/maps/{id}/tiles/{layer}/{z}/{x}/{y}", handler(ctx, getTile), std::move(tiles));
 }
 
 }  // namespace rover::api

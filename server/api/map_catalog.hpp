@@ -140,6 +140,13 @@ class MapCatalog {
   };
   Tile tileFile(const std::string& id, const std::string& layer, const std::string& format, long long z, long long x,
                 long long y, const std::string& pdmId);
+  // The tile's file when it is already made, from memory alone (the catalog's and the layer
+  // cache's maps; no database, no disk), for an answer on an io thread (RouteOptions::quick):
+  // nullopt when it is not made, the map's tile grid is not in memory yet, or the layer is pdm (its
+  // version is the database's). A wrong layer, format or address of a map in memory throws
+  // ApiError 404 as tileFile does.
+  std::optional<std::string> madeTile(const std::string& id, const std::string& layer, const std::string& format,
+                                      long long z, long long x, long long y);
 
   // PDMs: from JSON ({"components":[...]} or {"random": G, "seed": S}) or a raster upload.
   // Stored compactly (issue 22: a random 3-component PDM on a 49 M-cell map was a 164 MB GeoTIFF):
@@ -232,6 +239,7 @@ class MapCatalog {
     maps::ColourRange ramp;   // the pyramid's elevation ramp (the record's colour_range)
   };
   std::shared_ptr<const StoredTiles> storedTiles(const std::string& id);
+  std::shared_ptr<const StoredTiles> cachedStoredTiles(const std::string& id);  // null when not kept
   // Writes the PDM's files (`write` fills the staging folder) and its row, charged to the map.
   store::PdmRecord storePdm(const std::string& mapId, const std::string& name, const nlohmann::json& meta,
                             const std::function<void(const std::string& staging)>& write, const std::string& by);

@@ -47,6 +47,42 @@ std::string tileBytes(const Source& blocks, maps::RenderLayer layer, const std::
   return bytes;
 }
 
+// A tile's layer and format: 404 for any other (checked before anything is read).
+void checkTileKind(const std::string& layer, const std::string& format) {
+  static const char* const kLayers[] = {"elevation", "hillshade", "slope", "traversability", "pdm"};
+  if (std::none_of(std::begin(kLayers), std::end(kLayers), [&](const char* l) { return layer == l; }))
+    throw ApiError(404, "not_found", "no layer '" + rover::json::shown(layer) + "' (elevation, hillshade, slope, traversability, pdm)", "layer");
+  if (format != "png" && !(format == "f32" && (layer == "elevation" || layer == "slope")))
+    throw ApiError(404, "not_found", "tiles are .png for every layer, .f32 for elevation and slope", "format");
+}
+
+// The tile's cells, or 404 for an address outside the map's grid.
+maps::TileWindow tileWindowOr404(const maps::TileGrid& grid, long long z, long long x, long long y) {
+  const auto window = maps::tileWindow(grid, z, x, y);
+  if (!window)
+    throw ApiError(404, "not_found",
+                   "no tile " + std::to_string(z) + "/" + std::to_string(x) + "/" + std::to_string(y) +
+                       " (zoom 0.." + std::to_string(grid.maxZoom()) + ")",
+                   "tile");
+  return *window;
+}
+
+// The tile's file in the layer cache: layers/t1-LAYER[-PDM[-vN]]-Z-X-Y.FORMAT.
+fs::path tilePath(const fs::path& layersDir, const std::string& layer, const std::string& pdmAndVersion, long long z,
+                  long long x, long long y, const std::string& format) {
+  // Appended piece by piece: GCC 12's -Wrestrict misreads a chain of operator+ here.
+  std::string file = "t1-";
+  file += layer;
+  for (const std::string& part : {pdmAndVersion, std::to_string(z), std::to_string(x), std::to_string(y)}) {
+    if (part.empty()) continue;
+    file += '-';
+    file += part;
+  }
+  file += '.';
+  file += format;
+  return layersDir / file;
+}
+
 }  // namespace
 
 std::shared_ptr<const maps::DemHeader> MapCatalog::storedHeader(const std::string& id) {
@@ -71,15 +107,21 @@ std::shared_ptr<const maps::DemHeader> MapCatalog::storedHeader(const std::strin
   return h;
 }
 
+std::shared_ptr<const MapCatalog::StoredTiles> MapCatalog::cachedStoredTiles(const std::string& id) {
+  std::lock_guard lock(mutex_);
+  for (auto it = tilesCache_.begin(); it != tilesCache_.end(); ++it)
+    if ((*it)->id == id) {
+      tilesCache_.splice(tilesCache_.begin(), tilesCache_, it);
+      return *it;
+    }
+  return nullptr;
+}
+
 std::shared_ptr<const MapCatalog::StoredTiles> MapCatalog::storedTiles(const std::string& id) {
+  if (auto cached = cachedStoredTiles(id)) return cached;
   std::uint64_t removals = 0;
   {
     std::lock_guard lock(mutex_);
-    for (auto it = tilesCache_.begin(); it != tilesCache_.end(); ++it)
-      if ((*it)->id == id) {
-        tilesCache_.splice(tilesCache_.begin(), tilesCache_, it);
-        return *it;
-      }
     removals = removals_;
   }
   auto rec = db_.getMap(id);
@@ -96,13 +138,22 @@ std::shared_ptr<const MapCatalog::StoredTiles> MapCatalog::storedTiles(const std
   return t;
 }
 
+
+std::optional<std::string> MapCatalog::madeTile(const std::string& id, const std::string& layer,
+                                                const std::string& format, long long z, long long x, long long y) {
+  checkTileKind(layer, format);
+  if (layer == "pdm") return std::nullopt;  // its version is the database's
+  const auto stored = cachedStoredTiles(id);
+  if (!stored) return std::nullopt;
+  tileWindowOr404(stored->grid, z, x, y);
+  const std::string path = tilePath(fs::path(dir_.mapDir(id)) / "layers", layer, "", z, x, y, format).string();
+  if (!layers_.find(path)) return std::nullopt;
+  return path;
+}
+
 MapCatalog::Tile MapCatalog::tileFile(const std::string& id, const std::string& layer, const std::string& format,
                                  long long z, long long x, long long y, const std::string& pdmId) {
-  static const char* const kLayers[] = {"elevation", "hillshade", "slope", "traversability", "pdm"};
-  if (std::none_of(std::begin(kLayers), std::end(kLayers), [&](const char* l) { return layer == l; }))
-    throw ApiError(404, "not_found", "no layer '" + rover::json::shown(layer) + "' (elevation, hillshade, slope, traversability, pdm)", "layer");
-  if (format != "png" && !(format == "f32" && (layer == "elevation" || layer == "slope")))
-    throw ApiError(404, "not_found", "tiles are .png for every layer, .f32 for elevation and slope", "format");
+  checkTileKind(layer, format);
   const auto stored = storedTiles(id);
   std::string pdmVersion;  // an edited PDM's tiles are new files (issue 26)
   if (layer == "pdm") {
@@ -111,20 +162,12 @@ MapCatalog::Tile MapCatalog::tileFile(const std::string& id, const std::string& 
     if (!p || p->mapId != id) throw ApiError(404, "not_found", "no PDM '" + rover::json::shown(pdmId) + "' on this map", "pdm");
     pdmVersion = pdmVersionTag(p->version);
   }
-  const maps::TileGrid& grid = stored->grid;
-  const auto window = maps::tileWindow(grid, z, x, y);
-  if (!window)
-    throw ApiError(404, "not_found",
-                   "no tile " + std::to_string(z) + "/" + std::to_string(x) + "/" + std::to_string(y) +
-                       " (zoom 0.." + std::to_string(grid.maxZoom()) + ")",
-                   "tile");
+  const maps::TileWindow window = tileWindowOr404(stored->grid, z, x, y);
   const fs::path dir = fs::path(dir_.mapDir(id)) / "layers";
-  std::string file = "t1-" + layer;
-  if (layer == "pdm") file += "-" + pdmId + pdmVersion;
-  file += "-" + std::to_string(z) + "-" + std::to_string(x) + "-" + std::to_string(y) + "." + format;
   // Made once per file on the work pool, outside the catalog's lock.
   Tile tile;
-  tile.path = layers_.get((dir / file).string(), [&](const std::string& path) {
+  const fs::path file = tilePath(dir, layer, layer == "pdm" ? pdmId + pdmVersion : "", z, x, y, format);
+  tile.path = layers_.get(file.string(), [&](const std::string& path) {
     std::error_code ec;
     fs::create_directories(dir, ec);
     const auto l = maps::renderLayerFromName(layer);
@@ -133,7 +176,7 @@ MapCatalog::Tile MapCatalog::tileFile(const std::string& id, const std::string& 
       // The PDM's mass pyramid (made once per PDM version): the tile's window at its zoom and the
       // ramp stored with it, never the whole mass or the map.
       const maps::MassPyramidBlocks blocks(pdmPyramidFile(id, pdmId, pdmVersion), storedHeader(id)->geometry);
-      tile.made = tileBytes(blocks, l, format, *window);
+      tile.made = tileBytes(blocks, l, format, window);
       store::DataDir::writeFileAtomic(path, tile.made, false);  // a cache file: no fsync
       return;
     }
@@ -142,7 +185,7 @@ MapCatalog::Tile MapCatalog::tileFile(const std::string& id, const std::string& 
       const auto header = storedHeader(id);
       tile.made = readElevation(mapDir.string(), [&](const std::string& dem) {
         return tileBytes(maps::PyramidBlocks(dem, (mapDir / kClassFile).string(), header, stored->ramp), l, format,
-                         *window);
+                         window);
       });
       store::DataDir::writeFileAtomic(path, tile.made, false);  // a cache file: no fsync
       return;
@@ -152,7 +195,7 @@ MapCatalog::Tile MapCatalog::tileFile(const std::string& id, const std::string& 
     src.dem = &map->dem;
     src.classes = &map->traversability.classes;
     src.range = map->elevationRange;
-    tile.made = tileBytes(src, l, format, *window);
+    tile.made = tileBytes(src, l, format, window);
     store::DataDir::writeFileAtomic(path, tile.made, false);
   });
   return tile;

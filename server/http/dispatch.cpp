@@ -151,6 +151,15 @@ Response invoke(const Route& route, const Request& req, const ServerState& state
   }
 }
 
+std::optional<Response> tryQuick(const Route& route, const Request& req, const ServerState& state) noexcept {
+  if (!route.options.blocking || !route.options.quick) return std::nullopt;
+  try {
+    return route.options.quick(req);
+  } catch (...) {
+    return failed(req, state, "handler failed");
+  }
+}
+
 std::variant<std::shared_ptr<WsSource>, Response> openStream(const Route& route, const Request& req,
                                                             std::shared_ptr<WsConnection> connection,
                                                             const ServerState& state) noexcept {
@@ -188,6 +197,7 @@ Response dispatch(ServerState& state, const bhttp::request<bhttp::string_body>& 
     req.body = message.body();
   }
   req.bodySize = message.body().size();
+  if (auto quick = tryQuick(route, req, state)) return std::move(*quick);
   return invoke(route, req, state);
 }
 

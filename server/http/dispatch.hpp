@@ -34,13 +34,17 @@ Routing routeHead(const ServerState& state, const boost::beast::http::request_he
 // detail goes to the server's log).
 Response invoke(const Route& route, const Request& req, const ServerState& state) noexcept;
 
+// A blocking route's quick answer (RouteOptions::quick) on the calling io thread, or nullopt
+// when it has none or none at hand; never throws (a failure is answered like invoke's).
+std::optional<Response> tryQuick(const Route& route, const Request& req, const ServerState& state) noexcept;
+
 // The route's WebSocket source for an upgrade, or the answer refusing it (what its handler threw).
 std::variant<std::shared_ptr<WsSource>, Response> openStream(const Route& route, const Request& req,
                                                             std::shared_ptr<WsConnection> connection,
                                                             const ServerState& state) noexcept;
 
 // routeHead + invoke for a whole request held in memory: what a session answers it, without the
-// socket, the work pool (a blocking handler runs here) or an upgrade (a WebSocket route, which
+// socket, the work pool (a blocking handler's quick answer is tried, then the handler runs here) or an upgrade (a WebSocket route, which
 // needs a connection, is answered 426 upgrade_required). A streamed-body route gets the body in a
 // temporary file, removed afterwards.
 Response dispatch(ServerState& state, const boost::beast::http::request<boost::beast::http::string_body>& message);

@@ -335,7 +335,10 @@ void HttpSession::onBody() {
     request_.body = stringParser_->release().body();
     request_.bodySize = request_.body.size();
   }
-  if (route_->options.blocking) return runOnPool();
+  if (route_->options.blocking) {
+    if (auto quick = tryQuick(*route_, request_, *state_)) return respond(std::move(*quick));
+    return runOnPool();
+  }
   respond(invoke(*route_, request_, *state_));
 }
 

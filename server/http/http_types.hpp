@@ -78,6 +78,9 @@ class ApiError : public std::runtime_error {
 };
 
 using Handler = std::function<Response(const Request&)>;
+// A blocking route's answer from what is at hand, tried on the io thread before the request goes
+// to the work pool (RouteOptions::quick); nullopt: "not at hand", the pool runs the handler.
+using QuickHandler = std::function<std::optional<Response>(const Request&)>;
 
 // --- WebSocket: a pull model. The session asks its source for the next frame whenever it may
 // write (one write in flight); the source says "nothing now" and later calls wake() on the

@@ -15,6 +15,11 @@ struct RouteOptions {
   // Slow handler (GDAL, rendering, PDM discretisation, whole-DEM validation): runs on the
   // server's work pool, not on an io thread, so cheap requests keep being answered meanwhile.
   bool blocking = false;
+  // With `blocking`: tried first on the io thread, so what is already made (a cached tile file)
+  // is answered without a trip through the pool, whose queue renders wait in (issue 24: warm tiles
+  // at 1/15 of nginx's rate). It may only look up memory and open a file the page cache holds;
+  // nullopt hands the request to the pool, and what it throws is answered like a handler's.
+  QuickHandler quick;
   std::string summary;      // one line for the OpenAPI document
   nlohmann::json openapi;   // extra OpenAPI operation fields (parameters, requestBody, responses)
 };

@@ -178,6 +178,26 @@ void DataDir::commitDir(const std::string& staged, const std::string& finalDir,
   fsyncDirBestEffort(fs::path(staged).parent_path());
 }
 
+std::optional<std::string> DataDir::readFileUpTo(const std::string& path, std::uint64_t maxBytes) {
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) return std::nullopt;
+  struct stat st {};
+  std::optional<std::string> bytes;
+  if (::fstat(fd, &st) == 0 && S_ISREG(st.st_mode) && static_cast<std::uint64_t>(st.st_size) <= maxBytes) {
+    std::string out(static_cast<std::size_t>(st.st_size), '\0');
+    std::size_t got = 0;
+    while (got < out.size()) {
+      const ssize_t n = ::read(fd, out.data() + got, out.size() - got);
+      if (n < 0 && errno == EINTR) continue;
+      if (n <= 0) break;  // an error, or the file shrank: not the whole file
+      got += static_cast<std::size_t>(n);
+    }
+    if (got == out.size()) bytes = std::move(out);
+  }
+  ::close(fd);
+  return bytes;
+}
+
 void DataDir::writeFileAtomic(const std::string& path, const std::string& bytes, bool durable) {
   const fs::path target(path);
   const fs::path dir = target.has_parent_path() ? target.parent_path() : fs::path(".");

@@ -89,6 +89,10 @@ class DataDir {
   // machine, holding a work-pool thread idle); a crash may then leave such a file empty, and the
   // layer cache drops empty files when it starts.
   static void writeFileAtomic(const std::string& path, const std::string& bytes, bool durable = true);
+  // The whole file when it is at most `maxBytes` long; nullopt when it is absent, larger, or cannot
+  // be read (the caller has another way to the bytes: e.g. a tile removed by the layer cache
+  // meanwhile is rendered again).
+  static std::optional<std::string> readFileUpTo(const std::string& path, std::uint64_t maxBytes);
   // Removes a folder and everything in it (no error if absent).
   static void removeTree(const std::string& path);
   // fsyncs the file `path` (throws StorageFull or std::runtime_error naming it, for the log), and

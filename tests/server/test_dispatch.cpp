@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <optional>
 #include <stdexcept>
 #include <string>
 
@@ -167,6 +168,48 @@ TEST_CASE("dispatch: what a handler throws is answered through the error table")
   CHECK(r.status == 500);
   CHECK(error(r)["code"] == "internal");
   CHECK(r.body.find("secret") == std::string::npos);  // the detail goes to the log only
+}
+
+TEST_CASE("dispatch: a blocking route's quick answer is taken when it has one, its handler runs otherwise") {
+  Server s;
+  int handled = 0;
+  rover::http::RouteOptions slow;
+  slow.blocking = true;
+  slow.quick = [](const Request& req) -> std::optional<Response> {
+    const std::string& what = req.params.at("what");
+    if (what == "made") return Response::json(200, {{"from", "quick"}});
+    if (what == "gone") throw rover::http::ApiError(404, "not_found", "no such thing", "what");
+    if (what == "bug") throw std::runtime_error("/srv/secret/path");
+    return std::nullopt;  // not at hand
+  };
+  s.router.add("GET", "/api/thing/{what}", [&](const Request&) {
+    ++handled;
+    return Response::json(200, {{"from", "handler"}});
+  }, slow);
+  // The same quick function on a route that is not blocking is never asked: the handler is as cheap.
+  rover::http::RouteOptions cheap = slow;
+  cheap.blocking = false;
+  s.router.add("GET", "/api/cheap/{what}", [&](const Request&) {
+    ++handled;
+    return Response::json(200, {{"from", "handler"}});
+  }, cheap);
+
+  Response r = rover::http::dispatch(s.state(), request(bhttp::verb::get, "/api/thing/made"));
+  CHECK(json::parse(r.body)["from"] == "quick");
+  CHECK(handled == 0);
+  r = rover::http::dispatch(s.state(), request(bhttp::verb::get, "/api/thing/unmade"));
+  CHECK(json::parse(r.body)["from"] == "handler");
+  CHECK(handled == 1);
+  r = rover::http::dispatch(s.state(), request(bhttp::verb::get, "/api/thing/gone"));
+  CHECK(r.status == 404);
+  CHECK(error(r)["field"] == "what");
+  r = rover::http::dispatch(s.state(), request(bhttp::verb::get, "/api/thing/bug"));
+  CHECK(r.status == 500);
+  CHECK(r.body.find("secret") == std::string::npos);
+  CHECK(handled == 1);  // an answer thrown by the quick function is the answer
+  r = rover::http::dispatch(s.state(), request(bhttp::verb::get, "/api/cheap/made"));
+  CHECK(json::parse(r.body)["from"] == "handler");
+  CHECK(handled == 2);
 }
 
 TEST_CASE("dispatch: a streamed-body route reads its body from a file that is gone afterwards") {

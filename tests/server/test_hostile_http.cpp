@@ -544,6 +544,56 @@ TEST_CASE("hostile: with the work pool saturated by slow handlers, /api/health s
   CHECK(entered == 4);
 }
 
+TEST_CASE("hostile: with the work pool saturated, a tile already made is still answered; a new one is rendered once the pool is free") {
+  // Issue 24: warm tiles are answered on the io threads (RouteOptions::quick), so renders and
+  // imports holding the pool delay only what needs the pool.
+  test::Gate gate;
+  std::atomic<int> entered{0};
+  TempDir tmp;
+  ApiServer s(tmp.str("data"), unstarted());
+  http::RouteOptions slow;
+  slow.blocking = true;
+  slow.requireAuth = false;
+  s.router.add("GET", "/api/test/sleep", [&](const http::Request&) {
+    ++entered;
+    gate.wait();
+    return http::Response::json(200, {{"slept", true}});
+  }, slow);
+  http::ServerConfig c;
+  c.workThreads = 2;
+  c.workQueue = 4;
+  s.start(c);
+  const std::string base = "/api/maps/" + s.defaultMap() + "/tiles/";
+  const auto made = s.get(base + "hillshade/2/1/1.png");  // rendered on the pool, now a file
+  REQUIRE(made.status == 200);
+  const std::string etag = made.headers.at("ETag");
+
+  std::vector<std::thread> sleepers;
+  for (int i = 0; i < 2; ++i) sleepers.emplace_back([&] { test::request(s.port(), "GET", "/api/test/sleep"); });
+  test::waitUntil([&] { return entered == 2; }, "both pool threads to be held");
+  for (int i = 0; i < 5; ++i) {
+    const auto warm = s.get(base + "hillshade/2/1/1.png");
+    CHECK(warm.status == 200);
+    CHECK(warm.body == made.body);
+    CHECK(warm.headers["ETag"] == etag);
+    CHECK(warm.headers["Content-Type"] == "image/png");
+    CHECK(warm.headers["Cache-Control"] == "public, max-age=31536000, immutable");
+  }
+  auto revalidated = test::request(s.port(), "GET", base + "hillshade/2/1/1.png", "", "", {{"If-None-Match", etag}});
+  CHECK(revalidated.status == 304);
+  CHECK(revalidated.body.empty());
+  // An address outside the grid of a map whose grid is in memory: 404 without the pool.
+  const auto outside = s.get(base + "hillshade/9/0/0.png");
+  CHECK(outside.status == 404);
+  CHECK(outside.json()["error"]["field"] == "tile");
+  // A tile not made yet needs the pool: rendered once the gate opens.
+  auto fresh = std::async(std::launch::async, [&] { return s.get(base + "hillshade/2/0/0.png"); });
+  CHECK(entered == 2);
+  gate.open();
+  for (auto& t : sleepers) t.join();
+  CHECK(fresh.get().status == 200);
+}
+
 TEST_CASE("hostile: failed multipart uploads leave data/tmp empty, a big form field is refused") {
   TempDir tmp;
   ApiServer s(tmp.str("data"), unstarted());
