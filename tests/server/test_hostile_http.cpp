@@ -550,7 +550,9 @@ TEST_CASE("hostile: with the work pool saturated, a tile already made is still a
   test::Gate gate;
   std::atomic<int> entered{0};
   TempDir tmp;
-  ApiServer s(tmp.str("data"), unstarted());
+  test::ApiServerOptions o = unstarted();
+  o.defaultMap = true;
+  ApiServer s(tmp.str("data"), o);
   http::RouteOptions slow;
   slow.blocking = true;
   slow.requireAuth = false;
@@ -572,7 +574,7 @@ TEST_CASE("hostile: with the work pool saturated, a tile already made is still a
   for (int i = 0; i < 2; ++i) sleepers.emplace_back([&] { test::request(s.port(), "GET", "/api/test/sleep"); });
   test::waitUntil([&] { return entered == 2; }, "both pool threads to be held");
   for (int i = 0; i < 5; ++i) {
-    const auto warm = s.get(base + "hillshade/2/1/1.png");
+    auto warm = s.get(base + "hillshade/2/1/1.png");
     CHECK(warm.status == 200);
     CHECK(warm.body == made.body);
     CHECK(warm.headers["ETag"] == etag);
@@ -583,7 +585,7 @@ TEST_CASE("hostile: with the work pool saturated, a tile already made is still a
   CHECK(revalidated.status == 304);
   CHECK(revalidated.body.empty());
   // An address outside the grid of a map whose grid is in memory: 404 without the pool.
-  const auto outside = s.get(base + "hillshade/9/0/0.png");
+  auto outside = s.get(base + "hillshade/9/0/0.png");
   CHECK(outside.status == 404);
   CHECK(outside.json()["error"]["field"] == "tile");
   // A tile not made yet needs the pool: rendered once the gate opens.
