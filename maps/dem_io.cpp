@@ -526,10 +526,19 @@ void writeAtomically(const std::string& path, GDALDataType type, const GridGeome
   GDALSetGeoTransform(ds.get(), gt);
   if (!geo.crsWkt.empty()) GDALSetProjection(ds.get(), geo.crsWkt.c_str());
   errno = 0;
-  bool ok = fill(GDALGetRasterBand(ds.get(), 1));
+  std::error_code ec;
+  bool ok = false;
+  try {
+    ok = fill(GDALGetRasterBand(ds.get(), 1));
+  } catch (...) {
+    // What fill reads failed (a band's source): no half-written file stays behind.
+    ds.reset();
+    std::filesystem::remove(tmp, ec);
+    std::filesystem::remove(tmp + ".aux.xml", ec);
+    throw;
+  }
   ds.reset();  // flushes and closes
   const int writeErrno = errno;
-  std::error_code ec;
   if (!ok || CPLGetLastErrorType() >= CE_Failure) {
     std::filesystem::remove(tmp, ec);
     std::filesystem::remove(tmp + ".aux.xml", ec);
@@ -546,19 +555,44 @@ void writeAtomically(const std::string& path, GDALDataType type, const GridGeome
 
 }  // namespace
 
-void writeGeoTiff(const std::string& path, const Raster<float>& layer) {
+void writeGeoTiffInBands(const std::string& path, const GridGeometry& g, const GeoReference& geo, int bandRows,
+                         const std::function<int(float* out)>& next) {
   constexpr float kNoData = -9999.0f;
-  writeAtomically(path, GDT_Float32, layer.geometry, layer.geo, [&](GDALRasterBandH band) {
+  bandRows = std::max(1, bandRows);
+  writeAtomically(path, GDT_Float32, g, geo, [&](GDALRasterBandH band) {
     GDALSetRasterNoDataValue(band, kNoData);
-    const GridGeometry& g = layer.geometry;
-    std::vector<float> row(g.cols);
-    for (int r = 0; r < g.rows; ++r) {
-      for (int c = 0; c < g.cols; ++c) row[c] = std::isnan(layer(r, c)) ? kNoData : layer(r, c);
-      if (GDALRasterIO(band, GF_Write, 0, r, g.cols, 1, row.data(), g.cols, 1, GDT_Float32, 0, 0) !=
-          CE_None)
+    int blockCols = 0, blockRows = 0;
+    GDALGetBlockSize(band, &blockCols, &blockRows);
+    std::vector<float> values(static_cast<std::size_t>(bandRows) * g.cols);
+    for (int r = 0; r < g.rows;) {
+      const int n = next(values.data());
+      if (n < 1 || n > bandRows || n > g.rows - r)
+        throw std::logic_error("writeGeoTiffInBands: a band of " + std::to_string(n) + " rows");
+      float* v = values.data();
+      for (std::size_t i = 0, m = static_cast<std::size_t>(n) * g.cols; i < m; ++i)
+        if (std::isnan(v[i])) v[i] = kNoData;
+      if (GDALRasterIO(band, GF_Write, 0, r, g.cols, n, v, g.cols, n, GDT_Float32, 0, 0) != CE_None)
+        return false;
+      r += n;
+      // A finished row of tiles is compressed and written now, not held in GDAL's block cache
+      // (up to GDAL_CACHEMAX of dirty blocks) until the file closes; a tile written before its
+      // last row would be written again, its first copy left in the file as dead bytes.
+      if (blockRows > 0 && (r % blockRows == 0 || r == g.rows) && GDALFlushRasterCache(band) != CE_None)
         return false;
     }
     return true;
+  });
+}
+
+void writeGeoTiff(const std::string& path, const Raster<float>& layer) {
+  const GridGeometry& g = layer.geometry;
+  constexpr int kBandRows = 256;
+  int row = 0;
+  writeGeoTiffInBands(path, g, layer.geo, kBandRows, [&](float* out) {
+    const int n = std::min(kBandRows, g.rows - row);
+    std::copy_n(&layer(row, 0), static_cast<std::size_t>(n) * g.cols, out);
+    row += n;
+    return n;
   });
 }
 

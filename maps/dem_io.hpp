@@ -6,6 +6,7 @@
 // ellipsoid or sphere). Optional crop and resampling run through GDAL's warper.
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -100,6 +101,13 @@ class DiskFull : public std::runtime_error {
 // Classes: uint8 with a colour table and category names (terrain::TerrainClass), nodata = 3.
 // A full disk throws DiskFull and leaves no file behind.
 void writeGeoTiff(const std::string& path, const Raster<float>& layer);
+// writeGeoTiff's file for a float layer of `g`'s shape that is never whole in memory (issue 24: a
+// big map's slope): `next(out)` puts the next rows, in order, into `out` (room for `bandRows` ×
+// g.cols floats, NaN for nodata) and returns how many (1..bandRows); it is called until g.rows
+// rows are in. Each finished row of the file's 256² tiles is compressed and written at once, so
+// the writer holds `out` and one row of tiles. What `next` throws removes the file and propagates.
+void writeGeoTiffInBands(const std::string& path, const GridGeometry& g, const GeoReference& geo, int bandRows,
+                         const std::function<int(float* out)>& next);
 void writeClassesGeoTiff(const std::string& path, const Raster<std::uint8_t>& classes);
 
 }  // namespace rover::maps

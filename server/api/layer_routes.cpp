@@ -148,7 +148,10 @@ void addLayerRoutes(http::Router& router, ApiContext& ctx) {
   router.add("GET", "/api/maps/{id}/layers/{file}", handler(ctx, getLayer),
              routeDoc("A layer (elevation|hillshade|slope|traversability|pdm) as .png (?max= overview), "
                       ".tif (GeoTIFF) or .f32 (raw little-endian float32, size in X-Rows/X-Cols); ?pdm=ID for pdm. "
-                      "Full-size files other than elevation.tif and traversability.tif of a map over 25 M cells → 413. "
+                      "On a map over 25 M cells, elevation.tif and traversability.tif are its stored files, "
+                      "slope/hillshade .tif and elevation/slope/hillshade .f32 are computed band by band (an .f32 "
+                      "up to a quarter of the layer cache, 256 MiB by default), and full-size .png, "
+                      "traversability.f32 and pdm files → 413. "
                       "elevation.tif of such a map still stored raw (its COG being written) → 503 with Retry-After.",
                       openapi::Operation()
                           .query("max", {{"type", "integer"}, {"minimum", 0}, {"maximum", 16384}},

@@ -16,11 +16,21 @@
 #include "server/api/map_files.hpp"
 #include "server/http/http_types.hpp"
 #include "server/json/json_edge.hpp"
+#include "server/store/disk_budget.hpp"
 
 namespace rover::api {
 
 namespace fs = std::filesystem;
 using http::ApiError;
+
+namespace {
+
+// "25 M" for whole millions (the default), else the number: the limit as a message states it.
+std::string cellsInWords(std::int64_t cells) {
+  return cells % 1'000'000 == 0 ? std::to_string(cells / 1'000'000) + " M" : std::to_string(cells);
+}
+
+}  // namespace
 
 MapCatalog::MapCatalog(store::Database& db, store::DataDir& dir, std::int64_t maxCells,
                        std::uint64_t layerCacheBytes)
@@ -171,10 +181,13 @@ std::string MapCatalog::layerFile(const std::string& id, const std::string& laye
   const bool pyramid = storedAsPyramid(*rec, mapDir.string());
   const GridGeometry geom = pyramid ? storedHeader(id)->geometry : get(id)->dem.geometry();
   const int side = format == "png" ? overviewSide(max, std::max(geom.rows, geom.cols)) : 0;
-  if (pyramid && side == 0 && geom.cellCount() > kMaxWholeLayerCells) {
+  const std::int64_t cells = static_cast<std::int64_t>(geom.rows) * geom.cols;
+  const bool big = pyramid && side == 0 && cells > wholeLayerCells();
+  if (big) {
     // Full size on a big map: the elevation and class GeoTIFFs are the stored files themselves
-    // (the COG and the class pyramid); anything else is computed on the whole map in memory, which
-    // a big map refuses rather than load gigabytes for one file.
+    // (the COG and the class pyramid); elevation, slope and hillshade are computed band by band
+    // from the stored DEM (below); anything else would be computed on the whole map in memory,
+    // which a big map refuses rather than load gigabytes for one file.
     if (format == "tif" && layer == "elevation") {
       // The stored COG itself. A map whose COG is still being written (storage "raw": seconds)
       // is asked again later: a wait here would hold one of the work pool's few threads.
@@ -184,12 +197,22 @@ std::string MapCatalog::layerFile(const std::string& id, const std::string& laye
       return (mapDir / kDemFile).string();
     }
     if (format == "tif" && layer == "traversability") return (mapDir / kClassFile).string();
-    throw ApiError(413, "too_large",
-                     "a full-size " + layer + "." + format + " of this map (" + std::to_string(geom.rows) + " x " +
-                         std::to_string(geom.cols) + " cells) would load the whole map; full-size layers are made up to " +
-                         std::to_string(kMaxWholeLayerCells / 1'000'000) +
-                         " M cells (elevation.tif and traversability.tif at any size): ask for a ?max= overview, "
-                         "or its tiles",
+    const std::string size = std::to_string(geom.rows) + " x " + std::to_string(geom.cols) + " cells";
+    const bool banded = layer == "elevation" || layer == "slope" || layer == "hillshade";
+    if (banded && format == "f32" && 4ull * static_cast<std::uint64_t>(cells) > maxStreamedF32Bytes())
+      throw ApiError(413, "too_large",
+                     "a full-size " + layer + ".f32 of this map (" + size + ") would be " +
+                         store::megabytes(4ull * static_cast<std::uint64_t>(cells)) +
+                         " uncompressed, over the " + store::megabytes(maxStreamedF32Bytes()) +
+                         " a raw export may take of the layer cache: ask for " + layer +
+                         ".tif (the same values, compressed), or its .f32 tiles",
+                     "layer");
+    if (!banded || format == "png")
+      throw ApiError(413, "too_large",
+                     "a full-size " + layer + "." + format + " of this map (" + size +
+                         ") would load the whole map; on maps over " + cellsInWords(wholeLayerCells()) +
+                         " cells the full-size files are elevation, slope and hillshade as .tif and .f32, and "
+                         "traversability.tif: ask for one of them, a ?max= overview, or the tiles",
                      "layer");
   }
   const fs::path dir = mapDir / "layers";
@@ -224,6 +247,15 @@ std::string MapCatalog::layerFile(const std::string& id, const std::string& laye
       }
       const auto png = maps::encodePng(pic);
       store::DataDir::writeFileAtomic(path, std::string(png.begin(), png.end()));
+      return;
+    }
+    if (big) {
+      // Band by band from the stored DEM (the raw VRT or the COG: readElevation reads again from
+      // the COG if the swap removed the VRT mid-way; the file is written atomically, so a second
+      // pass only replaces the temporary file).
+      const auto header = storedHeader(id);
+      readElevation(mapDir.string(),
+                    [&](const std::string& dem) { streamLayerFile(dem, *header, layer, format, path); });
       return;
     }
     auto map = get(id);

@@ -113,16 +113,27 @@ class MapCatalog {
   // 1024, 2048, 4096 (or the full size when that is smaller). Returns the file path.
   // A map stored as its pyramid (issue 24) draws its overviews from the pyramid's level that fits
   // (maps/layer_overview.hpp) and a pdm overview from the PDM's mass pyramid, never loading the
-  // map. Its full-size files (png without max, tif, f32) need the whole map in memory: beyond
-  // kMaxWholeLayerCells, elevation.tif and traversability.tif are its stored COG and class
-  // pyramid, and the others are refused (ApiError 413 too_large, naming the size). A map stored before
-  // the pyramid is loaded whole (get()) for every layer file.
+  // map. Its full-size files (png without max, tif, f32) are computed on the whole map in memory
+  // up to wholeLayerCells(); beyond, elevation.tif and traversability.tif are its stored COG and
+  // class pyramid, slope.tif and hillshade.tif, and elevation, slope and hillshade .f32 up to
+  // maxStreamedF32Bytes(), are computed band by band from the stored DEM (streamLayerFile:
+  // the whole-map values, memory a band of rows), and the rest (full-size png, traversability
+  // and pdm f32, pdm tif, a larger f32) are refused (ApiError 413 too_large, naming the size and
+  // what is made). A map stored before the pyramid is loaded whole (get()) for every layer file.
   std::string layerFile(const std::string& id, const std::string& layer, const std::string& format,
                         int max, const std::string& pdmId);
   // The largest map whose full-size layer files are computed in memory: the map loaded with its
   // traversability (get(): a 49 M-cell map's elevation overview peaked at 728 MiB that way, about
-  // 15 bytes a cell) plus the layer's own grid, about 0.5 GB at this size.
-  static constexpr std::int64_t kMaxWholeLayerCells = 25'000'000;
+  // 15 bytes a cell) plus the layer's own grid, about 0.5 GB at this size. Tests lower it to see
+  // small maps take the streamed path.
+  static constexpr std::int64_t kDefaultWholeLayerCells = 25'000'000;
+  void setWholeLayerCells(std::int64_t cells) { wholeLayerCells_ = cells; }
+  std::int64_t wholeLayerCells() const { return wholeLayerCells_; }
+  // The largest full-size .f32 made band by band: a quarter of the layer cache (256 MiB, 67 M
+  // cells, at the default 1 GiB). An f32 is 4 bytes a cell uncompressed (1.2 GB for a 300 M-cell
+  // map, more than the whole default cache); a quarter leaves the rest of the cache to the tiles
+  // and overviews being viewed. Beyond it the .tif holds the same values, compressed.
+  std::uint64_t maxStreamedF32Bytes() const { return layers_.capBytes() / 4; }
 
   // A tile of a layer (maps/tile_grid.hpp, maps/map_tiles.hpp) as png (any layer) or f32
   // (elevation, slope: kTileSize² little-endian float32), created on first use in the layer cache
@@ -248,6 +259,7 @@ class MapCatalog {
   store::DataDir& dir_;
   std::int64_t maxCells_;
   std::atomic<std::int64_t> backgroundCells_{kDefaultBackgroundCells};
+  std::atomic<std::int64_t> wholeLayerCells_{kDefaultWholeLayerCells};
   mutable std::mutex mutex_;  // guards the map caches and jail_
   jail::JailConfig jail_;
   LayerCache layers_;

@@ -6,10 +6,13 @@
 #include <filesystem>
 #include <iterator>
 #include <stdexcept>
+#include <vector>
 
 #include "core/common/error.hpp"
 #include "core/terrain/layers.hpp"
 #include "maps/dem_io.hpp"
+#include "maps/grid_file.hpp"
+#include "maps/layer_bands.hpp"
 #include "maps/render.hpp"
 #include "server/api/map_catalog.hpp"
 #include "server/store/data_dir.hpp"
@@ -120,6 +123,34 @@ void renderLayerFile(const MapData& map, const std::string& layer, const std::st
     auto png = maps::encodePng(maps::renderLayer(maps::renderLayerFromName(layer), in, ro));
     store::DataDir::writeFileAtomic(path, std::string(png.begin(), png.end()));
   }
+}
+
+void streamLayerFile(const std::string& demPath, const maps::DemHeader& header, const std::string& layer,
+                     const std::string& format, const std::string& path) {
+  maps::LayerBands bands(demPath, header, maps::renderLayerFromName(layer));
+  const GridGeometry& g = header.geometry;
+  storingGeoTiff([&] {
+    if (format == "tif") {
+      maps::writeGeoTiffInBands(path, g, header.geo, maps::LayerBands::kBandRows,
+                                [&](float* out) { return bands.next(out); });
+      return;
+    }
+    // The f32 file: rows × cols little-endian floats as renderLayerFile writes them, through a
+    // temporary file renamed into place (GridFileWriter: a full disk is DiskFull).
+    const std::string tmp = path + ".tmp";
+    try {
+      maps::GridFileWriter out(tmp, g);
+      std::vector<float> values(static_cast<std::size_t>(maps::LayerBands::kBandRows) * g.cols);
+      while (const int n = bands.next(values.data()))
+        out.append(values.data(), static_cast<std::size_t>(n) * g.cols);
+      out.close();
+      std::filesystem::rename(tmp, path);
+    } catch (...) {
+      std::error_code ec;
+      std::filesystem::remove(tmp, ec);
+      throw;
+    }
+  });
 }
 
 }  // namespace rover::api

@@ -7,6 +7,7 @@
 
 #include "core/grid/raster.hpp"
 #include "core/terrain/body.hpp"
+#include "maps/dem_io.hpp"
 #include "server/store/database.hpp"
 
 namespace rover::api {
@@ -61,13 +62,20 @@ bool offLadderOverview(const std::string& file);
 // The map's body: declared at upload (its record's meta), else the body of its CRS.
 terrain::Body mapBody(const store::MapRecord& record, const std::string& crsWkt);
 
-// Runs `write`, a GeoTIFF write into the data dir: a full disk throws store::StorageFull (507),
-// any other failure to write there is the server's (std::runtime_error, 500).
+// Runs `write`, a GeoTIFF (or streamed .f32) write into the data dir: a full disk throws
+// store::StorageFull (507), any other failure to write there is the server's (std::runtime_error, 500).
 void storingGeoTiff(const std::function<void()>& write);
 
 // Renders `layer` (elevation|hillshade|slope|traversability|pdm) of `map` as `format`
 // (png|tif|f32) into `path`; `side` > 0 for a PNG overview, `pdmMass` for the pdm layer.
 void renderLayerFile(const MapData& map, const std::string& layer, const std::string& format, int side,
                      const Raster<float>* pdmMass, const std::string& path);
+
+// renderLayerFile's tif or f32 of elevation, slope or hillshade, for a map too big to load whole
+// (MapCatalog::layerFile): computed band by band from the stored DEM at `demPath`, whose header
+// is `header`, by maps::LayerBands (the same values and georeferencing), and written as it goes;
+// memory is a band of rows (maps/layer_bands.hpp), never the map. Atomic like renderLayerFile's.
+void streamLayerFile(const std::string& demPath, const maps::DemHeader& header, const std::string& layer,
+                     const std::string& format, const std::string& path);
 
 }  // namespace rover::api

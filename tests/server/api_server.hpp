@@ -56,6 +56,8 @@ struct ApiServerOptions {
   bool start = true;           // false: add test routes to `router`, then call start()
   // Maps of at least this many cells are stored raw first, their COG written in the background.
   std::int64_t backgroundCells = api::MapCatalog::kDefaultBackgroundCells;
+  // Maps over this many cells get their full-size layer files band by band (or 413).
+  std::int64_t wholeLayerCells = api::MapCatalog::kDefaultWholeLayerCells;
   http::ServerConfig http{};
 };
 
@@ -83,6 +85,7 @@ struct ApiServer {
         ctx{db, dir, maps, manager, planners},
         config(o.http) {
     maps.setBackgroundCells(o.backgroundCells);
+    maps.setWholeLayerCells(o.wholeLayerCells);
     interrupted = db.markUnfinishedInterrupted();
     orphans = maps.sweepOrphans();
     if (o.defaultMap) maps.ensureDefaultMap();

@@ -332,7 +332,8 @@ TEST_CASE("tiles api: pdm tiles come from the PDM's mass pyramid, one per versio
   CHECK(s.get("/api/maps/" + map + "/tiles/elevation/0/0/0.png").status == 200);  // the map's own tiles stay
 }
 
-TEST_CASE("layers api: a pyramid-stored map's overviews come from its pyramid, full-size files of a big map are its stored files or 413") {
+TEST_CASE("layers api: a pyramid-stored map's overviews come from its pyramid, full-size files of a big map are "
+          "its stored files, made band by band, or 413") {
   TempDir tmp;
   ApiServer s(tmp.str("data"));
   const std::string id = s.defaultMap();  // 600 × 600, stored as its pyramid
@@ -344,8 +345,9 @@ TEST_CASE("layers api: a pyramid-stored map's overviews come from its pyramid, f
     CHECK(pngSize(r.body).second > 256);
   }
   // The same map's DEM header made 5001 × 5001 cells (a sparse file: nothing to read): over the
-  // 25 M cells whole-map layers are computed for, a full-size hillshade is refused from the header
-  // alone, naming the size; elevation.tif and traversability.tif are the stored files.
+  // 25 M cells whole-map layers are computed for, a full-size png or traversability.f32 is refused
+  // from the header alone, naming the size; elevation.tif and traversability.tif are the stored
+  // files (slope and hillshade files made band by band: test_layer_bands_api.cpp).
   maps::ensureGdal();
   const std::string dem = s.dir.mapDir(id) + "/dem.tif";
   std::filesystem::remove(dem);
@@ -358,7 +360,7 @@ TEST_CASE("layers api: a pyramid-stored map's overviews come from its pyramid, f
   }
   // A second catalog on the data dir: the first one keeps the 600² header it read.
   api::MapCatalog catalog(s.db, s.dir);
-  for (const std::string f : {"hillshade.tif", "slope.f32", "elevation.f32", "traversability.png"}) {
+  for (const std::string f : {"hillshade.png", "slope.png", "traversability.f32", "traversability.png"}) {
     CAPTURE(f);
     try {
       catalog.layerFile(id, f.substr(0, f.find('.')), f.substr(f.find('.') + 1), 0, "");
