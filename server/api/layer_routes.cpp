@@ -106,7 +106,7 @@ constexpr std::uint64_t kMaxTileBytes = 1 << 20;
 // The io thread's answer for a tile already made (RouteOptions::quick): 304 or the file's bytes,
 // read whole so header and body leave in one write. Anything else (not made, a pdm tile, the file
 // evicted meanwhile) goes to the pool's getTile.
-std::optional<Response> madeTile(ApiContext& ctx, const Request& req) {
+std::optional<Response> warmTile(ApiContext& ctx, const Request& req) {
   const TileAddress a = tileAddress(req);
   const auto path = ctx.maps.madeTile(a.id, a.layer, a.format, a.z, a.x, a.y);
   if (!path) return std::nullopt;
@@ -163,21 +163,21 @@ void addLayerRoutes(http::Router& router, ApiContext& ctx) {
                           .errors({400, 404, 409, 413, 503, 507}),
                       onPool));
   http::RouteOptions tiles =
-             routeDoc("A 256-px tile of a layer on the map's tile grid (the map's tiles: size, zmax, "
-                      "resolutions, extent): .png for every layer, .f32 (256×256 little-endian float32, NaN "
-                      "for no data and beyond the map) for elevation and slope; ?pdm=ID for pdm. Tiles never "
-                      "change: ETag, Cache-Control immutable, If-None-Match → 304. An address outside the grid → 404.",
-                      openapi::Operation()
-                          .query("pdm", kIdSchema, "The PDM of a pdm tile (required for pdm).")
-                          .returns(200, "The tile.", nullptr, "image/png")
-                          .header("ETag", "string", "The tile's version (constant for the tile).")
-                          .header("Cache-Control", "string", "public, max-age=31536000, immutable")
-                          .returns(200, "The tile.", nullptr, "application/octet-stream")
-                          .returns(304, "Not modified: If-None-Match named the tile's ETag.")
-                          .errors({400, 404, 409, 503, 507}),
-                      onPool);
+      routeDoc("A 256-px tile of a layer on the map's tile grid (the map's tiles: size, zmax, "
+               "resolutions, extent): .png for every layer, .f32 (256×256 little-endian float32, NaN "
+               "for no data and beyond the map) for elevation and slope; ?pdm=ID for pdm. Tiles never "
+               "change: ETag, Cache-Control immutable, If-None-Match → 304. An address outside the grid → 404.",
+               openapi::Operation()
+                   .query("pdm", kIdSchema, "The PDM of a pdm tile (required for pdm).")
+                   .returns(200, "The tile.", nullptr, "image/png")
+                   .header("ETag", "string", "The tile's version (constant for the tile).")
+                   .header("Cache-Control", "string", "public, max-age=31536000, immutable")
+                   .returns(200, "The tile.", nullptr, "application/octet-stream")
+                   .returns(304, "Not modified: If-None-Match named the tile's ETag.")
+                   .errors({400, 404, 409, 503, 507}),
+               onPool);
   // A tile already made is answered on the io thread; the pool only renders.
-  tiles.quick = [&ctx](const Request& req) { return madeTile(ctx, req); };
+  tiles.quick = [&ctx](const Request& req) { return warmTile(ctx, req); };
   router.add("GET", "/api/maps/{id}/tiles/{layer}/{z}/{x}/{y}", handler(ctx, getTile), std::move(tiles));
 }
 
