@@ -43,24 +43,32 @@ LayerCache::LayerCache(const std::string& mapsRoot, std::uint64_t capBytes,
 
 void LayerCache::addLocked(const std::string& path, std::uint64_t size) {
   auto [it, fresh] = entries_.try_emplace(path);
-  if (!fresh) total_ -= it->second.size;
-  it->second = {size, ++clock_};
+  if (fresh) {
+    it->second.use = byUse_.insert(byUse_.end(), &it->first);
+  } else {
+    total_ -= it->second.size;
+    byUse_.splice(byUse_.end(), byUse_, it->second.use);
+  }
+  it->second.size = size;
   total_ += size;
 }
 
+void LayerCache::eraseLocked(Entries::iterator it) {
+  total_ -= it->second.size;
+  byUse_.erase(it->second.use);
+  entries_.erase(it);
+}
+
 bool LayerCache::evictOldestLocked(const std::string& keep, const std::string& ofMap) {
-  auto oldest = entries_.end();
-  for (auto it = entries_.begin(); it != entries_.end(); ++it)
-    if (it->first != keep && (ofMap.empty() || mapOf(it->first) == ofMap) &&
-        (oldest == entries_.end() || it->second.lastUse < oldest->second.lastUse))
-      oldest = it;
-  if (oldest == entries_.end()) return false;
-  std::error_code ec;
-  fs::remove(oldest->first, ec);
-  if (budget_) budget_->release(oldest->first);
-  total_ -= oldest->second.size;
-  entries_.erase(oldest);
-  return true;
+  for (const std::string* path : byUse_) {
+    if (*path == keep || (!ofMap.empty() && mapOf(*path) != ofMap)) continue;
+    std::error_code ec;
+    fs::remove(*path, ec);
+    if (budget_) budget_->release(*path);
+    eraseLocked(entries_.find(*path));
+    return true;
+  }
+  return false;
 }
 
 void LayerCache::evictLocked(const std::string& keep) {
@@ -85,11 +93,12 @@ void LayerCache::chargeLocked(const std::string& path, std::uint64_t size) {
   }
 }
 
-bool LayerCache::find(const std::string& path) {
-  std::lock_guard lock(mutex_);
+bool LayerCache::tryUse(const std::string& path) {
+  std::unique_lock lock(mutex_, std::try_to_lock);
+  if (!lock.owns_lock()) return false;
   auto it = entries_.find(path);
   if (it == entries_.end()) return false;
-  it->second.lastUse = ++clock_;
+  byUse_.splice(byUse_.end(), byUse_, it->second.use);
   return true;
 }
 
@@ -98,7 +107,7 @@ std::string LayerCache::get(const std::string& path, const std::function<void(co
   {
     std::lock_guard lock(mutex_);
     if (auto it = entries_.find(path); it != entries_.end()) {
-      it->second.lastUse = ++clock_;
+      byUse_.splice(byUse_.end(), byUse_, it->second.use);
       return path;
     }
     auto& m = making_[path];
@@ -114,7 +123,7 @@ std::string LayerCache::get(const std::string& path, const std::function<void(co
   {
     std::unique_lock lock(mutex_);
     if (auto it = entries_.find(path); it != entries_.end()) {
-      it->second.lastUse = ++clock_;
+      byUse_.splice(byUse_.end(), byUse_, it->second.use);
       lock.unlock();
       release();
       return path;
@@ -148,8 +157,7 @@ void LayerCache::forgetUnder(const std::string& dir) {
   for (auto it = entries_.begin(); it != entries_.end();) {
     if (it->first.rfind(prefix, 0) == 0) {
       if (budget_) budget_->release(it->first);
-      total_ -= it->second.size;
-      it = entries_.erase(it);
+      eraseLocked(it++);
     } else {
       ++it;
     }
@@ -168,8 +176,7 @@ void LayerCache::discardUnder(const std::string& dir,
       std::error_code ec;
       fs::remove(path, ec);
       if (budget_) budget_->release(path);
-      total_ -= it->second.size;
-      it = entries_.erase(it);
+      eraseLocked(it++);
     } else {
       ++it;
     }

@@ -9,6 +9,7 @@
 // too_large, field "layer") and deleted.
 #include <cstdint>
 #include <functional>
+#include <list>
 #include <memory>
 #include <mutex>
 #include <string>
@@ -29,8 +30,10 @@ class LayerCache {
   // `path`, made by `make(path)` (which writes it atomically) unless it is there already. A file
   // larger than the cap on its own is still kept until the next one arrives.
   std::string get(const std::string& path, const std::function<void(const std::string&)>& make);
-  // Whether `path` is cached (counted as a use); never makes it. Only the cache's map is read.
-  bool find(const std::string& path);
+  // Whether `path` is cached, counting as a use; false as well when another thread holds the
+  // cache (evicting, say): never waits and never makes the file, for an io thread's answer
+  // (RouteOptions::quick), which then leaves the request to the pool.
+  bool tryUse(const std::string& path);
   // Forgets the files under `dir` (a deleted map's folder).
   void forgetUnder(const std::string& dir);
   // Deletes the cached files under `dir` whose file name `unreachable` accepts (e.g. an edited or
@@ -44,11 +47,13 @@ class LayerCache {
  private:
   struct Entry {
     std::uint64_t size = 0;
-    std::uint64_t lastUse = 0;
+    std::list<const std::string*>::iterator use;  // its place in byUse_
   };
+  using Entries = std::unordered_map<std::string, Entry>;
   void addLocked(const std::string& path, std::uint64_t size);
+  void eraseLocked(Entries::iterator it);
   void evictLocked(const std::string& keep);
-  // The least recently used file but `keep` (of map `ofMap` when given); false when none is left.
+  // Deletes the least recently used file but `keep` (of map `ofMap` when given); false when none is left.
   bool evictOldestLocked(const std::string& keep, const std::string& ofMap = "");
   // Charges a new file to the budget, evicting older files while it does not fit; throws
   // OverBudget (the file is deleted) when it cannot fit.
@@ -57,9 +62,13 @@ class LayerCache {
   store::DiskBudget* budget_;
   const std::uint64_t cap_;
   mutable std::mutex mutex_;  // guards everything below; never held while a file is made
-  std::unordered_map<std::string, Entry> entries_;
+  Entries entries_;
+  // The cached files' paths (the keys of entries_, whose addresses a rehash keeps), least recently
+  // used first: an eviction takes the front, a use moves a file to the back, both O(1) (a scan of
+  // every file for the oldest, per eviction, held the lock for seconds with 50 k tiles cached).
+  std::list<const std::string*> byUse_;
   std::unordered_map<std::string, std::shared_ptr<std::mutex>> making_;  // once-locks in use
-  std::uint64_t total_ = 0, clock_ = 0;
+  std::uint64_t total_ = 0;
 };
 
 }  // namespace rover::api

@@ -2,6 +2,8 @@
 #include <algorithm>
 #include <cctype>
 #include <optional>
+#include <stdexcept>
+#include <string_view>
 
 #include "maps/tile_grid.hpp"
 #include "server/api/route_kit.hpp"
@@ -40,13 +42,27 @@ long long tileNumber(const std::string& s, const char* field) {
 }
 
 // Tiles of a map never change (a map is immutable; a PDM tile names its PDM), so the ETag is the
-// address itself with the renderer's version: a new renderer gives new ETags and new file names.
-constexpr const char* kTileVersion = "t1";
+// address itself with the renderer's version (MapCatalog::kTileVersion).
 
+// Whether If-None-Match names `etag` (RFC 9110 §13.1.2): "*" alone, or a comma-separated list of
+// entity tags, each compared weakly (a W/ prefix ignored). Anything else matches nothing.
 bool etagMatches(const std::string& ifNoneMatch, const std::string& etag) {
-  if (ifNoneMatch.empty()) return false;
-  if (ifNoneMatch.find('*') != std::string::npos) return true;
-  return ifNoneMatch.find(etag) != std::string::npos;  // one tag or a list, weak or strong
+  auto trim = [](std::string_view s) {
+    const auto a = s.find_first_not_of(" \t");
+    if (a == std::string_view::npos) return std::string_view();
+    return s.substr(a, s.find_last_not_of(" \t") - a + 1);
+  };
+  const std::string_view all = trim(ifNoneMatch);
+  if (all == "*") return true;
+  std::size_t from = 0;
+  while (from <= all.size()) {
+    const std::size_t comma = std::min(all.find(',', from), all.size());
+    std::string_view tag = trim(all.substr(from, comma - from));
+    if (tag.substr(0, 2) == "W/") tag.remove_prefix(2);
+    if (tag == etag) return true;
+    from = comma + 1;
+  }
+  return false;
 }
 
 // A tile's address as the request names it: /tiles/{layer}/{z}/{x}/{y}.{format}[?pdm=ID].
@@ -74,7 +90,7 @@ TileAddress tileAddress(const Request& req) {
 std::string tileEtag(const TileAddress& a, const std::string& pdmTag) {
   // Appended piece by piece: GCC 12's -Wrestrict misreads a chain of operator+ here.
   std::string etag = "\"";
-  for (const std::string& part : {std::string(kTileVersion), a.id, a.layer, pdmTag,
+  for (const std::string& part : {std::string(MapCatalog::kTileVersion), a.id, a.layer, pdmTag,
                                   std::to_string(a.z), std::to_string(a.x)}) {
     if (part.empty()) continue;
     etag += part;
@@ -103,9 +119,9 @@ Response tileResponse(Response r, const TileAddress& a, const std::string& etag)
 // A tile file is at most a 256² float32 tile (256 KiB) or an RGBA PNG a little over it.
 constexpr std::uint64_t kMaxTileBytes = 1 << 20;
 
-// The io thread's answer for a tile already made (RouteOptions::quick): 304 or the file's bytes,
-// read whole so header and body leave in one write. Anything else (not made, a pdm tile, the file
-// evicted meanwhile) goes to the pool's getTile.
+// The io thread's answer for a tile already made (RouteOptions::quick): 304, or the file's bytes
+// when the page cache holds them (read whole, so header and body leave in one write). Anything
+// else (not made, a pdm tile, the file evicted meanwhile or on disk only) goes to the pool's getTile.
 std::optional<Response> warmTile(ApiContext& ctx, const Request& req) {
   const TileAddress a = tileAddress(req);
   const auto path = ctx.maps.madeTile(a.id, a.layer, a.format, a.z, a.x, a.y);
@@ -115,8 +131,8 @@ std::optional<Response> warmTile(ApiContext& ctx, const Request& req) {
   if (etagMatches(req.header("if-none-match"), etag)) {
     r.status = 304;
   } else {
-    auto bytes = store::DataDir::readFileUpTo(*path, kMaxTileBytes);
-    if (!bytes) return std::nullopt;
+    auto bytes = store::DataDir::readFileUpTo(*path, kMaxTileBytes, store::DataDir::Read::CachedOnly);
+    if (!bytes || bytes->empty()) return std::nullopt;  // a tile is never empty
     r.contentType = tileType(a);
     r.body = std::move(*bytes);
   }
@@ -126,6 +142,16 @@ std::optional<Response> warmTile(ApiContext& ctx, const Request& req) {
 Response getTile(ApiContext& ctx, const Request& req) {
   const TileAddress a = tileAddress(req);
   MapCatalog::Tile tile = ctx.maps.tileFile(a.id, a.layer, a.format, a.z, a.x, a.y, a.pdm);  // 404s checked first
+  // A file made earlier is read now: the cache may evict it (or an edit discard an old PDM
+  // version's) between the lookup and the read; then it is asked for once more, which makes it anew.
+  for (int attempt = 0; tile.made.empty(); ++attempt) {
+    if (auto bytes = store::DataDir::readFileUpTo(tile.path, kMaxTileBytes); bytes && !bytes->empty())
+      tile.made = std::move(*bytes);
+    else if (attempt == 0)
+      tile = ctx.maps.tileFile(a.id, a.layer, a.format, a.z, a.x, a.y, a.pdm);
+    else
+      throw std::runtime_error("tile file " + tile.path + " gone again after it was made");  // 500, logged
+  }
   // A PDM can be edited (issue 26): its tiles name its version, and are revalidated (ETag) rather
   // than kept a year.
   std::string pdmTag;
@@ -133,9 +159,9 @@ Response getTile(ApiContext& ctx, const Request& req) {
     if (auto p = ctx.db.getPdm(a.pdm)) pdmTag = a.pdm + MapCatalog::pdmVersionTag(p->version);
   const std::string etag = tileEtag(a, pdmTag);
   Response r;
-  if (etagMatches(req.header("if-none-match"), etag)) r.status = 304;
-  else if (tile.made.empty()) r = fileResponse(tile.path, tileType(a));
-  else {  // just rendered: the bytes in hand, not the file read back
+  if (etagMatches(req.header("if-none-match"), etag)) {
+    r.status = 304;
+  } else {
     r.contentType = tileType(a);
     r.body = std::move(tile.made);
   }

@@ -149,6 +149,9 @@ class MapCatalog {
     std::string path;
     std::string made;
   };
+  // The renderer's version, first in a tile's file name and ETag: a new renderer names new files
+  // and tags, so no client keeps an old one's tile (they are cached as immutable).
+  static constexpr const char* kTileVersion = "t1";
   Tile tileFile(const std::string& id, const std::string& layer, const std::string& format, long long z, long long x,
                 long long y, const std::string& pdmId);
   // The tile's file when it is already made, from memory alone (the catalog's and the layer

@@ -178,7 +178,7 @@ void MapCatalog::forgetPdm(const std::string& mapId, const std::string& pdmId,
   // A name of this PDM's: "pdm-ID" or "t1-pdm-ID", then its version tag ("-vN", none for the
   // first), then "-..." or ".ext". Ids are fixed-length hex, so no other PDM's name matches.
   auto versionOf = [&](const std::string& name) -> std::optional<std::string> {
-    for (const std::string& head : {"pdm-" + pdmId, "t1-pdm-" + pdmId}) {
+    for (const std::string& head : {"pdm-" + pdmId, std::string(kTileVersion) + "-pdm-" + pdmId}) {
       if (name.rfind(head, 0) != 0 || name.size() == head.size()) continue;
       std::string rest = name.substr(head.size());
       if (rest[0] == '.') return std::string();

@@ -71,7 +71,8 @@ maps::TileWindow tileWindowOr404(const maps::TileGrid& grid, long long z, long l
 fs::path tilePath(const fs::path& layersDir, const std::string& layer, const std::string& pdmAndVersion, long long z,
                   long long x, long long y, const std::string& format) {
   // Appended piece by piece: GCC 12's -Wrestrict misreads a chain of operator+ here.
-  std::string file = "t1-";
+  std::string file = MapCatalog::kTileVersion;
+  file += '-';
   file += layer;
   for (const std::string& part : {pdmAndVersion, std::to_string(z), std::to_string(x), std::to_string(y)}) {
     if (part.empty()) continue;
@@ -147,7 +148,7 @@ std::optional<std::string> MapCatalog::madeTile(const std::string& id, const std
   if (!stored) return std::nullopt;
   tileWindowOr404(stored->grid, z, x, y);
   const std::string path = tilePath(fs::path(dir_.mapDir(id)) / "layers", layer, "", z, x, y, format).string();
-  if (!layers_.find(path)) return std::nullopt;
+  if (!layers_.tryUse(path)) return std::nullopt;
   return path;
 }
 

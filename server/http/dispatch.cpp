@@ -156,7 +156,7 @@ std::optional<Response> tryQuick(const Route& route, const Request& req, const S
   try {
     return route.options.quick(req);
   } catch (...) {
-    return failed(req, state, "handler failed");
+    return failed(req, state, "quick answer failed");
   }
 }
 

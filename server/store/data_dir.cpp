@@ -2,6 +2,7 @@
 
 #include <fcntl.h>
 #include <sys/stat.h>
+#include <sys/uio.h>
 #include <unistd.h>
 
 #include <cerrno>
@@ -178,7 +179,7 @@ void DataDir::commitDir(const std::string& staged, const std::string& finalDir,
   fsyncDirBestEffort(fs::path(staged).parent_path());
 }
 
-std::optional<std::string> DataDir::readFileUpTo(const std::string& path, std::uint64_t maxBytes) {
+std::optional<std::string> DataDir::readFileUpTo(const std::string& path, std::uint64_t maxBytes, Read how) {
   const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
   if (fd < 0) return std::nullopt;
   struct stat st {};
@@ -186,10 +187,16 @@ std::optional<std::string> DataDir::readFileUpTo(const std::string& path, std::u
   if (::fstat(fd, &st) == 0 && S_ISREG(st.st_mode) && static_cast<std::uint64_t>(st.st_size) <= maxBytes) {
     std::string out(static_cast<std::size_t>(st.st_size), '\0');
     std::size_t got = 0;
+    int flags = how == Read::CachedOnly ? RWF_NOWAIT : 0;
     while (got < out.size()) {
-      const ssize_t n = ::read(fd, out.data() + got, out.size() - got);
+      iovec into{out.data() + got, out.size() - got};
+      const ssize_t n = ::preadv2(fd, &into, 1, static_cast<off_t>(got), flags);
       if (n < 0 && errno == EINTR) continue;
-      if (n <= 0) break;  // an error, or the file shrank: not the whole file
+      if (n < 0 && flags != 0 && (errno == EOPNOTSUPP || errno == EINVAL || errno == ENOSYS)) {
+        flags = 0;  // the filesystem cannot say what is cached: read it plainly
+        continue;
+      }
+      if (n <= 0) break;  // not cached (EAGAIN), an error, or the file shrank: not the whole file
       got += static_cast<std::size_t>(n);
     }
     if (got == out.size()) bytes = std::move(out);

@@ -91,8 +91,12 @@ class DataDir {
   static void writeFileAtomic(const std::string& path, const std::string& bytes, bool durable = true);
   // The whole file when it is at most `maxBytes` long; nullopt when it is absent, larger, or cannot
   // be read (the caller has another way to the bytes: e.g. a tile removed by the layer cache
-  // meanwhile is rendered again).
-  static std::optional<std::string> readFileUpTo(const std::string& path, std::uint64_t maxBytes);
+  // meanwhile is rendered again). With CachedOnly, also nullopt when any of its pages is not in the
+  // page cache (preadv2 RWF_NOWAIT), so an io thread never waits for the disk; a filesystem that
+  // cannot tell reads it plainly.
+  enum class Read { Any, CachedOnly };
+  static std::optional<std::string> readFileUpTo(const std::string& path, std::uint64_t maxBytes,
+                                                 Read how = Read::Any);
   // Removes a folder and everything in it (no error if absent).
   static void removeTree(const std::string& path);
   // fsyncs the file `path` (throws StorageFull or std::runtime_error naming it, for the log), and

@@ -283,6 +283,15 @@ TEST_CASE("layer cache: least recently used files go past the cap, each file is 
   CHECK_FALSE(fs::exists(file("b.png")));
   CHECK(fs::exists(file("c.png")));
   CHECK(cache.bytes() == 2000);
+  // tryUse counts as a use and never makes a file: a becomes more recent than c, so e evicts c.
+  CHECK(cache.tryUse(file("a.png")));
+  CHECK_FALSE(cache.tryUse(file("z.png")));
+  cache.get(file("e.png"), make);
+  CHECK(made == 4);
+  CHECK(fs::exists(file("a.png")));
+  CHECK_FALSE(fs::exists(file("c.png")));
+  CHECK_FALSE(cache.tryUse(file("c.png")));
+  CHECK(cache.bytes() == 2000);
   // A new cache over the same folder counts what is there, less what `stale` names.
   std::ofstream((maps / "m1" / "layers" / "elevation-3013.png").string()) << std::string(10, 'x');
   api::LayerCache again(maps.string(), 2500, [](const std::string& f) { return f == "elevation-3013.png"; });

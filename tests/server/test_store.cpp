@@ -640,6 +640,21 @@ TEST_CASE("data dir: writeFileAtomic writes whole files and leaves no temp files
   CHECK_FALSE(fs::exists(t.path / "no"));
 }
 
+TEST_CASE("data dir: readFileUpTo reads whole files up to a size, nothing else") {
+  TempDir t;
+  const fs::path f = t.path / "tile.png";
+  const std::string bytes(4096 + 17, 'p');
+  DataDir::writeFileAtomic(f.string(), bytes, false);
+  CHECK(DataDir::readFileUpTo(f.string(), bytes.size()) == bytes);  // exactly the cap
+  CHECK_FALSE(DataDir::readFileUpTo(f.string(), bytes.size() - 1));  // one byte over
+  // Just written, so in the page cache: a cached-only read gets it too.
+  CHECK(DataDir::readFileUpTo(f.string(), 1 << 20, DataDir::Read::CachedOnly) == bytes);
+  CHECK_FALSE(DataDir::readFileUpTo((t.path / "absent.png").string(), 1 << 20));
+  CHECK_FALSE(DataDir::readFileUpTo(t.path.string(), 1 << 20));  // a folder is no file
+  DataDir::writeFileAtomic(f.string(), "", false);
+  CHECK(DataDir::readFileUpTo(f.string(), 1 << 20) == std::string());
+}
+
 TEST_CASE("data dir: a reader never sees a partial file during writeFileAtomic") {
   TempDir t;
   const fs::path target = t.path / "f.bin";
