@@ -128,6 +128,36 @@ Compressor::Status failedTimes(ApiServer& s, const std::string& id, int n) {
   return st;
 }
 
+// Waits until the map's job has ended (it is neither queued nor running) and returns its state.
+Compressor::Status settled(ApiServer& s, const std::string& id) {
+  Compressor::Status st;
+  rover::test::waitUntil(
+      [&] {
+        st = s.maps.compressor().status(id);
+        return st.state != Compressor::State::Queued && st.state != Compressor::State::Running;
+      },
+      "the map's compression job to end");
+  return st;
+}
+
+// What std::cerr receives meanwhile (the compressor's log). Read it only once the compressor has
+// said (through its state) that it wrote.
+struct LogCapture {
+  std::ostringstream text;
+  std::streambuf* old = std::cerr.rdbuf(text.rdbuf());
+  ~LogCapture() { std::cerr.rdbuf(old); }
+};
+
+// The files of a map's folder but its layer cache, relative to it.
+std::set<std::string> filesOf(const std::string& mapDir) {
+  std::set<std::string> out;
+  for (const auto& e : std::filesystem::recursive_directory_iterator(mapDir)) {
+    const std::string rel = std::filesystem::relative(e.path(), mapDir).string();
+    if (rel.rfind("layers", 0) != 0) out.insert(rel);
+  }
+  return out;
+}
+
 }  // namespace
 
 TEST_CASE("raw maps: tiles of a map stored raw are byte for byte those of its COG; storage goes raw -> cog") {
@@ -259,6 +289,65 @@ TEST_CASE("raw maps: a server stopped with a map still raw compresses it at its 
   CHECK_FALSE(std::filesystem::exists(s.dir.mapDir(id) + "/dem~raw"));
   CHECK(s.get("/api/maps/" + id + "/tiles/elevation/0/0/0.png").status == 200);
   CHECK(s.get("/api/maps/" + id + "/tiles/hillshade/2/1/1.png").body == tileBefore);
+}
+
+TEST_CASE("raw maps: a COG that does not fit the server's disk budget is not written; the map stays raw, working, charged for what it holds") {
+  TempDir tmp;
+  Hold hold;  // declared first: they outlive the server whose thread uses them
+  TestClock clock;
+  ApiServer s(tmp.str("data"), rawFirst());
+  clock.on(s);
+  hold.on(s);
+  const auto up = s.post("/api/maps?name=big&filename=odd.tif", oddDem(tmp), "image/tiff");
+  REQUIRE(up.status == 201);
+  const std::string id = up.json()["id"];
+  rover::test::waitUntil([&] { return hold.held.load() == 1; }, rover::test::kHangDeadline, "the job to start");
+  const std::string mapDir = s.dir.mapDir(id);
+  const std::string base = "/api/maps/" + id + "/tiles/";
+  const auto tileBefore = s.get(base + "hillshade/2/1/1.png");
+  REQUIRE(tileBefore.status == 200);
+  const std::uint64_t raw = store::bytesUnder(mapDir + "/dem~raw");
+  const std::uint64_t used = s.dir.budget().used();
+  CHECK(used == store::bytesUnder(mapDir));  // its raw files, classes.tif and the tile
+  const std::set<std::string> files = filesOf(mapDir);
+  // Room left for half the raw files: tiles fit, the COG (which may take up to their size) not.
+  s.dir.budget().setLimits({used + raw / 2, store::DiskBudgetLimits::kUnlimited});
+  {
+    LogCapture log;
+    hold.release = true;  // the job is running (held): it has ended once it is no longer
+    const auto st = settled(s, id);
+    CHECK(st.state == Compressor::State::WaitingRetry);
+    CHECK(st.failures == 1);
+    CHECK(log.text.str().find("compressing map " + id) != std::string::npos);
+    CHECK(log.text.str().find("disk budget is full") != std::string::npos);
+  }
+  // Nothing written, nothing left, nothing charged but what is there.
+  CHECK(storage(s, id) == "raw");
+  CHECK(filesOf(mapDir) == files);
+  CHECK(s.dir.budget().used() == used);
+  // It works raw: its tiles (a cached one, one made now), an overview, a planning window, and its
+  // record names no server path.
+  CHECK(s.get(base + "hillshade/2/1/1.png").body == tileBefore.body);
+  CHECK(s.get(base + "slope/1/0/0.png").status == 200);
+  CHECK(s.get("/api/maps/" + id + "/layers/elevation.png?max=256").status == 200);
+  PlanningWindow w;
+  w.row0 = 10;
+  w.col0 = 20;
+  w.grid = GridGeometry{50, 60, 1.0, 1.0};
+  CHECK(std::isfinite(s.maps.demWindow(id, w)->z.at(0)));
+  const auto rec = s.get("/api/maps/" + id);
+  CHECK(rec.body.find(tmp.path.string()) == std::string::npos);
+  CHECK(rec.body.find("dem~raw") == std::string::npos);
+  // Room made: the retry, due a minute after the failure, writes the COG; the raw files go and
+  // the map is charged for what it holds.
+  s.dir.budget().setLimits({});
+  clock.advance(s, Compressor::kFirstRetryDelay);
+  rover::test::waitUntil([&] { return storage(s, id) == "cog"; }, rover::test::kHangDeadline, "the map's storage to be cog");
+  CHECK(s.maps.compressor().waitIdle(id, rover::test::kHangDeadline));
+  CHECK(s.maps.compressor().status(id).state == Compressor::State::Idle);
+  CHECK_FALSE(std::filesystem::exists(mapDir + "/dem~raw"));
+  CHECK(s.dir.budget().used() == store::bytesUnder(mapDir));
+  CHECK(s.get(base + "hillshade/2/1/1.png").body == tileBefore.body);
 }
 
 TEST_CASE("raw maps: a failed compression is tried again while the server runs, 1, 2, 4 ... 30 min after, 8 times at most") {
