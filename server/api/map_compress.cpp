@@ -87,18 +87,24 @@ void MapCatalog::compressElevation(const std::string& id, const std::function<bo
                             : 0;
   db_.setMapStorage(id, cogStorage(overviews));
   committed = true;
-  {
-    // The header read from the VRT names its driver; the COG's is read afresh.
-    std::lock_guard lock(mutex_);
-    headerCache_.remove_if([&](const auto& e) { return e.first == id; });
-  }
+  // What was read from the raw files and kept (the header read from the VRT names its driver and
+  // path) is read afresh from the COG.
+  forgetStoredElevation(id);
   // Readers that opened the VRT keep their files (open descriptors); one that opens it after this
   // finds dem.tif instead (readElevation).
   store::DataDir::removeTree(raw.string());
+  maps::forgetStoredRasters(raw.string());
   dir_.budget().record(mapDir.string(), store::DiskUse::Map, id, mapBytes(mapDir));
   if (onStorageChanged) onStorageChanged(id);
   std::cerr << "compressed map " << id << ": dem.tif in "
             << std::chrono::duration<double>(std::chrono::steady_clock::now() - from).count() << " s" << std::endl;
+}
+
+void MapCatalog::forgetStoredElevation(const std::string& id) {
+  std::lock_guard lock(mutex_);
+  headerCache_.remove_if([&](const auto& e) { return e.first == id; });
+  cellCache_.remove_if([&](const auto& e) { return e.first.rfind(id + "@", 0) == 0; });
+  ++invalidations_;  // a read begun before this is not kept (storedHeader, demAtCell)
 }
 
 int MapCatalog::resumeCompressions() {

@@ -86,6 +86,7 @@ fs::path tilePath(const fs::path& layersDir, const std::string& layer, const std
 }  // namespace
 
 std::shared_ptr<const maps::DemHeader> MapCatalog::storedHeader(const std::string& id) {
+  std::uint64_t invalidations = 0;
   {
     std::lock_guard lock(mutex_);
     for (auto it = headerCache_.begin(); it != headerCache_.end(); ++it)
@@ -93,6 +94,7 @@ std::shared_ptr<const maps::DemHeader> MapCatalog::storedHeader(const std::strin
         headerCache_.splice(headerCache_.begin(), headerCache_, it);
         return it->second;
       }
+    invalidations = invalidations_;
   }
   std::shared_ptr<const maps::DemHeader> h;
   try {
@@ -101,7 +103,11 @@ std::shared_ptr<const maps::DemHeader> MapCatalog::storedHeader(const std::strin
   } catch (const Error& e) {
     throw std::runtime_error(e.what());  // the stored file is the server's: 500, its path in the log only
   }
+  if (raceHooks.afterHeaderRead) raceHooks.afterHeaderRead(id);
   std::lock_guard lock(mutex_);
+  // A header read while the map's storage changed (the raw VRT's, read as its COG replaced it) or
+  // the map went is returned this once, not kept: forgetStoredElevation ran before it could be.
+  if (invalidations != invalidations_) return h;
   headerCache_.emplace_front(id, h);
   if (headerCache_.size() > 16) headerCache_.pop_back();
   return h;
@@ -119,10 +125,10 @@ std::shared_ptr<const MapCatalog::StoredTiles> MapCatalog::cachedStoredTiles(con
 
 std::shared_ptr<const MapCatalog::StoredTiles> MapCatalog::storedTiles(const std::string& id) {
   if (auto cached = cachedStoredTiles(id)) return cached;
-  std::uint64_t removals = 0;
+  std::uint64_t invalidations = 0;
   {
     std::lock_guard lock(mutex_);
-    removals = removals_;
+    invalidations = invalidations_;
   }
   auto rec = db_.getMap(id);
   if (!rec) throw ApiError(404, "not_found", "no map '" + rover::json::shown(id) + "'", "id");
@@ -132,12 +138,11 @@ std::shared_ptr<const MapCatalog::StoredTiles> MapCatalog::storedTiles(const std
   t->pyramid = storedAsPyramid(*rec, dir_.mapDir(id));
   if (t->pyramid) t->ramp = {rec->meta["colour_range"][0].get<double>(), rec->meta["colour_range"][1].get<double>()};
   std::lock_guard lock(mutex_);
-  if (removals != removals_) return t;  // the map may be gone: this once, uncached
+  if (invalidations != invalidations_) return t;  // the map may be gone: this once, uncached
   tilesCache_.emplace_front(t);
   if (tilesCache_.size() > 16) tilesCache_.pop_back();
   return t;
 }
-
 
 std::optional<std::string> MapCatalog::madeTile(const std::string& id, const std::string& layer,
                                                 const std::string& format, long long z, long long x, long long y) {

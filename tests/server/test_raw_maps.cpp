@@ -415,3 +415,33 @@ TEST_CASE("raw maps: a failed compression is tried again while the server runs, 
     CHECK(s.dir.budget().used() == 0);
   }
 }
+
+TEST_CASE("raw maps: a header read from the raw VRT as the COG replaces it is not kept; the COG's is read afresh") {
+  TempDir tmp;
+  Hold hold;  // declared first: it outlives the server whose jobs it holds
+  ApiServer s(tmp.str("data"), rawFirst());
+  hold.on(s);
+  const auto up = s.post("/api/maps?name=swap&filename=odd.tif", oddDem(tmp), "image/tiff");
+  REQUIRE(up.status == 201);
+  const std::string id = up.json()["id"];
+  rover::test::waitUntil([&] { return hold.held.load() == 1; }, rover::test::kHangDeadline, "the job to start");
+  // The whole swap (COG written, record "cog", raw files removed) runs between the header's read
+  // from the VRT and its keeping.
+  bool swapped = false;
+  s.maps.raceHooks.afterHeaderRead = [&](const std::string& map) {
+    if (map != id || swapped) return;
+    swapped = true;
+    hold.release = true;
+    CHECK(s.maps.compressor().waitIdle(id, rover::test::kHangDeadline));
+  };
+  const auto read = s.maps.storedHeader(id);  // on this thread: the hook runs here
+  REQUIRE(swapped);
+  CHECK(read->info.driver == "VRT");
+  CHECK(storage(s, id) == "cog");
+  const auto after = s.maps.storedHeader(id);
+  CHECK(after->info.driver == "GTiff");
+  CHECK(after->info.path == s.dir.mapDir(id) + "/dem.tif");
+  CHECK(after->geometry.rows == read->geometry.rows);
+  CHECK(after->geometry.cols == read->geometry.cols);
+  CHECK(s.get("/api/maps/" + id + "/tiles/elevation/2/1/1.png").status == 200);
+}
