@@ -84,9 +84,11 @@ class MapCatalog {
   std::function<void(const std::string& mapId)> onStorageChanged;
   // Tests: called where a read can race a write, so that a test runs the write exactly there
   // (set before the first request): `afterHeaderRead(mapId)` when storedHeader has read a header
-  // and not yet kept it.
+  // and not yet kept it; `beforePdmPyramidRead(pdmId)` when a pdm tile has its version's mass
+  // pyramid file and has not yet opened it.
   struct RaceHooks {
     std::function<void(const std::string& mapId)> afterHeaderRead;
+    std::function<void(const std::string& pdmId)> beforePdmPyramidRead;
   } raceHooks;
   // Start-up: removes map and PDM folders that have no database row (a crash between committing
   // the files and inserting the row leaves one behind). Returns how many were removed.
@@ -155,9 +157,14 @@ class MapCatalog {
   // 404; a pdm tile names its PDM (`pdmId` required: a tile never changes, "the newest" would).
   // The tile's file, and its bytes when this call made it (empty when the file was there): a fresh
   // tile is answered from memory, not read back from the disk it was just written to.
+  // A pdm tile is of its PDM's version when it was drawn (`pdmVersion`, pdmVersionTag): an edit or
+  // delete that races the request is answered with the current version's tile, or 404 for a
+  // deleted PDM (ApiError 409 only if it is edited again while that is drawn), never a tile of
+  // one version named by another's ETag.
   struct Tile {
     std::string path;
     std::string made;
+    std::string pdmVersion;
   };
   Tile tileFile(const std::string& id, const std::string& layer, const std::string& format, long long z, long long x,
                 long long y, const std::string& pdmId);
