@@ -86,7 +86,13 @@ void ElevationCompressor::setClock(std::function<Clock::time_point()> now) {
   changed_.notify_all();
 }
 
-void ElevationCompressor::wake() { changed_.notify_all(); }
+void ElevationCompressor::wake() {
+  // Through the lock: a thread that read the clock before the test moved it is then waiting, and
+  // is woken; one that reads it after sees it moved. (A notify between its read and its wait would
+  // be lost, and it would sleep the old delay.)
+  { std::lock_guard lock(mutex_); }
+  changed_.notify_all();
+}
 
 void ElevationCompressor::queueDueRetriesLocked() {
   if (retryAt_.empty()) return;
