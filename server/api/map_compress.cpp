@@ -55,7 +55,13 @@ void MapCatalog::compressElevation(const std::string& id, const std::function<bo
   const std::uint64_t before = mapBytes(mapDir);
   const std::uint64_t rawBytes = store::bytesUnder(raw.string());
   const std::uint64_t cogBound = rawBytes + rawBytes / 64 + (std::uint64_t(64) << 10);
-  dir_.budget().charge(mapDir.string(), store::DiskUse::Map, id, before + cogBound);
+  try {
+    dir_.budget().charge(mapDir.string(), store::DiskUse::Map, id, before + cogBound);
+  } catch (const store::OverBudget& e) {
+    // For the log: the charge's own words count the whole map, raw files and COG together.
+    throw std::runtime_error("no room for its COG (up to " + store::megabytes(cogBound) + " beside its " +
+                             store::megabytes(before) + "): " + e.what());
+  }
   bool committed = false;
   struct Undo {  // until the record says "cog": no dem.tif beside the raw files, the charge as on disk
     MapCatalog& catalog;
