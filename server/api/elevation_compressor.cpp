@@ -3,10 +3,11 @@
 #include <algorithm>
 #include <exception>
 #include <iostream>
+#include <sstream>
 
 namespace rover::api {
 
-ElevationCompressor::ElevationCompressor(Job job) : job_(std::move(job)) {}
+ElevationCompressor::ElevationCompressor(Job job) : job_(std::move(job)), now_([] { return Clock::now(); }) {}
 
 ElevationCompressor::~ElevationCompressor() { stop(); }
 
@@ -16,15 +17,25 @@ void ElevationCompressor::stop() {
     stopping_ = true;
     cancelRunning_ = true;
     queue_.clear();
+    retryAt_.clear();
   }
   changed_.notify_all();
   if (thread_.joinable()) thread_.join();
 }
 
+ElevationCompressor::Clock::duration ElevationCompressor::retryDelay(int failures) {
+  Clock::duration d = kFirstRetryDelay;
+  for (int i = 1; i < failures && d < kMaxRetryDelay; ++i) d *= 2;
+  return std::min<Clock::duration>(d, kMaxRetryDelay);
+}
+
 void ElevationCompressor::enqueue(const std::string& mapId) {
   {
     std::lock_guard lock(mutex_);
-    if (stopping_ || running_ == mapId || std::find(queue_.begin(), queue_.end(), mapId) != queue_.end()) return;
+    if (stopping_ || running_ == mapId || retryAt_.count(mapId) ||
+        std::find(queue_.begin(), queue_.end(), mapId) != queue_.end())
+      return;
+    failures_.erase(mapId);  // a map whose retries were used up starts afresh
     queue_.push_back(mapId);
     if (!thread_.joinable()) thread_ = std::thread([this] { run(); });
   }
@@ -34,6 +45,8 @@ void ElevationCompressor::enqueue(const std::string& mapId) {
 void ElevationCompressor::cancel(const std::string& mapId) {
   std::unique_lock lock(mutex_);
   queue_.erase(std::remove(queue_.begin(), queue_.end(), mapId), queue_.end());
+  retryAt_.erase(mapId);
+  failures_.erase(mapId);
   if (running_ != mapId) return;
   cancelRunning_ = true;
   changed_.wait(lock, [&] { return running_ != mapId; });
@@ -42,13 +55,56 @@ void ElevationCompressor::cancel(const std::string& mapId) {
 bool ElevationCompressor::waitIdle(const std::string& mapId, std::chrono::milliseconds timeout) {
   std::unique_lock lock(mutex_);
   return changed_.wait_for(lock, timeout, [&] {
-    return running_ != mapId && std::find(queue_.begin(), queue_.end(), mapId) == queue_.end();
+    return running_ != mapId && !retryAt_.count(mapId) &&
+           std::find(queue_.begin(), queue_.end(), mapId) == queue_.end();
   });
+}
+
+ElevationCompressor::Status ElevationCompressor::status(const std::string& mapId) {
+  std::lock_guard lock(mutex_);
+  Status s;
+  if (auto f = failures_.find(mapId); f != failures_.end()) s.failures = f->second;
+  if (running_ == mapId) s.state = State::Running;
+  else if (std::find(queue_.begin(), queue_.end(), mapId) != queue_.end()) s.state = State::Queued;
+  else if (auto r = retryAt_.find(mapId); r != retryAt_.end()) {
+    s.state = State::WaitingRetry;
+    s.retryAt = r->second;
+  } else if (s.failures > 0) s.state = State::GaveUp;
+  return s;
 }
 
 void ElevationCompressor::setBeforeJob(Hook hook) {
   std::lock_guard lock(mutex_);
   beforeJob_ = std::move(hook);
+}
+
+void ElevationCompressor::setClock(std::function<Clock::time_point()> now) {
+  {
+    std::lock_guard lock(mutex_);
+    now_ = std::move(now);
+  }
+  changed_.notify_all();
+}
+
+void ElevationCompressor::wake() {
+  // Through the lock: a thread that read the clock before the test moved it is then waiting, and
+  // is woken; one that reads it after sees it moved. (A notify between its read and its wait would
+  // be lost, and it would sleep the old delay.)
+  { std::lock_guard lock(mutex_); }
+  changed_.notify_all();
+}
+
+void ElevationCompressor::queueDueRetriesLocked() {
+  if (retryAt_.empty()) return;
+  const auto now = now_();
+  for (auto it = retryAt_.begin(); it != retryAt_.end();) {
+    if (it->second <= now) {
+      queue_.push_back(it->first);
+      it = retryAt_.erase(it);
+    } else {
+      ++it;
+    }
+  }
 }
 
 void ElevationCompressor::run() {
@@ -57,8 +113,20 @@ void ElevationCompressor::run() {
     Hook hook;
     {
       std::unique_lock lock(mutex_);
-      changed_.wait(lock, [&] { return stopping_ || !queue_.empty(); });
-      if (stopping_) return;
+      for (;;) {
+        if (stopping_) return;
+        queueDueRetriesLocked();
+        if (!queue_.empty()) break;
+        if (retryAt_.empty()) {
+          changed_.wait(lock);
+        } else {
+          // Asleep until the earliest retry is due (at most kMaxRetryDelay at a time: a test's
+          // clock that does not move costs one wake-up per half hour), or until woken.
+          Clock::time_point due = Clock::time_point::max();
+          for (const auto& r : retryAt_) due = std::min(due, r.second);
+          changed_.wait_for(lock, std::clamp<Clock::duration>(due - now_(), Clock::duration::zero(), kMaxRetryDelay));
+        }
+      }
       id = queue_.front();
       queue_.pop_front();
       running_ = id;
@@ -69,16 +137,34 @@ void ElevationCompressor::run() {
       std::lock_guard lock(mutex_);
       return cancelRunning_;
     };
+    std::string failure;  // why the job failed ("" when it did not, or was cancelled)
     try {
       if (hook) hook(id, cancelled);
       if (!cancelled()) job_(id, cancelled);
     } catch (const std::exception& e) {
-      // The map stays raw and readable; it is queued again at the next start.
-      if (!cancelled()) std::cerr << "compressing map " << id << "'s elevation failed: " << e.what() << std::endl;
+      if (!cancelled()) failure = e.what()[0] ? e.what() : "an error without a message";
     }
     {
       std::lock_guard lock(mutex_);
       running_.clear();
+      if (failure.empty() || stopping_ || cancelRunning_) {
+        failures_.erase(id);
+      } else {
+        // The map stays raw and readable. The line is written before the map's state changes,
+        // so whoever sees the state sees the line logged.
+        const int n = ++failures_[id];
+        std::ostringstream line;
+        line << "compressing map " << id << "'s elevation failed (attempt " << n << " of " << kAttempts
+             << "; the map stays raw and readable): " << failure;
+        if (n < kAttempts) {
+          const auto delay = retryDelay(n);
+          line << "; trying again in " << std::chrono::duration_cast<std::chrono::seconds>(delay).count() << " s";
+          retryAt_[id] = now_() + delay;
+        } else {
+          line << "; not tried again before the server restarts";
+        }
+        std::cerr << line.str() << std::endl;
+      }
     }
     changed_.notify_all();
   }

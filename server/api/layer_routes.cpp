@@ -155,8 +155,7 @@ Response getTile(ApiContext& ctx, const Request& req) {
   // A PDM can be edited (issue 26): its tiles name its version, and are revalidated (ETag) rather
   // than kept a year.
   std::string pdmTag;
-  if (a.layer == "pdm")
-    if (auto p = ctx.db.getPdm(a.pdm)) pdmTag = a.pdm + MapCatalog::pdmVersionTag(p->version);
+  if (a.layer == "pdm") pdmTag = a.pdm + tile.pdmVersion;  // the version drawn, not one edited since
   const std::string etag = tileEtag(a, pdmTag);
   Response r;
   if (etagMatches(req.header("if-none-match"), etag)) {

@@ -114,7 +114,7 @@ void MapCatalog::remove(const std::string& id) {
     cellCache_.remove_if([&](const auto& e) { return e.first.rfind(id + "@", 0) == 0; });
     headerCache_.remove_if([&](const auto& e) { return e.first == id; });
     tilesCache_.remove_if([&](const auto& t) { return t->id == id; });
-    ++removals_;
+    ++invalidations_;
   }
   // Its COG job, if any, ends before the folder goes (it never makes the folder again).
   compressor_->cancel(id);
@@ -129,10 +129,12 @@ std::shared_ptr<const terrain::Dem> MapCatalog::demAtCell(const std::string& id,
   if (cellSize <= 0 || std::fabs(cellSize - map->dem.geometry().cellWidth) < 1e-9)
     return std::shared_ptr<const terrain::Dem>(map, &map->dem);
   const std::string key = id + "@" + std::to_string(cellSize);
+  std::uint64_t invalidations = 0;
   {
     std::lock_guard lock(mutex_);
     for (auto& e : cellCache_)
       if (e.first == key) return e.second;
+    invalidations = invalidations_;
   }
   maps::LoadOptions o;
   o.cellSize = cellSize;
@@ -149,6 +151,7 @@ std::shared_ptr<const terrain::Dem> MapCatalog::demAtCell(const std::string& id,
     }
   });
   std::lock_guard lock(mutex_);
+  if (invalidations != invalidations_) return dem;  // read from a file since replaced: this once, uncached
   cellCache_.emplace_front(key, dem);
   if (cellCache_.size() > 4) cellCache_.pop_back();
   return dem;

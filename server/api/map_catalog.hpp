@@ -82,6 +82,14 @@ class MapCatalog {
   // Called on the compressor's thread after a map's storage changed (raw -> cog), so the API's
   // cached map bodies are dropped and clients told.
   std::function<void(const std::string& mapId)> onStorageChanged;
+  // Tests: called where a read can race a write, so that a test runs the write exactly there
+  // (set before the first request): `afterHeaderRead(mapId)` when storedHeader has read a header
+  // and not yet kept it; `beforePdmPyramidRead(pdmId)` when a pdm tile has its version's mass
+  // pyramid file and has not yet opened it.
+  struct RaceHooks {
+    std::function<void(const std::string& mapId)> afterHeaderRead;
+    std::function<void(const std::string& pdmId)> beforePdmPyramidRead;
+  } raceHooks;
   // Start-up: removes map and PDM folders that have no database row (a crash between committing
   // the files and inserting the row leaves one behind). Returns how many were removed.
   int sweepOrphans();
@@ -91,6 +99,10 @@ class MapCatalog {
   std::shared_ptr<const MapData> get(const std::string& id);
   void remove(const std::string& id);
 
+  // The stored DEM's header (grid, per-row widths, the file's driver), read once per map for its
+  // tiles (map_tile_files.cpp); a few maps are kept, a map's dropped when its storage changes
+  // (raw -> cog: forgetStoredElevation) or it is removed.
+  std::shared_ptr<const maps::DemHeader> storedHeader(const std::string& id);
   // The map's header (map_window.cpp): from the loaded map when it is in memory, else from the
   // stored DEM's header. Throws ApiError 404 (field "id") for an unknown map.
   MapHeader header(const std::string& id);
@@ -145,9 +157,14 @@ class MapCatalog {
   // 404; a pdm tile names its PDM (`pdmId` required: a tile never changes, "the newest" would).
   // The tile's file, and its bytes when this call made it (empty when the file was there): a fresh
   // tile is answered from memory, not read back from the disk it was just written to.
+  // A pdm tile is of its PDM's version when it was drawn (`pdmVersion`, pdmVersionTag): an edit or
+  // delete that races the request is answered with the current version's tile, or 404 for a
+  // deleted PDM (ApiError 409 only if it is edited again while that is drawn), never a tile of
+  // one version named by another's ETag.
   struct Tile {
     std::string path;
     std::string made;
+    std::string pdmVersion;
   };
   // The renderer's version, first in a tile's file name and ETag: a new renderer names new files
   // and tags, so no client keeps an old one's tile (they are cached as immutable).
@@ -234,13 +251,14 @@ class MapCatalog {
   // The compressor's job (map_compress.cpp): the map's dem.tif from its raw files, then its
   // record's storage, its disk charge and the raw files' removal.
   void compressElevation(const std::string& id, const std::function<bool()>& cancelled);
+  // Drops what was read from a map's elevation file and kept (its stored header, its DEMs at
+  // coverage cell sizes), once that file has changed (the COG replaced the raw VRT); a read begun
+  // before is not kept either (invalidations_).
+  void forgetStoredElevation(const std::string& id);
   // The map's cells with data (1 where its height is not NaN), one byte a cell: the loaded map's,
   // else read from the stored DEM kValidBandRows rows at a time (the heights of one band in memory).
   std::vector<std::uint8_t> validCells(const std::string& mapId, const GridGeometry& g);
   static constexpr int kValidBandRows = 512;
-  // The stored DEM's header (grid, per-row widths), read once per map for its tiles
-  // (map_tile_files.cpp); a few maps are kept.
-  std::shared_ptr<const maps::DemHeader> storedHeader(const std::string& id);
   // What a map's tiles need of its record and folder, none of which changes after the import (a map
   // is immutable; a rename changes neither): its tile grid and, for a map stored as its pyramid,
   // its ramp. Read once per map (a SQLite read and a stat a tile were a twentieth of a cold tile's
@@ -270,7 +288,9 @@ class MapCatalog {
   std::list<std::pair<std::string, std::shared_ptr<const terrain::Dem>>> cellCache_;
   std::list<std::pair<std::string, std::shared_ptr<const maps::DemHeader>>> headerCache_;  // most recent first
   std::list<std::shared_ptr<const StoredTiles>> tilesCache_;  // most recent first
-  std::uint64_t removals_ = 0;  // maps removed: a record read before a removal is not cached
+  // Maps removed or their elevation file changed: what was read before is not cached (a header
+  // read from a raw VRT, a removed map's record), only returned.
+  std::uint64_t invalidations_ = 0;
   std::list<std::pair<std::string, std::shared_ptr<const Raster<float>>>> massCache_;  // most recent first
   // `key`: the PDM's id and version tag (pdmVersionTag).
   void keepMass(const std::string& key, std::shared_ptr<const Raster<float>> mass);

@@ -9,6 +9,7 @@
 #include "maps/map_tiles.hpp"
 #include "server/api/map_files.hpp"
 #include "server/api/map_catalog.hpp"
+#include "server/errors/domain_error.hpp"
 #include "server/http/http_types.hpp"
 #include "server/json/json_edge.hpp"
 
@@ -87,6 +88,7 @@ fs::path tilePath(const fs::path& layersDir, const std::string& layer, const std
 }  // namespace
 
 std::shared_ptr<const maps::DemHeader> MapCatalog::storedHeader(const std::string& id) {
+  std::uint64_t invalidations = 0;
   {
     std::lock_guard lock(mutex_);
     for (auto it = headerCache_.begin(); it != headerCache_.end(); ++it)
@@ -94,6 +96,7 @@ std::shared_ptr<const maps::DemHeader> MapCatalog::storedHeader(const std::strin
         headerCache_.splice(headerCache_.begin(), headerCache_, it);
         return it->second;
       }
+    invalidations = invalidations_;
   }
   std::shared_ptr<const maps::DemHeader> h;
   try {
@@ -102,7 +105,11 @@ std::shared_ptr<const maps::DemHeader> MapCatalog::storedHeader(const std::strin
   } catch (const Error& e) {
     throw std::runtime_error(e.what());  // the stored file is the server's: 500, its path in the log only
   }
+  if (raceHooks.afterHeaderRead) raceHooks.afterHeaderRead(id);
   std::lock_guard lock(mutex_);
+  // A header read while the map's storage changed (the raw VRT's, read as its COG replaced it) or
+  // the map went is returned this once, not kept: forgetStoredElevation ran before it could be.
+  if (invalidations != invalidations_) return h;
   headerCache_.emplace_front(id, h);
   if (headerCache_.size() > 16) headerCache_.pop_back();
   return h;
@@ -120,10 +127,10 @@ std::shared_ptr<const MapCatalog::StoredTiles> MapCatalog::cachedStoredTiles(con
 
 std::shared_ptr<const MapCatalog::StoredTiles> MapCatalog::storedTiles(const std::string& id) {
   if (auto cached = cachedStoredTiles(id)) return cached;
-  std::uint64_t removals = 0;
+  std::uint64_t invalidations = 0;
   {
     std::lock_guard lock(mutex_);
-    removals = removals_;
+    invalidations = invalidations_;
   }
   auto rec = db_.getMap(id);
   if (!rec) throw ApiError(404, "not_found", "no map '" + rover::json::shown(id) + "'", "id");
@@ -133,12 +140,11 @@ std::shared_ptr<const MapCatalog::StoredTiles> MapCatalog::storedTiles(const std
   t->pyramid = storedAsPyramid(*rec, dir_.mapDir(id));
   if (t->pyramid) t->ramp = {rec->meta["colour_range"][0].get<double>(), rec->meta["colour_range"][1].get<double>()};
   std::lock_guard lock(mutex_);
-  if (removals != removals_) return t;  // the map may be gone: this once, uncached
+  if (invalidations != invalidations_) return t;  // the map may be gone: this once, uncached
   tilesCache_.emplace_front(t);
   if (tilesCache_.size() > 16) tilesCache_.pop_back();
   return t;
 }
-
 
 std::optional<std::string> MapCatalog::madeTile(const std::string& id, const std::string& layer,
                                                 const std::string& format, long long z, long long x, long long y) {
@@ -156,50 +162,86 @@ MapCatalog::Tile MapCatalog::tileFile(const std::string& id, const std::string& 
                                  long long z, long long x, long long y, const std::string& pdmId) {
   checkTileKind(layer, format);
   const auto stored = storedTiles(id);
-  std::string pdmVersion;  // an edited PDM's tiles are new files (issue 26)
-  if (layer == "pdm") {
-    if (pdmId.empty()) throw ApiError(400, "invalid_parameter", "a pdm tile names its PDM: ?pdm=ID", "pdm");
+  // A pdm tile names its PDM's version now (an edited PDM's tiles are new files, issue 26): 404
+  // when the PDM is gone or not on this map.
+  auto pdmVersionNow = [&] {
     auto p = db_.getPdm(pdmId);
     if (!p || p->mapId != id) throw ApiError(404, "not_found", "no PDM '" + rover::json::shown(pdmId) + "' on this map", "pdm");
-    pdmVersion = pdmVersionTag(p->version);
+    return pdmVersionTag(p->version);
+  };
+  std::string pdmVersion;
+  if (layer == "pdm") {
+    if (pdmId.empty()) throw ApiError(400, "invalid_parameter", "a pdm tile names its PDM: ?pdm=ID", "pdm");
+    pdmVersion = pdmVersionNow();
   }
   const maps::TileWindow window = tileWindowOr404(stored->grid, z, x, y);
   const fs::path dir = fs::path(dir_.mapDir(id)) / "layers";
-  // Made once per file on the work pool, outside the catalog's lock.
   Tile tile;
-  const fs::path file = tilePath(dir, layer, layer == "pdm" ? pdmId + pdmVersion : "", z, x, y, format);
-  tile.path = layers_.get(file.string(), [&](const std::string& path) {
-    std::error_code ec;
-    fs::create_directories(dir, ec);
-    const auto l = maps::renderLayerFromName(layer);
-    const fs::path mapDir = dir_.mapDir(id);
-    if (layer == "pdm") {
-      // The PDM's mass pyramid (made once per PDM version): the tile's window at its zoom and the
-      // ramp stored with it, never the whole mass or the map.
-      const maps::MassPyramidBlocks blocks(pdmPyramidFile(id, pdmId, pdmVersion), storedHeader(id)->geometry);
-      tile.made = tileBytes(blocks, l, format, window);
-      store::DataDir::writeFileAtomic(path, tile.made, false);  // a cache file: no fsync
-      return;
+  // The tile's file (of PDM version `version` for a pdm tile), made once per file on the work
+  // pool, outside the catalog's lock.
+  auto tileOf = [&](const std::string& version) {
+    const fs::path file = tilePath(dir, layer, layer == "pdm" ? pdmId + version : "", z, x, y, format);
+    tile.made.clear();
+    return layers_.get(file.string(), [&](const std::string& path) {
+      std::error_code ec;
+      fs::create_directories(dir, ec);
+      const auto l = maps::renderLayerFromName(layer);
+      const fs::path mapDir = dir_.mapDir(id);
+      if (layer == "pdm") {
+        // The PDM's mass pyramid (made once per PDM version): the tile's window at its zoom and the
+        // ramp stored with it, never the whole mass or the map.
+        const std::string pyramid = pdmPyramidFile(id, pdmId, version);
+        if (raceHooks.beforePdmPyramidRead) raceHooks.beforePdmPyramidRead(pdmId);
+        const maps::MassPyramidBlocks blocks(pyramid, storedHeader(id)->geometry);
+        tile.made = tileBytes(blocks, l, format, window);
+        store::DataDir::writeFileAtomic(path, tile.made, false);  // a cache file: no fsync
+        return;
+      }
+      if (stored->pyramid) {
+        // The level of the tile's zoom, about (256 + 2)² cells: the map is never loaded.
+        const auto header = storedHeader(id);
+        tile.made = readElevation(mapDir.string(), [&](const std::string& dem) {
+          return tileBytes(maps::PyramidBlocks(dem, (mapDir / kClassFile).string(), header, stored->ramp), l, format,
+                           window);
+        });
+        store::DataDir::writeFileAtomic(path, tile.made, false);  // a cache file: no fsync
+        return;
+      }
+      auto map = get(id);  // a map stored before the pyramid: the whole map in memory
+      maps::TileSource src;
+      src.dem = &map->dem;
+      src.classes = &map->traversability.classes;
+      src.range = map->elevationRange;
+      tile.made = tileBytes(src, l, format, window);
+      store::DataDir::writeFileAtomic(path, tile.made, false);
+    });
+  };
+  if (layer != "pdm") {
+    tile.path = tileOf("");
+    return tile;
+  }
+  // A pdm tile races its PDM's edits and deletion: the version resolved above may be edited or
+  // deleted before its mass pyramid is read (forgetPdm removes that version's files: the
+  // pyramid's open fails, or pdmPyramidFile finds another version, 409), or evicted from the
+  // layer cache meanwhile. Then the PDM is resolved again and its current version drawn, once;
+  // a PDM gone meanwhile is 404. Another edit during that second drawing is a 409 (ask again),
+  // never a 500; a failure of the same version's file that is the request's (413, 507) stands.
+  for (int attempt = 0;; ++attempt) {
+    try {
+      tile.path = tileOf(pdmVersion);
+      tile.pdmVersion = pdmVersion;
+      return tile;
+    } catch (const std::exception& e) {
+      const std::string now = pdmVersionNow();  // 404 when the PDM went meanwhile
+      const bool requests = dynamic_cast<const ApiError*>(&e) || dynamic_cast<const DomainError*>(&e);
+      if (now == pdmVersion && requests) throw;
+      if (attempt > 0) {
+        if (now == pdmVersion) throw;  // its own file does not read: the server's fault
+        throw ApiError(409, "conflict", "the PDM was edited while this tile was drawn: ask again", "pdm");
+      }
+      pdmVersion = now;
     }
-    if (stored->pyramid) {
-      // The level of the tile's zoom, about (256 + 2)² cells: the map is never loaded.
-      const auto header = storedHeader(id);
-      tile.made = readElevation(mapDir.string(), [&](const std::string& dem) {
-        return tileBytes(maps::PyramidBlocks(dem, (mapDir / kClassFile).string(), header, stored->ramp), l, format,
-                         window);
-      });
-      store::DataDir::writeFileAtomic(path, tile.made, false);  // a cache file: no fsync
-      return;
-    }
-    auto map = get(id);  // a map stored before the pyramid: the whole map in memory
-    maps::TileSource src;
-    src.dem = &map->dem;
-    src.classes = &map->traversability.classes;
-    src.range = map->elevationRange;
-    tile.made = tileBytes(src, l, format, window);
-    store::DataDir::writeFileAtomic(path, tile.made, false);
-  });
-  return tile;
+  }
 }
 
 }  // namespace rover::api

@@ -2,10 +2,12 @@
 // If-None-Match, the layer cache on disk, and hostile addresses answered 404 as JSON errors.
 #include <doctest/doctest.h>
 
+#include <atomic>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <iterator>
 #include <limits>
 #include <utility>
@@ -373,4 +375,52 @@ TEST_CASE("layers api: a pyramid-stored map's overviews come from its pyramid, f
   }
   CHECK(catalog.layerFile(id, "elevation", "tif", 0, "") == dem);
   CHECK(catalog.layerFile(id, "traversability", "tif", 0, "") == s.dir.mapDir(id) + "/classes.tif");
+}
+
+TEST_CASE("tiles api: a pdm tile whose PDM is edited or deleted as its mass pyramid is opened draws the current version, or is 404; never 500") {
+  // The race is run exactly where it hurt: the tile has its version's mass pyramid file and has
+  // not opened it when the edit or delete (forgetPdm) removes that file.
+  TempDir tmp;
+  ApiServer s(tmp.str("data"));
+  const std::string map = s.defaultMap();  // 600 × 600 cells: native zoom 2
+  const json first = json::array({{{"x", 40}, {"y", 100}, {"sigma_x", 20}, {"sigma_y", 30}}});
+  const json second = json::array({{{"x", 120}, {"y", 50}, {"sigma_x", 10}, {"sigma_y", 10}}});
+  const auto made = s.postJson("/api/maps/" + map + "/pdms", {{"name", "p"}, {"components", first}});
+  REQUIRE(made.status == 201);
+  const std::string pdm = made.json()["id"];
+  const std::string tile = "/api/maps/" + map + "/tiles/pdm/2/0/0.png?pdm=" + pdm;
+  std::atomic<int> opened{0};
+  std::atomic<bool> raced{false};
+  std::function<bool()> race;  // on the work pool's thread: no assertion there
+  s.maps.raceHooks.beforePdmPyramidRead = [&](const std::string& id) {
+    if (id == pdm && opened++ == 0) raced = race();
+  };
+  SUBCASE("edited: the tile of the new version, named so") {
+    race = [&] {
+      pdm::Gaussian g;  // `second`'s one component
+      g.mean = {120, 50};
+      g.sigmaX = g.sigmaY = 10;
+      store::PdmRecord out;
+      return s.maps.changePdm(*s.db.getPdm(pdm), "p", std::vector<pdm::Gaussian>{g}, 1, "", out) == store::Cas::Done;
+    };
+    const auto r = s.get(tile);
+    CHECK(raced.load());
+    REQUIRE(r.status == 200);
+    CHECK(r.headers.at("ETag").find(pdm + "-v2-") != std::string::npos);
+    CHECK(r.body == pdmTileInMemory(s, map, second, 2, 0, 0));
+    const auto again = s.get(tile);  // the file it left is the new version's
+    CHECK(again.body == r.body);
+    CHECK(again.headers.at("ETag") == r.headers.at("ETag"));
+  }
+  SUBCASE("deleted: 404 naming the PDM") {
+    race = [&] {
+      const bool gone = s.db.deletePdm(pdm);
+      s.dir.remove(s.dir.pdmDir(pdm));
+      s.maps.forgetPdm(map, pdm, std::nullopt);
+      return gone;
+    };
+    const auto r = s.get(tile);
+    CHECK(raced.load());
+    checkError(r, 404, "not_found", "pdm");
+  }
 }
