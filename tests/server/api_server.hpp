@@ -9,6 +9,7 @@
 #include <atomic>
 #include <chrono>
 #include <filesystem>
+#include <functional>
 #include <memory>
 #include <string>
 #include <thread>
@@ -168,5 +169,19 @@ inline void checkError(const HttpResult& r, int status, const std::string& code,
   CHECK(j["error"].value("code", std::string()) == code);
   CHECK(j["error"].value("field", std::string()) == field);
 }
+
+// Holds each of the server's compression jobs at its start until `release` (or the compressor
+// stops), so a map stays stored raw meanwhile. Declare it before the server: it outlives the
+// server whose jobs it holds.
+struct CompressionHold {
+  std::atomic<bool> release{false};
+  std::atomic<int> held{0};
+  void on(ApiServer& s) {
+    s.maps.compressor().setBeforeJob([this](const std::string&, const std::function<bool()>& cancelled) {
+      ++held;
+      pollUntil([&] { return release.load() || cancelled(); });
+    });
+  }
+};
 
 }  // namespace rover::test

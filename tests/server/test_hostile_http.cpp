@@ -179,6 +179,20 @@ test::ApiServerOptions unstarted() {
   return o;
 }
 
+// GET /api/test/sleep: a slow handler on the work pool that counts itself in `entered`, then holds
+// its pool thread until the test opens `gate` (declare both before the server, which waits for its
+// handlers when it stops).
+void addGatedRoute(ApiServer& s, test::Gate& gate, std::atomic<int>& entered) {
+  http::RouteOptions slow;
+  slow.blocking = true;
+  slow.requireAuth = false;
+  s.router.add("GET", "/api/test/sleep", [&](const http::Request&) {
+    ++entered;
+    gate.wait();
+    return http::Response::json(200, {{"slept", true}});
+  }, slow);
+}
+
 double msSince(Clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
 }
@@ -496,14 +510,7 @@ TEST_CASE("hostile: with the work pool saturated by slow handlers, /api/health s
   std::atomic<int> entered{0};
   TempDir tmp;
   ApiServer s(tmp.str("data"), unstarted());
-  http::RouteOptions slow;
-  slow.blocking = true;
-  slow.requireAuth = false;
-  s.router.add("GET", "/api/test/sleep", [&](const http::Request&) {
-    ++entered;
-    gate.wait();
-    return http::Response::json(200, {{"slept", true}});
-  }, slow);
+  addGatedRoute(s, gate, entered);
   http::ServerConfig c;
   c.workThreads = 2;
   c.workQueue = 2;
@@ -553,14 +560,7 @@ TEST_CASE("hostile: with the work pool saturated, a tile already made is still a
   test::ApiServerOptions o = unstarted();
   o.defaultMap = true;
   ApiServer s(tmp.str("data"), o);
-  http::RouteOptions slow;
-  slow.blocking = true;
-  slow.requireAuth = false;
-  s.router.add("GET", "/api/test/sleep", [&](const http::Request&) {
-    ++entered;
-    gate.wait();
-    return http::Response::json(200, {{"slept", true}});
-  }, slow);
+  addGatedRoute(s, gate, entered);
   http::ServerConfig c;
   c.workThreads = 2;
   c.workQueue = 4;

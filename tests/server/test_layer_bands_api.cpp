@@ -94,17 +94,7 @@ Tif readTif(const std::string& path) {
   return t;
 }
 
-// Holds each compression job at its start until `release`, so the map stays raw meanwhile.
-struct Hold {
-  std::atomic<bool> release{false};
-  std::atomic<int> held{0};
-  void on(ApiServer& s) {
-    s.maps.compressor().setBeforeJob([this](const std::string&, const std::function<bool()>& cancelled) {
-      ++held;
-      rover::test::pollUntil([&] { return release.load() || cancelled(); });
-    });
-  }
-};
+using Hold = rover::test::CompressionHold;
 
 }  // namespace
 

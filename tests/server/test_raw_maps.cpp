@@ -77,17 +77,7 @@ std::vector<std::string> tileAddresses(ApiServer& s, const std::string& id) {
   return out;
 }
 
-// Holds each compression job at its start until `release` (or the compressor stops).
-struct Hold {
-  std::atomic<bool> release{false};
-  std::atomic<int> held{0};
-  void on(ApiServer& s) {
-    s.maps.compressor().setBeforeJob([this](const std::string&, const std::function<bool()>& cancelled) {
-      ++held;
-      rover::test::pollUntil([&] { return release.load() || cancelled(); });
-    });
-  }
-};
+using Hold = rover::test::CompressionHold;
 
 using Compressor = api::ElevationCompressor;
 
